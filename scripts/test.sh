@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# Builds and runs every test suite: an optimised build of everything, then format/ and decoder/
+# again under AddressSanitizer + UndefinedBehaviorSanitizer (they parse untrusted bytes).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+jobs="$(nproc)"
+
+echo "== release build (-O2) and tests"
+cmake -S . -B build-test -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DECRF_NATIVE=ON >/dev/null
+cmake --build build-test -j"$jobs"
+ctest --test-dir build-test -j"$jobs" --output-on-failure
+
+echo "== format/ and decoder/ under ASan+UBSan"
+cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DECRF_SANITIZE=ON \
+      -DECRF_BUILD_TRAINER=OFF >/dev/null
+cmake --build build-asan -j"$jobs"
+ctest --test-dir build-asan -j"$jobs" --output-on-failure
