@@ -1,0 +1,16 @@
+// Entry points of the `ecrf bench <what>` subcommands; each prints figures and can write JSON.
+#ifndef ECRF_TOOLS_BENCHES_H_
+#define ECRF_TOOLS_BENCHES_H_
+
+namespace ecrf {
+namespace tools {
+
+// argv[0] is the subcommand name ("coder", "train", ...). Returns a process exit code.
+int RunCoderBench(int argc, char** argv);
+int RunIdctBench(int argc, char** argv);
+int RunTrainBench(int argc, char** argv);
+
+}  // namespace tools
+}  // namespace ecrf
+
+#endif  // ECRF_TOOLS_BENCHES_H_

@@ -1,0 +1,13 @@
+// The ecrf subcommands (one file each). argv[0] is the subcommand name; each returns an exit code.
+#ifndef ECRF_TOOLS_COMMANDS_H_
+#define ECRF_TOOLS_COMMANDS_H_
+
+namespace ecrf {
+namespace tools {
+
+int RunSelfCheck(int argc, char** argv);
+
+}  // namespace tools
+}  // namespace ecrf
+
+#endif  // ECRF_TOOLS_COMMANDS_H_

@@ -1,0 +1,76 @@
+// The ecrf command-line tool: one binary, one subcommand per job.
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <string>
+
+#include "ecrf/decoder.h"
+#include "tools/benches.h"
+#include "tools/commands.h"
+
+namespace {
+
+struct Command {
+  const char* name;
+  int (*run)(int argc, char** argv);
+  const char* help;
+};
+
+int RunVersion(int, char**) {
+  std::printf("ecrf %s (bitstream version %d)\n", ecrf_version_string(), ecrf_bitstream_version());
+  return 0;
+}
+
+int RunBench(int argc, char** argv);
+
+const Command kCommands[] = {
+    {"version", RunVersion, "print the library and bitstream versions"},
+    {"selfcheck", ecrf::tools::RunSelfCheck,
+     "round-trip the entropy coder and check the integer IDCT against float64"},
+    {"bench", RunBench, "benchmarks: bench coder|idct|mlp|train [--json FILE]"},
+};
+
+const Command kBenches[] = {
+    {"coder", ecrf::tools::RunCoderBench, "entropy coder and coefficient coding"},
+    {"idct", ecrf::tools::RunIdctBench, "integer inverse DCT"},
+};
+
+void PrintUsage(FILE* out) {
+  std::fprintf(out, "usage: ecrf <command> [options]\n\ncommands:\n");
+  for (const Command& c : kCommands) std::fprintf(out, "  %-10s %s\n", c.name, c.help);
+}
+
+int RunBench(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: ecrf bench <what> [--json FILE]\n");
+    for (const Command& b : kBenches) std::fprintf(stderr, "  %-8s %s\n", b.name, b.help);
+    return 2;
+  }
+  for (const Command& b : kBenches) {
+    if (std::strcmp(argv[1], b.name) == 0) return b.run(argc - 1, argv + 1);
+  }
+  std::fprintf(stderr, "ecrf bench: unknown benchmark '%s'\n", argv[1]);
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0) {
+    PrintUsage(argc < 2 ? stderr : stdout);
+    return argc < 2 ? 2 : 0;
+  }
+  if (std::strcmp(argv[1], "--version") == 0) return RunVersion(0, nullptr);
+  for (const Command& c : kCommands) {
+    if (std::strcmp(argv[1], c.name) != 0) continue;
+    try {
+      return c.run(argc - 1, argv + 1);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "ecrf %s: error: %s\n", c.name, e.what());
+      return 1;
+    }
+  }
+  std::fprintf(stderr, "ecrf: unknown command '%s'\n\n", argv[1]);
+  PrintUsage(stderr);
+  return 2;
+}

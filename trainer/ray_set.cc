@@ -1,0 +1,68 @@
+#include "trainer/ray_set.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "trainer/camera.h"
+
+namespace ecrf {
+namespace trainer {
+
+RaySet::RaySet(const std::vector<View>& views) : views_(views) {
+  view_offset_.push_back(0);
+  for (const View& v : views) {
+    if (v.rgb.channels != 3) throw std::invalid_argument("RaySet: view '" + v.name + "' is not RGB");
+    view_offset_.push_back(view_offset_.back() + uint64_t(v.rgb.width) * v.rgb.height);
+  }
+  if (view_offset_.back() > UINT32_MAX) {
+    throw std::invalid_argument("RaySet: more than 2^32 training pixels; use --downscale");
+  }
+  active_.resize(view_offset_.back());
+  for (size_t i = 0; i < active_.size(); ++i) active_[i] = uint32_t(i);
+}
+
+void RaySet::Ray(uint32_t index, float origin[3], float dir[3], float rgb[3]) const {
+  const size_t v = size_t(std::upper_bound(view_offset_.begin(), view_offset_.end(), uint64_t(index)) -
+                          view_offset_.begin()) - 1;
+  const View& view = views_[v];
+  const uint32_t pixel = uint32_t(index - view_offset_[v]);
+  const int x = int(pixel % uint32_t(view.rgb.width));
+  const int y = int(pixel / uint32_t(view.rgb.width));
+  GenerateRay(view.camera, x, y, origin, dir);
+  for (int c = 0; c < 3; ++c) rgb[c] = view.rgb.at(x, y, c);
+}
+
+void RaySet::Filter(const std::function<bool(const float*, const float*)>& keep) {
+  std::vector<uint8_t> flags(active_.size());
+#pragma omp parallel for schedule(dynamic, 4096)
+  for (long i = 0; i < long(active_.size()); ++i) {
+    float o[3], d[3], c[3];
+    Ray(active_[i], o, d, c);
+    flags[i] = keep(o, d) ? 1 : 0;
+  }
+  size_t w = 0;
+  for (size_t i = 0; i < active_.size(); ++i) {
+    if (flags[i]) active_[w++] = active_[i];
+  }
+  active_.resize(w);
+  active_.shrink_to_fit();
+  order_.clear();
+  cursor_ = 0;
+}
+
+void RaySet::Shuffle(std::mt19937_64& rng) {
+  order_ = active_;
+  std::shuffle(order_.begin(), order_.end(), rng);
+  cursor_ = 0;
+}
+
+void RaySet::NextBatch(int n, std::mt19937_64& rng, float* origins, float* dirs, float* rgb) {
+  if (active_.empty()) throw std::runtime_error("no training rays left (all were filtered out)");
+  for (int i = 0; i < n; ++i) {
+    if (order_.empty() || cursor_ >= order_.size()) Shuffle(rng);
+    Ray(order_[cursor_++], origins + 3 * i, dirs + 3 * i, rgb + 3 * i);
+  }
+}
+
+}  // namespace trainer
+}  // namespace ecrf

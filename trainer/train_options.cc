@@ -1,0 +1,71 @@
+#include "trainer/train_options.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace ecrf {
+namespace trainer {
+
+TrainOptions PresetOptions(const std::string& name) {
+  TrainOptions o;
+  o.preset = name;
+  if (name == "paper") return o;
+  if (name == "fast") {
+    // Chosen by test PSNR per minute on chair and mic at 400x400 on 2 cores (see README).
+    o.iters = 5000;
+    o.reference_iters = 5000;
+    o.voxels_init = 64L * 64 * 64;
+    o.voxels_final = 200L * 200 * 200;
+    o.upsample_iters = {500, 1000, 1500, 2000, 2500};
+    o.alpha_mask_iters = {500, 1500};
+    o.test_view_stride = 8;
+    return o;
+  }
+  if (name == "tiny") {
+    // The built-in scene at low resolution: a couple of minutes on 2 cores.
+    o.iters = 1500;
+    o.reference_iters = 1500;
+    o.batch_rays = 2048;
+    o.voxels_init = 32L * 32 * 32;
+    o.voxels_final = 96L * 96 * 96;
+    o.upsample_iters = {200, 400, 600, 800};
+    o.alpha_mask_iters = {300, 700};
+    o.density_rank = 8;
+    o.appearance_rank = 24;
+    return o;
+  }
+  throw std::invalid_argument("unknown preset '" + name + "' (expected paper, fast or tiny)");
+}
+
+int ScaleMilestone(int milestone, int iters, int reference_iters) {
+  if (reference_iters <= 0 || iters == reference_iters) return milestone;
+  return int(std::lround(double(milestone) * iters / reference_iters));
+}
+
+long ResolutionForVoxels(long voxels, const double aabb_min[3], const double aabb_max[3], int res[3]) {
+  // TensoRF N_to_reso: cubic voxels of the size that gives `voxels` cells in the box.
+  double volume = 1.0;
+  for (int a = 0; a < 3; ++a) volume *= aabb_max[a] - aabb_min[a];
+  const double voxel = std::cbrt(volume / double(voxels));
+  long total = 1;
+  for (int a = 0; a < 3; ++a) {
+    res[a] = std::max(2, int((aabb_max[a] - aabb_min[a]) / voxel));
+    total *= res[a];
+  }
+  return total;
+}
+
+std::vector<long> UpsampleVoxelCounts(const TrainOptions& o) {
+  // exp(linspace(log(init), log(final), len(upsample_iters) + 1))[1:], as TensoRF.
+  std::vector<long> counts;
+  const int n = int(o.upsample_iters.size());
+  for (int i = 1; i <= n; ++i) {
+    const double t = double(i) / n;
+    counts.push_back(
+        long(std::round(std::exp(std::log(double(o.voxels_init)) * (1 - t) + std::log(double(o.voxels_final)) * t))));
+  }
+  return counts;
+}
+
+}  // namespace trainer
+}  // namespace ecrf

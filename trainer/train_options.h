@@ -1,0 +1,69 @@
+// Training options and the named presets.
+//
+// Iteration milestones (upsampling, alpha-mask updates) are stated for a reference run length
+// (30,000 iterations for `paper`) and scaled linearly when --iters changes: a milestone at
+// iteration m of a reference run of R iterations happens at round(m * iters / R), so a shorter run
+// keeps the same shape of schedule.
+#ifndef ECRF_TRAINER_TRAIN_OPTIONS_H_
+#define ECRF_TRAINER_TRAIN_OPTIONS_H_
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace ecrf {
+namespace trainer {
+
+struct TrainOptions {
+  std::string preset = "fast";
+  // Data.
+  std::string data_dir;        // NeRF Blender or Instant-NGP/nerfstudio layout
+  bool builtin_scene = false;  // the procedural scene instead of data_dir
+  int downscale = 1;
+  std::string out_dir;
+
+  // Schedule.
+  int iters = 30000;
+  int reference_iters = 30000;  // the run length the milestones below are stated for
+  int batch_rays = 4096;
+  long voxels_init = 128L * 128 * 128;
+  long voxels_final = 300L * 300 * 300;
+  std::vector<int> upsample_iters = {2000, 3000, 4000, 5500, 7000};
+  std::vector<int> alpha_mask_iters = {2000, 4000};
+  float lr_grid = 0.02f;
+  float lr_network = 1e-3f;
+  float lr_decay_ratio = 0.1f;  // learning rates fall to this fraction over the run
+  float l1_weight_initial = 8e-5f;
+  float l1_weight_rest = 4e-5f;  // after the first alpha-mask update
+  int max_samples_per_ray = 1000000;  // cap on TensoRF's n_samples (1e6 = no cap)
+
+  // Model.
+  int density_rank = 16;    // per mode
+  int appearance_rank = 48;  // per mode
+
+  // Bookkeeping.
+  uint32_t seed = 20211202;
+  int checkpoint_every = 0;  // iterations; 0 = only the final checkpoint
+  bool resume = false;
+  int test_view_stride = 1;  // evaluate every k-th test view
+  int max_test_views = 0;    // 0 = all
+  bool save_renders = false;
+  int progress_every = 50;
+};
+
+// "paper": the reference TensoRF VM-192 schedule. "fast": what a CPU user should run.
+// "tiny": the built-in scene in CI. Throws std::invalid_argument for unknown names.
+TrainOptions PresetOptions(const std::string& name);
+
+// The iteration at which a reference milestone happens in a run of `iters` iterations.
+int ScaleMilestone(int milestone, int iters, int reference_iters);
+
+// Grid resolutions after each upsample: voxel counts spaced evenly in log space from
+// voxels_init to voxels_final (TensoRF's N_voxel_list), turned into per-axis sizes for the box.
+long ResolutionForVoxels(long voxels, const double aabb_min[3], const double aabb_max[3], int res[3]);
+std::vector<long> UpsampleVoxelCounts(const TrainOptions& options);
+
+}  // namespace trainer
+}  // namespace ecrf
+
+#endif  // ECRF_TRAINER_TRAIN_OPTIONS_H_
