@@ -39,12 +39,12 @@ void InitUniformCdf(uint16_t* cdf, int num_symbols);
 inline void AdaptCdf(uint16_t* cdf, int symbol, int num_symbols) {
   const uint32_t count = cdf[num_symbols];
   const int rate = 3 + (count > 15) + (count > 31) + (num_symbols > 3 ? 2 : 1);
-  for (int i = 0; i < num_symbols - 1; ++i) {
-    if (i < symbol) {
-      cdf[i] = static_cast<uint16_t>(cdf[i] + ((kCdfProbTop - cdf[i]) >> rate));
-    } else {
-      cdf[i] = static_cast<uint16_t>(cdf[i] - (cdf[i] >> rate));
-    }
+  // Two branch-free loops (symbols below / from the coded one) that compilers vectorise.
+  for (int i = 0; i < symbol; ++i) {
+    cdf[i] = static_cast<uint16_t>(cdf[i] + ((kCdfProbTop - cdf[i]) >> rate));
+  }
+  for (int i = symbol; i < num_symbols - 1; ++i) {
+    cdf[i] = static_cast<uint16_t>(cdf[i] - (cdf[i] >> rate));
   }
   cdf[num_symbols] = static_cast<uint16_t>(count + (count < 32));
 }
@@ -85,10 +85,10 @@ class RangeEncoder {
   void PropagateCarry();
 
   std::vector<uint8_t> bytes_;
-  uint64_t low_ = 0;         // bits of the interval base not yet moved to bytes_
-  uint32_t rng_ = 0x8000;    // 16-bit range, normalised to [32768, 65535]
-  int pending_bits_ = 15;    // width of low_ (position of its carry bit)
-  uint64_t total_shift_ = 0; // sum of all normalisation shifts
+  uint64_t low_ = 0;          // bits of the interval base not yet moved to bytes_
+  uint32_t rng_ = 0x8000;     // 16-bit range, normalised to [32768, 65535]
+  int pending_bits_ = 15;     // width of low_ (position of its carry bit)
+  uint64_t total_shift_ = 0;  // sum of all normalisation shifts
 };
 
 // Decoding never reads outside [data, data + size): bytes past the end read as zero. Errors are
@@ -106,8 +106,11 @@ class RangeDecoder {
   uint32_t DecodeGolomb(int k);
 
   bool HasError() const { return error_ != kOk; }
-  // kErrCorrupt for an invalid escape code, kErrTruncated when the symbols decoded so far need
-  // more bits than the stream holds; Ok otherwise.
+  // The sticky error as a Status: kErrCorrupt for an invalid escape code, kErrTruncated once
+  // the decoder is certainly past the end; Ok otherwise.
+  Status status() const;
+  // status(), plus kErrTruncated if the symbols decoded so far need more bits than the stream
+  // holds. Call after the last symbol of the stream.
   Status Finish() const;
 
  private:
@@ -157,7 +160,8 @@ inline int RangeDecoder::DecodeBypassBit() {
 
 inline uint32_t RangeDecoder::DecodeBypass(int num_bits) {
   uint32_t value = 0;
-  for (int i = 0; i < num_bits; ++i) value = (value << 1) | static_cast<uint32_t>(DecodeBypassBit());
+  for (int i = 0; i < num_bits; ++i)
+    value = (value << 1) | static_cast<uint32_t>(DecodeBypassBit());
   return value;
 }
 

@@ -3,7 +3,10 @@
 namespace ecrf {
 
 RangeDecoder::RangeDecoder(const uint8_t* data, size_t size)
-    : pos_(data), end_(data == nullptr ? data : data + size), dif_((1u << 31) - 1), rng_(0x8000),
+    : pos_(data),
+      end_(data == nullptr ? data : data + size),
+      dif_((1u << 31) - 1),
+      rng_(0x8000),
       cnt_(-15) {
   Refill();
 }
@@ -57,11 +60,19 @@ uint32_t RangeDecoder::DecodeGolomb(int k) {
   return ((prefix_value - 1) << k) | DecodeBypass(k);
 }
 
-Status RangeDecoder::Finish() const {
+Status RangeDecoder::status() const {
+  if (error_ == kOk) return Status::Ok();
   if (error_ == kErrTruncated) {
     return Status::Error(kErrTruncated, "range decoder read past the end of its stream");
   }
-  if (error_ != kOk) return Status::Error(error_, "range decoder: invalid escape code");
+  if (error_ == kErrInvalidArgument) {
+    return Status::Error(kErrInvalidArgument, "range decoder: Golomb order out of range");
+  }
+  return Status::Error(error_, "range decoder: invalid Exp-Golomb escape code");
+}
+
+Status RangeDecoder::Finish() const {
+  if (error_ != kOk) return status();
   // Bits consumed = 8 * bytes loaded - 15 - cnt_; they may exceed 8 * size only by the
   // 15-bit look-ahead that every stream ends with.
   if (8 * virtual_bytes_ > 15 + cnt_) {

@@ -8,7 +8,8 @@ namespace tools {
 // argv[0] is the subcommand name ("coder", "train", ...). Returns a process exit code.
 int RunCoderBench(int argc, char** argv);
 int RunIdctBench(int argc, char** argv);
-int RunTrainBench(int argc, char** argv);
+int RunMlpBench(int argc, char** argv);
+int RunTrainStepBench(int argc, char** argv);
 
 }  // namespace tools
 }  // namespace ecrf

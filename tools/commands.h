@@ -6,6 +6,7 @@ namespace ecrf {
 namespace tools {
 
 int RunSelfCheck(int argc, char** argv);
+int RunTrain(int argc, char** argv);
 
 }  // namespace tools
 }  // namespace ecrf

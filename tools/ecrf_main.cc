@@ -27,12 +27,15 @@ const Command kCommands[] = {
     {"version", RunVersion, "print the library and bitstream versions"},
     {"selfcheck", ecrf::tools::RunSelfCheck,
      "round-trip the entropy coder and check the integer IDCT against float64"},
+    {"train", ecrf::tools::RunTrain, "train a TensoRF VM model: train --data DIR|--scene builtin -o RUN"},
     {"bench", RunBench, "benchmarks: bench coder|idct|mlp|train [--json FILE]"},
 };
 
 const Command kBenches[] = {
     {"coder", ecrf::tools::RunCoderBench, "entropy coder and coefficient coding"},
     {"idct", ecrf::tools::RunIdctBench, "integer inverse DCT"},
+    {"mlp", ecrf::tools::RunMlpBench, "appearance MLP forward/backward GEMMs"},
+    {"train", ecrf::tools::RunTrainStepBench, "one training step at the 128^3 and 300^3 phases"},
 };
 
 void PrintUsage(FILE* out) {

@@ -47,8 +47,8 @@ struct Cursor {
 
 }  // namespace
 
-const NamedArray* Checkpoint::Find(const std::string& name) const {
-  for (const NamedArray& a : arrays) {
+const CheckpointArray* Checkpoint::Find(const std::string& name) const {
+  for (const CheckpointArray& a : arrays) {
     if (a.name == name) return &a;
   }
   return nullptr;
@@ -89,7 +89,7 @@ void WriteCheckpoint(const std::string& path, const Checkpoint& checkpoint, int 
   PutU64(raw, checkpoint.json.size());
   Put(raw, checkpoint.json.data(), checkpoint.json.size());
   PutU64(raw, checkpoint.arrays.size());
-  for (const NamedArray& a : checkpoint.arrays) {
+  for (const CheckpointArray& a : checkpoint.arrays) {
     uint64_t count = 1;
     for (int64_t d : a.shape) count *= uint64_t(d);
     if (count != a.data.size()) {
@@ -138,7 +138,7 @@ Checkpoint ReadCheckpoint(const std::string& path) {
   const uint64_t count = c.U64();
   if (count > kMaxArrays) throw std::runtime_error(path + ": too many arrays in checkpoint");
   for (uint64_t i = 0; i < count; ++i) {
-    NamedArray a;
+    CheckpointArray a;
     const uint64_t name_size = c.U64();
     c.CheckRemaining(name_size, "array name");
     a.name.assign(reinterpret_cast<const char*>(raw.data() + c.pos), name_size);

@@ -10,7 +10,7 @@
 namespace ecrf {
 namespace trainer {
 
-struct NamedArray {
+struct CheckpointArray {
   std::string name;
   std::vector<int64_t> shape;
   std::vector<float> data;  // row-major, product(shape) elements
@@ -18,9 +18,9 @@ struct NamedArray {
 
 struct Checkpoint {
   std::string json;  // training state that is not an array (iteration, options, aabb, ...)
-  std::vector<NamedArray> arrays;
+  std::vector<CheckpointArray> arrays;
 
-  const NamedArray* Find(const std::string& name) const;
+  const CheckpointArray* Find(const std::string& name) const;
 };
 
 // Throws std::runtime_error naming the path and the problem.

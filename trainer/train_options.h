@@ -49,6 +49,11 @@ struct TrainOptions {
   int max_test_views = 0;    // 0 = all
   bool save_renders = false;
   int progress_every = 50;
+  int eval_every = 0;  // iterations between test evaluations for a PSNR-vs-time curve (0 = end only)
+
+  // The built-in scene's size (train views; test views are an orbit of 1/4 as many).
+  int builtin_size = 64;
+  int builtin_views = 60;
 };
 
 // "paper": the reference TensoRF VM-192 schedule. "fast": what a CPU user should run.

@@ -1,0 +1,370 @@
+#include "decoder/field_sampler.h"
+
+#include <algorithm>
+#include <cmath>
+#include <type_traits>
+
+namespace ecrf {
+namespace dec {
+namespace {
+
+// Per-mode corner pointers and weights for one grid point.
+template <typename T>
+struct ModeTaps {
+  const T* p00;  // plane (u0, v0)
+  const T* p01;  // (u0+1, v0)
+  const T* p10;  // (u0, v0+1)
+  const T* p11;
+  const T* l0;
+  const T* l1;
+  float fu, fv, fw, scale;
+};
+
+template <typename T>
+inline const T* PlaneData(const VmGrid& g, int m);
+template <>
+inline const float* PlaneData<float>(const VmGrid& g, int m) { return g.plane_f32[m].data(); }
+template <>
+inline const int16_t* PlaneData<int16_t>(const VmGrid& g, int m) { return g.plane_i16[m].data(); }
+template <typename T>
+inline const T* LineData(const VmGrid& g, int m);
+template <>
+inline const float* LineData<float>(const VmGrid& g, int m) { return g.line_f32[m].data(); }
+template <>
+inline const int16_t* LineData<int16_t>(const VmGrid& g, int m) { return g.line_i16[m].data(); }
+
+template <typename T>
+inline ModeTaps<T> Taps(const VmGrid& g, const GridPoint& gp, int m) {
+  const int u = kMatMode[m][0], v = kMatMode[m][1], w = kVecMode[m];
+  const int R = g.ranks[m];
+  const size_t ru = static_cast<size_t>(g.res[u]);
+  ModeTaps<T> t;
+  t.p00 = PlaneData<T>(g, m) + (static_cast<size_t>(gp.i0[v]) * ru + gp.i0[u]) * R;
+  t.p01 = t.p00 + R;
+  t.p10 = t.p00 + ru * R;
+  t.p11 = t.p10 + R;
+  t.l0 = LineData<T>(g, m) + static_cast<size_t>(gp.i0[w]) * R;
+  t.l1 = t.l0 + R;
+  t.fu = gp.f[u];
+  t.fv = gp.f[v];
+  t.fw = gp.f[w];
+  t.scale = std::is_same<T, float>::value ? 1.f : g.plane_scale[m] * g.line_scale[m];
+  return t;
+}
+
+template <typename T>
+float DensityFeatureT(const VmGrid& g, const GridPoint& gp) {
+  float total = 0.f;
+  for (int m = 0; m < 3; ++m) {
+    const int R = g.ranks[m];
+    if (R == 0) continue;
+    const ModeTaps<T> t = Taps<T>(g, gp, m);
+    const float w00 = (1.f - t.fu) * (1.f - t.fv), w01 = t.fu * (1.f - t.fv);
+    const float w10 = (1.f - t.fu) * t.fv, w11 = t.fu * t.fv;
+    const float wl0 = 1.f - t.fw, wl1 = t.fw;
+    float sum = 0.f;
+    for (int r = 0; r < R; ++r) {
+      const float p = w00 * static_cast<float>(t.p00[r]) + w01 * static_cast<float>(t.p01[r]) +
+                      w10 * static_cast<float>(t.p10[r]) + w11 * static_cast<float>(t.p11[r]);
+      const float l = wl0 * static_cast<float>(t.l0[r]) + wl1 * static_cast<float>(t.l1[r]);
+      sum += p * l;
+    }
+    total += sum * t.scale;
+  }
+  return total;
+}
+
+template <typename T>
+void AppearanceProductsT(const VmGrid& g, const GridPoint& gp, float* out) {
+  for (int m = 0; m < 3; ++m) {
+    const int R = g.ranks[m];
+    if (R == 0) continue;
+    const ModeTaps<T> t = Taps<T>(g, gp, m);
+    const float w00 = (1.f - t.fu) * (1.f - t.fv) * t.scale, w01 = t.fu * (1.f - t.fv) * t.scale;
+    const float w10 = (1.f - t.fu) * t.fv * t.scale, w11 = t.fu * t.fv * t.scale;
+    const float wl0 = 1.f - t.fw, wl1 = t.fw;
+    float* o = out + g.rank_offset(m);
+    for (int r = 0; r < R; ++r) {
+      const float p = w00 * static_cast<float>(t.p00[r]) + w01 * static_cast<float>(t.p01[r]) +
+                      w10 * static_cast<float>(t.p10[r]) + w11 * static_cast<float>(t.p11[r]);
+      const float l = wl0 * static_cast<float>(t.l0[r]) + wl1 * static_cast<float>(t.l1[r]);
+      o[r] = p * l;
+    }
+  }
+}
+
+bool AllFinite(const float* p, size_t n) {
+  for (size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(p[i])) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+float DensityFeature(const VmGrid& grid, const GridPoint& gp) {
+  return grid.storage == GridStorage::kInt16 ? DensityFeatureT<int16_t>(grid, gp)
+                                             : DensityFeatureT<float>(grid, gp);
+}
+
+void AppearanceProducts(const VmGrid& grid, const GridPoint& gp, float* out) {
+  if (grid.storage == GridStorage::kInt16) {
+    AppearanceProductsT<int16_t>(grid, gp, out);
+  } else {
+    AppearanceProductsT<float>(grid, gp, out);
+  }
+}
+
+Status QuantizeGridInt16(const VmGrid& src, VmGrid* dst) {
+  ECRF_CHECK_OR_RETURN(dst != nullptr && dst != &src && src.storage == GridStorage::kFloat32,
+                       kErrInvalidArgument, "QuantizeGridInt16: needs a float32 source");
+  ECRF_RETURN_IF_ERROR(src.Validate("source"));
+  ECRF_RETURN_IF_ERROR(dst->Allocate(src.res, src.ranks, GridStorage::kInt16));
+  auto quantize = [](const float* in, size_t n, int16_t* out, float* scale) {
+    float mx = 0.f;
+    for (size_t i = 0; i < n; ++i) mx = std::max(mx, std::fabs(in[i]));
+    *scale = mx > 0.f ? mx / 32767.f : 1.f;
+    const float inv = 1.f / *scale;
+    for (size_t i = 0; i < n; ++i) {
+      float q = std::nearbyint(in[i] * inv);
+      q = q > 32767.f ? 32767.f : (q < -32767.f ? -32767.f : q);
+      out[i] = static_cast<int16_t>(q);
+    }
+  };
+  for (int m = 0; m < 3; ++m) {
+    quantize(src.plane_f32[m].data(), src.plane_count(m), dst->plane_i16[m].data(),
+             &dst->plane_scale[m]);
+    quantize(src.line_f32[m].data(), src.line_count(m), dst->line_i16[m].data(),
+             &dst->line_scale[m]);
+  }
+  return Status::Ok();
+}
+
+float Softplus(float x) { return x > 20.f ? x : std::log1p(std::exp(x)); }
+
+// ---------------------------------------------------------------------------------------------
+// VmGrid
+
+Status VmGrid::Allocate(const int res_in[3], const int ranks_in[3], GridStorage storage_in) {
+  for (int a = 0; a < 3; ++a) {
+    ECRF_CHECK_OR_RETURN(res_in[a] >= 2 && res_in[a] <= kMaxGridRes, kErrLimit,
+                         "grid resolution %d on axis %d out of range [2, %d]", res_in[a], a,
+                         kMaxGridRes);
+    ECRF_CHECK_OR_RETURN(ranks_in[a] >= 0 && ranks_in[a] <= kMaxRank, kErrLimit,
+                         "grid rank %d of mode %d out of range [0, %d]", ranks_in[a], a, kMaxRank);
+  }
+  ECRF_CHECK_OR_RETURN(storage_in == GridStorage::kFloat32 || storage_in == GridStorage::kInt16,
+                       kErrUnsupported, "unknown grid storage %d", static_cast<int>(storage_in));
+  for (int a = 0; a < 3; ++a) {
+    res[a] = res_in[a];
+    ranks[a] = ranks_in[a];
+    plane_scale[a] = line_scale[a] = 1.f;
+    plane_f32[a].Reset();
+    line_f32[a].Reset();
+    plane_i16[a].Reset();
+    line_i16[a].Reset();
+  }
+  storage = storage_in;
+  for (int m = 0; m < 3; ++m) {
+    size_t pc = 0, lc = 0;
+    ECRF_CHECK_OR_RETURN(CheckedMul(static_cast<size_t>(res[kMatMode[m][1]]),
+                                    static_cast<size_t>(res[kMatMode[m][0]]), &pc) &&
+                             CheckedMul(pc, static_cast<size_t>(ranks[m]), &pc) &&
+                             CheckedMul(static_cast<size_t>(res[kVecMode[m]]),
+                                        static_cast<size_t>(ranks[m]), &lc),
+                         kErrLimit, "grid mode %d size overflows", m);
+    if (storage == GridStorage::kFloat32) {
+      ECRF_RETURN_IF_ERROR(plane_f32[m].Allocate(pc));
+      ECRF_RETURN_IF_ERROR(line_f32[m].Allocate(lc));
+    } else {
+      ECRF_RETURN_IF_ERROR(plane_i16[m].Allocate(pc));
+      ECRF_RETURN_IF_ERROR(line_i16[m].Allocate(lc));
+    }
+  }
+  return Status::Ok();
+}
+
+Status VmGrid::Validate(const char* what) const {
+  for (int m = 0; m < 3; ++m) {
+    ECRF_CHECK_OR_RETURN(res[m] >= 2 && res[m] <= kMaxGridRes && ranks[m] >= 0 &&
+                             ranks[m] <= kMaxRank,
+                         kErrInvalidArgument, "%s grid: bad shape on axis/mode %d", what, m);
+  }
+  for (int m = 0; m < 3; ++m) {
+    const size_t pc = plane_count(m), lc = line_count(m);
+    if (storage == GridStorage::kFloat32) {
+      ECRF_CHECK_OR_RETURN(plane_f32[m].size() == pc && line_f32[m].size() == lc,
+                           kErrInvalidArgument, "%s grid: mode %d tensors not allocated", what, m);
+      ECRF_CHECK_OR_RETURN(AllFinite(plane_f32[m].data(), pc) && AllFinite(line_f32[m].data(), lc),
+                           kErrCorrupt, "%s grid: mode %d has non-finite values", what, m);
+    } else if (storage == GridStorage::kInt16) {
+      ECRF_CHECK_OR_RETURN(plane_i16[m].size() == pc && line_i16[m].size() == lc,
+                           kErrInvalidArgument, "%s grid: mode %d tensors not allocated", what, m);
+      ECRF_CHECK_OR_RETURN(std::isfinite(plane_scale[m]) && std::isfinite(line_scale[m]) &&
+                               std::isfinite(plane_scale[m] * line_scale[m]),
+                           kErrCorrupt, "%s grid: mode %d has a non-finite scale", what, m);
+    } else {
+      return Status::Error(kErrUnsupported, "%s grid: unknown storage", what);
+    }
+  }
+  return Status::Ok();
+}
+
+// ---------------------------------------------------------------------------------------------
+// OccupancyMask
+
+Status OccupancyMask::Init(const float aabb_min[3], const float aabb_max[3], const int res[3]) {
+  accel_ready_ = false;
+  occupied_ = 0;
+  for (int a = 0; a < 3; ++a) {
+    ECRF_CHECK_OR_RETURN(res[a] >= 2 && res[a] <= kMaxGridRes, kErrLimit,
+                         "alpha mask resolution %d on axis %d out of range [2, %d]", res[a], a,
+                         kMaxGridRes);
+    ECRF_CHECK_OR_RETURN(std::isfinite(aabb_min[a]) && std::isfinite(aabb_max[a]) &&
+                             aabb_max[a] > aabb_min[a],
+                         kErrInvalidArgument, "alpha mask: empty or non-finite aabb on axis %d", a);
+    min_[a] = aabb_min[a];
+    max_[a] = aabb_max[a];
+    inv_size_[a] = 1.0f / (aabb_max[a] - aabb_min[a]) * 2.f;
+    res_[a] = res[a];
+  }
+  const size_t voxels = voxel_count();  // <= 4096^3 = 2^36: fits size_t on 64-bit
+  ECRF_CHECK_OR_RETURN(voxels / res[0] / res[1] == static_cast<size_t>(res[2]), kErrLimit,
+                       "alpha mask size overflows");
+  ECRF_RETURN_IF_ERROR(bits_.Allocate((voxels + 7) / 8));
+  for (int l = 0; l < kLevels; ++l) blocks_[l].Reset();
+  return Status::Ok();
+}
+
+Status OccupancyMask::BuildAcceleration() {
+  ECRF_CHECK_OR_RETURN(!bits_.empty(), kErrInvalidArgument, "alpha mask not initialised");
+  accel_ready_ = false;
+  for (int l = 0; l < kLevels; ++l) {
+    size_t count = 1;
+    for (int a = 0; a < 3; ++a) {
+      dims_[l][a] = (res_[a] - 1 + kBlock[l] - 1) / kBlock[l];
+      count *= static_cast<size_t>(dims_[l][a]);
+    }
+    ECRF_RETURN_IF_ERROR(blocks_[l].Allocate(count));
+  }
+  occupied_ = 0;
+  const int X = res_[0], Y = res_[1], Z = res_[2];
+  for (int z = 0; z < Z; ++z) {
+    for (int y = 0; y < Y; ++y) {
+      for (int x = 0; x < X; ++x) {
+        if (!Get(x, y, z)) continue;
+        ++occupied_;
+        const int c[3] = {x, y, z};
+        for (int l = 0; l < kLevels; ++l) {
+          const int B = kBlock[l];
+          // A corner on a block boundary belongs to the closed ranges of both blocks.
+          int lo[3], hi[3];
+          for (int a = 0; a < 3; ++a) {
+            hi[a] = c[a] / B;
+            lo[a] = (c[a] % B == 0 && c[a] > 0) ? hi[a] - 1 : hi[a];
+            if (hi[a] > dims_[l][a] - 1) hi[a] = dims_[l][a] - 1;
+          }
+          for (int bz = lo[2]; bz <= hi[2]; ++bz)
+            for (int by = lo[1]; by <= hi[1]; ++by)
+              for (int bx = lo[0]; bx <= hi[0]; ++bx)
+                blocks_[l][(static_cast<size_t>(bz) * dims_[l][1] + by) * dims_[l][0] + bx] = 1;
+        }
+      }
+    }
+  }
+  accel_ready_ = true;
+  return Status::Ok();
+}
+
+bool OccupancyMask::OccupiedAtIndex(const float idx[3]) const {
+  // Corners with non-zero weight: floor(idx) always (weight 1 - f > 0 unless f == 1, impossible),
+  // floor(idx) + 1 when f > 0. Out-of-range corners are zero padding.
+  int lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    const float fl = std::floor(idx[a]);
+    if (!(fl > -2.f && fl < static_cast<float>(res_[a]))) return false;
+    const int i = static_cast<int>(fl);
+    lo[a] = i;
+    hi[a] = idx[a] > fl ? i + 1 : i;
+    if (lo[a] < 0) lo[a] = 0;
+    if (hi[a] > res_[a] - 1) hi[a] = res_[a] - 1;
+    if (lo[a] > hi[a]) return false;
+  }
+  for (int z = lo[2]; z <= hi[2]; ++z)
+    for (int y = lo[1]; y <= hi[1]; ++y)
+      for (int x = lo[0]; x <= hi[0]; ++x)
+        if (Get(x, y, z)) return true;
+  return false;
+}
+
+bool OccupancyMask::EmptyBlock(int level, const float idx[3], int lo[3], int hi[3]) const {
+  const int B = kBlock[level];
+  int b[3];
+  for (int a = 0; a < 3; ++a) {
+    int i = static_cast<int>(idx[a]);  // idx >= 0 (checked by the caller)
+    b[a] = i / B;
+    if (b[a] > dims_[level][a] - 1) b[a] = dims_[level][a] - 1;
+    lo[a] = b[a] * B;
+    hi[a] = lo[a] + B;
+    if (hi[a] > res_[a] - 1) hi[a] = res_[a] - 1;
+  }
+  return blocks_[level][(static_cast<size_t>(b[2]) * dims_[level][1] + b[1]) * dims_[level][0] +
+                        b[0]] == 0;
+}
+
+// ---------------------------------------------------------------------------------------------
+// SceneField
+
+float SceneField::StepSize() const {
+  if (step_size > 0.f) return step_size;
+  float mean = 0.f;
+  for (int a = 0; a < 3; ++a) mean += (aabb_max[a] - aabb_min[a]) / static_cast<float>(res[a] - 1);
+  return mean / 3.f * step_ratio;
+}
+
+int SceneField::NumSamples() const {
+  if (n_samples > 0) return n_samples;
+  const double norm = std::sqrt(static_cast<double>(res[0]) * res[0] +
+                                static_cast<double>(res[1]) * res[1] +
+                                static_cast<double>(res[2]) * res[2]);
+  const double n = norm / static_cast<double>(step_ratio);
+  return n >= 1e9 ? 1000000000 : static_cast<int>(n);
+}
+
+Status SceneField::Validate() const {
+  for (int a = 0; a < 3; ++a) {
+    ECRF_CHECK_OR_RETURN(std::isfinite(aabb_min[a]) && std::isfinite(aabb_max[a]) &&
+                             aabb_max[a] > aabb_min[a],
+                         kErrInvalidArgument, "scene: empty or non-finite aabb on axis %d", a);
+    ECRF_CHECK_OR_RETURN(res[a] >= 2 && res[a] <= kMaxGridRes, kErrInvalidArgument,
+                         "scene: grid resolution %d on axis %d out of range", res[a], a);
+    ECRF_CHECK_OR_RETURN(density.res[a] == res[a] && appearance.res[a] == res[a],
+                         kErrInvalidArgument, "scene: grid resolutions differ on axis %d", a);
+  }
+  ECRF_RETURN_IF_ERROR(density.Validate("density"));
+  ECRF_RETURN_IF_ERROR(appearance.Validate("appearance"));
+  ECRF_CHECK_OR_RETURN(std::isfinite(density_shift) && std::isfinite(distance_scale) &&
+                           distance_scale >= 0.f && std::isfinite(weight_threshold) &&
+                           std::isfinite(near_far[0]) && std::isfinite(near_far[1]) &&
+                           near_far[0] <= near_far[1] && std::isfinite(background[0]) &&
+                           std::isfinite(background[1]) && std::isfinite(background[2]),
+                       kErrInvalidArgument, "scene: non-finite or inconsistent render parameters");
+  ECRF_CHECK_OR_RETURN(step_ratio > 0.f && std::isfinite(step_ratio) && std::isfinite(step_size) &&
+                           step_size >= 0.f && n_samples >= 0,
+                       kErrInvalidArgument, "scene: bad step parameters");
+  const float step = StepSize();
+  ECRF_CHECK_OR_RETURN(step > 0.f && std::isfinite(step), kErrInvalidArgument,
+                       "scene: step size %g is not positive", static_cast<double>(step));
+  ECRF_CHECK_OR_RETURN(mlp.initialized(), kErrInvalidArgument, "scene: appearance MLP not set");
+  ECRF_CHECK_OR_RETURN(mlp.config().num_products == appearance.total_rank(), kErrInvalidArgument,
+                       "scene: MLP expects %d products, appearance grid has %d",
+                       mlp.config().num_products, appearance.total_rank());
+  if (has_mask) {
+    ECRF_CHECK_OR_RETURN(mask.acceleration_ready(), kErrInvalidArgument,
+                         "scene: alpha mask acceleration not built (call BuildAcceleration)");
+  }
+  return Status::Ok();
+}
+
+}  // namespace dec
+}  // namespace ecrf

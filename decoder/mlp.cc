@@ -1,0 +1,360 @@
+#include "decoder/mlp.h"
+
+#include <cmath>
+#include <cstring>
+
+namespace ecrf {
+namespace dec {
+namespace {
+
+constexpr int kPad = 8;   // output widths of the hidden layers / basis are padded to this
+constexpr int kOutPad = 8;
+
+int RoundUp(int v, int m) { return (v + m - 1) / m * m; }
+
+// y_r[j] = bias[j] + sum_k x_r[k] * wt[k * ldw + j] for 4 rows r, j < ncols (multiple of kCols),
+// optional ReLU. The k loop is sequential for every element, identical for all rows.
+// GCC/Clang generic vectors (lowered to SSE/AVX/NEON/wasm-simd128, or scalar code, by the
+// compiler): plain loops over small accumulator arrays get scalarised by GCC's SLP pass.
+#if defined(__GNUC__)
+typedef float V4 __attribute__((vector_size(16)));
+
+template <int kCols>
+void Gemm4(const float* x0, const float* x1, const float* x2, const float* x3, int K,
+           const float* wt, int ldw, const float* bias, int ncols, bool relu, float* y0, float* y1,
+           float* y2, float* y3) {
+  static_assert(kCols == 8, "two 4-float vectors per row");
+  // 16-byte vectors only: wider generic vectors are lowered through the stack on SSE targets.
+  // Named accumulators (not arrays) so they stay in registers: 8 of 16 xmm / NEON / simd128.
+  for (int j0 = 0; j0 < ncols; j0 += 8) {
+    V4 a0, b0, a1, b1, a2, b2, a3, b3;
+    std::memcpy(&a0, bias + j0, sizeof(V4));
+    std::memcpy(&b0, bias + j0 + 4, sizeof(V4));
+    a1 = a2 = a3 = a0;
+    b1 = b2 = b3 = b0;
+    const float* w = wt + j0;
+    for (int k = 0; k < K; ++k, w += ldw) {
+      V4 wa, wb;
+      std::memcpy(&wa, w, sizeof(V4));
+      std::memcpy(&wb, w + 4, sizeof(V4));
+      const float s0 = x0[k], s1 = x1[k], s2 = x2[k], s3 = x3[k];
+      a0 += s0 * wa;
+      b0 += s0 * wb;
+      a1 += s1 * wa;
+      b1 += s1 * wb;
+      a2 += s2 * wa;
+      b2 += s2 * wb;
+      a3 += s3 * wa;
+      b3 += s3 * wb;
+    }
+    if (relu) {
+      const V4 z = {0, 0, 0, 0};
+      a0 = a0 > z ? a0 : z;
+      b0 = b0 > z ? b0 : z;
+      a1 = a1 > z ? a1 : z;
+      b1 = b1 > z ? b1 : z;
+      a2 = a2 > z ? a2 : z;
+      b2 = b2 > z ? b2 : z;
+      a3 = a3 > z ? a3 : z;
+      b3 = b3 > z ? b3 : z;
+    }
+    std::memcpy(y0 + j0, &a0, sizeof(V4));
+    std::memcpy(y0 + j0 + 4, &b0, sizeof(V4));
+    std::memcpy(y1 + j0, &a1, sizeof(V4));
+    std::memcpy(y1 + j0 + 4, &b1, sizeof(V4));
+    std::memcpy(y2 + j0, &a2, sizeof(V4));
+    std::memcpy(y2 + j0 + 4, &b2, sizeof(V4));
+    std::memcpy(y3 + j0, &a3, sizeof(V4));
+    std::memcpy(y3 + j0 + 4, &b3, sizeof(V4));
+  }
+}
+#else
+template <int kCols>
+void Gemm4(const float* x0, const float* x1, const float* x2, const float* x3, int K,
+           const float* wt, int ldw, const float* bias, int ncols, bool relu, float* y0, float* y1,
+           float* y2, float* y3) {
+  float* y[4] = {y0, y1, y2, y3};
+  const float* x[4] = {x0, x1, x2, x3};
+  for (int r = 0; r < 4; ++r) {
+    for (int j = 0; j < ncols; ++j) y[r][j] = bias[j];
+    for (int k = 0; k < K; ++k) {
+      const float s = x[r][k];
+      const float* w = wt + static_cast<size_t>(k) * ldw;
+      for (int j = 0; j < ncols; ++j) y[r][j] += s * w[j];
+    }
+    if (relu) {
+      for (int j = 0; j < ncols; ++j) y[r][j] = y[r][j] > 0.f ? y[r][j] : 0.f;
+    }
+  }
+}
+#endif
+
+// rows (multiple of 4) x K times wt, rows contiguous with strides ldx / ldy.
+template <int kCols>
+void GemmRows(int rows, const float* x, int ldx, int K, const float* wt, int ldw,
+              const float* bias, bool relu, float* y, int ldy) {
+  for (int r = 0; r < rows; r += 4) {
+    const float* xr = x + static_cast<size_t>(r) * ldx;
+    float* yr = y + static_cast<size_t>(r) * ldy;
+    Gemm4<kCols>(xr, xr + ldx, xr + 2 * ldx, xr + 3 * ldx, K, wt, ldw, bias, ldw, relu, yr,
+                 yr + ldy, yr + 2 * ldy, yr + 3 * ldy);
+  }
+}
+
+bool AllFinite(const float* p, size_t n) {
+  for (size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(p[i])) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+void FastSinCos(const float* x, int count, float* s, float* c) {
+  constexpr float kTwoOverPi = 0.636619772367581343f;
+  constexpr float kP1 = 1.5703125f;  // pi/2 in three parts (Cody-Waite)
+  constexpr float kP2 = 4.837512969970703125e-4f;
+  constexpr float kP3 = 7.54978995489188216e-8f;
+  constexpr float kMagic = 12582912.f;  // 1.5 * 2^23: round-to-nearest by addition
+  constexpr float kLimit = 8192.f;
+  // Float-only, select-based body so the loop vectorises (no int conversions, no branches).
+  for (int i = 0; i < count; ++i) {
+    const float v = x[i];  // NaN / huge give garbage here and are fixed up below
+    const float kf = (v * kTwoOverPi + kMagic) - kMagic;
+    const float k4 = ((kf - 1.5f) * 0.25f + kMagic) - kMagic;  // floor(kf / 4), no ties
+    const float q = kf - 4.f * k4;                               // kf mod 4 in {0,1,2,3}
+    float r = v - kf * kP1;
+    r -= kf * kP2;
+    r -= kf * kP3;
+    const float r2 = r * r;
+    const float sr =
+        r + r * r2 * (-1.6666654611e-1f + r2 * (8.3321608736e-3f + r2 * -1.9515295891e-4f));
+    const float cr = 1.f - 0.5f * r2 +
+                     r2 * r2 *
+                         (4.166664568298827e-2f +
+                          r2 * (-1.388731625493765e-3f + r2 * 2.443315711809948e-5f));
+    // sin(r + q pi/2) = A sin r + B cos r, cos(r + q pi/2) = A cos r - B sin r.
+    // A = cos(q pi/2), B = sin(q pi/2) as exact cubic interpolants (no compares: they would
+    // keep GCC from if-converting, hence from vectorising, under -ftrapping-math).
+    const float qm = q - 1.f;
+    const float A = (3.f - q - 3.f * q * q + q * q * q) * (1.f / 3.f);
+    const float B = (3.f - qm - 3.f * qm * qm + qm * qm * qm) * (1.f / 3.f);
+    const float sv = A * sr + B * cr;
+    const float cv = A * cr - B * sr;
+    s[i] = sv;
+    c[i] = cv;
+  }
+  int big = 0;
+  for (int i = 0; i < count; ++i) big += std::fabs(x[i]) <= kLimit ? 0 : 1;
+  if (big != 0) {
+    for (int i = 0; i < count; ++i) {
+      if (!(std::fabs(x[i]) <= kLimit)) {
+        s[i] = std::sin(x[i]);
+        c[i] = std::cos(x[i]);
+      }
+    }
+  }
+}
+
+AppearanceMlp::~AppearanceMlp() { Release(); }
+
+AppearanceMlp::AppearanceMlp(AppearanceMlp&& o) noexcept { *this = static_cast<AppearanceMlp&&>(o); }
+
+AppearanceMlp& AppearanceMlp::operator=(AppearanceMlp&& o) noexcept {
+  if (this == &o) return *this;
+  Release();
+  config_ = o.config_;
+  fd_pad_ = o.fd_pad_;
+  hid_pad_ = o.hid_pad_;
+  in_dim_ = o.in_dim_;
+  in_stride_ = o.in_stride_;
+  weights_ = o.weights_;
+  weights_count_ = o.weights_count_;
+  o_basis_ = o.o_basis_;
+  o_w1_ = o.o_w1_;
+  o_b1_ = o.o_b1_;
+  o_w2_ = o.o_w2_;
+  o_b2_ = o.o_b2_;
+  o_w3_ = o.o_w3_;
+  o_b3_ = o.o_b3_;
+  o_zero_ = o.o_zero_;
+  o.weights_ = nullptr;
+  o.weights_count_ = 0;
+  return *this;
+}
+
+void AppearanceMlp::Release() {
+  std::free(weights_);
+  weights_ = nullptr;
+  weights_count_ = 0;
+}
+
+Status AppearanceMlp::Init(const MlpConfig& config) {
+  Release();
+  ECRF_CHECK_OR_RETURN(config.num_products >= 0 && config.num_products <= kMaxMlpProducts,
+                       kErrLimit, "mlp: num_products %d out of range [0, %d]",
+                       config.num_products, kMaxMlpProducts);
+  ECRF_CHECK_OR_RETURN(config.feature_dim >= 1 && config.feature_dim <= kMaxMlpFeatureDim,
+                       kErrLimit, "mlp: feature_dim %d out of range [1, %d]", config.feature_dim,
+                       kMaxMlpFeatureDim);
+  ECRF_CHECK_OR_RETURN(config.feature_pe_freqs >= 0 && config.feature_pe_freqs <= kMaxMlpPeFreqs &&
+                           config.viewdir_pe_freqs >= 0 &&
+                           config.viewdir_pe_freqs <= kMaxMlpPeFreqs,
+                       kErrLimit, "mlp: PE frequencies %d/%d out of range [0, %d]",
+                       config.feature_pe_freqs, config.viewdir_pe_freqs, kMaxMlpPeFreqs);
+  ECRF_CHECK_OR_RETURN(config.hidden >= 1 && config.hidden <= kMaxMlpHidden, kErrLimit,
+                       "mlp: hidden width %d out of range [1, %d]", config.hidden, kMaxMlpHidden);
+  config_ = config;
+  in_dim_ = config.input_dim();
+  in_stride_ = RoundUp(in_dim_, 8);
+  fd_pad_ = RoundUp(config.feature_dim, kPad);
+  hid_pad_ = RoundUp(config.hidden, kPad);
+  const size_t P = static_cast<size_t>(config.num_products);
+  const size_t H = static_cast<size_t>(config.hidden);
+  // All factors are bounded by the limits above, so these sizes cannot overflow.
+  size_t off = 0;
+  o_basis_ = off;
+  off += P * fd_pad_;
+  o_w1_ = off;
+  off += static_cast<size_t>(in_dim_) * hid_pad_;
+  o_b1_ = off;
+  off += hid_pad_;
+  o_w2_ = off;
+  off += H * hid_pad_;
+  o_b2_ = off;
+  off += hid_pad_;
+  o_w3_ = off;
+  off += H * kOutPad;
+  o_b3_ = off;
+  off += kOutPad;
+  o_zero_ = off;
+  off += fd_pad_;
+  weights_ = static_cast<float*>(std::calloc(off, sizeof(float)));
+  ECRF_CHECK_OR_RETURN(weights_ != nullptr, kErrOutOfMemory, "mlp: out of memory (%zu floats)",
+                       off);
+  weights_count_ = off;
+  return Status::Ok();
+}
+
+size_t AppearanceMlp::num_params() const {
+  const size_t P = config_.num_products, F = config_.feature_dim, H = config_.hidden;
+  return F * P + H * static_cast<size_t>(in_dim_) + H + H * H + H + 3 * H + 3;
+}
+
+Status AppearanceMlp::SetParams(const float* params, size_t count) {
+  ECRF_CHECK_OR_RETURN(initialized(), kErrInvalidArgument, "mlp: SetParams before Init");
+  ECRF_CHECK_OR_RETURN(params != nullptr && count == num_params(), kErrInvalidArgument,
+                       "mlp: expected %zu parameters, got %zu", num_params(), count);
+  ECRF_CHECK_OR_RETURN(AllFinite(params, count), kErrCorrupt, "mlp: non-finite parameter");
+  const int P = config_.num_products, F = config_.feature_dim, H = config_.hidden;
+  const int in = in_dim_;
+  std::memset(weights_, 0, weights_count_ * sizeof(float));
+  const float* p = params;
+  auto transpose = [&](int out, int k_in, float* dst, int ldw) {
+    for (int o = 0; o < out; ++o) {
+      for (int k = 0; k < k_in; ++k) dst[static_cast<size_t>(k) * ldw + o] = p[static_cast<size_t>(o) * k_in + k];
+    }
+    p += static_cast<size_t>(out) * k_in;
+  };
+  transpose(F, P, weights_ + o_basis_, fd_pad_);
+  transpose(H, in, weights_ + o_w1_, hid_pad_);
+  std::memcpy(weights_ + o_b1_, p, H * sizeof(float));
+  p += H;
+  transpose(H, H, weights_ + o_w2_, hid_pad_);
+  std::memcpy(weights_ + o_b2_, p, H * sizeof(float));
+  p += H;
+  transpose(3, H, weights_ + o_w3_, kOutPad);
+  std::memcpy(weights_ + o_b3_, p, 3 * sizeof(float));
+  return Status::Ok();
+}
+
+size_t AppearanceMlp::ScratchFloats() const {
+  const size_t C = kChunkRows;
+  const size_t pe = static_cast<size_t>(config_.feature_dim) * config_.feature_pe_freqs +
+                    3 * static_cast<size_t>(config_.viewdir_pe_freqs);
+  const size_t P = config_.num_products > 0 ? config_.num_products : 1;
+  return C * (fd_pad_ + in_stride_ + 2 * hid_pad_ + kOutPad) + 3 * C * pe + 4 * P + 64;
+}
+
+void AppearanceMlp::Infer(int rows, const float* products, size_t products_stride,
+                          const float* viewdirs, float* rgb, float* scratch) const {
+  const int C = kChunkRows;
+  const int P = config_.num_products, F = config_.feature_dim, H = config_.hidden;
+  const int Ff = config_.feature_pe_freqs, Fv = config_.viewdir_pe_freqs;
+  const int nf = F * Ff, nv = 3 * Fv;
+  float* feat = scratch;
+  float* in = feat + static_cast<size_t>(C) * fd_pad_;
+  float* h1 = in + static_cast<size_t>(C) * in_stride_;
+  float* h2 = h1 + static_cast<size_t>(C) * hid_pad_;
+  float* out = h2 + static_cast<size_t>(C) * hid_pad_;
+  float* pe_arg = out + static_cast<size_t>(C) * kOutPad;
+  float* pe_sin = pe_arg + static_cast<size_t>(C) * (nf + nv);
+  float* pe_cos = pe_sin + static_cast<size_t>(C) * (nf + nv);
+  float* zero_row = pe_cos + static_cast<size_t>(C) * (nf + nv);  // 4 * P floats, kept zero
+  const int zp = P > 0 ? P : 1;
+  std::memset(zero_row, 0, static_cast<size_t>(zp) * sizeof(float));
+  const float* wz = weights_ + o_zero_;
+
+  for (int r0 = 0; r0 < rows; r0 += C) {
+    const int n = rows - r0 < C ? rows - r0 : C;
+    const int n4 = (n + 3) & ~3;
+    // Basis: features = products * basis^T (no bias). Rows past n read the zero row.
+    for (int r = 0; r < n4; r += 4) {
+      const float* x[4];
+      for (int q = 0; q < 4; ++q) {
+        x[q] = r + q < n ? products + static_cast<size_t>(r0 + r + q) * products_stride : zero_row;
+      }
+      float* y = feat + static_cast<size_t>(r) * fd_pad_;
+      Gemm4<kPad>(x[0], x[1], x[2], x[3], P, weights_ + o_basis_, fd_pad_, wz, fd_pad_, false, y,
+                  y + fd_pad_, y + 2 * fd_pad_, y + 3 * fd_pad_);
+    }
+    // PE arguments for the whole chunk, one vectorised sin/cos pass.
+    for (int r = 0; r < n4; ++r) {
+      const float* f = feat + static_cast<size_t>(r) * fd_pad_;
+      const float* vd = r < n ? viewdirs + static_cast<size_t>(r0 + r) * 3 : wz;
+      float* a = pe_arg + static_cast<size_t>(r) * (nf + nv);
+      for (int c = 0; c < F; ++c) {
+        float m = 1.f;
+        for (int q = 0; q < Ff; ++q, m *= 2.f) a[c * Ff + q] = f[c] * m;
+      }
+      for (int c = 0; c < 3; ++c) {
+        float m = 1.f;
+        for (int q = 0; q < Fv; ++q, m *= 2.f) a[nf + c * Fv + q] = vd[c] * m;
+      }
+    }
+    FastSinCos(pe_arg, n4 * (nf + nv), pe_sin, pe_cos);
+    // Input rows: [features, viewdir, sin(feat args), cos(feat args), sin(vd args), cos(vd args)].
+    for (int r = 0; r < n4; ++r) {
+      float* x = in + static_cast<size_t>(r) * in_stride_;
+      const float* vd = r < n ? viewdirs + static_cast<size_t>(r0 + r) * 3 : wz;
+      const float* s = pe_sin + static_cast<size_t>(r) * (nf + nv);
+      const float* c = pe_cos + static_cast<size_t>(r) * (nf + nv);
+      std::memcpy(x, feat + static_cast<size_t>(r) * fd_pad_, F * sizeof(float));
+      x += F;
+      x[0] = vd[0];
+      x[1] = vd[1];
+      x[2] = vd[2];
+      x += 3;
+      std::memcpy(x, s, nf * sizeof(float));
+      std::memcpy(x + nf, c, nf * sizeof(float));
+      x += 2 * nf;
+      std::memcpy(x, s + nf, nv * sizeof(float));
+      std::memcpy(x + nv, c + nf, nv * sizeof(float));
+    }
+    GemmRows<kPad>(n4, in, in_stride_, in_dim_, weights_ + o_w1_, hid_pad_, weights_ + o_b1_, true,
+                   h1, hid_pad_);
+    GemmRows<kPad>(n4, h1, hid_pad_, H, weights_ + o_w2_, hid_pad_, weights_ + o_b2_, true, h2,
+                   hid_pad_);
+    GemmRows<kOutPad>(n4, h2, hid_pad_, H, weights_ + o_w3_, kOutPad, weights_ + o_b3_, false, out,
+                      kOutPad);
+    for (int r = 0; r < n; ++r) {
+      for (int c = 0; c < 3; ++c) {
+        rgb[static_cast<size_t>(r0 + r) * 3 + c] =
+            1.f / (1.f + std::exp(-out[static_cast<size_t>(r) * kOutPad + c]));
+      }
+    }
+  }
+}
+
+}  // namespace dec
+}  // namespace ecrf

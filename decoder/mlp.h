@@ -1,0 +1,92 @@
+// AppearanceMlp: float32 inference of TensoRF's MLPRender_Fea colour head (no allocation, no
+// exceptions, no BLAS).
+//
+// products (P) -> basis [F x P, no bias] -> features (F)
+// -> input [features F, viewdir 3, PE(features, Ff), PE(viewdir, Fv)]
+// -> Linear(hidden) ReLU -> Linear(hidden) ReLU -> Linear(3) -> sigmoid.
+// PE(x, Fr): arguments x_c * 2^f ordered c-major, then all sines, then all cosines.
+// Widths come from MlpConfig (read from the scene), not constants.
+//
+// Weights are kept transposed ([in x out], out padded to a multiple of 8) so every layer is a
+// row-blocked product whose inner loop runs over contiguous outputs and auto-vectorises. Each row
+// goes through exactly the same arithmetic whatever the batch size or its position in the batch,
+// so results do not depend on batching (or on the renderer's thread count).
+#ifndef ECRF_DECODER_MLP_H_
+#define ECRF_DECODER_MLP_H_
+
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+
+#include "format/status.h"
+
+namespace ecrf {
+namespace dec {
+
+struct MlpConfig {
+  int num_products = 0;  // P: sum of the appearance ranks
+  int feature_dim = 27;
+  int feature_pe_freqs = 2;
+  int viewdir_pe_freqs = 2;
+  int hidden = 128;
+  int input_dim() const {
+    return feature_dim + 3 + 2 * feature_dim * feature_pe_freqs + 2 * 3 * viewdir_pe_freqs;
+  }
+};
+
+// Limits checked by Init.
+inline constexpr int kMaxMlpProducts = 3 * 1024;
+inline constexpr int kMaxMlpFeatureDim = 256;
+inline constexpr int kMaxMlpPeFreqs = 16;
+inline constexpr int kMaxMlpHidden = 1024;
+
+class AppearanceMlp {
+ public:
+  AppearanceMlp() = default;
+  ~AppearanceMlp();
+  AppearanceMlp(const AppearanceMlp&) = delete;
+  AppearanceMlp& operator=(const AppearanceMlp&) = delete;
+  AppearanceMlp(AppearanceMlp&& o) noexcept;
+  AppearanceMlp& operator=(AppearanceMlp&& o) noexcept;
+
+  // Validates the widths and allocates zero weights.
+  Status Init(const MlpConfig& config);
+  bool initialized() const { return weights_ != nullptr; }
+  const MlpConfig& config() const { return config_; }
+
+  // Number of floats in the trainer's flat layout (trainer/appearance_head.h): basis [F x P],
+  // W1 [H x in], b1 [H], W2 [H x H], b2 [H], W3 [3 x H], b3 [3]; row-major (out x in).
+  size_t num_params() const;
+  // Loads weights from that layout (count must equal num_params()); rejects non-finite values.
+  Status SetParams(const float* params, size_t count);
+
+  // Scratch floats Infer needs (independent of the number of rows).
+  size_t ScratchFloats() const;
+  // rgb[r*3 + c] for `rows` rows: products row r at products + r * products_stride (P floats),
+  // viewdir row r at viewdirs + r * 3 (unit vectors). scratch: ScratchFloats() floats, 32-byte
+  // alignment recommended. Processes kChunkRows rows at a time so activations stay in cache.
+  void Infer(int rows, const float* products, size_t products_stride, const float* viewdirs,
+             float* rgb, float* scratch) const;
+
+  static constexpr int kChunkRows = 32;
+
+ private:
+  void Release();
+  MlpConfig config_;
+  int fd_pad_ = 0, hid_pad_ = 0, in_dim_ = 0, in_stride_ = 0;
+  // One allocation: basis_t [P x fd_pad], w1_t [in x hid_pad], b1 [hid_pad], w2_t [H x hid_pad],
+  // b2 [hid_pad], w3_t [H x 8], b3 [8], zero bias [fd_pad].
+  float* weights_ = nullptr;
+  size_t weights_count_ = 0;
+  size_t o_basis_ = 0, o_w1_ = 0, o_b1_ = 0, o_w2_ = 0, o_b2_ = 0, o_w3_ = 0, o_b3_ = 0,
+         o_zero_ = 0;
+};
+
+// s[i] = sin(x[i]), c[i] = cos(x[i]); absolute error ~1e-7 for |x| <= 8192 (Cody-Waite reduction
+// and minimax polynomials, branch-free so it vectorises), std::sin/std::cos beyond.
+void FastSinCos(const float* x, int count, float* s, float* c);
+
+}  // namespace dec
+}  // namespace ecrf
+
+#endif  // ECRF_DECODER_MLP_H_

@@ -1,0 +1,86 @@
+// The adaptive state of the coefficient coder for one block shape, and the context derivations
+// that encoder and decoder must share exactly (docs/spec/entropy_coding.md, "Contexts").
+#ifndef ECRF_FORMAT_COEF_CONTEXTS_H_
+#define ECRF_FORMAT_COEF_CONTEXTS_H_
+
+#include <cstdint>
+#include <vector>
+
+#include "format/coef_scan.h"
+#include "format/status.h"
+
+namespace ecrf {
+
+constexpr int kCodedFlagContexts = 3;  // how many of the previous two blocks were coded
+constexpr int kMaxEobClasses = 13;     // eob in [1, 4096]
+constexpr int kBaseSymbols = 4;        // base level 0, 1, 2 or >= 3
+constexpr int kLastBaseSymbols = 3;    // base level of the last coefficient: 1, 2 or >= 3
+constexpr int kRangeSymbols = 4;       // each adds 0..3; 3 means "more follows"
+constexpr int kMaxRangeSymbols = 4;    // range symbols take a level from 3 up to 15
+constexpr int kBaseMagContexts = 5;
+constexpr int kRangeMagContexts = 7;
+constexpr uint32_t kBaseLevelCap = 3;
+constexpr uint32_t kEscapeLevel = 15;  // levels >= 15 add an Exp-Golomb remainder
+constexpr int kMaxEscapeStat = 63;
+
+// All CDFs of one tensor chunk and one block shape. Init() once per shape, Reset() at the start
+// of each chunk; the members are the state the block coder reads and adapts.
+struct CoefContexts {
+  // kErrInvalidArgument for an invalid shape. Allocates the scan table and level map.
+  Status Init(const BlockShape& shape);
+  // Back to the initial state of a chunk: uniform CDFs, no history.
+  void Reset();
+
+  ScanTable scan;
+  int num_eob_classes = 0;         // log2(volume) + 1
+  std::vector<uint8_t> levels;     // padded map of min(level, 15); all zero between blocks
+  uint8_t prev_coded[2] = {0, 0};  // coded flags of the previous two blocks, latest first
+  int escape_stat = 0;             // Rice-style statistic choosing the Exp-Golomb order
+
+  uint16_t coded_cdf[kCodedFlagContexts][3];
+  uint16_t eob_class_cdf[kMaxEobClasses + 1];
+  uint16_t eob_extra_cdf[kMaxEobClasses][3];
+  uint16_t last_base_cdf[kNumBaseBands][kLastBaseSymbols + 1];
+  uint16_t base_cdf[kNumBaseBands * kBaseMagContexts][kBaseSymbols + 1];
+  uint16_t range_cdf[kNumRangeBands * kRangeMagContexts][kRangeSymbols + 1];
+};
+
+// eob class: 0 for eob 1, else 1 + FloorLog2(eob - 1); class c >= 2 has c - 1 offset bits.
+inline int EobClass(int eob) {
+  return eob == 1 ? 0 : 32 - __builtin_clz(static_cast<uint32_t>(eob - 1));
+}
+
+inline uint32_t MinU32(uint32_t a, uint32_t b) { return a < b ? a : b; }
+
+// `level` points at the coefficient's slot in the padded level map; its three higher-frequency
+// neighbours (one step along each axis) were coded before it in reverse scan order.
+inline int BaseContext(const uint8_t* level, const ScanTable& scan, int base_band) {
+  const uint32_t mag = MinU32(level[1], kBaseLevelCap) +
+                       MinU32(level[scan.padded_stride1], kBaseLevelCap) +
+                       MinU32(level[scan.padded_stride0], kBaseLevelCap);
+  return base_band * kBaseMagContexts +
+         static_cast<int>(MinU32((mag + 1) >> 1, kBaseMagContexts - 1));
+}
+
+inline int RangeContext(const uint8_t* level, const ScanTable& scan, int range_band) {
+  const uint32_t mag = uint32_t{level[1]} + level[scan.padded_stride1] + level[scan.padded_stride0];
+  return range_band * kRangeMagContexts +
+         static_cast<int>(MinU32((mag + 1) >> 1, kRangeMagContexts - 1));
+}
+
+inline int EscapeGolombOrder(int escape_stat) { return escape_stat >> 2; }
+
+// HEVC's persistent Rice adaptation: grow the order after large remainders, shrink it after
+// small ones.
+inline void UpdateEscapeStat(int* escape_stat, uint32_t remainder) {
+  const int k = EscapeGolombOrder(*escape_stat);
+  if (remainder >= (3u << k)) {
+    if (*escape_stat < kMaxEscapeStat) ++*escape_stat;
+  } else if (2 * remainder < (1u << k) && *escape_stat > 0) {
+    --*escape_stat;
+  }
+}
+
+}  // namespace ecrf
+
+#endif  // ECRF_FORMAT_COEF_CONTEXTS_H_

@@ -1,0 +1,182 @@
+#include "decoder/mlp.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <random>
+#include <vector>
+
+namespace ecrf {
+namespace dec {
+namespace {
+
+// Naive double-precision MLPRender_Fea on the trainer's flat parameter layout.
+void NaiveMlp(const MlpConfig& cfg, const std::vector<float>& params, const float* prod,
+              const float* vd, double rgb[3]) {
+  const int P = cfg.num_products, F = cfg.feature_dim, H = cfg.hidden, in_dim = cfg.input_dim();
+  size_t o = 0;
+  const size_t o_basis = o;
+  o += static_cast<size_t>(F) * P;
+  const size_t o_w1 = o;
+  o += static_cast<size_t>(H) * in_dim;
+  const size_t o_b1 = o;
+  o += H;
+  const size_t o_w2 = o;
+  o += static_cast<size_t>(H) * H;
+  const size_t o_b2 = o;
+  o += H;
+  const size_t o_w3 = o;
+  o += 3 * static_cast<size_t>(H);
+  const size_t o_b3 = o;
+  std::vector<double> feat(F, 0.0);
+  for (int j = 0; j < F; ++j)
+    for (int k = 0; k < P; ++k) feat[j] += double(params[o_basis + j * P + k]) * prod[k];
+  std::vector<double> x(feat);
+  for (int c = 0; c < 3; ++c) x.push_back(vd[c]);
+  auto pe = [&](const std::vector<double>& v, int freqs) {
+    std::vector<double> args;
+    for (double a : v)
+      for (int f = 0; f < freqs; ++f) args.push_back(a * std::ldexp(1.0, f));
+    for (double a : args) x.push_back(std::sin(a));
+    for (double a : args) x.push_back(std::cos(a));
+  };
+  pe(feat, cfg.feature_pe_freqs);
+  pe(std::vector<double>(vd, vd + 3), cfg.viewdir_pe_freqs);
+  EXPECT_EQ(static_cast<int>(x.size()), in_dim);
+  auto layer = [&](const std::vector<double>& a, size_t ow, size_t ob, int out, bool relu) {
+    std::vector<double> y(out);
+    for (int j = 0; j < out; ++j) {
+      double s = params[ob + j];
+      for (size_t k = 0; k < a.size(); ++k) s += double(params[ow + j * a.size() + k]) * a[k];
+      y[j] = relu ? std::max(s, 0.0) : s;
+    }
+    return y;
+  };
+  const std::vector<double> h1 = layer(x, o_w1, o_b1, H, true);
+  const std::vector<double> h2 = layer(h1, o_w2, o_b2, H, true);
+  const std::vector<double> z = layer(h2, o_w3, o_b3, 3, false);
+  for (int c = 0; c < 3; ++c) rgb[c] = 1.0 / (1.0 + std::exp(-z[c]));
+}
+
+std::vector<float> RandomParams(const AppearanceMlp& mlp, uint32_t seed, float scale) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-1.f, 1.f);
+  std::vector<float> p(mlp.num_params());
+  for (float& v : p) v = scale * u(rng);
+  return p;
+}
+
+void RandomInputs(int rows, int P, uint32_t seed, std::vector<float>* prod,
+                  std::vector<float>* vd) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> n(0.f, 1.f);
+  prod->resize(static_cast<size_t>(rows) * (P > 0 ? P : 1));
+  for (float& v : *prod) v = n(rng);
+  vd->resize(static_cast<size_t>(rows) * 3);
+  for (int r = 0; r < rows; ++r) {
+    float d[3] = {n(rng), n(rng), n(rng)};
+    const float len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    for (int c = 0; c < 3; ++c) (*vd)[r * 3 + c] = d[c] / len;
+  }
+}
+
+void CheckAgainstNaive(const MlpConfig& cfg, int rows, uint32_t seed) {
+  AppearanceMlp mlp;
+  ASSERT_TRUE(mlp.Init(cfg).ok());
+  // Scale so hidden activations are O(1) and the sigmoid is not saturated.
+  const std::vector<float> params = RandomParams(mlp, seed, 0.25f);
+  ASSERT_TRUE(mlp.SetParams(params.data(), params.size()).ok());
+  std::vector<float> prod, vd;
+  RandomInputs(rows, cfg.num_products, seed + 1, &prod, &vd);
+  const size_t stride = cfg.num_products > 0 ? cfg.num_products : 1;
+  std::vector<float> rgb(static_cast<size_t>(rows) * 3, -1.f), scratch(mlp.ScratchFloats());
+  mlp.Infer(rows, prod.data(), stride, vd.data(), rgb.data(), scratch.data());
+  double max_err = 0.0;
+  for (int r = 0; r < rows; ++r) {
+    double ref[3];
+    NaiveMlp(cfg, params, prod.data() + r * stride, vd.data() + r * 3, ref);
+    for (int c = 0; c < 3; ++c) max_err = std::max(max_err, std::fabs(ref[c] - rgb[r * 3 + c]));
+  }
+  EXPECT_LT(max_err, 2e-5) << "P=" << cfg.num_products << " F=" << cfg.feature_dim
+                           << " H=" << cfg.hidden;
+  // Every row is computed independently of the batch: one row at a time gives the same bits.
+  for (int r = 0; r < rows; r += 7) {
+    float one[3];
+    mlp.Infer(1, prod.data() + r * stride, stride, vd.data() + r * 3, one, scratch.data());
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(one[c], rgb[r * 3 + c]) << "row " << r;
+  }
+}
+
+TEST(MlpTest, DefaultTensorfWidthsMatchNaive) {
+  MlpConfig cfg;
+  cfg.num_products = 144;
+  CheckAgainstNaive(cfg, 101, 1);  // several chunks and a ragged tail
+}
+
+TEST(MlpTest, OtherWidthsMatchNaive) {
+  MlpConfig cfg;
+  cfg.num_products = 7;
+  cfg.feature_dim = 5;
+  cfg.feature_pe_freqs = 3;
+  cfg.viewdir_pe_freqs = 1;
+  cfg.hidden = 20;
+  CheckAgainstNaive(cfg, 33, 2);
+  cfg.feature_pe_freqs = 0;
+  cfg.viewdir_pe_freqs = 0;
+  cfg.hidden = 1;
+  CheckAgainstNaive(cfg, 5, 3);
+}
+
+TEST(MlpTest, ZeroProducts) {
+  MlpConfig cfg;
+  cfg.num_products = 0;
+  cfg.hidden = 16;
+  CheckAgainstNaive(cfg, 9, 4);
+}
+
+TEST(MlpTest, RejectsBadConfigAndParams) {
+  AppearanceMlp mlp;
+  MlpConfig cfg;
+  cfg.num_products = 10;
+  cfg.hidden = 0;
+  EXPECT_EQ(mlp.Init(cfg).code(), kErrLimit);
+  cfg.hidden = kMaxMlpHidden + 1;
+  EXPECT_EQ(mlp.Init(cfg).code(), kErrLimit);
+  cfg.hidden = 8;
+  cfg.num_products = -1;
+  EXPECT_EQ(mlp.Init(cfg).code(), kErrLimit);
+  cfg.num_products = 10;
+  ASSERT_TRUE(mlp.Init(cfg).ok());
+  std::vector<float> p(mlp.num_params(), 0.f);
+  EXPECT_EQ(mlp.SetParams(p.data(), p.size() - 1).code(), kErrInvalidArgument);
+  p[3] = NAN;
+  EXPECT_EQ(mlp.SetParams(p.data(), p.size()).code(), kErrCorrupt);
+  p[3] = 0.f;
+  EXPECT_TRUE(mlp.SetParams(p.data(), p.size()).ok());
+  // Moves keep the weights.
+  AppearanceMlp moved(static_cast<AppearanceMlp&&>(mlp));
+  EXPECT_TRUE(moved.initialized());
+  EXPECT_FALSE(mlp.initialized());
+}
+
+TEST(MlpTest, FastSinCosAccuracy) {
+  std::vector<float> x;
+  for (int i = -20000; i <= 20000; ++i) x.push_back(i * 0.013f);
+  x.push_back(1e5f);
+  x.push_back(-3e6f);
+  x.push_back(0.f);
+  x.push_back(-0.f);
+  std::vector<float> s(x.size()), c(x.size());
+  FastSinCos(x.data(), static_cast<int>(x.size()), s.data(), c.data());
+  double max_err = 0.0;
+  for (size_t i = 0; i < x.size(); ++i) {
+    max_err = std::max(max_err, std::fabs(s[i] - std::sin(double(x[i]))));
+    max_err = std::max(max_err, std::fabs(c[i] - std::cos(double(x[i]))));
+  }
+  EXPECT_LT(max_err, 5e-7);
+}
+
+}  // namespace
+}  // namespace dec
+}  // namespace ecrf

@@ -1,0 +1,724 @@
+#include "decoder/ray_marcher.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <random>
+#include <vector>
+
+#include "decoder/field.h"
+#include "decoder/field_sampler.h"
+
+namespace ecrf {
+namespace dec {
+namespace {
+
+constexpr int kMat[3][2] = {{0, 1}, {0, 2}, {1, 2}};
+constexpr int kVec[3] = {2, 1, 0};
+
+struct TestScene {
+  SceneField field;
+  std::vector<float> mlp_params;  // trainer layout, for the naive reference
+};
+
+struct SceneSpec {
+  int res[3] = {9, 11, 7};
+  int dranks[3] = {3, 2, 4};
+  int aranks[3] = {4, 5, 3};
+  int mask_res[3] = {37, 41, 29};  // 0: no mask
+  float blob_amp = 3.5f;
+  bool empty_mask = false;
+  MlpConfig mlp;
+  uint32_t seed = 7;
+};
+
+// Random grids plus a separable blob of density, a mask that is a dilated ball plus a few
+// random voxels, a random MLP; an off-centre, non-cubic aabb.
+void BuildScene(const SceneSpec& spec, TestScene* ts) {
+  std::mt19937 rng(spec.seed);
+  std::normal_distribution<float> nrm(0.f, 1.f);
+  std::uniform_real_distribution<float> uni(-1.f, 1.f);
+  SceneField& s = ts->field;
+  const float mn[3] = {-1.2f, -0.8f, -1.0f}, mx[3] = {1.0f, 1.3f, 0.9f};
+  for (int a = 0; a < 3; ++a) {
+    s.aabb_min[a] = mn[a];
+    s.aabb_max[a] = mx[a];
+    s.res[a] = spec.res[a];
+  }
+  s.near_far[0] = 0.1f;
+  s.near_far[1] = 6.f;
+  ASSERT_TRUE(s.density.Allocate(spec.res, spec.dranks, GridStorage::kFloat32).ok());
+  ASSERT_TRUE(s.appearance.Allocate(spec.res, spec.aranks, GridStorage::kFloat32).ok());
+  const float center[3] = {0.2f, -0.15f, 0.1f};
+  auto gauss = [&](int axis, int i) {
+    const float c = float(i) / float(spec.res[axis] - 1) * 2.f - 1.f;
+    const float z = (c - center[axis]) / 0.45f;
+    return std::exp(-0.5f * z * z);
+  };
+  for (int m = 0; m < 3; ++m) {
+    for (size_t i = 0; i < s.density.plane_count(m); ++i) s.density.plane_f32[m][i] = 0.4f * nrm(rng);
+    for (size_t i = 0; i < s.density.line_count(m); ++i) s.density.line_f32[m][i] = 0.4f * nrm(rng);
+    for (size_t i = 0; i < s.appearance.plane_count(m); ++i) s.appearance.plane_f32[m][i] = 0.5f * nrm(rng);
+    for (size_t i = 0; i < s.appearance.line_count(m); ++i) s.appearance.line_f32[m][i] = 0.5f * nrm(rng);
+    if (spec.dranks[m] > 0) {
+      const int u = kMat[m][0], v = kMat[m][1], w = kVec[m];
+      for (int y = 0; y < spec.res[v]; ++y)
+        for (int x = 0; x < spec.res[u]; ++x)
+          s.density.plane_f32[m][s.density.plane_index(m, y, x, 0)] = spec.blob_amp * gauss(u, x) * gauss(v, y);
+      for (int i = 0; i < spec.res[w]; ++i) s.density.line_f32[m][s.density.line_index(m, i, 0)] = gauss(w, i);
+    }
+  }
+  MlpConfig mc = spec.mlp;
+  mc.num_products = s.appearance.total_rank();
+  ASSERT_TRUE(s.mlp.Init(mc).ok());
+  ts->mlp_params.resize(s.mlp.num_params());
+  for (float& v : ts->mlp_params) v = 0.3f * uni(rng);
+  ASSERT_TRUE(s.mlp.SetParams(ts->mlp_params.data(), ts->mlp_params.size()).ok());
+  s.has_mask = spec.mask_res[0] > 0;
+  if (s.has_mask) {
+    ASSERT_TRUE(s.mask.Init(s.aabb_min, s.aabb_max, spec.mask_res).ok());
+    if (!spec.empty_mask) {
+      const int* r = spec.mask_res;
+      for (int z = 0; z < r[2]; ++z)
+        for (int y = 0; y < r[1]; ++y)
+          for (int x = 0; x < r[0]; ++x) {
+            const float c[3] = {float(x) / (r[0] - 1) * 2 - 1, float(y) / (r[1] - 1) * 2 - 1,
+                                float(z) / (r[2] - 1) * 2 - 1};
+            float d2 = 0.f;
+            for (int a = 0; a < 3; ++a) d2 += (c[a] - center[a]) * (c[a] - center[a]);
+            const bool on = d2 < 0.45f * 0.45f || (rng() % 997) == 0;
+            if (on) s.mask.Set(x, y, z, true);
+          }
+    }
+    ASSERT_TRUE(s.mask.BuildAcceleration().ok());
+  }
+  ASSERT_TRUE(s.Validate().ok()) << s.Validate().message();
+}
+
+// ------------------------------------------------------------------------------------------
+// Naive reference: TensoRF's inference process written directly (no skipping, no batching).
+// Sample positions and mask indices are computed in float as PyTorch does (they decide which
+// samples exist); field values, compositing and the MLP run in double.
+
+double GridPlane(const VmGrid& g, int m, int y, int x, int r) {
+  const size_t i = g.plane_index(m, y, x, r);
+  return g.storage == GridStorage::kFloat32 ? double(g.plane_f32[m][i])
+                                            : double(g.plane_i16[m][i]) * g.plane_scale[m];
+}
+double GridLine(const VmGrid& g, int m, int k, int r) {
+  const size_t i = g.line_index(m, k, r);
+  return g.storage == GridStorage::kFloat32 ? double(g.line_f32[m][i])
+                                            : double(g.line_i16[m][i]) * g.line_scale[m];
+}
+
+struct RefPoint {
+  int i0[3];
+  double f[3];
+};
+
+RefPoint Locate(const SceneField& s, const float p[3]) {
+  RefPoint rp;
+  for (int a = 0; a < 3; ++a) {
+    const double c = (double(p[a]) - s.aabb_min[a]) * 2.0 / (double(s.aabb_max[a]) - s.aabb_min[a]) - 1.0;
+    double idx = (c + 1.0) / 2.0 * (s.res[a] - 1);
+    idx = std::min(std::max(idx, 0.0), double(s.res[a] - 1));
+    int i = int(std::floor(idx));
+    if (i > s.res[a] - 2) i = s.res[a] - 2;
+    rp.i0[a] = i;
+    rp.f[a] = idx - i;
+  }
+  return rp;
+}
+
+// out[rank_offset + r] = plane * line.
+void RefProducts(const VmGrid& g, const RefPoint& rp, std::vector<double>* out) {
+  out->clear();
+  for (int m = 0; m < 3; ++m) {
+    const int u = kMat[m][0], v = kMat[m][1], w = kVec[m];
+    for (int r = 0; r < g.ranks[m]; ++r) {
+      const double fu = rp.f[u], fv = rp.f[v], fw = rp.f[w];
+      const int x = rp.i0[u], y = rp.i0[v], k = rp.i0[w];
+      const double pl = GridPlane(g, m, y, x, r) * (1 - fu) * (1 - fv) +
+                        GridPlane(g, m, y, x + 1, r) * fu * (1 - fv) +
+                        GridPlane(g, m, y + 1, x, r) * (1 - fu) * fv +
+                        GridPlane(g, m, y + 1, x + 1, r) * fu * fv;
+      const double li = GridLine(g, m, k, r) * (1 - fw) + GridLine(g, m, k + 1, r) * fw;
+      out->push_back(pl * li);
+    }
+  }
+}
+
+bool RefMaskKeeps(const OccupancyMask& mask, const float p[3]) {
+  const int* res = mask.res();
+  float idx[3];  // float, as grid_sample computes it
+  for (int a = 0; a < 3; ++a) {
+    const float inv = 1.0f / (mask.aabb_max()[a] - mask.aabb_min()[a]) * 2.f;
+    const float c = (p[a] - mask.aabb_min()[a]) * inv - 1.f;
+    idx[a] = (c + 1.f) / 2.f * float(res[a] - 1);
+  }
+  double value = 0.0;
+  int i0[3];
+  double f[3];
+  for (int a = 0; a < 3; ++a) {
+    i0[a] = int(std::floor(idx[a]));
+    f[a] = double(idx[a]) - i0[a];
+  }
+  for (int c = 0; c < 8; ++c) {
+    const int x = i0[0] + (c & 1), y = i0[1] + ((c >> 1) & 1), z = i0[2] + (c >> 2);
+    if (x < 0 || y < 0 || z < 0 || x >= res[0] || y >= res[1] || z >= res[2]) continue;
+    const double w = ((c & 1) ? f[0] : 1 - f[0]) * (((c >> 1) & 1) ? f[1] : 1 - f[1]) *
+                     ((c >> 2) ? f[2] : 1 - f[2]);
+    value += w * (mask.Get(x, y, z) ? 1.0 : 0.0);
+  }
+  return value > 0.0;
+}
+
+void NaiveMlp(const MlpConfig& cfg, const std::vector<float>& params,
+              const std::vector<double>& prod, const float* vd, double rgb[3]) {
+  const int P = cfg.num_products, F = cfg.feature_dim, H = cfg.hidden, in_dim = cfg.input_dim();
+  const size_t o_w1 = size_t(F) * P, o_b1 = o_w1 + size_t(H) * in_dim, o_w2 = o_b1 + H,
+               o_b2 = o_w2 + size_t(H) * H, o_w3 = o_b2 + H, o_b3 = o_w3 + 3 * size_t(H);
+  std::vector<double> feat(F, 0.0);
+  for (int j = 0; j < F; ++j)
+    for (int k = 0; k < P; ++k) feat[j] += double(params[size_t(j) * P + k]) * prod[k];
+  std::vector<double> x(feat);
+  for (int c = 0; c < 3; ++c) x.push_back(vd[c]);
+  auto pe = [&](const std::vector<double>& v, int freqs) {
+    std::vector<double> args;
+    for (double a : v)
+      for (int q = 0; q < freqs; ++q) args.push_back(a * std::ldexp(1.0, q));
+    for (double a : args) x.push_back(std::sin(a));
+    for (double a : args) x.push_back(std::cos(a));
+  };
+  pe(feat, cfg.feature_pe_freqs);
+  pe(std::vector<double>(vd, vd + 3), cfg.viewdir_pe_freqs);
+  auto layer = [&](const std::vector<double>& a, size_t ow, size_t ob, int out, bool relu) {
+    std::vector<double> y(out);
+    for (int j = 0; j < out; ++j) {
+      double s = params[ob + j];
+      for (size_t k = 0; k < a.size(); ++k) s += double(params[ow + j * a.size() + k]) * a[k];
+      y[j] = relu ? std::max(s, 0.0) : s;
+    }
+    return y;
+  };
+  const std::vector<double> z =
+      layer(layer(layer(x, o_w1, o_b1, H, true), o_w2, o_b2, H, true), o_w3, o_b3, 3, false);
+  for (int c = 0; c < 3; ++c) rgb[c] = 1.0 / (1.0 + std::exp(-z[c]));
+}
+
+void NaiveRender(const TestScene& ts, const float o[3], const float d[3], double rgb[3],
+                 double* acc_out) {
+  const SceneField& s = ts.field;
+  const float step = s.StepSize();
+  const int n = s.NumSamples();
+  float tmin = -INFINITY;
+  for (int a = 0; a < 3; ++a) {
+    const float vec = d[a] == 0.f ? 1e-6f : d[a];
+    tmin = std::max(tmin, std::min((s.aabb_max[a] - o[a]) / vec, (s.aabb_min[a] - o[a]) / vec));
+  }
+  const float t0 = std::min(std::max(tmin, s.near_far[0]), s.near_far[1]);
+  std::vector<float> z(n);
+  for (int i = 0; i < n; ++i) z[i] = t0 + step * float(i);
+  double T = 1.0, acc = 0.0, col[3] = {0, 0, 0};
+  std::vector<double> prod;
+  for (int i = 0; i < n; ++i) {
+    const float p[3] = {o[0] + d[0] * z[i], o[1] + d[1] * z[i], o[2] + d[2] * z[i]};
+    bool valid = true;
+    for (int a = 0; a < 3; ++a) valid = valid && !(s.aabb_min[a] > p[a] || p[a] > s.aabb_max[a]);
+    if (valid && s.has_mask) valid = RefMaskKeeps(s.mask, p);
+    double sigma = 0.0;
+    RefPoint rp{};
+    if (valid) {
+      rp = Locate(s, p);
+      RefProducts(s.density, rp, &prod);
+      double feat = 0.0;
+      for (double v : prod) feat += v;
+      const double x = feat + s.density_shift;
+      sigma = x > 20.0 ? x : std::log1p(std::exp(x));
+    }
+    const double dist = i + 1 < n ? double(float(z[i + 1] - z[i])) : 0.0;
+    const double alpha = 1.0 - std::exp(-sigma * dist * s.distance_scale);
+    const double w = alpha * T;
+    T *= 1.0 - alpha + 1e-10;
+    acc += w;
+    if (w > s.weight_threshold) {
+      RefProducts(s.appearance, rp, &prod);
+      double c[3];
+      NaiveMlp(s.mlp.config(), ts.mlp_params, prod, d, c);
+      for (int k = 0; k < 3; ++k) col[k] += w * c[k];
+    }
+  }
+  for (int k = 0; k < 3; ++k) rgb[k] = std::min(std::max(col[k] + (1.0 - acc) * s.background[k], 0.0), 1.0);
+  *acc_out = acc;
+}
+
+// ------------------------------------------------------------------------------------------
+// Ray sets
+
+void Normalize(float d[3]) {
+  const float l = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  for (int a = 0; a < 3; ++a) d[a] /= l;
+}
+
+struct Rays {
+  std::vector<float> o, d;
+  std::vector<const char*> kind;
+  void Add(const float* oo, const float* dd, const char* k) {
+    o.insert(o.end(), oo, oo + 3);
+    d.insert(d.end(), dd, dd + 3);
+    kind.push_back(k);
+  }
+  size_t size() const { return kind.size(); }
+};
+
+Rays MakeRays(const SceneField& s, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0.f, 1.f);
+  std::normal_distribution<float> nrm(0.f, 1.f);
+  Rays rays;
+  auto in_box = [&](float frac_lo, float frac_hi, float p[3]) {
+    for (int a = 0; a < 3; ++a) {
+      const float f = frac_lo + (frac_hi - frac_lo) * u(rng);
+      p[a] = s.aabb_min[a] + f * (s.aabb_max[a] - s.aabb_min[a]);
+    }
+  };
+  // Camera-like rays from a sphere towards points in (or slightly around) the box.
+  for (int i = 0; i < 160; ++i) {
+    float o[3] = {nrm(rng), nrm(rng), nrm(rng)}, target[3], d[3];
+    Normalize(o);
+    for (float& v : o) v *= 3.5f;
+    in_box(-0.1f, 1.1f, target);
+    for (int a = 0; a < 3; ++a) d[a] = target[a] - o[a];
+    Normalize(d);
+    rays.Add(o, d, "camera");
+  }
+  // Axis-parallel rays (both signs), entering from outside through a random point of a face.
+  for (int i = 0; i < 36; ++i) {
+    const int axis = i % 3;
+    const float sign = (i / 3) % 2 ? 1.f : -1.f;
+    float o[3], d[3] = {0.f, 0.f, 0.f};
+    in_box(0.02f, 0.98f, o);
+    o[axis] = sign > 0 ? s.aabb_min[axis] - 0.7f : s.aabb_max[axis] + 0.7f;
+    d[axis] = sign;
+    rays.Add(o, d, "axis");
+    // Same with a -0 component.
+    float dz[3] = {d[0] == 0.f ? -0.f : d[0], d[1], d[2]};
+    rays.Add(o, dz, "axis-negzero");
+  }
+  // Rays starting inside the box.
+  for (int i = 0; i < 60; ++i) {
+    float o[3], d[3] = {nrm(rng), nrm(rng), nrm(rng)};
+    in_box(0.05f, 0.95f, o);
+    Normalize(d);
+    rays.Add(o, d, "inside");
+  }
+  // Rays missing the box: from outside, pointing away.
+  for (int i = 0; i < 20; ++i) {
+    float o[3] = {nrm(rng), nrm(rng), nrm(rng)};
+    Normalize(o);
+    for (float& v : o) v *= 4.f;
+    float d[3] = {o[0] + 0.3f * nrm(rng), o[1] + 0.3f * nrm(rng), o[2] + 0.3f * nrm(rng)};
+    Normalize(d);
+    rays.Add(o, d, "miss");
+  }
+  // Grazing rays: within a face plane (d component 0, origin exactly on the face), along an
+  // edge, and nearly tangent to a face.
+  for (int i = 0; i < 24; ++i) {
+    const int axis = i % 3;
+    float o[3], d[3];
+    in_box(0.1f, 0.9f, o);
+    o[axis] = (i / 3) % 2 ? s.aabb_max[axis] : s.aabb_min[axis];
+    const int b = (axis + 1) % 3, c = (axis + 2) % 3;
+    d[axis] = 0.f;
+    d[b] = nrm(rng);
+    d[c] = nrm(rng);
+    Normalize(d);
+    const float back = 3.f;
+    const float oo[3] = {o[0] - back * d[0], o[1] - back * d[1], o[2] - back * d[2]};
+    float oo2[3] = {oo[0], oo[1], oo[2]};
+    oo2[axis] = o[axis];  // keep exactly on the face plane
+    rays.Add(oo2, d, "grazing-face");
+    float dt[3] = {d[0], d[1], d[2]};
+    dt[axis] = (o[axis] == s.aabb_max[axis] ? -1.f : 1.f) * 1e-4f;  // nearly tangent, into the box
+    Normalize(dt);
+    rays.Add(oo2, dt, "grazing-tilt");
+  }
+  // Along an edge of the box.
+  {
+    const float o[3] = {s.aabb_min[0] - 1.f, s.aabb_max[1], s.aabb_min[2]};
+    const float d[3] = {1.f, 0.f, 0.f};
+    rays.Add(o, d, "edge");
+  }
+  return rays;
+}
+
+void RenderWith(const SceneField& s, const RenderOptions& opt, const Rays& rays,
+                std::vector<float>* rgb, std::vector<float>* acc, RenderStats* stats = nullptr) {
+  RayMarcher rm;
+  const Status st = rm.Init(&s, opt);
+  ASSERT_TRUE(st.ok()) << st.message();
+  rgb->assign(rays.size() * 3, -1.f);
+  acc->assign(rays.size(), -1.f);
+  const Status r = rm.RenderRays(rays.size(), rays.o.data(), rays.d.data(), rgb->data(), acc->data(), stats);
+  ASSERT_TRUE(r.ok()) << r.message();
+}
+
+void ExpectMatchesNaive(const TestScene& ts, const RenderOptions& opt, uint32_t seed,
+                        double min_mean_acc = 0.05, double tol = 1e-4) {
+  const Rays rays = MakeRays(ts.field, seed);
+  std::vector<float> rgb, acc;
+  RenderWith(ts.field, opt, rays, &rgb, &acc);
+  double max_err = 0.0, max_acc_err = 0.0, sum_acc = 0.0;
+  int worst = -1;
+  for (size_t r = 0; r < rays.size(); ++r) {
+    double ref[3], ref_acc;
+    NaiveRender(ts, &rays.o[3 * r], &rays.d[3 * r], ref, &ref_acc);
+    sum_acc += ref_acc;
+    for (int k = 0; k < 3; ++k) {
+      const double e = std::fabs(ref[k] - rgb[3 * r + k]);
+      if (e > max_err) {
+        max_err = e;
+        worst = int(r);
+      }
+    }
+    max_acc_err = std::max(max_acc_err, std::fabs(ref_acc - acc[r]));
+    if (std::string(rays.kind[r]) == "miss") {
+      EXPECT_EQ(acc[r], 0.f);
+      for (int k = 0; k < 3; ++k) EXPECT_EQ(rgb[3 * r + k], ts.field.background[k]);
+    }
+  }
+  EXPECT_LT(max_err, tol) << "worst ray " << worst << " (" << (worst >= 0 ? rays.kind[worst] : "")
+                          << ")";
+  EXPECT_LT(max_acc_err, tol);
+  // The scene must actually show something (not a trivially white image).
+  EXPECT_GT(sum_acc / rays.size(), min_mean_acc);
+}
+
+RenderOptions Exact() {
+  RenderOptions o;
+  o.early_stop_transmittance = 0.f;
+  o.tile_size = 4;
+  o.batch_rows = 37;  // odd batch size: flushes in the middle of rays
+  return o;
+}
+
+TEST(RayMarcherTest, MatchesNaiveReferenceWithMask) {
+  TestScene ts;
+  BuildScene(SceneSpec(), &ts);
+  ExpectMatchesNaive(ts, Exact(), 11);
+  RenderOptions no_skip = Exact();
+  no_skip.skip_empty_space = false;
+  ExpectMatchesNaive(ts, no_skip, 12);
+}
+
+TEST(RayMarcherTest, MatchesNaiveReferenceWithoutMask) {
+  SceneSpec spec;
+  spec.mask_res[0] = 0;
+  spec.seed = 8;
+  TestScene ts;
+  BuildScene(spec, &ts);
+  ExpectMatchesNaive(ts, Exact(), 13);
+}
+
+TEST(RayMarcherTest, NearPlaneAndSampleCap) {
+  SceneSpec spec;
+  TestScene ts;
+  BuildScene(spec, &ts);
+  ts.field.near_far[0] = 2.f;  // Blender near: rays starting inside begin at t = 2
+  ts.field.n_samples = 23;     // explicit sample count (the last sample has dist 0)
+  ExpectMatchesNaive(ts, Exact(), 14, 0.01);
+  ts.field.n_samples = 0;
+  ts.field.step_size = 0.037f;
+  ExpectMatchesNaive(ts, Exact(), 15, 0.01);
+}
+
+TEST(RayMarcherTest, RankZeroModes) {
+  SceneSpec spec;
+  spec.dranks[0] = 0;
+  spec.dranks[2] = 0;
+  spec.aranks[1] = 0;
+  spec.blob_amp = 12.f;  // one density mode left: make it dense
+  spec.seed = 9;
+  TestScene ts;
+  BuildScene(spec, &ts);
+  ExpectMatchesNaive(ts, Exact(), 16);
+  // No appearance components at all (P = 0): colour comes from the MLP biases and viewdirs.
+  SceneSpec spec0 = spec;
+  spec0.aranks[0] = spec0.aranks[1] = spec0.aranks[2] = 0;
+  TestScene ts0;
+  BuildScene(spec0, &ts0);
+  ExpectMatchesNaive(ts0, Exact(), 17);
+}
+
+TEST(RayMarcherTest, OtherMlpWidths) {
+  SceneSpec spec;
+  spec.mlp.feature_dim = 9;
+  spec.mlp.feature_pe_freqs = 3;
+  spec.mlp.viewdir_pe_freqs = 0;
+  spec.mlp.hidden = 24;
+  TestScene ts;
+  BuildScene(spec, &ts);
+  ExpectMatchesNaive(ts, Exact(), 18);
+}
+
+TEST(RayMarcherTest, Int16GridsMatchFloatWithinQuantization) {
+  TestScene ts;
+  BuildScene(SceneSpec(), &ts);
+  TestScene tq;
+  BuildScene(SceneSpec(), &tq);  // same seed: same MLP and mask
+  VmGrid qd, qa;
+  ASSERT_TRUE(QuantizeGridInt16(ts.field.density, &qd).ok());
+  ASSERT_TRUE(QuantizeGridInt16(ts.field.appearance, &qa).ok());
+  tq.field.density = std::move(qd);
+  tq.field.appearance = std::move(qa);
+  ASSERT_TRUE(tq.field.Validate().ok());
+  // The int16 renderer is exact for its own (dequantized) values...
+  ExpectMatchesNaive(tq, Exact(), 19);
+  // ...and close to the float scene.
+  const Rays rays = MakeRays(ts.field, 20);
+  std::vector<float> rf, af, rq, aq;
+  RenderWith(ts.field, Exact(), rays, &rf, &af);
+  RenderWith(tq.field, Exact(), rays, &rq, &aq);
+  double max_diff = 0.0;
+  for (size_t i = 0; i < rf.size(); ++i) max_diff = std::max(max_diff, double(std::fabs(rf[i] - rq[i])));
+  EXPECT_LT(max_diff, 2e-3);
+  std::printf("int16 vs float grids: max |rgb diff| = %.3g\n", max_diff);
+}
+
+Camera TestCamera(int w, int h) {
+  Camera cam = OrbitCamera(w, h, 0.7f, 0.4f, 3.5f);
+  cam.fx = cam.fy = 0.9f * w;  // wide enough to see the whole box and some background
+  return cam;
+}
+
+TEST(RayMarcherTest, SkippingGivesIdenticalImage) {
+  TestScene ts;
+  BuildScene(SceneSpec(), &ts);
+  const Camera cam = TestCamera(48, 40);
+  std::vector<float> a(48 * 40 * 3), b(48 * 40 * 3);
+  RenderOptions opt;
+  opt.early_stop_transmittance = 0.f;
+  RayMarcher skip, noskip;
+  ASSERT_TRUE(skip.Init(&ts.field, opt).ok());
+  opt.skip_empty_space = false;
+  ASSERT_TRUE(noskip.Init(&ts.field, opt).ok());
+  RenderStats sa, sb;
+  ASSERT_TRUE(skip.RenderImage(cam, nullptr, a.data(), &sa).ok());
+  ASSERT_TRUE(noskip.RenderImage(cam, nullptr, b.data(), &sb).ok());
+  EXPECT_EQ(sa.samples, sb.samples);
+  EXPECT_EQ(sa.color_samples, sb.color_samples);
+  EXPECT_GT(sa.samples, 0u);
+  for (size_t i = 0; i < a.size(); ++i) ASSERT_EQ(a[i], b[i]) << "at " << i;
+  // The test rays too (axis-parallel, grazing, inside).
+  const Rays rays = MakeRays(ts.field, 21);
+  std::vector<float> r1, a1, r2, a2;
+  RenderOptions o1 = Exact(), o2 = Exact();
+  o2.skip_empty_space = false;
+  RenderWith(ts.field, o1, rays, &r1, &a1);
+  RenderWith(ts.field, o2, rays, &r2, &a2);
+  EXPECT_EQ(r1, r2);
+  EXPECT_EQ(a1, a2);
+}
+
+TEST(RayMarcherTest, ThreadCountDoesNotChangeOutput) {
+  TestScene ts;
+  BuildScene(SceneSpec(), &ts);
+  const Camera cam = TestCamera(37, 29);  // ragged tiles
+  std::vector<std::vector<uint8_t>> bytes;
+  std::vector<std::vector<float>> floats;
+  for (int threads : {1, 2, 3}) {
+    RenderOptions opt;
+    opt.num_threads = threads;
+    RayMarcher rm;
+    ASSERT_TRUE(rm.Init(&ts.field, opt).ok());
+    std::vector<uint8_t> img(37 * 29 * 4);
+    std::vector<float> rgb(37 * 29 * 3);
+    RenderStats st;
+    ASSERT_TRUE(rm.RenderImage(cam, img.data(), rgb.data(), &st).ok());
+    EXPECT_EQ(st.rays, 37u * 29u);
+    bytes.push_back(img);
+    floats.push_back(rgb);
+  }
+  EXPECT_EQ(bytes[0], bytes[1]);
+  EXPECT_EQ(bytes[0], bytes[2]);
+  EXPECT_EQ(floats[0], floats[1]);
+  EXPECT_EQ(floats[0], floats[2]);
+  // RGBA8 is the rounded float image, alpha the opacity.
+  for (size_t p = 0; p < 37 * 29; ++p)
+    for (int k = 0; k < 3; ++k)
+      EXPECT_EQ(bytes[0][4 * p + k], uint8_t(floats[0][3 * p + k] * 255.f + 0.5f));
+}
+
+TEST(RayMarcherTest, EarlyTerminationChangesAlmostNothing) {
+  SceneSpec spec;
+  spec.blob_amp = 6.f;  // opaque core so that termination actually happens
+  TestScene ts;
+  BuildScene(spec, &ts);
+  const Rays rays = MakeRays(ts.field, 22);
+  std::vector<float> r1, a1, r2, a2;
+  RenderOptions on = Exact(), off = Exact();
+  on.early_stop_transmittance = 1e-4f;
+  RenderStats s_on, s_off;
+  RenderWith(ts.field, on, rays, &r1, &a1, &s_on);
+  RenderWith(ts.field, off, rays, &r2, &a2, &s_off);
+  double max_diff = 0.0;
+  for (size_t i = 0; i < r1.size(); ++i) max_diff = std::max(max_diff, double(std::fabs(r1[i] - r2[i])));
+  EXPECT_LE(max_diff, 1.1e-4);
+  EXPECT_LT(s_on.samples, s_off.samples);
+  EXPECT_EQ(s_on.color_samples, s_off.color_samples);
+}
+
+TEST(RayMarcherTest, EmptyDensityRendersBackground) {
+  // Empty alpha mask: every sample is skipped, the image is exactly white with alpha 0.
+  SceneSpec spec;
+  spec.empty_mask = true;
+  TestScene ts;
+  BuildScene(spec, &ts);
+  const Camera cam = TestCamera(20, 16);
+  std::vector<uint8_t> img(20 * 16 * 4);
+  std::vector<float> rgb(20 * 16 * 3);
+  RayMarcher rm;
+  ASSERT_TRUE(rm.Init(&ts.field, RenderOptions()).ok());
+  RenderStats st;
+  ASSERT_TRUE(rm.RenderImage(cam, img.data(), rgb.data(), &st).ok());
+  EXPECT_EQ(st.samples, 0u);
+  for (size_t p = 0; p < 20 * 16; ++p) {
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(rgb[3 * p + k], 1.f);
+    EXPECT_EQ(img[4 * p + 3], 0);
+    EXPECT_EQ(img[4 * p], 255);
+  }
+  // No mask, density feature -100 everywhere: white up to float rounding.
+  SceneSpec spec2;
+  spec2.mask_res[0] = 0;
+  TestScene t2;
+  BuildScene(spec2, &t2);
+  for (int m = 0; m < 3; ++m) {
+    for (size_t i = 0; i < t2.field.density.plane_count(m); ++i) t2.field.density.plane_f32[m][i] = 0.f;
+    for (size_t i = 0; i < t2.field.density.line_count(m); ++i) t2.field.density.line_f32[m][i] = 0.f;
+  }
+  for (size_t i = 0; i < t2.field.density.plane_count(0); i += t2.field.density.ranks[0]) {
+    t2.field.density.plane_f32[0][i] = -10.f;
+  }
+  for (size_t i = 0; i < t2.field.density.line_count(0); i += t2.field.density.ranks[0]) {
+    t2.field.density.line_f32[0][i] = 10.f;
+  }
+  RayMarcher rm2;
+  ASSERT_TRUE(rm2.Init(&t2.field, RenderOptions()).ok());
+  ASSERT_TRUE(rm2.RenderImage(cam, img.data(), rgb.data(), &st).ok());
+  EXPECT_GT(st.samples, 0u);
+  EXPECT_EQ(st.color_samples, 0u);
+  for (size_t p = 0; p < 20 * 16; ++p) {
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(rgb[3 * p + k], 1.f, 1e-6);
+    EXPECT_EQ(img[4 * p + 3], 0);
+  }
+}
+
+TEST(RayMarcherTest, BlackBackground) {
+  TestScene ts;
+  BuildScene(SceneSpec(), &ts);
+  ts.field.background[0] = ts.field.background[1] = ts.field.background[2] = 0.f;
+  ExpectMatchesNaive(ts, Exact(), 23);
+}
+
+TEST(RayMarcherTest, CameraConvention) {
+  Camera cam;  // identity pose
+  cam.width = 4;
+  cam.height = 2;
+  cam.fx = cam.fy = 2.f;
+  cam.cx = 2.f;
+  cam.cy = 1.f;
+  cam.c2w[3] = 1.f;
+  cam.c2w[7] = 2.f;
+  cam.c2w[11] = 3.f;
+  float o[3], d[3];
+  CameraRay(cam, 0, 0, o, d);  // top-left pixel: left (-x), up (+y), forward (-z)
+  EXPECT_EQ(o[0], 1.f);
+  EXPECT_EQ(o[1], 2.f);
+  EXPECT_EQ(o[2], 3.f);
+  const float e[3] = {-0.75f, 0.25f, -1.f};
+  const float l = std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(d[a], e[a] / l, 1e-6);
+}
+
+TEST(RayMarcherTest, RejectsInvalidInput) {
+  TestScene ts;
+  BuildScene(SceneSpec(), &ts);
+  RayMarcher rm;
+  RenderOptions opt;
+  opt.num_threads = -1;
+  EXPECT_EQ(rm.Init(&ts.field, opt).code(), kErrInvalidArgument);
+  EXPECT_EQ(rm.Init(nullptr, RenderOptions()).code(), kErrInvalidArgument);
+  Camera cam = TestCamera(8, 8);
+  std::vector<uint8_t> img(64 * 4);
+  EXPECT_EQ(rm.RenderImage(cam, img.data(), nullptr).code(), kErrInvalidArgument);  // no Init
+  ASSERT_TRUE(rm.Init(&ts.field, RenderOptions()).ok());
+  EXPECT_EQ(rm.RenderImage(cam, nullptr, nullptr).code(), kErrInvalidArgument);
+  cam.width = 1 << 14;
+  cam.height = 1 << 14;
+  EXPECT_EQ(rm.RenderImage(cam, img.data(), nullptr).code(), kErrLimit);
+  cam = TestCamera(8, 8);
+  cam.fx = NAN;
+  EXPECT_EQ(rm.RenderImage(cam, img.data(), nullptr).code(), kErrInvalidArgument);
+  // Mismatched MLP width.
+  TestScene bad;
+  BuildScene(SceneSpec(), &bad);
+  MlpConfig mc = bad.field.mlp.config();
+  mc.num_products += 1;
+  ASSERT_TRUE(bad.field.mlp.Init(mc).ok());
+  EXPECT_EQ(rm.Init(&bad.field, RenderOptions()).code(), kErrInvalidArgument);
+  // Mask changed without rebuilding the acceleration.
+  TestScene m;
+  BuildScene(SceneSpec(), &m);
+  m.field.mask.Set(0, 0, 0, true);
+  EXPECT_EQ(rm.Init(&m.field, RenderOptions()).code(), kErrInvalidArgument);
+  // Allocation limits.
+  VmGrid g;
+  const int huge[3] = {kMaxGridRes, kMaxGridRes, kMaxGridRes}, ranks[3] = {kMaxRank, 1, 1};
+  EXPECT_EQ(g.Allocate(huge, ranks, GridStorage::kFloat32).code(), kErrLimit);
+  const int too_big[3] = {kMaxGridRes + 1, 2, 2};
+  EXPECT_EQ(g.Allocate(too_big, ranks, GridStorage::kFloat32).code(), kErrLimit);
+}
+
+TEST(RayMarcherTest, BlobSceneSmoke) {
+  SceneField s;
+  const Status st = MakeBlobScene(24, GridStorage::kInt16, true, 1, &s);
+  ASSERT_TRUE(st.ok()) << st.message();
+  RenderBenchResult r;
+  ASSERT_TRUE(BenchmarkRender(s, 32, 32, 2, 2, RenderOptions(), &r).ok());
+  EXPECT_GT(r.samples_per_view, 0u);
+  EXPECT_GT(r.color_samples_per_view, 0u);
+}
+
+// The render benchmark (400x400, 128^3 blob scene): set ECRF_RUN_BENCH=1 to run it.
+TEST(RenderBench, Blob128) {
+  if (std::getenv("ECRF_RUN_BENCH") == nullptr) GTEST_SKIP() << "set ECRF_RUN_BENCH=1";
+  for (GridStorage storage : {GridStorage::kFloat32, GridStorage::kInt16}) {
+    SceneField s;
+    const auto t0 = std::chrono::steady_clock::now();
+    ASSERT_TRUE(MakeBlobScene(128, storage, true, 1, &s).ok());
+    std::printf("scene build %.0f ms\n",
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() * 1e3);
+    for (bool skip : {true, false}) {
+      for (int threads : {1, 2}) {
+        RenderOptions opt;
+        opt.skip_empty_space = skip;
+        RenderBenchResult r;
+        ASSERT_TRUE(BenchmarkRender(s, 400, 400, threads, 4, opt, &r).ok());
+        std::printf("%s skip=%d threads=%d: %.1f ms/view, %.2f M samples/s (%llu/view), "
+                    "%.2f M colour samples/s (%llu/view)\n",
+                    storage == GridStorage::kInt16 ? "int16" : "f32  ", skip ? 1 : 0, threads,
+                    r.ms_per_view, r.msamples_per_s, (unsigned long long)r.samples_per_view,
+                    r.mcolor_samples_per_s, (unsigned long long)r.color_samples_per_view);
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace dec
+}  // namespace ecrf

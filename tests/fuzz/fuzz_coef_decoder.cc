@@ -1,0 +1,33 @@
+// libFuzzer target: coefficient decoding of arbitrary bytes, for every block shape family, must
+// end in an error status or valid coefficients within the bound, never a crash or a hang.
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+#include <vector>
+
+#include "format/coef_coder.h"
+#include "format/int_idct.h"
+#include "format/range_coder.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  if (size < 2) return 0;
+  // First byte picks the shape and bit depth; the rest is the coded stream.
+  static const ecrf::BlockShape kShapes[] = {{16, 16, 16}, {1, 8, 8}, {1, 1, 32}, {32, 4, 32}, {1, 1, 1}};
+  const ecrf::BlockShape shape = kShapes[data[0] % 5];
+  const bool wide = data[0] & 0x80;
+  const int32_t max_abs = wide ? 32767 : 127;
+  ecrf::CoefContexts contexts;
+  if (!contexts.Init(shape).ok()) return 0;
+  ecrf::RangeDecoder decoder(data + 1, size - 1);
+  std::vector<int32_t> coeffs(shape.Volume()), samples(shape.Volume());
+  const int dims[3] = {shape.n0, shape.n1, shape.n2};
+  for (int block = 0; block < 64; ++block) {
+    if (!ecrf::DecodeCoefBlock(decoder, contexts, max_abs, coeffs.data()).ok()) return 0;
+    for (int32_t c : coeffs) {
+      if (std::abs(c) > max_abs) std::abort();  // the decoder promised the bound
+    }
+    ecrf::InverseDctInt(coeffs.data(), dims, wide ? 16 : 8, samples.data());
+  }
+  (void)decoder.Finish();
+  return 0;
+}

@@ -1,0 +1,168 @@
+// `ecrf bench train-step`: times TrainStep (forward + backward incl. the appearance head) on a
+// synthetic Blender-like scene: aabb [-1.5,1.5]^3, cameras on a sphere of radius 4, an opaque
+// soft blob in the middle of a randomly initialised VM-192 field.
+//
+//   --res N          grid resolution per axis (128)
+//   --rays N         rays per batch (4096)
+//   --reps N         timed steps per configuration (5, after one warm-up step)
+//   --threads LIST   comma-separated thread counts (1,2)
+//   --mask 0|1       update the alpha mask (and shrink) before timing (0: no mask)
+//   --early-stop T   early_stop_transmittance (0)
+#include <omp.h>
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "trainer/tensorf_model.h"
+#include "trainer/volume_render.h"
+
+namespace ecrf {
+namespace tools {
+
+int RunTrainStepBench(int argc, char** argv);
+
+namespace {
+
+using trainer::TensorfConfig;
+using trainer::TensorfModel;
+using trainer::TrainStepStats;
+using trainer::VmGrid;
+
+double CpuSeconds() {
+  struct rusage ru;
+  getrusage(RUSAGE_SELF, &ru);
+  return ru.ru_utime.tv_sec + ru.ru_stime.tv_sec + 1e-6 * (ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
+}
+
+double PeakRssMb() {
+  struct rusage ru;
+  getrusage(RUSAGE_SELF, &ru);
+  return ru.ru_maxrss / 1024.0;
+}
+
+// Adds a soft ellipsoidal blob to rank 0 of density mode 0 (plane xy * line z):
+// feature = peak * max(0, 1 - 2 r_xy^2) * max(0, 1 - 2 r_z^2) in normalized coordinates.
+void AddBlob(TensorfModel& model, float peak) {
+  VmGrid& g = model.density();
+  const auto& res = model.res();
+  for (int y = 0; y < res[1]; ++y)
+    for (int x = 0; x < res[0]; ++x) {
+      const float u = 2.f * x / (res[0] - 1) - 1.f, v = 2.f * y / (res[1] - 1) - 1.f;
+      g.PlaneAt(0, y, x, 0) = std::sqrt(peak) * std::max(0.f, 1.f - 2.f * (u * u + v * v));
+    }
+  for (int z = 0; z < res[2]; ++z) {
+    const float w = 2.f * z / (res[2] - 1) - 1.f;
+    g.LineAt(0, z, 0) = std::sqrt(peak) * std::max(0.f, 1.f - 2.f * w * w);
+  }
+}
+
+void MakeRays(int n, uint32_t seed, std::vector<float>* o, std::vector<float>* d,
+              std::vector<float>* rgb) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> nd;
+  std::uniform_real_distribution<float> u(-1.f, 1.f), c(0.f, 1.f);
+  o->resize(3 * n);
+  d->resize(3 * n);
+  rgb->resize(3 * n);
+  for (int i = 0; i < n; ++i) {
+    float p[3] = {nd(rng), nd(rng), std::fabs(nd(rng))};  // upper hemisphere, as in Blender
+    const float len = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    float dir[3];
+    for (int a = 0; a < 3; ++a) {
+      (*o)[3 * i + a] = 4.f * p[a] / len;
+      dir[a] = 1.2f * u(rng) - (*o)[3 * i + a];
+    }
+    const float dl = std::sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+    for (int a = 0; a < 3; ++a) {
+      (*d)[3 * i + a] = dir[a] / dl;
+      (*rgb)[3 * i + a] = c(rng);
+    }
+  }
+}
+
+}  // namespace
+
+int RunTrainStepBench(int argc, char** argv) {
+  int res = 128, rays = 4096, reps = 5, mask = 0;
+  float early = 0.f;
+  std::string threads_arg = "1,2";
+  for (int i = 1; i < argc; ++i) {
+    auto next = [&](const char* name) -> const char* {
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "%s needs a value\n", name);
+        std::exit(2);
+      }
+      return argv[++i];
+    };
+    if (!std::strcmp(argv[i], "--res")) res = std::atoi(next("--res"));
+    else if (!std::strcmp(argv[i], "--rays")) rays = std::atoi(next("--rays"));
+    else if (!std::strcmp(argv[i], "--reps")) reps = std::atoi(next("--reps"));
+    else if (!std::strcmp(argv[i], "--threads")) threads_arg = next("--threads");
+    else if (!std::strcmp(argv[i], "--mask")) mask = std::atoi(next("--mask"));
+    else if (!std::strcmp(argv[i], "--early-stop")) early = static_cast<float>(std::atof(next("--early-stop")));
+    else {
+      std::fprintf(stderr, "unknown argument %s\n", argv[i]);
+      return 2;
+    }
+  }
+  std::vector<int> thread_counts;
+  for (size_t pos = 0; pos < threads_arg.size();) {
+    size_t comma = threads_arg.find(',', pos);
+    if (comma == std::string::npos) comma = threads_arg.size();
+    thread_counts.push_back(std::atoi(threads_arg.substr(pos, comma - pos).c_str()));
+    pos = comma + 1;
+  }
+
+  TensorfConfig config;
+  config.early_stop_transmittance = early;
+  TensorfModel model(config);
+  model.Initialize({res, res, res}, 1);
+  AddBlob(model, 14.f);  // feature up to 14 -> sigma up to softplus(4) ~ 4
+  if (mask) {
+    const trainer::Aabb box = model.UpdateAlphaMask({res, res, res});
+    model.Shrink(box);
+  }
+  std::vector<float> o, d, rgb;
+  MakeRays(rays, 7, &o, &d, &rgb);
+  std::printf("train-step bench: res %d^3 (after shrink %dx%dx%d), %d rays, %d samples/ray, mask %d, "
+              "early stop %g\n",
+              res, model.res()[0], model.res()[1], model.res()[2], rays, model.n_samples(), mask,
+              early);
+  for (int threads : thread_counts) {
+    omp_set_num_threads(threads);
+    std::vector<double> times;
+    TrainStepStats last;
+    double cpu = 0.0, wall = 0.0;
+    for (int rep = 0; rep <= reps; ++rep) {
+      model.ZeroGrads();
+      const double t0 = omp_get_wtime(), c0 = CpuSeconds();
+      last = trainer::TrainStep(model, rays, o.data(), d.data(), rgb.data(), 100 + rep);
+      const double dt = omp_get_wtime() - t0;
+      if (rep > 0) {
+        times.push_back(dt);
+        cpu += CpuSeconds() - c0;
+        wall += dt;
+      }
+    }
+    std::sort(times.begin(), times.end());
+    // cpu / (threads * wall) < 1 means other processes competed for the cores.
+    std::printf(
+        "threads %d: median %.3f s (min %.3f), cpu/(threads*wall) %.2f | density samples %ld, "
+        "appearance samples %ld | last step: march %.3f head %.3f composite %.3f scatter %.3f | "
+        "peak RSS %.0f MB\n",
+        threads, times[times.size() / 2], times[0], cpu / (threads * wall), last.density_samples,
+        last.appearance_samples, last.t_march, last.t_head, last.t_composite, last.t_scatter,
+        PeakRssMb());
+  }
+  return 0;
+}
+
+}  // namespace tools
+}  // namespace ecrf

@@ -1,0 +1,164 @@
+// `ecrf train`: trains a TensoRF VM model on posed images or on the built-in scene.
+#include <sys/stat.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <string>
+
+#include "tools/commands.h"
+#include "trainer/checkpoint.h"
+#include "trainer/image_io.h"
+#include "trainer/trainer.h"
+
+namespace ecrf {
+namespace tools {
+namespace {
+
+const char kTrainUsage[] =
+    "usage: ecrf train (--data DIR | --scene builtin) [options] -o RUN_DIR\n"
+    "  --preset fast|paper|tiny   schedule and grid sizes (default fast; tiny for the built-in scene)\n"
+    "  --iters N                  iterations (milestones scale with it)\n"
+    "  --downscale N              shrink the images by N (area filter)\n"
+    "  --batch N                  rays per iteration (default 4096)\n"
+    "  --seed N                   random seed\n"
+    "  --checkpoint-every N       write RUN_DIR/checkpoint.ckpt every N iterations\n"
+    "  --resume                   continue from RUN_DIR/checkpoint.ckpt\n"
+    "  --eval-every N             test PSNR every N iterations (a PSNR-vs-minutes curve)\n"
+    "  --test-stride K            evaluate every K-th test view\n"
+    "  --max-test-views N         evaluate at most N test views\n"
+    "  --save-renders             write the test renders as PNG into RUN_DIR/renders\n";
+
+int ParseInt(const char* flag, const char* value) {
+  char* end = nullptr;
+  errno = 0;
+  const long v = std::strtol(value, &end, 10);
+  if (errno || !end || *end || v < 0 || v > 1000000000) {
+    throw std::invalid_argument(std::string(flag) + ": '" + value + "' is not a non-negative integer");
+  }
+  return int(v);
+}
+
+void MakeDirectory(const std::string& dir) {
+  if (mkdir(dir.c_str(), 0755) != 0 && errno != EEXIST) {
+    throw std::runtime_error(dir + ": cannot create directory: " + std::strerror(errno));
+  }
+}
+
+}  // namespace
+
+int RunTrain(int argc, char** argv) {
+  // The preset comes first so that later flags override it whatever their order.
+  std::string preset = "fast";
+  bool builtin = false;
+  for (int i = 1; i + 1 < argc; ++i) {
+    if (!std::strcmp(argv[i], "--preset")) preset = argv[i + 1];
+    if (!std::strcmp(argv[i], "--scene") && !std::strcmp(argv[i + 1], "builtin")) builtin = true;
+  }
+  bool preset_given = false;
+  for (int i = 1; i < argc; ++i) preset_given |= !std::strcmp(argv[i], "--preset");
+  if (builtin && !preset_given) preset = "tiny";
+  trainer::TrainOptions o = trainer::PresetOptions(preset);
+  o.builtin_scene = builtin;
+
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&]() -> const char* {
+      if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
+      return argv[++i];
+    };
+    if (a == "--help" || a == "-h") {
+      std::fputs(kTrainUsage, stdout);
+      return 0;
+    } else if (a == "--preset") {
+      value();
+    } else if (a == "--scene") {
+      const std::string s = value();
+      if (s != "builtin") throw std::invalid_argument("--scene: only 'builtin' is known (use --data DIR)");
+    } else if (a == "--data") {
+      o.data_dir = value();
+    } else if (a == "-o" || a == "--out") {
+      o.out_dir = value();
+    } else if (a == "--iters") {
+      o.iters = ParseInt("--iters", value());
+    } else if (a == "--downscale") {
+      o.downscale = std::max(1, ParseInt("--downscale", value()));
+    } else if (a == "--batch") {
+      o.batch_rays = std::max(1, ParseInt("--batch", value()));
+    } else if (a == "--seed") {
+      o.seed = uint32_t(ParseInt("--seed", value()));
+    } else if (a == "--checkpoint-every") {
+      o.checkpoint_every = ParseInt("--checkpoint-every", value());
+    } else if (a == "--resume") {
+      o.resume = true;
+    } else if (a == "--eval-every") {
+      o.eval_every = ParseInt("--eval-every", value());
+    } else if (a == "--test-stride") {
+      o.test_view_stride = std::max(1, ParseInt("--test-stride", value()));
+    } else if (a == "--max-test-views") {
+      o.max_test_views = ParseInt("--max-test-views", value());
+    } else if (a == "--save-renders") {
+      o.save_renders = true;
+    } else {
+      std::fprintf(stderr, "ecrf train: unknown option '%s'\n\n%s", a.c_str(), kTrainUsage);
+      return 2;
+    }
+  }
+  if (o.iters < 1) throw std::invalid_argument("--iters must be at least 1");
+  if (o.out_dir.empty()) {
+    std::fprintf(stderr, "ecrf train: -o RUN_DIR is required\n\n%s", kTrainUsage);
+    return 2;
+  }
+  MakeDirectory(o.out_dir);
+
+  const trainer::Dataset train = trainer::LoadTrainingViews(o, "train");
+  const trainer::Dataset test = trainer::LoadTrainingViews(o, "test");
+  std::fprintf(stderr, "data: %zu train views, %zu test views (%dx%d)\n", train.views.size(),
+               test.views.size(), train.views[0].rgb.width, train.views[0].rgb.height);
+  trainer::TensorfModel model(trainer::ConfigFor(o, train));
+  const trainer::TrainResult r = trainer::Train(o, train, test, &model);
+
+  size_t float_bytes = 0;
+  for (const auto& a : model.NamedParameters()) float_bytes += a.size * sizeof(float);
+  std::printf("trained %d iterations in %.1f s (%.3f s/it); test PSNR %.2f dB, SSIM %.4f over %d views; "
+              "float32 model %.2f MB\n",
+              r.iterations, r.train_seconds, r.train_seconds / std::max(1, r.iterations), r.test.psnr,
+              r.test.ssim, r.test.views, float_bytes / 1e6);
+
+  nlohmann::json m;
+  m["preset"] = o.preset;
+  m["data"] = o.builtin_scene ? std::string("builtin") : o.data_dir;
+  m["iterations"] = r.iterations;
+  m["train_seconds"] = r.train_seconds;
+  m["train_psnr"] = r.final_train_psnr;
+  m["test_psnr"] = r.test.psnr;
+  m["test_ssim"] = r.test.ssim;
+  m["test_views"] = r.test.views;
+  m["render_seconds_per_view"] = r.test.seconds_per_view;
+  m["grid_res"] = model.res();
+  m["aabb_min"] = model.aabb().min;
+  m["aabb_max"] = model.aabb().max;
+  m["float32_model_bytes"] = float_bytes;
+  if (!r.psnr_curve.empty()) {
+    nlohmann::json curve = nlohmann::json::array();
+    for (const auto& p : r.psnr_curve) curve.push_back({{"minutes", p.first}, {"test_psnr", p.second}});
+    m["psnr_curve"] = curve;
+  }
+  const std::string text = m.dump(2) + "\n";
+  trainer::WriteFileAtomically(o.out_dir + "/metrics.json", text.data(), text.size());
+  if (o.save_renders) {
+    MakeDirectory(o.out_dir + "/renders");
+    for (size_t i = 0; i < r.test.renders.size(); ++i) {
+      char name[64];
+      std::snprintf(name, sizeof(name), "/renders/test_%03zu.png", i * size_t(o.test_view_stride));
+      trainer::SavePng(o.out_dir + name, r.test.renders[i]);
+    }
+  }
+  return 0;
+}
+
+}  // namespace tools
+}  // namespace ecrf

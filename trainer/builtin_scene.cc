@@ -1,0 +1,285 @@
+#include "trainer/builtin_scene.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+namespace ecrf::trainer {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+struct Vec3 {
+  double x = 0, y = 0, z = 0;
+};
+
+Vec3 operator+(Vec3 a, Vec3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+Vec3 operator-(Vec3 a, Vec3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+Vec3 operator*(Vec3 a, double s) { return {a.x * s, a.y * s, a.z * s}; }
+double Dot(Vec3 a, Vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+Vec3 Cross(Vec3 a, Vec3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+Vec3 Normalized(Vec3 a) { return a * (1.0 / std::sqrt(Dot(a, a))); }
+double Axis(Vec3 v, int axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
+
+// splitmix64: the same numbers on every platform, unlike std:: distributions.
+class Random {
+ public:
+  explicit Random(uint64_t seed) : state_(seed) {}
+  double Uniform() {
+    uint64_t z = (state_ += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    z ^= z >> 31;
+    return static_cast<double>(z >> 11) * (1.0 / 9007199254740992.0);
+  }
+
+ private:
+  uint64_t state_;
+};
+
+enum class Pattern { kSlabChecker, kSphereChecker, kSphereBands, kBoxGrid, kBoxStripes };
+
+struct Material {
+  Vec3 colour_a, colour_b;
+  Pattern pattern;
+  double specular;
+  double shininess;
+};
+
+struct Shape {
+  bool is_sphere;
+  Vec3 centre;  // sphere
+  double radius;
+  Vec3 lo, hi;  // box
+  Material material;
+};
+
+// A slab with three objects on it; every point lies within [-1.3, 1.3]^3, so the whole scene
+// stays inside the Blender box and within the 40 degree view from 4 units away.
+const Shape kShapes[] = {
+    {false, {}, 0, {-1.1, -1.1, -0.95}, {1.1, 1.1, -0.8},
+     {{0.88, 0.86, 0.80}, {0.30, 0.42, 0.52}, Pattern::kSlabChecker, 0.05, 8}},
+    {true, {-0.35, -0.25, -0.25}, 0.55, {}, {},
+     {{0.90, 0.22, 0.12}, {0.98, 0.80, 0.20}, Pattern::kSphereChecker, 0.45, 40}},
+    {true, {0.6, 0.55, -0.5}, 0.3, {}, {}, {{0.15, 0.30, 0.85}, {0.95, 0.95, 0.95}, Pattern::kSphereBands, 0.6, 80}},
+    {false, {}, 0, {0.15, -0.9, -0.8}, {0.8, -0.25, -0.15},
+     {{0.25, 0.70, 0.30}, {0.08, 0.25, 0.10}, Pattern::kBoxGrid, 0.15, 20}},
+    {false, {}, 0, {-0.95, 0.35, -0.8}, {-0.6, 0.75, 0.55},
+     {{0.60, 0.30, 0.75}, {0.95, 0.75, 0.40}, Pattern::kBoxStripes, 0.25, 30}},
+};
+constexpr int kShapeCount = sizeof(kShapes) / sizeof(kShapes[0]);
+
+const Vec3 kLight = Normalized({0.45, 0.3, 1.0});  // towards the light
+constexpr double kAmbient = 0.35;
+constexpr double kEpsilon = 1e-6;
+
+struct Hit {
+  double t = INFINITY;
+  int shape = -1;
+  Vec3 normal;
+};
+
+bool IntersectSphere(const Shape& s, Vec3 origin, Vec3 dir, double t_max, double* t, Vec3* normal) {
+  const Vec3 oc = origin - s.centre;
+  const double b = Dot(oc, dir);
+  const double c = Dot(oc, oc) - s.radius * s.radius;
+  const double disc = b * b - c;
+  if (disc < 0) return false;
+  const double root = std::sqrt(disc);
+  double hit = -b - root;
+  if (hit <= kEpsilon) hit = -b + root;
+  if (hit <= kEpsilon || hit >= t_max) return false;
+  *t = hit;
+  *normal = (origin + dir * hit - s.centre) * (1.0 / s.radius);
+  return true;
+}
+
+bool IntersectBox(const Shape& s, Vec3 origin, Vec3 dir, double t_max, double* t, Vec3* normal) {
+  double t_near = -INFINITY, t_far = INFINITY;
+  int near_axis = 0, far_axis = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    const double o = Axis(origin, axis), d = Axis(dir, axis);
+    const double lo = Axis(s.lo, axis), hi = Axis(s.hi, axis);
+    if (std::abs(d) < 1e-12) {
+      if (o < lo || o > hi) return false;
+      continue;
+    }
+    double t0 = (lo - o) / d, t1 = (hi - o) / d;
+    if (t0 > t1) std::swap(t0, t1);
+    if (t0 > t_near) t_near = t0, near_axis = axis;
+    if (t1 < t_far) t_far = t1, far_axis = axis;
+  }
+  if (t_near > t_far) return false;
+  const bool from_outside = t_near > kEpsilon;
+  const double hit = from_outside ? t_near : t_far;
+  if (hit <= kEpsilon || hit >= t_max) return false;
+  const int axis = from_outside ? near_axis : far_axis;
+  const double sign = (Axis(dir, axis) > 0) == from_outside ? -1.0 : 1.0;
+  *normal = {axis == 0 ? sign : 0.0, axis == 1 ? sign : 0.0, axis == 2 ? sign : 0.0};
+  *t = hit;
+  return true;
+}
+
+Hit Trace(Vec3 origin, Vec3 dir, double t_max) {
+  Hit best;
+  best.t = t_max;
+  for (int i = 0; i < kShapeCount; ++i) {
+    double t;
+    Vec3 normal;
+    const bool hit = kShapes[i].is_sphere ? IntersectSphere(kShapes[i], origin, dir, best.t, &t, &normal)
+                                          : IntersectBox(kShapes[i], origin, dir, best.t, &t, &normal);
+    if (hit) best = {t, i, normal};
+  }
+  return best;
+}
+
+int Parity(double a, double b) { return static_cast<int>(std::floor(a) + std::floor(b)) & 1; }
+
+// Picks colour_a or colour_b from surface position; patterns have a few cells per object so
+// they are resolvable at 64x64 but still need the model to learn detail.
+Vec3 Albedo(const Shape& shape, Vec3 p, Vec3 normal) {
+  const Material& m = shape.material;
+  bool use_b = false;
+  switch (m.pattern) {
+    case Pattern::kSlabChecker:
+      use_b = Parity(p.x * 2.5, p.y * 2.5);
+      break;
+    case Pattern::kSphereChecker: {
+      const Vec3 q = (p - shape.centre) * (1.0 / shape.radius);
+      const double longitude = std::atan2(q.y, q.x) / (2 * kPi) + 0.5;
+      const double latitude = std::acos(std::clamp(q.z, -1.0, 1.0)) / kPi;
+      use_b = Parity(longitude * 10, latitude * 5);
+      break;
+    }
+    case Pattern::kSphereBands:
+      use_b = static_cast<int>(std::floor((p.z - shape.centre.z) / shape.radius * 3.0)) & 1;
+      break;
+    case Pattern::kBoxGrid: {
+      // Grid lines on the two axes tangent to the face.
+      const int axis = std::abs(normal.x) > 0.5 ? 0 : (std::abs(normal.y) > 0.5 ? 1 : 2);
+      for (int a = 0; a < 3; ++a) {
+        if (a == axis) continue;
+        const double u = Axis(p, a) * 6.0;
+        if (u - std::floor(u) < 0.18) use_b = true;
+      }
+      break;
+    }
+    case Pattern::kBoxStripes:
+      use_b = static_cast<int>(std::floor((p.z + p.x) * 5.0)) & 1;
+      break;
+  }
+  return use_b ? m.colour_b : m.colour_a;
+}
+
+Vec3 Shade(Vec3 origin, Vec3 dir) {
+  const Hit hit = Trace(origin, dir, INFINITY);
+  if (hit.shape < 0) return {1, 1, 1};
+  const Shape& shape = kShapes[hit.shape];
+  const Vec3 p = origin + dir * hit.t;
+  const Vec3 albedo = Albedo(shape, p, hit.normal);
+  const double lambert = std::max(0.0, Dot(hit.normal, kLight));
+  const bool lit = lambert > 0 && Trace(p + hit.normal * 1e-5, kLight, INFINITY).shape < 0;
+  Vec3 colour = albedo * kAmbient;
+  if (lit) {
+    const Vec3 half = Normalized(kLight - dir);
+    const double highlight = shape.material.specular * std::pow(std::max(0.0, Dot(hit.normal, half)), shape.material.shininess);
+    colour = colour + albedo * ((1.0 - kAmbient) * lambert) + Vec3{highlight, highlight, highlight};
+  }
+  return {std::min(colour.x, 1.0), std::min(colour.y, 1.0), std::min(colour.z, 1.0)};
+}
+
+Camera LookAtOrigin(Vec3 position, int width, int height) {
+  Camera camera;
+  camera.width = width;
+  camera.height = height;
+  camera.fx = FocalFromFieldOfView(width, kBuiltinFieldOfView);
+  camera.fy = camera.fx;
+  camera.cx = 0.5 * width;
+  camera.cy = 0.5 * height;
+  const Vec3 forward = Normalized(Vec3{} - position);
+  const Vec3 right = Normalized(Cross(forward, {0, 0, 1}));
+  const Vec3 up = Cross(right, forward);
+  const Vec3 columns[4] = {right, up, forward * -1.0, position};  // OpenGL: looks down -z
+  for (int c = 0; c < 4; ++c) {
+    camera.c2w[0][c] = columns[c].x;
+    camera.c2w[1][c] = columns[c].y;
+    camera.c2w[2][c] = columns[c].z;
+  }
+  return camera;
+}
+
+Vec3 OnSphere(double azimuth, double z) {
+  const double ring = std::sqrt(std::max(0.0, 1.0 - z * z));
+  return Vec3{ring * std::cos(azimuth), ring * std::sin(azimuth), z} * kBuiltinCameraDistance;
+}
+
+std::vector<Vec3> CameraPositions(const std::string& split, int count, uint32_t seed) {
+  std::vector<Vec3> positions;
+  Random random(0x5eed0000ull ^ (uint64_t{seed} << 16) ^ (split == "train" ? 1 : split == "test" ? 2 : 3));
+  if (split == "train") {
+    // Uniform in area over the band; the poles are left out because the look-at frame needs
+    // a horizon and nothing is seen from straight below the slab.
+    for (int i = 0; i < count; ++i) {
+      const double azimuth = 2 * kPi * random.Uniform();
+      const double z = 0.1 + 0.85 * random.Uniform();
+      positions.push_back(OnSphere(azimuth, z));
+    }
+  } else {
+    const double elevation = (split == "test" ? 30.0 : 50.0) * kPi / 180.0;
+    const double phase = 2 * kPi * random.Uniform();
+    for (int i = 0; i < count; ++i) {
+      positions.push_back(OnSphere(phase + 2 * kPi * i / count, std::sin(elevation)));
+    }
+  }
+  return positions;
+}
+
+Image Render(const Camera& camera) {
+  static const double kSubpixel[4][2] = {{-0.25, -0.25}, {0.25, -0.25}, {-0.25, 0.25}, {0.25, 0.25}};
+  Image image = MakeImage(camera.width, camera.height, 3);
+  for (int j = 0; j < camera.height; ++j) {
+    for (int i = 0; i < camera.width; ++i) {
+      Vec3 sum;
+      for (const auto& offset : kSubpixel) {
+        float origin[3], dir[3];
+        GenerateRay(camera, i + offset[0], j + offset[1], origin, dir);
+        sum = sum + Shade({origin[0], origin[1], origin[2]}, Normalized({dir[0], dir[1], dir[2]}));
+      }
+      image.at(i, j, 0) = static_cast<float>(sum.x * 0.25);
+      image.at(i, j, 1) = static_cast<float>(sum.y * 0.25);
+      image.at(i, j, 2) = static_cast<float>(sum.z * 0.25);
+    }
+  }
+  return image;
+}
+
+}  // namespace
+
+Dataset MakeBuiltinScene(const std::string& split, int width, int height, int num_views, uint32_t seed) {
+  if (split != "train" && split != "val" && split != "test") {
+    throw std::runtime_error("builtin scene: unknown split '" + split + "' (expected train, val or test)");
+  }
+  if (width < 1 || height < 1 || width > 4096 || height > 4096) {
+    throw std::runtime_error("builtin scene: image size " + std::to_string(width) + "x" + std::to_string(height) +
+                             " must be within 1..4096");
+  }
+  if (num_views < 1) {
+    throw std::runtime_error("builtin scene: num_views must be >= 1, got " + std::to_string(num_views));
+  }
+  const std::vector<Vec3> positions = CameraPositions(split, num_views, seed);
+  Dataset dataset;  // defaults are the Blender conventions
+  dataset.views.resize(num_views);
+#pragma omp parallel for schedule(dynamic)
+  for (int v = 0; v < num_views; ++v) {
+    View& view = dataset.views[v];
+    view.camera = LookAtOrigin(positions[v], width, height);
+    view.rgb = Render(view.camera);
+    char name[64];
+    std::snprintf(name, sizeof name, "builtin/%s_%03d", split.c_str(), v);
+    view.name = name;
+  }
+  return dataset;
+}
+
+}  // namespace ecrf::trainer

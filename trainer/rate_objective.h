@@ -1,0 +1,81 @@
+// Rate term of the ECRF training loss: the feature grids are transformed by the block DCT
+// (trainer/grid_dct.h), divided by a per-tensor quantization step, and coded under a factorized
+// entropy model (trainer/entropy_model.h).
+//
+// Tensors: grid g (0 = density, 1 = appearance by convention; any number of grids), tensor t in
+// 0..5 = planes 0..2 then lines 0..2 (the VmGrid flat order); tensor index = g * 6 + t.
+// Model grouping: one entropy model per (tensor, frequency band), model index
+// = tensor_index * kNumFrequencyBands + band, band = FrequencyBand(k0 + k1 + k2) of the
+// coefficient's frequency inside its block (0 = DC, then octaves of the index sum). DCT
+// coefficient variances fall with frequency and differ strongly between tensors (density vs
+// appearance, planes vs lines); within an octave they are close, so a per-band scale model gets
+// most of the gain of per-position models with 8 models per tensor instead of 4096.
+#ifndef ECRF_TRAINER_RATE_OBJECTIVE_H_
+#define ECRF_TRAINER_RATE_OBJECTIVE_H_
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "trainer/entropy_model.h"
+#include "trainer/grid_dct.h"
+#include "trainer/vm_grid.h"
+
+namespace ecrf {
+namespace trainer {
+
+inline constexpr int kTensorsPerGrid = 6;
+inline constexpr int kNumFrequencyBands = 8;
+
+// 0 for DC (sum 0), else min(7, 1 + floor(log2(k0 + k1 + k2))).
+int FrequencyBand(int k0, int k1, int k2);
+inline int RateModelIndex(int tensor_index, int band) {
+  return tensor_index * kNumFrequencyBands + band;
+}
+inline int NumRateModels(int num_grids) {
+  return num_grids * kTensorsPerGrid * kNumFrequencyBands;
+}
+
+struct RateConfig {
+  int plane_block[3] = {16, 16, 16};  // channel x H x W
+  int line_block[3] = {1, 8, 8};      // 1 x channel x L
+};
+
+// Layout and storage of tensor t (0..5) of a grid.
+GridBlockLayout RateTensorLayout(const VmGrid& grid, int t, const RateConfig& config);
+const float* RateTensorData(const VmGrid& grid, int t);
+float* RateTensorGrad(VmGrid& grid, int t);
+
+struct RateEstimate {
+  double bits = 0.0;         // unbiased estimate of the total noisy-proxy bits (all tensors)
+  double regularizer = 0.0;  // unbiased estimate of sum of squared DCT coefficients (unweighted)
+};
+
+// Stochastic rate term for one training step. For every tensor, a random subset of
+// k = max(1, round(fraction * N)) of its N blocks (without replacement; all when fraction >= 1)
+// is transformed; x = coeff / step + U(-1/2, 1/2) (noise hashed from seed, tensor, block,
+// position) is coded under the tensor's band models, and the per-tensor sums are scaled by N / k
+// (unbiased for the full-grid sums). Adds into grids[g]->grads():
+//   lambda_e * d(bits estimate)/dG + lambda_r * d(regularizer estimate)/dG,
+// adds d(bits estimate)/d(model params) (NOT multiplied by lambda_e) into model->grads(), and
+// returns the unweighted estimates. steps: num_grids * 6 quantization steps (> 0).
+// model->num_models() must be >= NumRateModels(grids.size()).
+RateEstimate AddRateGradients(const std::vector<VmGrid*>& grids, const std::vector<float>& steps,
+                              const RateConfig& config, FactorizedEntropyModel* model,
+                              float lambda_e, float lambda_r, float fraction, uint64_t seed);
+
+// Full deterministic evaluation: all blocks, x = round(coeff / step) (std::round, half away
+// from zero), no noise, no gradients: the bits an encoder using this static model would pay
+// (up to the arithmetic coder's overhead).
+struct RateReport {
+  std::vector<double> bits;     // per tensor index
+  std::vector<size_t> coeffs;   // coefficients per tensor index (padded blocks)
+  double total_bits = 0.0;
+};
+RateReport EvaluateRate(const std::vector<const VmGrid*>& grids, const std::vector<float>& steps,
+                        const RateConfig& config, const FactorizedEntropyModel& model);
+
+}  // namespace trainer
+}  // namespace ecrf
+
+#endif  // ECRF_TRAINER_RATE_OBJECTIVE_H_

@@ -1,0 +1,353 @@
+#include "trainer/trainer.h"
+
+#include <omp.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <stdexcept>
+
+#include "trainer/adam.h"
+#include "trainer/builtin_scene.h"
+#include "trainer/camera.h"
+#include "trainer/checkpoint.h"
+#include "trainer/image_metrics.h"
+#include "trainer/ray_set.h"
+#include "trainer/volume_render.h"
+
+namespace ecrf {
+namespace trainer {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Seconds(Clock::time_point since) {
+  return std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+std::array<int, 3> ResolutionFor(long voxels, const Aabb& box) {
+  double lo[3], hi[3];
+  int res[3];
+  for (int a = 0; a < 3; ++a) lo[a] = box.min[a], hi[a] = box.max[a];
+  ResolutionForVoxels(voxels, lo, hi, res);
+  return {res[0], res[1], res[2]};
+}
+
+std::string FormatDuration(double seconds) {
+  char buf[32];
+  const int s = int(seconds + 0.5);
+  if (s >= 3600) {
+    std::snprintf(buf, sizeof(buf), "%dh%02dm", s / 3600, (s / 60) % 60);
+  } else {
+    std::snprintf(buf, sizeof(buf), "%dm%02ds", s / 60, s % 60);
+  }
+  return buf;
+}
+
+// The three optimizers of a TensoRF run: grids at lr_grid, the head (basis + MLP) at lr_network.
+struct Optimizers {
+  Adam density, appearance, head;
+  float lr_scale = 1.0f;
+  void Reset(TensorfModel& m) {
+    density.Reset(m.density().params().size());
+    appearance.Reset(m.appearance().params().size());
+    head.Reset(m.head().params().size());
+    lr_scale = 1.0f;  // TensoRF's lr_upsample_reset: back to the initial rates
+  }
+  void Step(TensorfModel& m, const TrainOptions& o) {
+    const float lr_grid = o.lr_grid * lr_scale, lr_net = o.lr_network * lr_scale;
+    density.Step(m.density().params().data(), m.density().grads().data(), m.density().params().size(), lr_grid);
+    appearance.Step(m.appearance().params().data(), m.appearance().grads().data(),
+                    m.appearance().params().size(), lr_grid);
+    head.Step(m.head().params().data(), m.head().grads().data(), m.head().params().size(), lr_net);
+  }
+};
+
+void PrintProgress(int it, int iters, double loss, double psnr, const TensorfModel& model,
+                   const TrainStepStats& stats, double sec_per_it, double elapsed) {
+  const int width = 24;
+  const int filled = int(double(it) / iters * width);
+  char bar[width + 1];
+  for (int i = 0; i < width; ++i) bar[i] = i < filled ? '#' : '.';
+  bar[width] = 0;
+  const auto& r = model.res();
+  std::fprintf(stderr,
+               "%s[%s] %6d/%d loss %.5f psnr %5.2f grid %dx%dx%d samples %.2fM/%.2fM %.2f s/it "
+               "elapsed %s eta %s%s",
+               isatty(2) ? "\r" : "", bar, it, iters, loss, psnr, r[0], r[1], r[2],
+               stats.density_samples / 1e6, stats.appearance_samples / 1e6, sec_per_it,
+               FormatDuration(elapsed).c_str(), FormatDuration(sec_per_it * (iters - it)).c_str(),
+               isatty(2) ? "   " : "\n");
+  std::fflush(stderr);
+}
+
+}  // namespace
+
+Dataset LoadTrainingViews(const TrainOptions& o, const std::string& split) {
+  if (o.builtin_scene) {
+    const int views = split == "train" ? o.builtin_views : std::max(4, o.builtin_views / 4);
+    return MakeBuiltinScene(split, o.builtin_size, o.builtin_size, views, o.seed);
+  }
+  if (o.data_dir.empty()) throw std::invalid_argument("no data: give --data DIR or --scene builtin");
+  return LoadDataset(o.data_dir, split, o.downscale);
+}
+
+TensorfConfig ConfigFor(const TrainOptions& o, const Dataset& data) {
+  TensorfConfig c;
+  c.density_ranks = {o.density_rank, o.density_rank, o.density_rank};
+  c.app_ranks = {o.appearance_rank, o.appearance_rank, o.appearance_rank};
+  c.head.num_products = 3 * o.appearance_rank;
+  c.near = float(data.near);
+  c.far = float(data.far);
+  c.white_background = data.white_background;
+  c.max_samples = o.max_samples_per_ray;
+  for (int a = 0; a < 3; ++a) {
+    c.aabb.min[a] = float(data.scene_aabb[0][a]);
+    c.aabb.max[a] = float(data.scene_aabb[1][a]);
+  }
+  return c;
+}
+
+Image RenderView(const TensorfModel& model, const Camera& camera) {
+  Image img;
+  img.width = camera.width;
+  img.height = camera.height;
+  img.channels = 3;
+  img.pixels.resize(size_t(img.width) * img.height * 3);
+  const int rows_per_chunk = std::max(1, 16384 / std::max(1, camera.width));
+  std::vector<float> origins, dirs;
+  for (int y0 = 0; y0 < camera.height; y0 += rows_per_chunk) {
+    const int rows = std::min(rows_per_chunk, camera.height - y0);
+    const int n = rows * camera.width;
+    origins.resize(size_t(n) * 3);
+    dirs.resize(size_t(n) * 3);
+    for (int y = 0; y < rows; ++y) {
+      for (int x = 0; x < camera.width; ++x) {
+        const size_t i = size_t(y) * camera.width + x;
+        GenerateRay(camera, x, y0 + y, &origins[3 * i], &dirs[3 * i]);
+      }
+    }
+    RenderRays(model, n, origins.data(), dirs.data(), &img.pixels[size_t(y0) * camera.width * 3], nullptr);
+  }
+  return img;
+}
+
+EvalResult Evaluate(const TensorfModel& model, const Dataset& test, int stride, int max_views,
+                    bool keep_renders) {
+  EvalResult r;
+  const auto start = Clock::now();
+  stride = std::max(1, stride);
+  for (size_t v = 0; v < test.views.size(); v += size_t(stride)) {
+    if (max_views > 0 && r.views >= max_views) break;
+    Image img = RenderView(model, test.views[v].camera);
+    r.psnr += Psnr(img, test.views[v].rgb);
+    r.ssim += Ssim(img, test.views[v].rgb);
+    ++r.views;
+    if (keep_renders) r.renders.push_back(std::move(img));
+  }
+  if (r.views > 0) {
+    r.psnr /= r.views;
+    r.ssim /= r.views;
+    r.seconds_per_view = Seconds(start) / r.views;
+  }
+  return r;
+}
+
+void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int iteration,
+                         const TrainOptions& o) {
+  Checkpoint ck;
+  nlohmann::json j;
+  j["format"] = "ecrf-checkpoint-1";
+  j["iteration"] = iteration;
+  j["preset"] = o.preset;
+  j["iters"] = o.iters;
+  j["res"] = model.res();
+  j["aabb_min"] = model.aabb().min;
+  j["aabb_max"] = model.aabb().max;
+  j["n_samples"] = model.n_samples();
+  j["density_rank"] = model.config().density_ranks;
+  j["appearance_rank"] = model.config().app_ranks;
+  if (const AlphaMask* mask = model.alpha_mask()) {
+    j["mask_res"] = mask->res();
+    j["mask_aabb_min"] = mask->aabb().min;
+    j["mask_aabb_max"] = mask->aabb().max;
+    CheckpointArray occ{"alpha_mask", {int64_t(mask->occupancy().size())}, {}};
+    occ.data.assign(mask->occupancy().begin(), mask->occupancy().end());
+    ck.arrays.push_back(std::move(occ));
+  }
+  ck.json = j.dump();
+  for (const NamedArray& a : model.NamedParameters()) {
+    ck.arrays.push_back({a.name, a.shape, std::vector<float>(a.data, a.data + a.size)});
+  }
+  WriteCheckpoint(path, ck);
+}
+
+int LoadModelCheckpoint(const std::string& path, TensorfModel* model) {
+  const Checkpoint ck = ReadCheckpoint(path);
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(ck.json);
+    Aabb box;
+    box.min = j.at("aabb_min").get<std::array<float, 3>>();
+    box.max = j.at("aabb_max").get<std::array<float, 3>>();
+    model->SetGeometry(box, j.at("res").get<std::array<int, 3>>());
+    model->set_n_samples(j.at("n_samples").get<int>());
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error(path + ": checkpoint metadata: " + e.what());
+  }
+  for (const NamedArray& a : model->NamedParameters()) {
+    const CheckpointArray* src = ck.Find(a.name);
+    if (!src) throw std::runtime_error(path + ": checkpoint lacks array '" + a.name + "'");
+    if (src->data.size() != a.size) {
+      throw std::runtime_error(path + ": array '" + a.name + "' has " + std::to_string(src->data.size()) +
+                               " values, the model expects " + std::to_string(a.size));
+    }
+    std::copy(src->data.begin(), src->data.end(), a.data);
+  }
+  if (j.contains("mask_res")) {
+    const CheckpointArray* occ = ck.Find("alpha_mask");
+    if (!occ) throw std::runtime_error(path + ": checkpoint lacks the alpha mask");
+    Aabb box;
+    box.min = j["mask_aabb_min"].get<std::array<float, 3>>();
+    box.max = j["mask_aabb_max"].get<std::array<float, 3>>();
+    const auto res = j["mask_res"].get<std::array<int, 3>>();
+    if (occ->data.size() != size_t(res[0]) * res[1] * res[2]) {
+      throw std::runtime_error(path + ": alpha mask size does not match its resolution");
+    }
+    std::vector<uint8_t> bits(occ->data.size());
+    for (size_t i = 0; i < bits.size(); ++i) bits[i] = occ->data[i] > 0.5f;
+    model->SetAlphaMask(AlphaMask(box, res, std::move(bits)));
+  }
+  return j.at("iteration").get<int>();
+}
+
+TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& test, TensorfModel* model) {
+  TrainResult result;
+  if (train.views.empty()) throw std::invalid_argument("the training split has no views");
+  const auto start = Clock::now();
+
+  // Milestones scaled to this run's length.
+  std::vector<int> upsample_at, mask_at;
+  for (int m : o.upsample_iters) upsample_at.push_back(ScaleMilestone(m, o.iters, o.reference_iters));
+  for (int m : o.alpha_mask_iters) mask_at.push_back(ScaleMilestone(m, o.iters, o.reference_iters));
+  const std::vector<long> voxel_counts = UpsampleVoxelCounts(o);
+
+  const std::string ckpt_path = o.out_dir.empty() ? std::string() : o.out_dir + "/checkpoint.ckpt";
+  int first_iter = 0;
+  bool resumed = false;
+  if (o.resume && !ckpt_path.empty() && access(ckpt_path.c_str(), R_OK) == 0) {
+    first_iter = LoadModelCheckpoint(ckpt_path, model);
+    resumed = true;
+    std::fprintf(stderr, "resumed from %s at iteration %d\n", ckpt_path.c_str(), first_iter);
+  } else {
+    model->Initialize(ResolutionFor(o.voxels_init, model->config().aabb), o.seed);
+  }
+
+  RaySet rays(train.views);
+  {
+    const Aabb box = model->aabb();
+    rays.Filter([&box](const float* org, const float* dir) {
+      float tn, tf;
+      RayAabb(box, org, dir, &tn, &tf);
+      return tf > tn;
+    });
+  }
+  float l1_weight = o.l1_weight_initial;
+  for (int m : mask_at) {
+    if (first_iter > m) l1_weight = o.l1_weight_rest;
+  }
+
+  Optimizers opt;
+  opt.Reset(*model);
+  const float lr_factor = std::pow(o.lr_decay_ratio, 1.0f / float(o.iters));
+  // Continue the decay where a resumed run left it: since the last reset (upsample) before it.
+  int last_reset = 0;
+  for (int m : upsample_at) {
+    if (m < first_iter) last_reset = m;
+  }
+  opt.lr_scale = std::pow(lr_factor, float(first_iter - last_reset));
+
+  std::mt19937_64 rng(o.seed + uint64_t(first_iter));
+  const int n = o.batch_rays;
+  std::vector<float> origins(size_t(n) * 3), dirs(size_t(n) * 3), rgb(size_t(n) * 3);
+  double mse_sum = 0.0;
+  int mse_count = 0;
+  auto interval_start = Clock::now();
+  TrainStepStats stats;
+  double eval_seconds = 0.0;
+
+  for (int it = first_iter; it < o.iters; ++it) {
+    rays.NextBatch(n, rng, origins.data(), dirs.data(), rgb.data());
+    model->ZeroGrads();
+    stats = TrainStep(*model, n, origins.data(), dirs.data(), rgb.data(), rng());
+    if (l1_weight > 0) model->DensityL1(l1_weight);
+    opt.Step(*model, o);
+    opt.lr_scale *= lr_factor;
+    mse_sum += stats.mse;
+    ++mse_count;
+
+    const int done = it + 1;
+    if (done % o.progress_every == 0 || done == o.iters) {
+      const double mse = mse_sum / std::max(1, mse_count);
+      result.final_train_psnr = -10.0 * std::log10(std::max(mse, 1e-12));
+      const double spi = Seconds(interval_start) / std::max(1, mse_count);
+      PrintProgress(done, o.iters, mse, result.final_train_psnr, *model, stats, spi,
+                    Seconds(start) - eval_seconds);
+      mse_sum = 0.0;
+      mse_count = 0;
+      interval_start = Clock::now();
+    }
+
+    // TensoRF order: alpha mask (and shrink / ray filtering) first, then upsampling.
+    for (size_t k = 0; k < mask_at.size(); ++k) {
+      if (it != mask_at[k]) continue;
+      const std::array<int, 3> mask_res = model->res();
+      const Aabb new_box = model->UpdateAlphaMask(mask_res);
+      if (k == 0) {
+        model->Shrink(new_box);
+        l1_weight = o.l1_weight_rest;
+        opt.Reset(*model);
+      }
+      if (k == 1) {
+        const TensorfModel& m = *model;
+        rays.Filter([&m](const float* org, const float* dir) {
+          return m.FilterRays(1, org, dir, false)[0] != 0;
+        });
+        std::fprintf(stderr, "\nfiltered training rays: %zu of %zu remain\n", rays.size(), rays.total());
+      }
+    }
+    for (size_t k = 0; k < upsample_at.size(); ++k) {
+      if (it != upsample_at[k]) continue;
+      model->UpsampleTo(ResolutionFor(voxel_counts[k], model->aabb()));
+      opt.Reset(*model);
+    }
+
+    if (!ckpt_path.empty() && o.checkpoint_every > 0 && done % o.checkpoint_every == 0 && done < o.iters) {
+      SaveModelCheckpoint(ckpt_path, *model, done, o);
+    }
+    if (o.eval_every > 0 && done % o.eval_every == 0 && done < o.iters) {
+      const auto eval_start = Clock::now();
+      const EvalResult e = Evaluate(*model, test, o.test_view_stride, o.max_test_views, false);
+      eval_seconds += Seconds(eval_start);
+      result.psnr_curve.emplace_back((Seconds(start) - eval_seconds) / 60.0, e.psnr);
+      std::fprintf(stderr, "%s  test psnr %.2f dB at %.1f min (training time)\n", isatty(2) ? "\n" : "",
+                   e.psnr, result.psnr_curve.back().first);
+    }
+  }
+  if (isatty(2)) std::fprintf(stderr, "\n");
+  result.iterations = o.iters;
+  result.train_seconds = Seconds(start) - eval_seconds;
+  (void)resumed;
+  if (!ckpt_path.empty()) SaveModelCheckpoint(ckpt_path, *model, o.iters, o);
+
+  result.test = Evaluate(*model, test, o.test_view_stride, o.max_test_views, o.save_renders);
+  if (o.eval_every > 0) result.psnr_curve.emplace_back(result.train_seconds / 60.0, result.test.psnr);
+  return result;
+}
+
+}  // namespace trainer
+}  // namespace ecrf

@@ -1,0 +1,61 @@
+// The training driver: data -> TensoRF VM model, with TensoRF's schedule (coarse-to-fine
+// upsampling, alpha mask, bounding-box shrink, learning-rate decay), checkpoints, evaluation and
+// metrics.json. The per-batch math lives in volume_render.h; this file only orchestrates.
+#ifndef ECRF_TRAINER_TRAINER_H_
+#define ECRF_TRAINER_TRAINER_H_
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "trainer/dataset.h"
+#include "trainer/image_io.h"
+#include "trainer/tensorf_model.h"
+#include "trainer/train_options.h"
+
+namespace ecrf {
+namespace trainer {
+
+struct EvalResult {
+  double psnr = 0.0;  // mean over views
+  double ssim = 0.0;  // mean over views
+  int views = 0;
+  double seconds_per_view = 0.0;
+  std::vector<Image> renders;  // filled when requested
+};
+
+struct TrainResult {
+  int iterations = 0;
+  double train_seconds = 0.0;
+  double final_train_psnr = 0.0;  // from the mean MSE of the last progress interval
+  EvalResult test;
+  std::vector<std::pair<double, double>> psnr_curve;  // (minutes, test PSNR) when --eval-every
+};
+
+// The datasets a run uses: the built-in procedural scene or a directory on disk.
+Dataset LoadTrainingViews(const TrainOptions& options, const std::string& split);
+
+// Model configuration for a dataset (its box, near/far, background) and the options' ranks.
+TensorfConfig ConfigFor(const TrainOptions& options, const Dataset& data);
+
+// Trains on `train`, evaluating on `test` at the end (and every options.eval_every iterations).
+// Writes checkpoints and metrics.json into options.out_dir when it is not empty.
+TrainResult Train(const TrainOptions& options, const Dataset& train, const Dataset& test,
+                  TensorfModel* model);
+
+// Renders every options.test_view_stride-th view and compares it with the ground truth.
+EvalResult Evaluate(const TensorfModel& model, const Dataset& test, int stride, int max_views,
+                    bool keep_renders);
+
+Image RenderView(const TensorfModel& model, const Camera& camera);
+
+// Checkpoint <-> model (+ training progress).
+void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int iteration,
+                         const TrainOptions& options);
+// Returns the iteration stored in the checkpoint.
+int LoadModelCheckpoint(const std::string& path, TensorfModel* model);
+
+}  // namespace trainer
+}  // namespace ecrf
+
+#endif  // ECRF_TRAINER_TRAINER_H_
