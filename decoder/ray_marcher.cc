@@ -528,12 +528,15 @@ Status MakeBlobScene(int res, GridStorage storage, bool with_mask, uint32_t seed
   VmGrid density, appearance;
   ECRF_RETURN_IF_ERROR(density.Allocate(r3, dr, GridStorage::kFloat32));
   ECRF_RETURN_IF_ERROR(appearance.Allocate(r3, ar, GridStorage::kFloat32));
+  // Separable smooth box (half-width 0.35, edge width 0.01 in normalized coordinates): a solid
+  // object whose surface spans a few samples, like a trained scene, rather than a soft fog that
+  // would send tens of samples per ray through the MLP.
   const float center[3] = {0.15f, -0.1f, 0.05f};  // normalized coordinates
-  const float width = 0.3f, amp = 10.f;
+  const float half = 0.35f, edge = 0.01f, amp = 8.f;
   auto gauss = [&](int axis, int i) {
     const float c = static_cast<float>(i) / static_cast<float>(res - 1) * 2.f - 1.f;
-    const float z = (c - center[axis]) / width;
-    return std::exp(-0.5f * z * z);
+    const float z = (half - std::fabs(c - center[axis])) / edge;
+    return 1.f / (1.f + std::exp(-z));
   };
   for (int m = 0; m < 3; ++m) {
     FillNormal(density.plane_f32[m].data(), density.plane_count(m), 0.05f, &rng);

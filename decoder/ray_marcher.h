@@ -102,7 +102,8 @@ class RayMarcher {
 // Synthetic scenes and the render benchmark (wired into `ecrf bench render`).
 
 // A res^3 scene over [-1.5,1.5]^3: density ranks 16, appearance ranks 48 (P = 144), feature 27,
-// hidden 128; random small grids (seeded) plus a separable Gaussian blob of density off-centre;
+// hidden 128; random small grids (seeded) plus a separable smooth box of dense density
+// off-centre (an opaque object whose surface spans a few samples);
 // random MLP (PyTorch-like init). with_mask: alpha mask at res^3 from the density (TensoRF's
 // updateAlphaMask: alpha >= 1e-4 after a 3x3x3 max-pool).
 Status MakeBlobScene(int res, GridStorage storage, bool with_mask, uint32_t seed,

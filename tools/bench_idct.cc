@@ -6,6 +6,8 @@
 #include <vector>
 
 #include "format/block_shape.h"
+#include "format/coef_coder.h"
+#include "format/range_coder.h"
 #include "format/float_dct.h"
 #include "format/int_idct.h"
 #include "tools/bench_json.h"
@@ -75,6 +77,37 @@ double FloatCoefficientsPerSecond(const std::vector<int32_t>& blocks, const int 
   return coefficients / elapsed;
 }
 
+// Entropy decoding followed by the integer IDCT: what a decoder spends per coefficient of a grid.
+double DecodePlusIdctPerSecond(const std::vector<int32_t>& blocks, const int dims[3]) {
+  const BlockShape shape{dims[0], dims[1], dims[2]};
+  const int v = BlockVolume(dims);
+  const int count = int(blocks.size() / v);
+  CoefContexts enc_ctx;
+  if (!enc_ctx.Init(shape).ok()) return 0;
+  RangeEncoder enc;
+  for (int b = 0; b < count; ++b) EncodeCoefBlock(enc, enc_ctx, &blocks[size_t(b) * v]);
+  const std::vector<uint8_t> stream = enc.Finish();
+  std::vector<int32_t> coeffs(v), out(v);
+  long coefficients = 0;
+  volatile int32_t sink = 0;
+  const auto start = std::chrono::steady_clock::now();
+  double elapsed = 0;
+  do {
+    CoefContexts ctx;
+    if (!ctx.Init(shape).ok()) return 0;
+    RangeDecoder dec(stream.data(), stream.size());
+    for (int b = 0; b < count; ++b) {
+      int eob = 0;
+      if (!DecodeCoefBlock(dec, ctx, 127, coeffs.data(), &eob).ok()) return 0;
+      InverseDctInt(coeffs.data(), dims, 8, out.data());
+      sink = sink + out[b % v];
+    }
+    coefficients += long(count) * v;
+    elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  } while (elapsed < 0.5);
+  return coefficients / elapsed;
+}
+
 }  // namespace
 
 int RunIdctBench(int argc, char** argv) {
@@ -90,6 +123,11 @@ int RunIdctBench(int argc, char** argv) {
   report.Add("idct_16x16x16_sparse_mcoef_per_s", CoefficientsPerSecond(sparse, cube) / 1e6, "M/s");
   report.Add("idct_16x16x16_zero_mcoef_per_s", CoefficientsPerSecond(zeros, cube) / 1e6, "M/s");
   report.Add("idct_1x8x8_lines_mcoef_per_s", CoefficientsPerSecond(lines, line) / 1e6, "M/s");
+  report.Add("decode_plus_idct_16x16x16_sparse_mcoef_per_s", DecodePlusIdctPerSecond(sparse, cube) / 1e6,
+             "M/s");
+  report.Add("decode_plus_idct_16x16x16_dense_mcoef_per_s", DecodePlusIdctPerSecond(dense, cube) / 1e6,
+             "M/s");
+  report.Add("decode_plus_idct_1x8x8_lines_mcoef_per_s", DecodePlusIdctPerSecond(lines, line) / 1e6, "M/s");
   report.Add("float64_idct_16x16x16_dense_mcoef_per_s", FloatCoefficientsPerSecond(dense, cube) / 1e6,
              "M/s");
   const std::string json = JsonPathFromArgs(argc, argv);

@@ -1,4 +1,5 @@
 // `ecrf train`: trains a TensoRF VM model on posed images or on the built-in scene.
+#include <omp.h>
 #include <sys/stat.h>
 
 #include <cerrno>
@@ -30,7 +31,8 @@ const char kTrainUsage[] =
     "  --eval-every N             test PSNR every N iterations (a PSNR-vs-minutes curve)\n"
     "  --test-stride K            evaluate every K-th test view\n"
     "  --max-test-views N         evaluate at most N test views\n"
-    "  --save-renders             write the test renders as PNG into RUN_DIR/renders\n";
+    "  --save-renders             write the test renders as PNG into RUN_DIR/renders\n"
+    "  --threads N                worker threads (default: all cores)\n";
 
 int ParseInt(const char* flag, const char* value) {
   char* end = nullptr;
@@ -100,6 +102,8 @@ int RunTrain(int argc, char** argv) {
       o.test_view_stride = std::max(1, ParseInt("--test-stride", value()));
     } else if (a == "--max-test-views") {
       o.max_test_views = ParseInt("--max-test-views", value());
+    } else if (a == "--threads") {
+      omp_set_num_threads(std::max(1, ParseInt("--threads", value())));
     } else if (a == "--save-renders") {
       o.save_renders = true;
     } else {

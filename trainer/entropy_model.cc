@@ -350,10 +350,13 @@ double FactorizedEntropyModel::Bits(const float* x, const EntropySegment* segmen
   }
   double total = 0.0;
   const long num_items = static_cast<long>(items.size());
+  size_t num_values = 0;
+  for (const Item& item : items) num_values += item.end - item.begin;
   std::vector<ModelView<float>> views;
   views.reserve(num_models_);
   for (int c = 0; c < num_models_; ++c) views.emplace_back(model_params(c));
-#pragma omp parallel if (num_items > 1) reduction(+ : total)
+  // Small calls run serially (a parallel region costs more than ~10k values' evaluation).
+#pragma omp parallel if (num_items > 1 && num_values > 16384) reduction(+ : total)
   {
     ChunkState<float>* st = new ChunkState<float>;
     std::vector<double> local(accumulate_param_grads ? params_.size() : 0, 0.0);

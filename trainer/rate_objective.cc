@@ -23,14 +23,14 @@ struct BandMap {
   int begin[kNumFrequencyBands + 1];
 };
 
-BandMap MakeBandMap(const GridBlockLayout& L) {
+BandMap MakeBandMap(const GridBlockLayout& L, bool line) {
   BandMap bm;
   std::vector<int> band(L.block_volume());
   int count[kNumFrequencyBands] = {0};
   for (int k0 = 0, p = 0; k0 < L.block[0]; ++k0) {
     for (int k1 = 0; k1 < L.block[1]; ++k1) {
       for (int k2 = 0; k2 < L.block[2]; ++k2, ++p) {
-        band[p] = FrequencyBand(k0, k1, k2);
+        band[p] = FrequencyBand(line, k0, k1, k2);
         ++count[band[p]];
       }
     }
@@ -59,7 +59,7 @@ TensorResult ProcessTensor(const float* tensor, float* grad, const GridBlockLayo
   const int k = static_cast<int>(ids.size());
   const int V = L.block_volume();
   const size_t total = static_cast<size_t>(k) * V;
-  const BandMap bm = MakeBandMap(L);
+  const BandMap bm = MakeBandMap(L, tensor_index % kTensorsPerGrid >= 3);
   std::vector<float> c(total), x(total);
   ForwardBlockList(tensor, L, ids.data(), k, c.data());
   const float inv_step = 1.f / step;
@@ -139,12 +139,16 @@ void CheckArgs(size_t num_grids, const std::vector<float>& steps,
 
 }  // namespace
 
-int FrequencyBand(int k0, int k1, int k2) {
-  const int s = k0 + k1 + k2;
-  if (s == 0) return 0;
+int FrequencyOctave(int s) {
   int l = 0;
-  while ((2 << l) <= s) ++l;  // floor(log2(s))
-  return std::min(kNumFrequencyBands - 1, 1 + l);
+  while (l < 5 && (1 << l) <= s) ++l;  // 1 + floor(log2(s)) for s >= 1
+  return l;
+}
+
+int FrequencyBand(bool line, int k0, int k1, int k2) {
+  const int kc = line ? k1 : k0;
+  const int ks = line ? k2 : k1 + k2;
+  return 6 * FrequencyOctave(kc) + FrequencyOctave(ks);
 }
 
 GridBlockLayout RateTensorLayout(const VmGrid& grid, int t, const RateConfig& config) {

@@ -50,6 +50,30 @@ void RaySet::Filter(const std::function<bool(const float*, const float*)>& keep)
   cursor_ = 0;
 }
 
+void RaySet::FilterChunked(
+    const std::function<void(int, const float*, const float*, uint8_t*)>& keep) {
+  const size_t chunk = 1 << 16;
+  std::vector<float> o(chunk * 3), d(chunk * 3);
+  std::vector<uint8_t> flags(active_.size());
+  for (size_t begin = 0; begin < active_.size(); begin += chunk) {
+    const int n = int(std::min(chunk, active_.size() - begin));
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < n; ++i) {
+      float c[3];
+      Ray(active_[begin + i], &o[3 * size_t(i)], &d[3 * size_t(i)], c);
+    }
+    keep(n, o.data(), d.data(), &flags[begin]);
+  }
+  size_t w = 0;
+  for (size_t i = 0; i < active_.size(); ++i) {
+    if (flags[i]) active_[w++] = active_[i];
+  }
+  active_.resize(w);
+  active_.shrink_to_fit();
+  order_.clear();
+  cursor_ = 0;
+}
+
 void RaySet::Shuffle(std::mt19937_64& rng) {
   order_ = active_;
   std::shuffle(order_.begin(), order_.end(), rng);

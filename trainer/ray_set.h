@@ -23,6 +23,10 @@ class RaySet {
 
   // Keeps the rays for which keep(origin, dir) holds; evaluated in parallel.
   void Filter(const std::function<bool(const float* origin, const float* dir)>& keep);
+  // Same, for a test that runs on many rays at once: keep(n, origins, dirs, flags_out), called on
+  // consecutive chunks (the callback parallelises internally).
+  void FilterChunked(
+      const std::function<void(int n, const float* origins, const float* dirs, uint8_t* keep)>& keep);
 
   // The next n rays of a shuffled order (TensoRF's SimpleSampler: consecutive slices of a random
   // permutation, reshuffled when exhausted). Outputs are n x 3 each.

@@ -246,6 +246,15 @@ std::vector<uint8_t> TensorfModel::FilterRays(int64_t n, const float* origins, c
                                               bool bbox_only, int n_samples) const {
   std::vector<uint8_t> keep(static_cast<size_t>(n), 0);
   const bool use_mask = !bbox_only && has_mask_;
+  Aabb mask_box;
+  if (use_mask) {
+    mask_box = mask_.aabb();
+    for (int a = 0; a < 3; ++a) {
+      const float unit = (mask_box.max[a] - mask_box.min[a]) / static_cast<float>(mask_.res()[a] - 1);
+      mask_box.min[a] -= 1.01f * unit;
+      mask_box.max[a] += 1.01f * unit;
+    }
+  }
 #pragma omp parallel for schedule(dynamic, 256) if (n > 1024)
   for (int64_t i = 0; i < n; ++i) {
     const float* o = origins + 3 * i;
@@ -257,8 +266,17 @@ std::vector<uint8_t> TensorfModel::FilterRays(int64_t n, const float* origins, c
       continue;
     }
     const float t_min = std::min(std::max(t_enter, config_.near), config_.far);
+    // Samples farther than one mask voxel outside the mask's box always read 0: only the index
+    // range crossing the expanded box is tested.
+    float m_enter, m_exit;
+    RayAabb(mask_box, o, d, &m_enter, &m_exit);
+    if (!(m_exit >= m_enter)) continue;
+    const double lo = std::floor((static_cast<double>(m_enter) - t_min) / step_size_) - 1;
+    const double hi = std::ceil((static_cast<double>(m_exit) - t_min) / step_size_) + 2;
+    const int s_lo = static_cast<int>(std::max(0.0, std::min(lo, static_cast<double>(n_samples))));
+    const int s_hi = static_cast<int>(std::max(0.0, std::min(hi, static_cast<double>(n_samples))));
     uint8_t hit = 0;
-    for (int s = 0; s < n_samples && !hit; ++s) {
+    for (int s = s_lo; s < s_hi && !hit; ++s) {
       const float t = t_min + step_size_ * static_cast<float>(s);
       const float p[3] = {o[0] + d[0] * t, o[1] + d[1] * t, o[2] + d[2] * t};
       if (mask_.Occupied(p)) hit = 1;

@@ -314,8 +314,9 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
       }
       if (k == 1) {
         const TensorfModel& m = *model;
-        rays.Filter([&m](const float* org, const float* dir) {
-          return m.FilterRays(1, org, dir, false)[0] != 0;
+        rays.FilterChunked([&m](int count, const float* org, const float* dir, uint8_t* keep) {
+          const std::vector<uint8_t> k = m.FilterRays(count, org, dir, false);
+          std::copy(k.begin(), k.end(), keep);
         });
         std::fprintf(stderr, "\nfiltered training rays: %zu of %zu remain\n", rays.size(), rays.total());
       }

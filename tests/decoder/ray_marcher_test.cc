@@ -708,7 +708,7 @@ TEST(RenderBench, Blob128) {
         RenderOptions opt;
         opt.skip_empty_space = skip;
         RenderBenchResult r;
-        ASSERT_TRUE(BenchmarkRender(s, 400, 400, threads, 4, opt, &r).ok());
+        ASSERT_TRUE(BenchmarkRender(s, 400, 400, threads, 2, opt, &r).ok());
         std::printf("%s skip=%d threads=%d: %.1f ms/view, %.2f M samples/s (%llu/view), "
                     "%.2f M colour samples/s (%llu/view)\n",
                     storage == GridStorage::kInt16 ? "int16" : "f32  ", skip ? 1 : 0, threads,

@@ -207,6 +207,41 @@ TEST(TensorfModelTest, FilterRays) {
   model.UpdateAlphaMask({21, 21, 21});
   keep = model.FilterRays(4, o, d, false);
   EXPECT_EQ(keep, (std::vector<uint8_t>{1, 0, 1, 0}));
+  // Equals brute force over all n_samples samples (the implementation skips the range outside
+  // the mask box) for random rays, after a shrink so the mask box is larger than the aabb.
+  model.Shrink(model.UpdateAlphaMask({21, 21, 21}));
+  std::mt19937 rng(5);
+  std::normal_distribution<float> nd;
+  std::uniform_real_distribution<float> u(-0.5f, 0.5f);
+  const int n = 3000;
+  std::vector<float> ro(3 * n), rd(3 * n);
+  for (int i = 0; i < n; ++i) {
+    float dir[3];
+    for (int a = 0; a < 3; ++a) {
+      ro[3 * i + a] = 2.5f * nd(rng) / 1.7f;
+      dir[a] = u(rng) - ro[3 * i + a];
+    }
+    const float l = std::sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+    for (int a = 0; a < 3; ++a) rd[3 * i + a] = dir[a] / l;
+  }
+  keep = model.FilterRays(n, ro.data(), rd.data(), false, 256);
+  int kept = 0;
+  for (int i = 0; i < n; ++i) {
+    float te, tx;
+    RayAabb(model.aabb(), &ro[3 * i], &rd[3 * i], &te, &tx);
+    const float t_min = std::min(std::max(te, model.config().near), model.config().far);
+    uint8_t hit = 0;
+    for (int s = 0; s < 256; ++s) {
+      const float t = t_min + model.step_size() * static_cast<float>(s);
+      const float p[3] = {ro[3 * i] + rd[3 * i] * t, ro[3 * i + 1] + rd[3 * i + 1] * t,
+                          ro[3 * i + 2] + rd[3 * i + 2] * t};
+      hit |= model.alpha_mask()->Occupied(p) ? 1 : 0;
+    }
+    ASSERT_EQ(keep[i], hit) << i;
+    kept += hit;
+  }
+  EXPECT_GT(kept, 100);
+  EXPECT_LT(kept, n - 100);
 }
 
 TEST(TensorfModelTest, DensityL1AddsWeightedGradient) {

@@ -293,6 +293,51 @@ TEST(VolumeRenderTest, TrainStepSameGradientsWithOneAndTwoThreads) {
     ASSERT_NEAR(a.appearance().grads()[i], b.appearance().grads()[i], 1e-7 + 1e-4 * std::fabs(a.appearance().grads()[i]));
 }
 
+TEST(VolumeRenderTest, HeadChunkingAndMaskKeepResults) {
+  TensorfConfig c = TinyConfig();
+  c.density_shift = -2.f;
+  TensorfConfig cc = c;
+  cc.head_chunk_rows = 7;  // many chunks, some rays larger than a chunk
+  TensorfModel a(c), b(cc);
+  a.Initialize({10, 10, 10}, 8);
+  b.Initialize({10, 10, 10}, 8);
+  // Mask: occupied for x < 0 only (half of the box).
+  std::vector<uint8_t> occ(10 * 10 * 10, 0);
+  for (int z = 0; z < 10; ++z)
+    for (int y = 0; y < 10; ++y)
+      for (int x = 0; x < 5; ++x) occ[(z * 10 + y) * 10 + x] = 1;
+  for (TensorfModel* m : {&a, &b}) m->SetAlphaMask(AlphaMask(m->aabb(), {10, 10, 10}, occ));
+  std::vector<float> o, d;
+  RandomRays(150, 12, &o, &d);
+  std::vector<float> target(450, 0.4f);
+  a.ZeroGrads();
+  b.ZeroGrads();
+  const TrainStepStats sa = TrainStep(a, 150, o.data(), d.data(), target.data(), 3);
+  const TrainStepStats sb = TrainStep(b, 150, o.data(), d.data(), target.data(), 3);
+  EXPECT_GT(sa.appearance_samples, 100);
+  EXPECT_EQ(sa.density_samples, sb.density_samples);
+  EXPECT_EQ(sa.appearance_samples, sb.appearance_samples);
+  EXPECT_NEAR(sa.loss, sb.loss, 1e-7);
+  for (size_t i = 0; i < a.density().grads().size(); ++i)
+    ASSERT_NEAR(a.density().grads()[i], b.density().grads()[i], 1e-7 + 1e-4 * std::fabs(a.density().grads()[i]));
+  for (size_t i = 0; i < a.appearance().grads().size(); ++i)
+    ASSERT_NEAR(a.appearance().grads()[i], b.appearance().grads()[i], 1e-7 + 1e-4 * std::fabs(a.appearance().grads()[i]));
+  for (size_t i = 0; i < a.head().grads().size(); ++i)
+    ASSERT_NEAR(a.head().grads()[i], b.head().grads()[i], 1e-6 + 1e-3 * std::fabs(a.head().grads()[i]));
+  // Masked-out samples are skipped: every traced sample lies in an occupied mask cell.
+  for (int r = 0; r < 150; ++r)
+    for (const auto& smp : TraceRay(a, &o[3 * r], &d[3 * r], RayJitter(3, r))) {
+      const float x[3] = {o[3 * r] + d[3 * r] * smp.t, o[3 * r + 1] + d[3 * r + 1] * smp.t,
+                          o[3 * r + 2] + d[3 * r + 2] * smp.t};
+      ASSERT_TRUE(a.alpha_mask()->Occupied(x));
+      ASSERT_LT(x[0], 0.23f);  // occupied up to vertex 4 (x = -0.111) plus one cell of support
+    }
+  TensorfModel nomask = a;
+  nomask.ClearAlphaMask();
+  const TrainStepStats sn = TrainStep(nomask, 150, o.data(), d.data(), target.data(), 3);
+  EXPECT_LT(sa.density_samples, 0.8 * sn.density_samples);
+}
+
 TEST(VolumeRenderTest, StatsCountTracedSamples) {
   TensorfConfig c = TinyConfig();
   c.density_shift = 0.f;
