@@ -32,7 +32,39 @@ const char kTrainUsage[] =
     "  --test-stride K            evaluate every K-th test view\n"
     "  --max-test-views N         evaluate at most N test views\n"
     "  --save-renders             write the test renders as PNG into RUN_DIR/renders\n"
-    "  --threads N                worker threads (default: all cores)\n";
+    "  --threads N                worker threads (default: all cores)\n"
+    "ECRF objective:\n"
+    "  --lambda-e X               weight of the estimated size in bits (0 = plain TensoRF)\n"
+    "  --alpha A                  lambda_r = A * lambda_e for the DCT-coefficient L2 term (default 1)\n"
+    "  --dct-block CxHxW          plane block shape (default 16x16x16)\n"
+    "  --line-block CxL           line block shape (default 8x8)\n"
+    "  --rate-fraction F          share of blocks in each step's rate estimate (default 0.1)\n";
+
+float ParseFloat(const char* flag, const char* value) {
+  char* end = nullptr;
+  errno = 0;
+  const float v = std::strtof(value, &end);
+  if (errno || !end || *end || !(v >= 0.0f)) {
+    throw std::invalid_argument(std::string(flag) + ": '" + value + "' is not a non-negative number");
+  }
+  return v;
+}
+
+// "16x16x16" or "8x8" into n values, each a power of two <= 32.
+void ParseShape(const char* flag, const std::string& text, int n, int* out) {
+  size_t pos = 0;
+  for (int i = 0; i < n; ++i) {
+    const size_t x = text.find('x', pos);
+    const std::string part = text.substr(pos, x == std::string::npos ? std::string::npos : x - pos);
+    const int v = std::atoi(part.c_str());
+    if (part.empty() || v < 1 || v > 32 || (v & (v - 1)) || (i + 1 < n) == (x == std::string::npos)) {
+      throw std::invalid_argument(std::string(flag) + ": '" + text + "' is not " + std::to_string(n) +
+                                  " powers of two <= 32 joined by 'x'");
+    }
+    out[i] = v;
+    pos = x == std::string::npos ? text.size() : x + 1;
+  }
+}
 
 int ParseInt(const char* flag, const char* value) {
   char* end = nullptr;
@@ -102,6 +134,20 @@ int RunTrain(int argc, char** argv) {
       o.test_view_stride = std::max(1, ParseInt("--test-stride", value()));
     } else if (a == "--max-test-views") {
       o.max_test_views = ParseInt("--max-test-views", value());
+    } else if (a == "--lambda-e") {
+      o.lambda_e = ParseFloat("--lambda-e", value());
+    } else if (a == "--alpha") {
+      o.alpha = ParseFloat("--alpha", value());
+    } else if (a == "--dct-block") {
+      ParseShape("--dct-block", value(), 3, o.plane_block);
+    } else if (a == "--line-block") {
+      int shape[2];
+      ParseShape("--line-block", value(), 2, shape);
+      o.line_block[0] = 1;
+      o.line_block[1] = shape[0];
+      o.line_block[2] = shape[1];
+    } else if (a == "--rate-fraction") {
+      o.rate_fraction = std::min(1.0f, ParseFloat("--rate-fraction", value()));
     } else if (a == "--threads") {
       omp_set_num_threads(std::max(1, ParseInt("--threads", value())));
     } else if (a == "--save-renders") {
@@ -128,9 +174,9 @@ int RunTrain(int argc, char** argv) {
   size_t float_bytes = 0;
   for (const auto& a : model.NamedParameters()) float_bytes += a.size * sizeof(float);
   std::printf("trained %d iterations in %.1f s (%.3f s/it); test PSNR %.2f dB, SSIM %.4f over %d views; "
-              "float32 model %.2f MB\n",
+              "float32 model %.2f MB; estimated coded grids %.3f MB\n",
               r.iterations, r.train_seconds, r.train_seconds / std::max(1, r.iterations), r.test.psnr,
-              r.test.ssim, r.test.views, float_bytes / 1e6);
+              r.test.ssim, r.test.views, float_bytes / 1e6, r.rate.total_bits / 8e6);
 
   nlohmann::json m;
   m["preset"] = o.preset;
@@ -146,6 +192,17 @@ int RunTrain(int argc, char** argv) {
   m["aabb_min"] = model.aabb().min;
   m["aabb_max"] = model.aabb().max;
   m["float32_model_bytes"] = float_bytes;
+  m["lambda_e"] = o.lambda_e;
+  m["alpha"] = o.alpha;
+  m["plane_block"] = o.plane_block;
+  m["line_block"] = o.line_block;
+  m["estimated_grid_bits"] = r.rate.total_bits;
+  m["estimated_grid_bytes"] = r.rate.total_bits / 8.0;
+  nlohmann::json per_tensor = nlohmann::json::object();
+  for (size_t t = 0; t < r.rate.bits.size(); ++t) {
+    per_tensor[trainer::RateTensorName(int(t))] = {{"bits", r.rate.bits[t]}, {"coefficients", r.rate.coeffs[t]}};
+  }
+  m["estimated_bits_per_tensor"] = per_tensor;
   if (!r.psnr_curve.empty()) {
     nlohmann::json curve = nlohmann::json::array();
     for (const auto& p : r.psnr_curve) curve.push_back({{"minutes", p.first}, {"test_psnr", p.second}});

@@ -32,6 +32,7 @@ TrainOptions PresetOptions(const std::string& name) {
     o.alpha_mask_iters = {300, 700};
     o.density_rank = 8;
     o.appearance_rank = 24;
+    o.plane_block[0] = 8;  // blocks never span more channels than a mode has
     return o;
   }
   throw std::invalid_argument("unknown preset '" + name + "' (expected paper, fast or tiny)");

@@ -41,6 +41,18 @@ struct TrainOptions {
   int density_rank = 16;    // per mode
   int appearance_rank = 48;  // per mode
 
+  // ECRF objective: loss = MSE + lambda_e * R + lambda_r * ||F(G)||^2, lambda_r = alpha * lambda_e.
+  // R is the estimated size in bits of all coded grid coefficients (the same unit as the paper,
+  // so lambda_e values carry over: 1e-10 means one bit is worth 1e-10 of per-channel MSE).
+  float lambda_e = 0.0f;  // 0: plain TensoRF
+  float alpha = 1.0f;
+  int plane_block[3] = {16, 16, 16};  // channel x H x W
+  int line_block[3] = {1, 8, 8};      // 1 x channel x L
+  float rate_fraction = 0.1f;         // share of DCT blocks in each step's unbiased rate estimate
+  float rate_start = 16000.0f / 30000.0f;  // share of the run after which the rate terms switch on
+  float entropy_lr = 5e-3f;           // Adam rate of the entropy-model parameters
+  int coef_bits = 8;                  // quantization depth the steps are chosen for
+
   // Bookkeeping.
   uint32_t seed = 20211202;
   int checkpoint_every = 0;  // iterations; 0 = only the final checkpoint

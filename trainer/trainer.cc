@@ -68,17 +68,19 @@ struct Optimizers {
 };
 
 void PrintProgress(int it, int iters, double loss, double psnr, const TensorfModel& model,
-                   const TrainStepStats& stats, double sec_per_it, double elapsed) {
+                   const TrainStepStats& stats, double sec_per_it, double elapsed, double est_mb) {
   const int width = 24;
   const int filled = int(double(it) / iters * width);
   char bar[width + 1];
   for (int i = 0; i < width; ++i) bar[i] = i < filled ? '#' : '.';
   bar[width] = 0;
   const auto& r = model.res();
+  char size[32] = "";
+  if (est_mb >= 0) std::snprintf(size, sizeof(size), " size~%.3fMB", est_mb);
   std::fprintf(stderr,
-               "%s[%s] %6d/%d loss %.5f psnr %5.2f grid %dx%dx%d samples %.2fM/%.2fM %.2f s/it "
+               "%s[%s] %6d/%d loss %.5f psnr %5.2f%s grid %dx%dx%d samples %.2fM/%.2fM %.2f s/it "
                "elapsed %s eta %s%s",
-               isatty(2) ? "\r" : "", bar, it, iters, loss, psnr, r[0], r[1], r[2],
+               isatty(2) ? "\r" : "", bar, it, iters, loss, psnr, size, r[0], r[1], r[2],
                stats.density_samples / 1e6, stats.appearance_samples / 1e6, sec_per_it,
                FormatDuration(elapsed).c_str(), FormatDuration(sec_per_it * (iters - it)).c_str(),
                isatty(2) ? "   " : "\n");
@@ -158,7 +160,7 @@ EvalResult Evaluate(const TensorfModel& model, const Dataset& test, int stride, 
 }
 
 void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int iteration,
-                         const TrainOptions& o) {
+                         const TrainOptions& o, const RateState* rate) {
   Checkpoint ck;
   nlohmann::json j;
   j["format"] = "ecrf-checkpoint-1";
@@ -179,6 +181,13 @@ void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int itera
     occ.data.assign(mask->occupancy().begin(), mask->occupancy().end());
     ck.arrays.push_back(std::move(occ));
   }
+  if (rate && rate->active) {
+    j["rate_active"] = true;
+    j["plane_block"] = rate->config.plane_block;
+    j["line_block"] = rate->config.line_block;
+    ck.arrays.push_back({"rate.steps", {int64_t(rate->steps.size())}, rate->steps});
+    ck.arrays.push_back({"rate.entropy_model", {int64_t(rate->entropy.params().size())}, rate->entropy.params()});
+  }
   ck.json = j.dump();
   for (const NamedArray& a : model.NamedParameters()) {
     ck.arrays.push_back({a.name, a.shape, std::vector<float>(a.data, a.data + a.size)});
@@ -186,7 +195,7 @@ void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int itera
   WriteCheckpoint(path, ck);
 }
 
-int LoadModelCheckpoint(const std::string& path, TensorfModel* model) {
+int LoadModelCheckpoint(const std::string& path, TensorfModel* model, RateState* rate) {
   const Checkpoint ck = ReadCheckpoint(path);
   nlohmann::json j;
   try {
@@ -222,11 +231,41 @@ int LoadModelCheckpoint(const std::string& path, TensorfModel* model) {
     for (size_t i = 0; i < bits.size(); ++i) bits[i] = occ->data[i] > 0.5f;
     model->SetAlphaMask(AlphaMask(box, res, std::move(bits)));
   }
+  if (rate && j.value("rate_active", false)) {
+    const CheckpointArray* steps = ck.Find("rate.steps");
+    const CheckpointArray* params = ck.Find("rate.entropy_model");
+    if (!steps || !params) throw std::runtime_error(path + ": checkpoint lacks the rate state");
+    for (int a = 0; a < 3; ++a) {
+      rate->config.plane_block[a] = j["plane_block"][a].get<int>();
+      rate->config.line_block[a] = j["line_block"][a].get<int>();
+    }
+    rate->steps = steps->data;
+    rate->entropy.Init(NumRateModels(2), 0);
+    if (params->data.size() != rate->entropy.params().size()) {
+      throw std::runtime_error(path + ": entropy model has the wrong number of parameters");
+    }
+    rate->entropy.params() = params->data;
+    rate->adam.Reset(rate->entropy.params().size());
+    rate->active = true;
+  }
   return j.at("iteration").get<int>();
 }
 
-TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& test, TensorfModel* model) {
+int RateStartIteration(const TrainOptions& o) {
+  int start = int(std::lround(double(o.rate_start) * o.iters));
+  for (int m : o.upsample_iters) start = std::max(start, ScaleMilestone(m, o.iters, o.reference_iters) + 1);
+  for (int m : o.alpha_mask_iters) start = std::max(start, ScaleMilestone(m, o.iters, o.reference_iters) + 1);
+  return start;
+}
+
+TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& test, TensorfModel* model,
+                  RateState* rate_out) {
   TrainResult result;
+  RateState local_rate;
+  RateState& rate = rate_out ? *rate_out : local_rate;
+  rate.Configure(o);
+  const bool use_rate = o.lambda_e > 0.0f;
+  const int rate_start = RateStartIteration(o);
   if (train.views.empty()) throw std::invalid_argument("the training split has no views");
   const auto start = Clock::now();
 
@@ -240,7 +279,7 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   int first_iter = 0;
   bool resumed = false;
   if (o.resume && !ckpt_path.empty() && access(ckpt_path.c_str(), R_OK) == 0) {
-    first_iter = LoadModelCheckpoint(ckpt_path, model);
+    first_iter = LoadModelCheckpoint(ckpt_path, model, &rate);
     resumed = true;
     std::fprintf(stderr, "resumed from %s at iteration %d\n", ckpt_path.c_str(), first_iter);
   } else {
@@ -283,8 +322,14 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   for (int it = first_iter; it < o.iters; ++it) {
     rays.NextBatch(n, rng, origins.data(), dirs.data(), rgb.data());
     model->ZeroGrads();
+    if (use_rate && it >= rate_start && !rate.active) {
+      rate.Activate(*model, o);
+      std::fprintf(stderr, "%srate objective on at iteration %d (lambda_e %g, alpha %g)\n",
+                   isatty(2) ? "\n" : "", it, o.lambda_e, o.alpha);
+    }
     stats = TrainStep(*model, n, origins.data(), dirs.data(), rgb.data(), rng());
     if (l1_weight > 0) model->DensityL1(l1_weight);
+    if (rate.active && use_rate) rate.Step(*model, o, rng());
     opt.Step(*model, o);
     opt.lr_scale *= lr_factor;
     mse_sum += stats.mse;
@@ -296,7 +341,7 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
       result.final_train_psnr = -10.0 * std::log10(std::max(mse, 1e-12));
       const double spi = Seconds(interval_start) / std::max(1, mse_count);
       PrintProgress(done, o.iters, mse, result.final_train_psnr, *model, stats, spi,
-                    Seconds(start) - eval_seconds);
+                    Seconds(start) - eval_seconds, rate.active ? rate.last_bits / 8e6 : -1.0);
       mse_sum = 0.0;
       mse_count = 0;
       interval_start = Clock::now();
@@ -328,7 +373,7 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
     }
 
     if (!ckpt_path.empty() && o.checkpoint_every > 0 && done % o.checkpoint_every == 0 && done < o.iters) {
-      SaveModelCheckpoint(ckpt_path, *model, done, o);
+      SaveModelCheckpoint(ckpt_path, *model, done, o, &rate);
     }
     if (o.eval_every > 0 && done % o.eval_every == 0 && done < o.iters) {
       const auto eval_start = Clock::now();
@@ -343,7 +388,16 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   result.iterations = o.iters;
   result.train_seconds = Seconds(start) - eval_seconds;
   (void)resumed;
-  if (!ckpt_path.empty()) SaveModelCheckpoint(ckpt_path, *model, o.iters, o);
+  if (!ckpt_path.empty()) SaveModelCheckpoint(ckpt_path, *model, o.iters, o, &rate);
+  if (!rate.active) {
+    // Without the rate objective, fit an entropy model to the final grids anyway so every run
+    // reports the size its coefficients would cost (the lambda_e = 0 point of a sweep).
+    rate.Activate(*model, o);
+    TrainOptions fit = o;
+    fit.lambda_e = 0.0f;
+    for (int k = 0; k < 300; ++k) rate.Step(*model, fit, rng());
+  }
+  result.rate = rate.Evaluate(*model);
 
   result.test = Evaluate(*model, test, o.test_view_stride, o.max_test_views, o.save_renders);
   if (o.eval_every > 0) result.psnr_curve.emplace_back(result.train_seconds / 60.0, result.test.psnr);

@@ -10,6 +10,7 @@
 
 #include "trainer/dataset.h"
 #include "trainer/image_io.h"
+#include "trainer/rate_state.h"
 #include "trainer/tensorf_model.h"
 #include "trainer/train_options.h"
 
@@ -30,6 +31,7 @@ struct TrainResult {
   double final_train_psnr = 0.0;  // from the mean MSE of the last progress interval
   EvalResult test;
   std::vector<std::pair<double, double>> psnr_curve;  // (minutes, test PSNR) when --eval-every
+  RateReport rate;  // bits per tensor of the rounded coefficients (when lambda_e > 0)
 };
 
 // The datasets a run uses: the built-in procedural scene or a directory on disk.
@@ -40,8 +42,13 @@ TensorfConfig ConfigFor(const TrainOptions& options, const Dataset& data);
 
 // Trains on `train`, evaluating on `test` at the end (and every options.eval_every iterations).
 // Writes checkpoints and metrics.json into options.out_dir when it is not empty.
+// `rate` receives the rate objective's state (steps, entropy model); it may be null.
 TrainResult Train(const TrainOptions& options, const Dataset& train, const Dataset& test,
-                  TensorfModel* model);
+                  TensorfModel* model, RateState* rate = nullptr);
+
+// The iteration at which the rate terms switch on: options.rate_start of the run, but never
+// before the grid is final (after the last upsample and alpha-mask update).
+int RateStartIteration(const TrainOptions& options);
 
 // Renders every options.test_view_stride-th view and compares it with the ground truth.
 EvalResult Evaluate(const TensorfModel& model, const Dataset& test, int stride, int max_views,
@@ -51,9 +58,9 @@ Image RenderView(const TensorfModel& model, const Camera& camera);
 
 // Checkpoint <-> model (+ training progress).
 void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int iteration,
-                         const TrainOptions& options);
-// Returns the iteration stored in the checkpoint.
-int LoadModelCheckpoint(const std::string& path, TensorfModel* model);
+                         const TrainOptions& options, const RateState* rate = nullptr);
+// Returns the iteration stored in the checkpoint. `rate` (optional) receives the rate state.
+int LoadModelCheckpoint(const std::string& path, TensorfModel* model, RateState* rate = nullptr);
 
 }  // namespace trainer
 }  // namespace ecrf

@@ -1,0 +1,49 @@
+// The state of the ECRF rate objective during training: per-tensor quantization steps (frozen
+// when the rate terms switch on, so the trained rate is the rate of the file), the factorized
+// entropy model and its optimizer.
+#ifndef ECRF_TRAINER_RATE_STATE_H_
+#define ECRF_TRAINER_RATE_STATE_H_
+
+#include <vector>
+
+#include "trainer/adam.h"
+#include "trainer/entropy_model.h"
+#include "trainer/rate_objective.h"
+#include "trainer/tensorf_model.h"
+#include "trainer/train_options.h"
+
+namespace ecrf {
+namespace trainer {
+
+struct RateState {
+  bool active = false;
+  RateConfig config;
+  std::vector<float> steps;  // one per tensor: density planes 0..2, lines 0..2, then appearance
+  FactorizedEntropyModel entropy;
+  Adam adam;
+  double last_bits = 0.0;         // latest unbiased estimate (bits)
+  double last_regularizer = 0.0;
+
+  // Applies the options' block shapes; does not activate.
+  void Configure(const TrainOptions& options);
+  // Freezes the steps for the model's current grids and initialises the entropy model.
+  void Activate(const TensorfModel& model, const TrainOptions& options);
+  // Adds lambda_e * dR/dG + lambda_r * d||F(G)||^2/dG to the grid gradients and steps the
+  // entropy model. Returns the estimated bits.
+  double Step(TensorfModel& model, const TrainOptions& options, uint64_t seed);
+  // Deterministic rate of the rounded coefficients under the current entropy model.
+  RateReport Evaluate(const TensorfModel& model) const;
+};
+
+// Quantization step of each tensor for coef_bits-bit coefficients: the largest magnitude of its
+// block-DCT coefficients maps to the largest level (127 for 8 bits), so nothing clips. The
+// encoder uses the same rule when the rate objective was off.
+std::vector<float> ChooseQuantSteps(const TensorfModel& model, const RateConfig& config, int coef_bits);
+
+// Name of tensor index t (0..11) as in checkpoints: "density.plane.0" ... "appearance.line.2".
+const char* RateTensorName(int t);
+
+}  // namespace trainer
+}  // namespace ecrf
+
+#endif  // ECRF_TRAINER_RATE_STATE_H_
