@@ -7,6 +7,7 @@ namespace tools {
 
 int RunSelfCheck(int argc, char** argv);
 int RunTrain(int argc, char** argv);
+int RunConformance(int argc, char** argv);
 
 }  // namespace tools
 }  // namespace ecrf

@@ -28,6 +28,8 @@ const Command kCommands[] = {
     {"selfcheck", ecrf::tools::RunSelfCheck,
      "round-trip the entropy coder and check the integer IDCT against float64"},
     {"train", ecrf::tools::RunTrain, "train a TensoRF VM model: train --data DIR|--scene builtin -o RUN"},
+    {"conformance", ecrf::tools::RunConformance,
+     "rebuild (--write DIR) or check (--check DIR) the conformance vectors"},
     {"bench", RunBench, "benchmarks: bench coder|idct|mlp|train [--json FILE]"},
 };
 

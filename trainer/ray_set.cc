@@ -32,6 +32,17 @@ void RaySet::Ray(uint32_t index, float origin[3], float dir[3], float rgb[3]) co
   for (int c = 0; c < 3; ++c) rgb[c] = view.rgb.at(x, y, c);
 }
 
+void RaySet::KeepFlagged(const std::vector<uint8_t>& flags) {
+  size_t w = 0;
+  for (size_t i = 0; i < active_.size(); ++i) {
+    if (flags[i]) active_[w++] = active_[i];
+  }
+  active_.resize(w);
+  active_.shrink_to_fit();
+  order_.clear();  // the sampler starts a fresh permutation of the kept rays
+  cursor_ = 0;
+}
+
 void RaySet::Filter(const std::function<bool(const float*, const float*)>& keep) {
   std::vector<uint8_t> flags(active_.size());
 #pragma omp parallel for schedule(dynamic, 4096)
@@ -40,14 +51,7 @@ void RaySet::Filter(const std::function<bool(const float*, const float*)>& keep)
     Ray(active_[i], o, d, c);
     flags[i] = keep(o, d) ? 1 : 0;
   }
-  size_t w = 0;
-  for (size_t i = 0; i < active_.size(); ++i) {
-    if (flags[i]) active_[w++] = active_[i];
-  }
-  active_.resize(w);
-  active_.shrink_to_fit();
-  order_.clear();
-  cursor_ = 0;
+  KeepFlagged(flags);
 }
 
 void RaySet::FilterChunked(
@@ -64,14 +68,7 @@ void RaySet::FilterChunked(
     }
     keep(n, o.data(), d.data(), &flags[begin]);
   }
-  size_t w = 0;
-  for (size_t i = 0; i < active_.size(); ++i) {
-    if (flags[i]) active_[w++] = active_[i];
-  }
-  active_.resize(w);
-  active_.shrink_to_fit();
-  order_.clear();
-  cursor_ = 0;
+  KeepFlagged(flags);
 }
 
 void RaySet::Shuffle(std::mt19937_64& rng) {

@@ -39,6 +39,7 @@ class RaySet {
 
  private:
   void Shuffle(std::mt19937_64& rng);
+  void KeepFlagged(const std::vector<uint8_t>& flags);
 
   const std::vector<View>& views_;
   std::vector<uint64_t> view_offset_;  // prefix sums of pixels per view

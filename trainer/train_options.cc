@@ -12,12 +12,12 @@ TrainOptions PresetOptions(const std::string& name) {
   if (name == "paper") return o;
   if (name == "fast") {
     // Chosen by test PSNR per minute on chair and mic at 400x400 on 2 cores (see README).
-    o.iters = 5000;
-    o.reference_iters = 5000;
+    o.iters = 3000;
+    o.reference_iters = 3000;
     o.voxels_init = 64L * 64 * 64;
-    o.voxels_final = 200L * 200 * 200;
-    o.upsample_iters = {500, 1000, 1500, 2000, 2500};
-    o.alpha_mask_iters = {500, 1500};
+    o.voxels_final = 180L * 180 * 180;
+    o.upsample_iters = {300, 600, 900, 1200, 1500};
+    o.alpha_mask_iters = {300, 900};
     o.test_view_stride = 8;
     return o;
   }

@@ -1,0 +1,78 @@
+#include "trainer/train_options.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "trainer/builtin_scene.h"
+#include "trainer/ray_set.h"
+#include "trainer/trainer.h"
+
+namespace ecrf {
+namespace trainer {
+namespace {
+
+TEST(TrainOptions, MilestonesScaleWithTheRunLength) {
+  EXPECT_EQ(ScaleMilestone(2000, 30000, 30000), 2000);
+  EXPECT_EQ(ScaleMilestone(2000, 15000, 30000), 1000);
+  EXPECT_EQ(ScaleMilestone(7000, 3000, 30000), 700);
+}
+
+TEST(TrainOptions, UpsampleCountsAreLogSpacedAndEndAtTheFinalGrid) {
+  const TrainOptions o = PresetOptions("paper");
+  const auto counts = UpsampleVoxelCounts(o);
+  ASSERT_EQ(counts.size(), o.upsample_iters.size());
+  EXPECT_EQ(counts.back(), o.voxels_final);
+  for (size_t i = 1; i < counts.size(); ++i) {
+    // Constant ratio between consecutive steps, as TensoRF's N_voxel_list.
+    EXPECT_NEAR(double(counts[i]) / counts[i - 1], double(counts[1]) / counts[0], 0.01);
+  }
+  const double lo[3] = {-1.5, -1.5, -1.5}, hi[3] = {1.5, 1.5, 1.5};
+  int res[3];
+  ResolutionForVoxels(300L * 300 * 300, lo, hi, res);
+  EXPECT_EQ(res[0], 300);
+  const double flat_hi[3] = {1.5, 1.5, 0.0};
+  ResolutionForVoxels(128L * 128 * 128, lo, flat_hi, res);
+  EXPECT_EQ(res[0], res[1]);
+  EXPECT_NEAR(double(res[2]) / res[0], 0.5, 0.02);  // cubic voxels
+  EXPECT_THROW(PresetOptions("nonsense"), std::invalid_argument);
+}
+
+TEST(TrainOptions, RateTermsStartOnlyOnTheFinalGrid) {
+  TrainOptions o = PresetOptions("fast");
+  o.rate_start = 0.1f;  // earlier than the last upsample: must be pushed after it
+  const int last_upsample = ScaleMilestone(o.upsample_iters.back(), o.iters, o.reference_iters);
+  EXPECT_GT(RateStartIteration(o), last_upsample);
+  o.rate_start = 0.9f;
+  EXPECT_EQ(RateStartIteration(o), int(0.9 * o.iters + 0.5));
+}
+
+TEST(RaySet, BatchesCoverEveryRayOncePerEpochAndFilterKeepsMatches) {
+  const Dataset d = MakeBuiltinScene("train", 8, 6, 3, 1);
+  RaySet rays(d.views);
+  EXPECT_EQ(rays.size(), 8u * 6 * 3);
+  std::mt19937_64 rng(5);
+  std::vector<float> o(3 * 144), dir(3 * 144), rgb(3 * 144);
+  rays.NextBatch(144, rng, o.data(), dir.data(), rgb.data());
+  // One epoch visits each pixel once: the set of colours equals the set of pixels' colours.
+  double sum = 0, expected = 0;
+  for (float c : rgb) sum += c;
+  for (const View& v : d.views)
+    for (float c : v.rgb.pixels) expected += c;
+  EXPECT_NEAR(sum, expected, 1e-3);
+  for (int i = 0; i < 144; ++i) EXPECT_NEAR(dir[3 * i] * dir[3 * i] + dir[3 * i + 1] * dir[3 * i + 1] + dir[3 * i + 2] * dir[3 * i + 2], 1.0, 1e-5);
+  rays.Filter([](const float*, const float* d) { return d[0] > 0; });
+  EXPECT_GT(rays.size(), 0u);
+  EXPECT_LT(rays.size(), 144u);
+  rays.NextBatch(16, rng, o.data(), dir.data(), rgb.data());
+  for (int i = 0; i < 16; ++i) EXPECT_GT(dir[3 * i], 0.f);
+  rays.FilterChunked([](int n, const float*, const float*, uint8_t* keep) {
+    for (int i = 0; i < n; ++i) keep[i] = 0;
+  });
+  EXPECT_EQ(rays.size(), 0u);
+  EXPECT_THROW(rays.NextBatch(1, rng, o.data(), dir.data(), rgb.data()), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace trainer
+}  // namespace ecrf
