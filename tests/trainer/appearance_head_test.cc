@@ -435,8 +435,11 @@ TEST(AppearanceHeadTest, ThreadCountAndBorrowingDoNotChangeResults) {
   const std::vector<float> g3 = run(2, true, &rgb3, &dp3);
   EXPECT_EQ(rgb1, rgb2);
   EXPECT_EQ(dp1, dp2);
-  EXPECT_EQ(g2, g3);
-  EXPECT_EQ(dp2, dp3);
+  // Borrowed and copied inputs sit at different alignments, so Eigen may pick kernels with a
+  // different FMA order (-march=native): equal up to float rounding, not bit for bit.
+  ASSERT_EQ(g2.size(), g3.size());
+  for (size_t i = 0; i < g2.size(); ++i) ASSERT_NEAR(g2[i], g3[i], 1e-6f * (1.0f + std::fabs(g2[i]))) << i;
+  for (size_t i = 0; i < dp2.size(); ++i) ASSERT_NEAR(dp2[i], dp3[i], 1e-6f * (1.0f + std::fabs(dp2[i]))) << i;
   for (size_t i = 0; i < g1.size(); ++i) {
     ASSERT_NEAR(g1[i], g2[i], 1e-5f * (1.0f + std::fabs(g1[i]))) << i;
   }
