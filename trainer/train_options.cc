@@ -11,7 +11,11 @@ TrainOptions PresetOptions(const std::string& name) {
   o.preset = name;
   if (name == "paper") return o;
   if (name == "fast") {
-    // Chosen by test PSNR per minute on chair and mic at 400x400 on 2 cores (see README).
+    // The CPU preset: TensoRF's schedule compressed 10x (3k iterations) with a 180^3 final grid.
+    // On chair-400 with 2 cores it passes 32.5 dB test PSNR after 7.3 minutes of training and
+    // ends at 35.2 dB after 16 minutes (10 test views; README "Measured"). The small early grid
+    // and the early alpha mask matter most: after the shrink at iteration 300 a batch costs
+    // 0.13 M density samples instead of 0.49 M.
     o.iters = 3000;
     o.reference_iters = 3000;
     o.voxels_init = 64L * 64 * 64;
