@@ -3,6 +3,7 @@
 #include <sys/stat.h>
 
 #include <cerrno>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -10,9 +11,13 @@
 #include <stdexcept>
 #include <string>
 
+#include "tools/cli_args.h"
+#include "tools/decoded_scene.h"
+#include "tools/encode_report.h"
 #include "tools/commands.h"
 #include "trainer/checkpoint.h"
 #include "trainer/image_io.h"
+#include "trainer/scene_encoder.h"
 #include "trainer/trainer.h"
 
 namespace ecrf {
@@ -39,48 +44,6 @@ const char kTrainUsage[] =
     "  --dct-block CxHxW          plane block shape (default 16x16x16)\n"
     "  --line-block CxL           line block shape (default 8x8)\n"
     "  --rate-fraction F          share of blocks in each step's rate estimate (default 0.1)\n";
-
-float ParseFloat(const char* flag, const char* value) {
-  char* end = nullptr;
-  errno = 0;
-  const float v = std::strtof(value, &end);
-  if (errno || !end || *end || !(v >= 0.0f)) {
-    throw std::invalid_argument(std::string(flag) + ": '" + value + "' is not a non-negative number");
-  }
-  return v;
-}
-
-// "16x16x16" or "8x8" into n values, each a power of two <= 32.
-void ParseShape(const char* flag, const std::string& text, int n, int* out) {
-  size_t pos = 0;
-  for (int i = 0; i < n; ++i) {
-    const size_t x = text.find('x', pos);
-    const std::string part = text.substr(pos, x == std::string::npos ? std::string::npos : x - pos);
-    const int v = std::atoi(part.c_str());
-    if (part.empty() || v < 1 || v > 32 || (v & (v - 1)) || (i + 1 < n) == (x == std::string::npos)) {
-      throw std::invalid_argument(std::string(flag) + ": '" + text + "' is not " + std::to_string(n) +
-                                  " powers of two <= 32 joined by 'x'");
-    }
-    out[i] = v;
-    pos = x == std::string::npos ? text.size() : x + 1;
-  }
-}
-
-int ParseInt(const char* flag, const char* value) {
-  char* end = nullptr;
-  errno = 0;
-  const long v = std::strtol(value, &end, 10);
-  if (errno || !end || *end || v < 0 || v > 1000000000) {
-    throw std::invalid_argument(std::string(flag) + ": '" + value + "' is not a non-negative integer");
-  }
-  return int(v);
-}
-
-void MakeDirectory(const std::string& dir) {
-  if (mkdir(dir.c_str(), 0755) != 0 && errno != EEXIST) {
-    throw std::runtime_error(dir + ": cannot create directory: " + std::strerror(errno));
-  }
-}
 
 }  // namespace
 
@@ -169,14 +132,42 @@ int RunTrain(int argc, char** argv) {
   std::fprintf(stderr, "data: %zu train views, %zu test views (%dx%d)\n", train.views.size(),
                test.views.size(), train.views[0].rgb.width, train.views[0].rgb.height);
   trainer::TensorfModel model(trainer::ConfigFor(o, train));
-  const trainer::TrainResult r = trainer::Train(o, train, test, &model);
+  trainer::RateState rate;
+  const trainer::TrainResult r = trainer::Train(o, train, test, &model, &rate);
 
   size_t float_bytes = 0;
   for (const auto& a : model.NamedParameters()) float_bytes += a.size * sizeof(float);
+  // Close the loop: encode, decode with the embeddable decoder, and score the decoded stream.
+  trainer::EncodeOptions eo;
+  eo.blocks = rate.config;
+  eo.steps = rate.steps;
+  eo.coef_bits = o.coef_bits;
+  eo.metadata_json = nlohmann::json{{"encoder", "ecrf"},
+                                    {"data", o.builtin_scene ? std::string("builtin") : o.data_dir},
+                                    {"preset", o.preset},
+                                    {"iterations", r.iterations},
+                                    {"lambda_e", o.lambda_e},
+                                    {"alpha", o.alpha}}.dump();
+  trainer::EncodeReport report;
+  const auto encode_start = std::chrono::steady_clock::now();
+  std::vector<uint8_t> bytes = trainer::EncodeScene(model, eo, &report);
+  const double encode_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - encode_start).count();
+  trainer::WriteFileAtomically(o.out_dir + "/scene.ecrf", bytes.data(), bytes.size());
+  const LoadedScene decoded = DecodeSceneBytes(std::move(bytes), o.out_dir + "/scene.ecrf");
+  dec::RenderOptions ro;
+  ro.num_threads = 0;
+  const trainer::EvalResult d =
+      EvaluateDecoded(*decoded.field, test, o.test_view_stride, o.max_test_views, ro, false);
+
   std::printf("trained %d iterations in %.1f s (%.3f s/it); test PSNR %.2f dB, SSIM %.4f over %d views; "
               "float32 model %.2f MB; estimated coded grids %.3f MB\n",
               r.iterations, r.train_seconds, r.train_seconds / std::max(1, r.iterations), r.test.psnr,
               r.test.ssim, r.test.views, float_bytes / 1e6, r.rate.total_bits / 8e6);
+  std::printf("encoded %s/scene.ecrf: %zu bytes (%.1fx smaller than float32); decoded stream: test PSNR %.2f dB "
+              "(%+.2f dB), SSIM %.4f; decode %.0f ms, render %.0f ms/view\n",
+              o.out_dir.c_str(), decoded.bytes.size(), double(float_bytes) / decoded.bytes.size(), d.psnr,
+              d.psnr - r.test.psnr, d.ssim, 1e3 * decoded.decode_seconds, 1e3 * d.seconds_per_view);
 
   nlohmann::json m;
   m["preset"] = o.preset;
@@ -196,6 +187,14 @@ int RunTrain(int argc, char** argv) {
   m["alpha"] = o.alpha;
   m["plane_block"] = o.plane_block;
   m["line_block"] = o.line_block;
+  m["file_bytes"] = decoded.bytes.size();
+  m["decoded_test_psnr"] = d.psnr;
+  m["decoded_test_ssim"] = d.ssim;
+  m["decode_seconds"] = decoded.decode_seconds;
+  m["decoded_render_seconds_per_view"] = d.seconds_per_view;
+  m["encode_seconds"] = encode_seconds;
+  m["encode"] = EncodeReportJson(report);
+  m["coded_to_estimated_grid_bytes"] = r.rate.total_bits > 0 ? report.coefficient_bytes() * 8.0 / r.rate.total_bits : 0.0;
   m["estimated_grid_bits"] = r.rate.total_bits;
   m["estimated_grid_bytes"] = r.rate.total_bits / 8.0;
   nlohmann::json per_tensor = nlohmann::json::object();

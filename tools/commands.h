@@ -8,6 +8,10 @@ namespace tools {
 int RunSelfCheck(int argc, char** argv);
 int RunTrain(int argc, char** argv);
 int RunConformance(int argc, char** argv);
+int RunEncode(int argc, char** argv);
+int RunInfo(int argc, char** argv);
+int RunRender(int argc, char** argv);
+int RunEval(int argc, char** argv);
 
 }  // namespace tools
 }  // namespace ecrf

@@ -146,7 +146,8 @@ EvalResult Evaluate(const TensorfModel& model, const Dataset& test, int stride, 
   for (size_t v = 0; v < test.views.size(); v += size_t(stride)) {
     if (max_views > 0 && r.views >= max_views) break;
     Image img = RenderView(model, test.views[v].camera);
-    r.psnr += Psnr(img, test.views[v].rgb);
+    // A view rendered exactly has infinite PSNR; cap it so one such view cannot swamp the mean.
+    r.psnr += std::min(100.0, Psnr(img, test.views[v].rgb));
     r.ssim += Ssim(img, test.views[v].rgb);
     ++r.views;
     if (keep_renders) r.renders.push_back(std::move(img));
@@ -173,6 +174,12 @@ void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int itera
   j["n_samples"] = model.n_samples();
   j["density_rank"] = model.config().density_ranks;
   j["appearance_rank"] = model.config().app_ranks;
+  const TensorfConfig& c = model.config();
+  j["render"] = {{"near", c.near}, {"far", c.far}, {"white_background", c.white_background},
+                 {"density_shift", c.density_shift}, {"distance_scale", c.distance_scale},
+                 {"step_ratio", c.step_ratio}, {"weight_threshold", c.weight_threshold}};
+  j["head"] = {{"feature_dim", c.head.feature_dim}, {"feature_pe_freqs", c.head.feature_pe_freqs},
+               {"viewdir_pe_freqs", c.head.viewdir_pe_freqs}, {"hidden", c.head.hidden}};
   if (const AlphaMask* mask = model.alpha_mask()) {
     j["mask_res"] = mask->res();
     j["mask_aabb_min"] = mask->aabb().min;
@@ -181,10 +188,13 @@ void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int itera
     occ.data.assign(mask->occupancy().begin(), mask->occupancy().end());
     ck.arrays.push_back(std::move(occ));
   }
+  // The block shapes of the run, so that `ecrf encode` codes with the blocks training used.
+  j["plane_block"] = rate && rate->active ? std::vector<int>(rate->config.plane_block, rate->config.plane_block + 3)
+                                          : std::vector<int>(o.plane_block, o.plane_block + 3);
+  j["line_block"] = rate && rate->active ? std::vector<int>(rate->config.line_block, rate->config.line_block + 3)
+                                         : std::vector<int>(o.line_block, o.line_block + 3);
   if (rate && rate->active) {
     j["rate_active"] = true;
-    j["plane_block"] = rate->config.plane_block;
-    j["line_block"] = rate->config.line_block;
     ck.arrays.push_back({"rate.steps", {int64_t(rate->steps.size())}, rate->steps});
     ck.arrays.push_back({"rate.entropy_model", {int64_t(rate->entropy.params().size())}, rate->entropy.params()});
   }
@@ -231,14 +241,16 @@ int LoadModelCheckpoint(const std::string& path, TensorfModel* model, RateState*
     for (size_t i = 0; i < bits.size(); ++i) bits[i] = occ->data[i] > 0.5f;
     model->SetAlphaMask(AlphaMask(box, res, std::move(bits)));
   }
-  if (rate && j.value("rate_active", false)) {
-    const CheckpointArray* steps = ck.Find("rate.steps");
-    const CheckpointArray* params = ck.Find("rate.entropy_model");
-    if (!steps || !params) throw std::runtime_error(path + ": checkpoint lacks the rate state");
+  if (rate && j.contains("plane_block") && j.contains("line_block")) {
     for (int a = 0; a < 3; ++a) {
       rate->config.plane_block[a] = j["plane_block"][a].get<int>();
       rate->config.line_block[a] = j["line_block"][a].get<int>();
     }
+  }
+  if (rate && j.value("rate_active", false)) {
+    const CheckpointArray* steps = ck.Find("rate.steps");
+    const CheckpointArray* params = ck.Find("rate.entropy_model");
+    if (!steps || !params) throw std::runtime_error(path + ": checkpoint lacks the rate state");
     rate->steps = steps->data;
     rate->entropy.Init(NumRateModels(2), 0);
     if (params->data.size() != rate->entropy.params().size()) {
@@ -249,6 +261,35 @@ int LoadModelCheckpoint(const std::string& path, TensorfModel* model, RateState*
     rate->active = true;
   }
   return j.at("iteration").get<int>();
+}
+
+TensorfModel LoadModelFromCheckpoint(const std::string& path, RateState* rate) {
+  TensorfConfig c;
+  try {
+    const nlohmann::json j = nlohmann::json::parse(ReadCheckpoint(path).json);
+    c.density_ranks = j.at("density_rank").get<std::array<int, 3>>();
+    c.app_ranks = j.at("appearance_rank").get<std::array<int, 3>>();
+    // Checkpoints from before these fields were written hold the Blender defaults.
+    const nlohmann::json render = j.value("render", nlohmann::json::object());
+    c.near = render.value("near", c.near);
+    c.far = render.value("far", c.far);
+    c.white_background = render.value("white_background", c.white_background);
+    c.density_shift = render.value("density_shift", c.density_shift);
+    c.distance_scale = render.value("distance_scale", c.distance_scale);
+    c.step_ratio = render.value("step_ratio", c.step_ratio);
+    c.weight_threshold = render.value("weight_threshold", c.weight_threshold);
+    const nlohmann::json head = j.value("head", nlohmann::json::object());
+    c.head.feature_dim = head.value("feature_dim", c.head.feature_dim);
+    c.head.feature_pe_freqs = head.value("feature_pe_freqs", c.head.feature_pe_freqs);
+    c.head.viewdir_pe_freqs = head.value("viewdir_pe_freqs", c.head.viewdir_pe_freqs);
+    c.head.hidden = head.value("hidden", c.head.hidden);
+    c.head.num_products = c.app_ranks[0] + c.app_ranks[1] + c.app_ranks[2];
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error(path + ": checkpoint metadata: " + e.what());
+  }
+  TensorfModel model(c);
+  LoadModelCheckpoint(path, &model, rate);
+  return model;
 }
 
 int RateStartIteration(const TrainOptions& o) {

@@ -59,6 +59,9 @@ Image RenderView(const TensorfModel& model, const Camera& camera);
 // Checkpoint <-> model (+ training progress).
 void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int iteration,
                          const TrainOptions& options, const RateState* rate = nullptr);
+// A model of the checkpoint's own configuration (ranks, render parameters, head), loaded from it:
+// what the encoder starts from. `rate` (optional) receives the rate state.
+TensorfModel LoadModelFromCheckpoint(const std::string& path, RateState* rate = nullptr);
 // Returns the iteration stored in the checkpoint. `rate` (optional) receives the rate state.
 int LoadModelCheckpoint(const std::string& path, TensorfModel* model, RateState* rate = nullptr);
 

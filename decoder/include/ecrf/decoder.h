@@ -1,10 +1,22 @@
 /* ecrf decoder: C API. Depends on nothing but the C++ standard library inside.
  *
- * Functions return 0 or a negative error code (ECRF_ERR_*); messages are available per handle.
- * The scene API (open, decode grids, render) lands with the bitstream work; this header fixes
- * the conventions it will follow. */
+ * Functions return 0 or a negative error code (ECRF_ERR_*); the message of the last error is
+ * available per handle (ecrf_scene_message). No function throws, aborts or reads outside the
+ * buffers it is given; a stream is checked against the decoder limits before anything is
+ * allocated. One scene handle is used by one thread at a time; rendering itself may use
+ * several threads (ecrf_render_options.num_threads).
+ *
+ *   ecrf_scene* s = ecrf_scene_create();
+ *   if (ecrf_scene_decode(s, bytes, size, ECRF_STORAGE_FLOAT32) < 0) puts(ecrf_scene_message(s));
+ *   ecrf_render_options o; ecrf_render_options_default(&o);
+ *   ecrf_scene_render(s, &camera, &o, rgba, NULL);
+ *   ecrf_scene_destroy(s);
+ */
 #ifndef ECRF_DECODER_H_
 #define ECRF_DECODER_H_
+
+#include <stddef.h>
+#include <stdint.h>
 
 #ifdef __cplusplus
 extern "C" {
@@ -26,6 +38,65 @@ const char* ecrf_version_string(void);
 int ecrf_bitstream_version(void);
 /* Short name of an error code ("truncated", "corrupt", ...). */
 const char* ecrf_error_name(int code);
+
+typedef struct ecrf_scene ecrf_scene;
+
+#define ECRF_STORAGE_FLOAT32 0 /* grids as decoded (normative values) */
+#define ECRF_STORAGE_INT16 1   /* grids rounded to 16-bit fixed point: half the memory */
+
+typedef struct ecrf_scene_info {
+  float aabb_min[3], aabb_max[3];
+  int grid_res[3];
+  int density_ranks[3];
+  int appearance_ranks[3];
+  int has_occupancy;
+  int occupancy_res[3];
+  int num_samples;      /* samples per ray */
+  float step_size;      /* world units between samples */
+  float near_plane, far_plane;
+  float background[3];
+  size_t stream_bytes;
+  size_t grid_bytes;    /* memory held by the decoded grids */
+} ecrf_scene_info;
+
+/* Pinhole camera. c2w: 3x4 row-major camera-to-world matrix (OpenGL: looks down -z, +y up).
+ * Pixel (i, j) has direction c2w[:3,:3] * ((i + 0.5 - cx) / fx, -(j + 0.5 - cy) / fy, -1). */
+typedef struct ecrf_camera {
+  float c2w[12];
+  float fx, fy, cx, cy;
+  int width, height;
+} ecrf_camera;
+
+typedef struct ecrf_render_options {
+  int num_threads;                /* 1: the calling thread only; 0: all hardware threads */
+  int skip_empty_space;           /* 1: skip samples the occupancy mask proves empty */
+  float early_stop_transmittance; /* stop a ray once its transmittance is below (0: off) */
+  int max_samples;                /* cap on samples per ray (0: the scene's) */
+} ecrf_render_options;
+
+void ecrf_render_options_default(ecrf_render_options* options);
+
+/* NULL when out of memory. */
+ecrf_scene* ecrf_scene_create(void);
+void ecrf_scene_destroy(ecrf_scene* scene);
+/* Message of the last failed call on this scene ("" after a success). */
+const char* ecrf_scene_message(const ecrf_scene* scene);
+
+/* Decodes an .ecrf stream (the buffer is not kept). storage: ECRF_STORAGE_*. */
+int ecrf_scene_decode(ecrf_scene* scene, const void* data, size_t size, int storage);
+int ecrf_scene_get_info(const ecrf_scene* scene, ecrf_scene_info* info);
+
+/* Read-only view of a decoded float32 tensor: grid 0 = density, 1 = appearance; tensor 0..2 =
+ * planes [rows][columns][rank], 3..5 = lines [length][rank] (SPEC.md 6.4). shape receives up to
+ * 3 sizes, outermost first; *count the number of floats. ECRF_ERR_INVALID_ARGUMENT for int16
+ * storage. */
+int ecrf_scene_tensor(const ecrf_scene* scene, int grid, int tensor, const float** data,
+                      int shape[3], size_t* count);
+
+/* Renders one view. rgba8: width*height*4 bytes (alpha = opacity), rgb: width*height*3 floats
+ * in [0, 1]; row-major from the top row; either may be NULL (not both). */
+int ecrf_scene_render(ecrf_scene* scene, const ecrf_camera* camera,
+                      const ecrf_render_options* options, uint8_t* rgba8, float* rgb);
 
 #ifdef __cplusplus
 }

@@ -1,0 +1,151 @@
+// The C API of decoder/include/ecrf/decoder.h over SceneDecoder and RayMarcher.
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <new>
+
+#include "decoder/ray_marcher.h"
+#include "decoder/scene_decoder.h"
+#include "ecrf/decoder.h"
+
+struct ecrf_scene {
+  ecrf::dec::SceneField field;
+  ecrf::dec::SceneInfo info;
+  bool decoded = false;
+  char message[256] = {0};
+};
+
+namespace {
+
+int Record(ecrf_scene* scene, const ecrf::Status& status) {
+  if (status.ok()) {
+    scene->message[0] = '\0';
+    return ECRF_OK;
+  }
+  std::snprintf(scene->message, sizeof(scene->message), "%s: %s",
+                ecrf::ErrorCodeName(status.code()), status.message());
+  return status.code();
+}
+
+size_t GridBytes(const ecrf::dec::VmGrid& g) {
+  const size_t element = g.storage == ecrf::dec::GridStorage::kInt16 ? 2 : 4;
+  size_t n = 0;
+  for (int m = 0; m < 3; ++m) n += g.plane_count(m) + g.line_count(m);
+  return n * element;
+}
+
+}  // namespace
+
+extern "C" {
+
+void ecrf_render_options_default(ecrf_render_options* o) {
+  if (!o) return;
+  const ecrf::dec::RenderOptions d;
+  o->num_threads = d.num_threads;
+  o->skip_empty_space = d.skip_empty_space ? 1 : 0;
+  o->early_stop_transmittance = d.early_stop_transmittance;
+  o->max_samples = d.max_samples;
+}
+
+ecrf_scene* ecrf_scene_create(void) { return new (std::nothrow) ecrf_scene(); }
+
+void ecrf_scene_destroy(ecrf_scene* scene) { delete scene; }
+
+const char* ecrf_scene_message(const ecrf_scene* scene) { return scene ? scene->message : ""; }
+
+int ecrf_scene_decode(ecrf_scene* scene, const void* data, size_t size, int storage) {
+  if (!scene) return ECRF_ERR_INVALID_ARGUMENT;
+  scene->decoded = false;
+  if (storage != ECRF_STORAGE_FLOAT32 && storage != ECRF_STORAGE_INT16) {
+    return Record(scene, ecrf::Status::Error(ecrf::kErrInvalidArgument,
+                                             "storage %d is neither FLOAT32 nor INT16", storage));
+  }
+  ecrf::dec::DecodeOptions options;
+  options.storage = storage == ECRF_STORAGE_INT16 ? ecrf::dec::GridStorage::kInt16
+                                                  : ecrf::dec::GridStorage::kFloat32;
+  const ecrf::Status s = ecrf::dec::DecodeScene(static_cast<const uint8_t*>(data), size, options,
+                                                &scene->field, &scene->info);
+  scene->info.metadata = nullptr;  // points into the caller's buffer, which is not kept
+  scene->info.metadata_size = 0;
+  scene->decoded = s.ok();
+  return Record(scene, s);
+}
+
+int ecrf_scene_get_info(const ecrf_scene* scene, ecrf_scene_info* out) {
+  if (!scene || !out || !scene->decoded) return ECRF_ERR_INVALID_ARGUMENT;
+  const ecrf::dec::SceneField& f = scene->field;
+  const ecrf::SceneHeader& h = scene->info.header;
+  std::memset(out, 0, sizeof(*out));
+  for (int a = 0; a < 3; ++a) {
+    out->aabb_min[a] = f.aabb_min[a];
+    out->aabb_max[a] = f.aabb_max[a];
+    out->grid_res[a] = f.res[a];
+    out->density_ranks[a] = h.ranks[0][a];
+    out->appearance_ranks[a] = h.ranks[1][a];
+    out->occupancy_res[a] = scene->info.occupancy_res[a];
+    out->background[a] = f.background[a];
+  }
+  out->has_occupancy = f.has_mask ? 1 : 0;
+  out->num_samples = f.NumSamples();
+  out->step_size = f.StepSize();
+  out->near_plane = f.near_far[0];
+  out->far_plane = f.near_far[1];
+  out->stream_bytes = scene->info.stream_bytes;
+  out->grid_bytes = GridBytes(f.density) + GridBytes(f.appearance);
+  return ECRF_OK;
+}
+
+int ecrf_scene_tensor(const ecrf_scene* scene, int grid, int tensor, const float** data,
+                      int shape[3], size_t* count) {
+  if (!scene || !scene->decoded || !data || !shape || !count || grid < 0 || grid > 1 ||
+      tensor < 0 || tensor > 5) {
+    return ECRF_ERR_INVALID_ARGUMENT;
+  }
+  const ecrf::dec::VmGrid& g = grid == 0 ? scene->field.density : scene->field.appearance;
+  if (g.storage != ecrf::dec::GridStorage::kFloat32) return ECRF_ERR_INVALID_ARGUMENT;
+  const int m = tensor % 3;
+  if (tensor < 3) {
+    shape[0] = g.res[ecrf::dec::kMatMode[m][1]];
+    shape[1] = g.res[ecrf::dec::kMatMode[m][0]];
+    shape[2] = g.ranks[m];
+    *data = g.plane_f32[m].data();
+    *count = g.plane_count(m);
+  } else {
+    shape[0] = g.res[ecrf::dec::kVecMode[m]];
+    shape[1] = g.ranks[m];
+    shape[2] = 1;
+    *data = g.line_f32[m].data();
+    *count = g.line_count(m);
+  }
+  return ECRF_OK;
+}
+
+int ecrf_scene_render(ecrf_scene* scene, const ecrf_camera* camera,
+                      const ecrf_render_options* options, uint8_t* rgba8, float* rgb) {
+  if (!scene) return ECRF_ERR_INVALID_ARGUMENT;
+  if (!scene->decoded || !camera) {
+    return Record(scene, ecrf::Status::Error(ecrf::kErrInvalidArgument,
+                                             "render: no decoded scene or no camera"));
+  }
+  ecrf::dec::RenderOptions o;
+  if (options) {
+    o.num_threads = options->num_threads;
+    o.skip_empty_space = options->skip_empty_space != 0;
+    o.early_stop_transmittance = options->early_stop_transmittance;
+    o.max_samples = options->max_samples;
+  }
+  ecrf::dec::Camera cam;
+  std::memcpy(cam.c2w, camera->c2w, sizeof(cam.c2w));
+  cam.fx = camera->fx;
+  cam.fy = camera->fy;
+  cam.cx = camera->cx;
+  cam.cy = camera->cy;
+  cam.width = camera->width;
+  cam.height = camera->height;
+  ecrf::dec::RayMarcher marcher;
+  ecrf::Status s = marcher.Init(&scene->field, o);
+  if (s.ok()) s = marcher.RenderImage(cam, rgba8, rgb);
+  return Record(scene, s);
+}
+
+}  // extern "C"

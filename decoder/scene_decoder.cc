@@ -1,0 +1,339 @@
+#include "decoder/scene_decoder.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "format/block_shape.h"
+#include "format/byte_io.h"
+#include "format/coef_coder.h"
+#include "format/container.h"
+#include "format/half_float.h"
+#include "format/int_idct.h"
+#include "format/occupancy_coder.h"
+#include "decoder/field_sampler.h"
+
+namespace ecrf {
+namespace dec {
+namespace {
+
+constexpr size_t kOccupancyHeaderBytes = 32;
+constexpr size_t kCoefHeaderBytes = 12;
+constexpr size_t kMlpHeaderBytes = 4;
+const char* const kGridNames[kNumSceneGrids] = {"density", "appearance"};
+const char* const kTensorNames[kTensorsPerSceneGrid] = {"plane 0", "plane 1", "plane 2",
+                                                        "line 0",  "line 1",  "line 2"};
+
+// Where tensor t of a grid lives and the strides of its three block axes (SPEC.md 6.4).
+struct TensorTarget {
+  float* data = nullptr;
+  int extent[3] = {1, 1, 1};
+  size_t stride[3] = {0, 0, 0};
+};
+
+TensorTarget TargetOf(VmGrid* grid, const SceneHeader& h, int g, int t) {
+  TensorTarget target;
+  SceneTensorExtent(h, g, t, target.extent);
+  const int m = t % 3;
+  const size_t rank = static_cast<size_t>(grid->ranks[m]);
+  if (t < 3) {
+    target.data = grid->plane_f32[m].data();
+    target.stride[0] = 1;                                         // channel
+    target.stride[1] = static_cast<size_t>(grid->res[kMatMode[m][0]]) * rank;  // row (v)
+    target.stride[2] = rank;                                      // column (u)
+  } else {
+    target.data = grid->line_f32[m].data();
+    target.stride[0] = 0;
+    target.stride[1] = 1;     // channel
+    target.stride[2] = rank;  // position along w
+  }
+  return target;
+}
+
+Status DecodeCoefficientChunk(const ChunkView& chunk, const SceneHeader& h, int g, int t,
+                              VmGrid* grid, TensorChunkInfo* info) {
+  ByteReader r(chunk.data, chunk.size);
+  uint8_t grid_index = 0, tensor_index = 0, coef_bits = 0, reserved0 = 0, reserved1 = 0;
+  uint8_t block[3] = {0, 0, 0};
+  float step = 0.f;
+  ECRF_RETURN_IF_ERROR(r.ReadU8(&grid_index, "COEF grid"));
+  ECRF_RETURN_IF_ERROR(r.ReadU8(&tensor_index, "COEF tensor"));
+  ECRF_RETURN_IF_ERROR(r.ReadU8(&coef_bits, "COEF coef_bits"));
+  ECRF_RETURN_IF_ERROR(r.ReadU8(&reserved0, "COEF reserved"));
+  for (uint8_t& b : block) ECRF_RETURN_IF_ERROR(r.ReadU8(&b, "COEF block shape"));
+  ECRF_RETURN_IF_ERROR(r.ReadU8(&reserved1, "COEF reserved"));
+  ECRF_RETURN_IF_ERROR(r.ReadF32(&step, "COEF step"));
+  ECRF_CHECK_OR_RETURN(grid_index == g && tensor_index == t, kErrCorrupt,
+                       "COEF chunk at offset %zu is for grid %u tensor %u, expected %s %s",
+                       chunk.offset, grid_index, tensor_index, kGridNames[g], kTensorNames[t]);
+  ECRF_CHECK_OR_RETURN(reserved0 == 0 && reserved1 == 0, kErrCorrupt,
+                       "COEF %s %s: reserved bytes must be 0", kGridNames[g], kTensorNames[t]);
+  ECRF_CHECK_OR_RETURN(coef_bits == 8 || coef_bits == 16, kErrUnsupported,
+                       "COEF %s %s: coef_bits %u (8 or 16)", kGridNames[g], kTensorNames[t],
+                       coef_bits);
+  const int dims[3] = {block[0], block[1], block[2]};
+  ECRF_CHECK_OR_RETURN(IsValidBlockShape(dims) && (t < 3 || dims[0] == 1), kErrCorrupt,
+                       "COEF %s %s: invalid block shape %dx%dx%d", kGridNames[g],
+                       kTensorNames[t], dims[0], dims[1], dims[2]);
+  // Steps in [2^-64, 2^64] keep step * 2^-P a normal float32, so the scale is exact.
+  ECRF_CHECK_OR_RETURN(std::isfinite(step) && step >= 0x1p-64f && step <= 0x1p64f, kErrCorrupt,
+                       "COEF %s %s: quantization step %g outside [2^-64, 2^64]", kGridNames[g],
+                       kTensorNames[t], static_cast<double>(step));
+  const int frac_bits = IdctOutputFracBits(coef_bits);
+  const float scale = std::ldexp(step, -frac_bits);
+  const int32_t max_abs = coef_bits == 16 ? 32767 : 127;
+
+  const TensorTarget target = TargetOf(grid, h, g, t);
+  int blocks[3];
+  for (int a = 0; a < 3; ++a) blocks[a] = (target.extent[a] + dims[a] - 1) / dims[a];
+  info->present = true;
+  info->coef_bits = coef_bits;
+  for (int a = 0; a < 3; ++a) info->block[a] = dims[a];
+  info->step = step;
+  info->payload_bytes = chunk.size;
+  info->blocks = static_cast<uint32_t>(blocks[0]) * blocks[1] * blocks[2];
+  info->coded_blocks = 0;
+
+  CoefContexts contexts;
+  ECRF_RETURN_IF_ERROR(contexts.Init(BlockShape{dims[0], dims[1], dims[2]}));
+  HeapArray<int32_t> work;
+  ECRF_RETURN_IF_ERROR(work.Allocate(2 * static_cast<size_t>(kMaxBlockVolume)));
+  int32_t* coeffs = work.data();
+  int32_t* samples = work.data() + kMaxBlockVolume;
+  RangeDecoder decoder(r.current(), r.remaining());
+  for (int b0 = 0; b0 < blocks[0]; ++b0) {
+    for (int b1 = 0; b1 < blocks[1]; ++b1) {
+      for (int b2 = 0; b2 < blocks[2]; ++b2) {
+        int eob = 0;
+        const Status s = DecodeCoefBlock(decoder, contexts, max_abs, coeffs, &eob);
+        if (!s.ok()) {
+          return Status::Error(s.code(), "COEF %s %s, block (%d, %d, %d): %s", kGridNames[g],
+                               kTensorNames[t], b0, b1, b2, s.message());
+        }
+        if (eob == 0) continue;  // the grid is zero-initialised
+        ++info->coded_blocks;
+        InverseDctInt(coeffs, dims, coef_bits, samples);
+        // Crop: only positions inside the tensor are stored (SPEC.md 6.4).
+        const int n0 = std::min(dims[0], target.extent[0] - b0 * dims[0]);
+        const int n1 = std::min(dims[1], target.extent[1] - b1 * dims[1]);
+        const int n2 = std::min(dims[2], target.extent[2] - b2 * dims[2]);
+        for (int i0 = 0; i0 < n0; ++i0) {
+          for (int i1 = 0; i1 < n1; ++i1) {
+            const int32_t* src = samples + (i0 * dims[1] + i1) * dims[2];
+            float* dst = target.data + (static_cast<size_t>(b0) * dims[0] + i0) * target.stride[0] +
+                         (static_cast<size_t>(b1) * dims[1] + i1) * target.stride[1] +
+                         static_cast<size_t>(b2) * dims[2] * target.stride[2];
+            for (int i2 = 0; i2 < n2; ++i2) {
+              dst[static_cast<size_t>(i2) * target.stride[2]] = static_cast<float>(src[i2]) * scale;
+            }
+          }
+        }
+      }
+    }
+  }
+  const Status s = decoder.Finish();
+  if (!s.ok()) {
+    return Status::Error(s.code(), "COEF %s %s: %s", kGridNames[g], kTensorNames[t], s.message());
+  }
+  return Status::Ok();
+}
+
+Status DecodeOccupancyChunk(const ChunkView& chunk, SceneField* scene, SceneInfo* info) {
+  ByteReader r(chunk.data, chunk.size);
+  float lo[3], hi[3];
+  uint16_t res16[3], reserved = 0;
+  for (float& v : lo) ECRF_RETURN_IF_ERROR(r.ReadF32(&v, "OCCU aabb_min"));
+  for (float& v : hi) ECRF_RETURN_IF_ERROR(r.ReadF32(&v, "OCCU aabb_max"));
+  for (uint16_t& v : res16) ECRF_RETURN_IF_ERROR(r.ReadU16(&v, "OCCU resolution"));
+  ECRF_RETURN_IF_ERROR(r.ReadU16(&reserved, "OCCU reserved"));
+  ECRF_CHECK_OR_RETURN(reserved == 0, kErrCorrupt, "OCCU: reserved field must be 0");
+  int res[3];
+  uint64_t voxels = 1;
+  for (int a = 0; a < 3; ++a) {
+    ECRF_CHECK_OR_RETURN(std::isfinite(lo[a]) && std::isfinite(hi[a]) && hi[a] > lo[a],
+                         kErrCorrupt, "OCCU: empty or non-finite box on axis %d", a);
+    ECRF_CHECK_OR_RETURN(res16[a] >= 2 && res16[a] <= kMaxSceneGridRes, kErrLimit,
+                         "OCCU: resolution %u on axis %d is outside [2, %d]", res16[a], a,
+                         kMaxSceneGridRes);
+    res[a] = res16[a];
+    voxels *= res16[a];
+  }
+  ECRF_CHECK_OR_RETURN(voxels <= kMaxOccupancyVoxels, kErrLimit,
+                       "OCCU: %llu voxels exceed the limit of %llu",
+                       static_cast<unsigned long long>(voxels),
+                       static_cast<unsigned long long>(kMaxOccupancyVoxels));
+  ECRF_RETURN_IF_ERROR(scene->mask.Init(lo, hi, res));
+  ECRF_RETURN_IF_ERROR(DecodeOccupancy(r.current(), r.remaining(), res, scene->mask.bits()));
+  ECRF_RETURN_IF_ERROR(scene->mask.BuildAcceleration());
+  scene->has_mask = true;
+  info->occupancy_bytes = chunk.size;
+  for (int a = 0; a < 3; ++a) info->occupancy_res[a] = res[a];
+  info->occupied_voxels = scene->mask.occupied_count();
+  return Status::Ok();
+}
+
+Status DecodeMlpChunk(const ChunkView& chunk, const SceneHeader& h, SceneField* scene,
+                      SceneInfo* info) {
+  ByteReader r(chunk.data, chunk.size);
+  uint8_t precision = 0, reserved[3] = {0, 0, 0};
+  ECRF_RETURN_IF_ERROR(r.ReadU8(&precision, "MLPW precision"));
+  for (uint8_t& b : reserved) ECRF_RETURN_IF_ERROR(r.ReadU8(&b, "MLPW reserved"));
+  ECRF_CHECK_OR_RETURN(reserved[0] == 0 && reserved[1] == 0 && reserved[2] == 0, kErrCorrupt,
+                       "MLPW: reserved bytes must be 0");
+  ECRF_CHECK_OR_RETURN(precision <= 1, kErrUnsupported,
+                       "MLPW: precision %u (0 = float16, 1 = float32)", precision);
+  MlpConfig config;
+  config.num_products = h.total_rank(1);
+  config.feature_dim = h.feature_dim;
+  config.feature_pe_freqs = h.feature_pe_freqs;
+  config.viewdir_pe_freqs = h.viewdir_pe_freqs;
+  config.hidden = h.hidden;
+  ECRF_RETURN_IF_ERROR(scene->mlp.Init(config));
+  const size_t count = scene->mlp.num_params();
+  const size_t value_bytes = precision == 0 ? 2 : 4;
+  ECRF_CHECK_OR_RETURN(r.remaining() / value_bytes == count && r.remaining() % value_bytes == 0,
+                       kErrCorrupt, "MLPW: %zu bytes of weights, expected %zu values of %zu bytes",
+                       r.remaining(), count, value_bytes);
+  HeapArray<float> params;
+  ECRF_RETURN_IF_ERROR(params.Allocate(count));
+  const uint8_t* p = r.current();
+  for (size_t i = 0; i < count; ++i, p += value_bytes) {
+    if (precision == 0) {
+      params[i] = HalfToFloat(static_cast<uint16_t>(p[0] | (p[1] << 8)));
+    } else {
+      const uint32_t u = uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 |
+                         uint32_t(p[3]) << 24;
+      std::memcpy(&params[i], &u, 4);
+    }
+  }
+  const Status s = scene->mlp.SetParams(params.data(), count);
+  if (!s.ok()) return Status::Error(kErrCorrupt, "MLPW: %s", s.message());
+  info->mlp_bytes = chunk.size;
+  info->mlp_precision_bits = precision == 0 ? 16 : 32;
+  return Status::Ok();
+}
+
+void ApplyHeader(const SceneHeader& h, SceneField* scene) {
+  for (int a = 0; a < 3; ++a) {
+    scene->aabb_min[a] = h.aabb_min[a];
+    scene->aabb_max[a] = h.aabb_max[a];
+    scene->res[a] = h.res[a];
+  }
+  scene->density_shift = h.density_shift;
+  scene->distance_scale = h.distance_scale;
+  scene->step_size = h.step_size;
+  scene->n_samples = static_cast<int>(h.num_samples);
+  scene->weight_threshold = h.weight_threshold;
+  scene->near_far[0] = h.near_far[0];
+  scene->near_far[1] = h.near_far[1];
+  for (int c = 0; c < 3; ++c) scene->background[c] = h.background[c];
+  scene->has_mask = false;
+}
+
+// The critical chunks in the only order a stream may have them (SPEC.md 6.1).
+enum class Expect { kHead, kOccupancy, kCoefficients, kMlp, kDone };
+
+}  // namespace
+
+Status DecodeScene(const uint8_t* data, size_t size, const DecodeOptions& options,
+                   SceneField* scene, SceneInfo* info_out) {
+  ECRF_CHECK_OR_RETURN(scene != nullptr, kErrInvalidArgument, "DecodeScene: null scene");
+  ECRF_CHECK_OR_RETURN(options.storage == GridStorage::kFloat32 ||
+                           options.storage == GridStorage::kInt16,
+                       kErrInvalidArgument, "DecodeScene: unknown grid storage");
+  SceneInfo local_info;
+  SceneInfo& info = info_out ? *info_out : local_info;
+  info = SceneInfo();
+  info.stream_bytes = size;
+  ContainerReader reader;
+  ECRF_RETURN_IF_ERROR(reader.Open(data, size));
+  info.version_major = reader.version_major();
+  info.version_minor = reader.version_minor();
+
+  SceneHeader& h = info.header;
+  Expect expect = Expect::kHead;
+  int next_tensor = 0;  // g * 6 + t of the next COEF chunk
+  auto advance_tensor = [&]() {
+    while (next_tensor < kNumSceneGrids * kTensorsPerSceneGrid &&
+           SceneTensorRank(h, next_tensor / kTensorsPerSceneGrid,
+                           next_tensor % kTensorsPerSceneGrid) == 0) {
+      ++next_tensor;
+    }
+    expect = next_tensor < kNumSceneGrids * kTensorsPerSceneGrid ? Expect::kCoefficients
+                                                                 : Expect::kMlp;
+  };
+  for (;;) {
+    ChunkView chunk;
+    bool done = false;
+    ECRF_RETURN_IF_ERROR(reader.Next(&chunk, &done));
+    char name[5];
+    ChunkTypeName(chunk.type, name);
+    if (done) {
+      ECRF_CHECK_OR_RETURN(expect == Expect::kDone, kErrCorrupt,
+                           "DONE at offset %zu before the scene is complete (%s missing)",
+                           chunk.offset,
+                           expect == Expect::kHead ? "HEAD"
+                           : expect == Expect::kOccupancy ? "OCCU"
+                           : expect == Expect::kCoefficients ? "COEF" : "MLPW");
+      break;
+    }
+    if (!IsCriticalChunk(chunk.type)) {
+      if (chunk.type == kChunkMetadata) {
+        info.metadata = chunk.data;
+        info.metadata_size = chunk.size;
+        info.metadata_bytes += chunk.size;
+      } else {
+        info.other_ancillary_bytes += chunk.size;
+      }
+      continue;
+    }
+    if (chunk.type == kChunkHead && expect == Expect::kHead) {
+      ECRF_RETURN_IF_ERROR(ParseSceneHeader(chunk.data, chunk.size, &h));
+      info.head_bytes = chunk.size;
+      ApplyHeader(h, scene);
+      int res[3], ranks[kNumSceneGrids][3];
+      for (int a = 0; a < 3; ++a) {
+        res[a] = h.res[a];
+        for (int g = 0; g < kNumSceneGrids; ++g) ranks[g][a] = h.ranks[g][a];
+      }
+      ECRF_RETURN_IF_ERROR(scene->density.Allocate(res, ranks[0], GridStorage::kFloat32));
+      ECRF_RETURN_IF_ERROR(scene->appearance.Allocate(res, ranks[1], GridStorage::kFloat32));
+      if (h.has_occupancy) {
+        expect = Expect::kOccupancy;
+      } else {
+        advance_tensor();
+      }
+    } else if (chunk.type == kChunkOccupancy && expect == Expect::kOccupancy) {
+      ECRF_RETURN_IF_ERROR(DecodeOccupancyChunk(chunk, scene, &info));
+      advance_tensor();
+    } else if (chunk.type == kChunkCoefficients && expect == Expect::kCoefficients) {
+      const int g = next_tensor / kTensorsPerSceneGrid, t = next_tensor % kTensorsPerSceneGrid;
+      VmGrid* grid = g == 0 ? &scene->density : &scene->appearance;
+      ECRF_RETURN_IF_ERROR(DecodeCoefficientChunk(chunk, h, g, t, grid, &info.tensors[g][t]));
+      ++next_tensor;
+      advance_tensor();
+    } else if (chunk.type == kChunkMlpWeights && expect == Expect::kMlp) {
+      ECRF_RETURN_IF_ERROR(DecodeMlpChunk(chunk, h, scene, &info));
+      expect = Expect::kDone;
+    } else {
+      const bool known = chunk.type == kChunkHead || chunk.type == kChunkOccupancy ||
+                         chunk.type == kChunkCoefficients || chunk.type == kChunkMlpWeights;
+      return Status::Error(known ? kErrCorrupt : kErrUnsupported,
+                           known ? "chunk '%s' at offset %zu is out of order"
+                                 : "unknown critical chunk '%s' at offset %zu",
+                           name, chunk.offset);
+    }
+  }
+  if (options.storage == GridStorage::kInt16) {
+    VmGrid converted;
+    ECRF_RETURN_IF_ERROR(QuantizeGridInt16(scene->density, &converted));
+    scene->density = static_cast<VmGrid&&>(converted);
+    VmGrid converted_app;
+    ECRF_RETURN_IF_ERROR(QuantizeGridInt16(scene->appearance, &converted_app));
+    scene->appearance = static_cast<VmGrid&&>(converted_app);
+  }
+  return scene->Validate();
+}
+
+}  // namespace dec
+}  // namespace ecrf

@@ -1,0 +1,59 @@
+// Decodes an .ecrf stream into a SceneField: container -> HEAD -> OCCU -> COEF (entropy decoding,
+// integer inverse DCT, written straight into the final grid layout) -> MLPW (SPEC.md section 6).
+//
+// The grids are the normative output: the same bits on every platform. Every size is checked
+// against SPEC.md section 8 before anything is allocated, and every chunk against the bytes it
+// has, so any byte string gives either a scene or an error status, never a crash.
+#ifndef ECRF_DECODER_SCENE_DECODER_H_
+#define ECRF_DECODER_SCENE_DECODER_H_
+
+#include <cstddef>
+#include <cstdint>
+
+#include "decoder/field.h"
+#include "format/scene_header.h"
+#include "format/status.h"
+
+namespace ecrf {
+namespace dec {
+
+struct DecodeOptions {
+  // kInt16 halves the grid memory (values rounded to 16-bit fixed point with one scale per
+  // tensor after the normative float32 reconstruction).
+  GridStorage storage = GridStorage::kFloat32;
+};
+
+// What the stream held, for `ecrf info` and reports.
+struct TensorChunkInfo {
+  bool present = false;
+  int coef_bits = 0;
+  int block[3] = {0, 0, 0};
+  float step = 0.f;
+  uint32_t payload_bytes = 0;
+  uint32_t blocks = 0;
+  uint32_t coded_blocks = 0;  // blocks with a nonzero coefficient
+};
+
+struct SceneInfo {
+  SceneHeader header;
+  uint8_t version_major = 0, version_minor = 0;
+  size_t stream_bytes = 0;
+  uint32_t head_bytes = 0, occupancy_bytes = 0, mlp_bytes = 0, metadata_bytes = 0;
+  uint32_t other_ancillary_bytes = 0;
+  int mlp_precision_bits = 0;  // 16 or 32
+  int occupancy_res[3] = {0, 0, 0};
+  size_t occupied_voxels = 0;
+  TensorChunkInfo tensors[kNumSceneGrids][kTensorsPerSceneGrid];
+  // The meta chunk (UTF-8 JSON), pointing into the caller's buffer; null if absent.
+  const uint8_t* metadata = nullptr;
+  uint32_t metadata_size = 0;
+};
+
+// Decodes `data` into *scene (replacing its contents). info may be null.
+Status DecodeScene(const uint8_t* data, size_t size, const DecodeOptions& options,
+                   SceneField* scene, SceneInfo* info);
+
+}  // namespace dec
+}  // namespace ecrf
+
+#endif  // ECRF_DECODER_SCENE_DECODER_H_

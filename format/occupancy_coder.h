@@ -1,0 +1,32 @@
+// Coding of the occupancy (alpha) mask of the OCCU chunk (SPEC.md 6.3): a res[0] x res[1] x
+// res[2] binary volume, scanned z, then y, then x (x fastest). Each row of x first gets a flag
+// "row has an occupied voxel" (context: the same flag of the row above and of the row in the
+// previous slice); only occupied rows code their voxels, each with a context made of four
+// already-coded neighbours. Empty space therefore costs almost nothing and decodes fast.
+#ifndef ECRF_FORMAT_OCCUPANCY_CODER_H_
+#define ECRF_FORMAT_OCCUPANCY_CODER_H_
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "format/status.h"
+
+namespace ecrf {
+
+// Bits are packed [z][y][x], x fastest: voxel i is bit (i % 8) of byte i / 8 (LSB first).
+inline bool OccupancyBit(const uint8_t* bits, size_t i) { return (bits[i >> 3] >> (i & 7)) & 1; }
+inline size_t OccupancyBytes(const int res[3]) {
+  return (static_cast<size_t>(res[0]) * res[1] * res[2] + 7) / 8;
+}
+
+// occupancy: res[2]*res[1]*res[0] bytes, nonzero = occupied. Returns the range-coded stream.
+std::vector<uint8_t> EncodeOccupancy(const uint8_t* occupancy, const int res[3]);
+
+// bits: OccupancyBytes(res) bytes, which the decoder overwrites. The caller has checked res
+// against the limits. kErrTruncated / kErrCorrupt for a bad stream.
+Status DecodeOccupancy(const uint8_t* stream, size_t size, const int res[3], uint8_t* bits);
+
+}  // namespace ecrf
+
+#endif  // ECRF_FORMAT_OCCUPANCY_CODER_H_

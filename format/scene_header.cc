@@ -1,0 +1,129 @@
+#include "format/scene_header.h"
+
+#include <cmath>
+
+namespace ecrf {
+namespace {
+
+constexpr int kMatModeU[3] = {0, 0, 1};
+constexpr int kMatModeV[3] = {1, 2, 2};
+constexpr int kVecModeW[3] = {2, 1, 0};
+
+Status ReadFinite(ByteReader* r, float* v, const char* what) {
+  ECRF_RETURN_IF_ERROR(r->ReadF32(v, what));
+  ECRF_CHECK_OR_RETURN(std::isfinite(*v), kErrCorrupt, "HEAD: %s is not finite", what);
+  return Status::Ok();
+}
+
+}  // namespace
+
+void WriteSceneHeader(const SceneHeader& h, ByteWriter* out) {
+  for (float v : h.aabb_min) out->F32(v);
+  for (float v : h.aabb_max) out->F32(v);
+  for (uint16_t v : h.res) out->U16(v);
+  for (int g = 0; g < kNumSceneGrids; ++g) {
+    for (uint16_t v : h.ranks[g]) out->U16(v);
+  }
+  out->F32(h.density_shift);
+  out->F32(h.distance_scale);
+  out->F32(h.step_size);
+  out->U32(h.num_samples);
+  out->F32(h.weight_threshold);
+  out->F32(h.near_far[0]);
+  out->F32(h.near_far[1]);
+  for (float v : h.background) out->F32(v);
+  out->U16(h.feature_dim);
+  out->U8(h.feature_pe_freqs);
+  out->U8(h.viewdir_pe_freqs);
+  out->U16(h.hidden);
+  out->U8(h.has_occupancy);
+  out->U8(0);  // reserved
+}
+
+Status ParseSceneHeader(const uint8_t* payload, size_t size, SceneHeader* h) {
+  ECRF_CHECK_OR_RETURN(size == kSceneHeaderBytes, kErrCorrupt,
+                       "HEAD: payload is %zu bytes, must be %zu", size, kSceneHeaderBytes);
+  ByteReader r(payload, size);
+  for (float& v : h->aabb_min) ECRF_RETURN_IF_ERROR(ReadFinite(&r, &v, "aabb_min"));
+  for (float& v : h->aabb_max) ECRF_RETURN_IF_ERROR(ReadFinite(&r, &v, "aabb_max"));
+  for (int a = 0; a < 3; ++a) {
+    ECRF_CHECK_OR_RETURN(h->aabb_max[a] > h->aabb_min[a], kErrCorrupt,
+                         "HEAD: aabb is empty on axis %d (%g >= %g)", a, double(h->aabb_min[a]),
+                         double(h->aabb_max[a]));
+  }
+  for (int a = 0; a < 3; ++a) {
+    ECRF_RETURN_IF_ERROR(r.ReadU16(&h->res[a], "grid resolution"));
+    ECRF_CHECK_OR_RETURN(h->res[a] >= 2 && h->res[a] <= kMaxSceneGridRes, kErrLimit,
+                         "HEAD: grid resolution %u on axis %d is outside [2, %d]", h->res[a], a,
+                         kMaxSceneGridRes);
+  }
+  uint64_t values = 0;
+  for (int g = 0; g < kNumSceneGrids; ++g) {
+    for (int m = 0; m < 3; ++m) {
+      ECRF_RETURN_IF_ERROR(r.ReadU16(&h->ranks[g][m], "rank"));
+      ECRF_CHECK_OR_RETURN(h->ranks[g][m] <= kMaxSceneRank, kErrLimit,
+                           "HEAD: %s rank %u of mode %d exceeds %d",
+                           g == 0 ? "density" : "appearance", h->ranks[g][m], m, kMaxSceneRank);
+      const uint64_t plane = uint64_t(h->res[kMatModeU[m]]) * h->res[kMatModeV[m]];
+      values += (plane + h->res[kVecModeW[m]]) * h->ranks[g][m];
+    }
+  }
+  ECRF_CHECK_OR_RETURN(values <= kMaxSceneGridValues, kErrLimit,
+                       "HEAD: the grids hold %llu values, more than the limit of %llu",
+                       static_cast<unsigned long long>(values),
+                       static_cast<unsigned long long>(kMaxSceneGridValues));
+  ECRF_RETURN_IF_ERROR(ReadFinite(&r, &h->density_shift, "density_shift"));
+  ECRF_RETURN_IF_ERROR(ReadFinite(&r, &h->distance_scale, "distance_scale"));
+  ECRF_CHECK_OR_RETURN(h->distance_scale >= 0.f, kErrCorrupt, "HEAD: distance_scale is negative");
+  ECRF_RETURN_IF_ERROR(ReadFinite(&r, &h->step_size, "step_size"));
+  ECRF_CHECK_OR_RETURN(h->step_size > 0.f, kErrCorrupt, "HEAD: step_size must be positive");
+  ECRF_RETURN_IF_ERROR(r.ReadU32(&h->num_samples, "num_samples"));
+  ECRF_CHECK_OR_RETURN(h->num_samples >= 1 && h->num_samples <= kMaxSceneSamples, kErrLimit,
+                       "HEAD: num_samples %u is outside [1, %u]", h->num_samples, kMaxSceneSamples);
+  ECRF_RETURN_IF_ERROR(ReadFinite(&r, &h->weight_threshold, "weight_threshold"));
+  ECRF_RETURN_IF_ERROR(ReadFinite(&r, &h->near_far[0], "near"));
+  ECRF_RETURN_IF_ERROR(ReadFinite(&r, &h->near_far[1], "far"));
+  ECRF_CHECK_OR_RETURN(h->near_far[0] <= h->near_far[1], kErrCorrupt, "HEAD: near > far");
+  for (float& v : h->background) {
+    ECRF_RETURN_IF_ERROR(ReadFinite(&r, &v, "background"));
+    ECRF_CHECK_OR_RETURN(v >= 0.f && v <= 1.f, kErrCorrupt, "HEAD: background outside [0, 1]");
+  }
+  ECRF_RETURN_IF_ERROR(r.ReadU16(&h->feature_dim, "feature_dim"));
+  ECRF_RETURN_IF_ERROR(r.ReadU8(&h->feature_pe_freqs, "feature_pe_freqs"));
+  ECRF_RETURN_IF_ERROR(r.ReadU8(&h->viewdir_pe_freqs, "viewdir_pe_freqs"));
+  ECRF_RETURN_IF_ERROR(r.ReadU16(&h->hidden, "hidden"));
+  ECRF_CHECK_OR_RETURN(h->feature_dim >= 1 && h->feature_dim <= kMaxSceneFeatureDim, kErrLimit,
+                       "HEAD: feature_dim %u is outside [1, %d]", h->feature_dim,
+                       kMaxSceneFeatureDim);
+  ECRF_CHECK_OR_RETURN(h->feature_pe_freqs <= kMaxScenePeFreqs &&
+                           h->viewdir_pe_freqs <= kMaxScenePeFreqs,
+                       kErrLimit, "HEAD: positional-encoding frequencies exceed %d",
+                       kMaxScenePeFreqs);
+  ECRF_CHECK_OR_RETURN(h->hidden >= 1 && h->hidden <= kMaxSceneHidden, kErrLimit,
+                       "HEAD: hidden width %u is outside [1, %d]", h->hidden, kMaxSceneHidden);
+  ECRF_CHECK_OR_RETURN(h->total_rank(1) >= 1, kErrCorrupt,
+                       "HEAD: the appearance grid has no component (the MLP needs at least one)");
+  ECRF_RETURN_IF_ERROR(r.ReadU8(&h->has_occupancy, "has_occupancy"));
+  ECRF_CHECK_OR_RETURN(h->has_occupancy <= 1, kErrCorrupt, "HEAD: has_occupancy is %u",
+                       h->has_occupancy);
+  uint8_t reserved = 0;
+  ECRF_RETURN_IF_ERROR(r.ReadU8(&reserved, "reserved"));
+  ECRF_CHECK_OR_RETURN(reserved == 0, kErrCorrupt, "HEAD: reserved byte is %u, must be 0", reserved);
+  return Status::Ok();
+}
+
+void SceneTensorExtent(const SceneHeader& h, int grid, int tensor, int extent[3]) {
+  const int m = tensor % 3;
+  const int rank = h.ranks[grid][m];
+  if (tensor < 3) {
+    extent[0] = rank;
+    extent[1] = h.res[kMatModeV[m]];
+    extent[2] = h.res[kMatModeU[m]];
+  } else {
+    extent[0] = 1;
+    extent[1] = rank;
+    extent[2] = h.res[kVecModeW[m]];
+  }
+}
+
+}  // namespace ecrf

@@ -1,0 +1,71 @@
+// The HEAD chunk: everything a decoder must know before it allocates anything (SPEC.md 6.2).
+// Writer and parser live together so the two cannot drift apart; the parser validates every
+// field against the limits of SPEC.md section 8 and says which field is wrong.
+#ifndef ECRF_FORMAT_SCENE_HEADER_H_
+#define ECRF_FORMAT_SCENE_HEADER_H_
+
+#include <cstddef>
+#include <cstdint>
+
+#include "format/byte_io.h"
+#include "format/container.h"
+#include "format/status.h"
+
+namespace ecrf {
+
+constexpr uint32_t kChunkHead = FourCC("HEAD");
+constexpr uint32_t kChunkOccupancy = FourCC("OCCU");
+constexpr uint32_t kChunkCoefficients = FourCC("COEF");
+constexpr uint32_t kChunkMlpWeights = FourCC("MLPW");
+constexpr uint32_t kChunkMetadata = FourCC("meta");
+
+// Scene limits (SPEC.md section 8).
+constexpr int kMaxSceneGridRes = 4096;        // per axis, feature grids and occupancy
+constexpr int kMaxSceneRank = 1024;           // per mode and grid
+constexpr uint64_t kMaxSceneGridValues = uint64_t{1} << 28;  // all planes and lines of a scene
+constexpr uint64_t kMaxOccupancyVoxels = uint64_t{1} << 31;
+constexpr uint32_t kMaxSceneSamples = 1u << 20;  // samples per ray
+constexpr int kMaxSceneFeatureDim = 256;
+constexpr int kMaxScenePeFreqs = 16;
+constexpr int kMaxSceneHidden = 1024;
+
+constexpr int kNumSceneGrids = 2;     // 0: density, 1: appearance
+constexpr int kTensorsPerSceneGrid = 6;  // planes 0..2, then lines 0..2
+
+constexpr size_t kSceneHeaderBytes = 90;
+
+struct SceneHeader {
+  float aabb_min[3] = {-1.5f, -1.5f, -1.5f};
+  float aabb_max[3] = {1.5f, 1.5f, 1.5f};
+  uint16_t res[3] = {2, 2, 2};
+  uint16_t ranks[kNumSceneGrids][3] = {{0, 0, 0}, {0, 0, 0}};
+  float density_shift = -10.f;
+  float distance_scale = 25.f;
+  float step_size = 0.f;          // world units between samples
+  uint32_t num_samples = 0;       // samples per ray
+  float weight_threshold = 1e-4f;
+  float near_far[2] = {2.f, 6.f};
+  float background[3] = {1.f, 1.f, 1.f};
+  uint16_t feature_dim = 27;
+  uint8_t feature_pe_freqs = 2;
+  uint8_t viewdir_pe_freqs = 2;
+  uint16_t hidden = 128;
+  uint8_t has_occupancy = 0;
+
+  int total_rank(int grid) const { return ranks[grid][0] + ranks[grid][1] + ranks[grid][2]; }
+};
+
+void WriteSceneHeader(const SceneHeader& header, ByteWriter* out);
+// Parses and validates a HEAD payload (exactly kSceneHeaderBytes).
+Status ParseSceneHeader(const uint8_t* payload, size_t size, SceneHeader* header);
+
+// Extent of tensor t (0..5) of a grid as a block-DCT view (SPEC.md 6.4): planes
+// {rank, res[v], res[u]}, lines {1, rank, res[w]}.
+void SceneTensorExtent(const SceneHeader& header, int grid, int tensor, int extent[3]);
+inline int SceneTensorRank(const SceneHeader& header, int grid, int tensor) {
+  return header.ranks[grid][tensor % 3];
+}
+
+}  // namespace ecrf
+
+#endif  // ECRF_FORMAT_SCENE_HEADER_H_

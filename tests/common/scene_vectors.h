@@ -1,0 +1,183 @@
+// Hand-made .ecrf conformance streams (SPEC.md section 6), built from integer coefficients with
+// format/ only, so every platform writes the same bytes: the generator (`ecrf conformance`)
+// and the tests rebuild them and compare with the checked-in files to detect format changes.
+//
+// Each exercises an edge of the syntax: rank-0 modes, 2D-only plane blocks, 16-bit
+// coefficients with escapes, an occupancy mask, an empty occupancy mask, float16/float32 MLPs.
+#ifndef ECRF_TESTS_COMMON_SCENE_VECTORS_H_
+#define ECRF_TESTS_COMMON_SCENE_VECTORS_H_
+
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "format/byte_io.h"
+#include "format/coef_coder.h"
+#include "format/container.h"
+#include "format/half_float.h"
+#include "format/occupancy_coder.h"
+#include "format/scene_header.h"
+#include "tests/common/coef_vectors.h"
+
+namespace ecrf {
+namespace conformance {
+
+enum class OccupancyKind { kNone, kSphere, kEmpty };
+
+struct SceneVector {
+  const char* name;
+  uint16_t res[3];
+  uint16_t ranks[2][3];
+  int plane_block[3];
+  int line_block[3];
+  int coef_bits;
+  int mlp_precision;  // 0 float16, 1 float32
+  OccupancyKind occupancy;
+  uint32_t seed;
+};
+
+inline const std::vector<SceneVector>& SceneVectors() {
+  static const std::vector<SceneVector> v = {
+      {"scene_ranks_dropped", {12, 10, 9}, {{0, 3, 2}, {2, 0, 3}}, {4, 8, 8}, {1, 4, 8}, 8, 0,
+       OccupancyKind::kNone, 11},
+      {"scene_2d_blocks", {20, 18, 16}, {{2, 2, 2}, {3, 3, 3}}, {1, 8, 8}, {1, 1, 16}, 8, 1,
+       OccupancyKind::kSphere, 12},
+      {"scene_16bit", {9, 9, 9}, {{2, 1, 2}, {2, 2, 1}}, {2, 4, 4}, {1, 2, 4}, 16, 0,
+       OccupancyKind::kSphere, 13},
+      {"scene_empty_occupancy", {8, 8, 8}, {{1, 1, 1}, {1, 1, 1}}, {1, 4, 4}, {1, 1, 8}, 8, 0,
+       OccupancyKind::kEmpty, 14},
+  };
+  return v;
+}
+
+inline SceneHeader SceneVectorHeader(const SceneVector& v) {
+  SceneHeader h;
+  for (int a = 0; a < 3; ++a) {
+    h.aabb_min[a] = -1.f;
+    h.aabb_max[a] = 1.f;
+    h.res[a] = v.res[a];
+    h.ranks[0][a] = v.ranks[0][a];
+    h.ranks[1][a] = v.ranks[1][a];
+  }
+  h.aabb_max[2] = 0.75f;  // not a cube: axis conventions matter
+  h.density_shift = -2.f;
+  h.distance_scale = 25.f;
+  h.step_size = 0.05f;
+  h.num_samples = 120;
+  h.weight_threshold = 1e-4f;
+  h.near_far[0] = 1.f;
+  h.near_far[1] = 6.f;
+  h.background[0] = 1.f;
+  h.background[1] = 0.5f;
+  h.background[2] = 0.f;
+  h.feature_dim = 6;
+  h.feature_pe_freqs = 1;
+  h.viewdir_pe_freqs = 2;
+  h.hidden = 16;
+  h.has_occupancy = v.occupancy == OccupancyKind::kNone ? 0 : 1;
+  return h;
+}
+
+// Coefficients of one block: a strong DC, decaying lower frequencies, some zero blocks.
+inline void MakeSceneBlock(Lcg& rng, const int dims[3], int32_t max_abs, bool density,
+                           int32_t* q) {
+  const int volume = dims[0] * dims[1] * dims[2];
+  for (int i = 0; i < volume; ++i) q[i] = 0;
+  if (rng.Below(5) == 0) return;
+  const int32_t dc_scale = max_abs > 127 ? 20000 : 100;
+  for (int i0 = 0; i0 < dims[0]; ++i0)
+    for (int i1 = 0; i1 < dims[1]; ++i1)
+      for (int i2 = 0; i2 < dims[2]; ++i2) {
+        const int f = i0 + i1 + i2;
+        const int bound = dc_scale / (1 + 2 * f * f);
+        if (bound == 0 || rng.Below(3) == 0) continue;
+        int32_t m = int32_t(rng.Below(bound + 1));
+        if (f == 0 && density) m = bound;  // positive density features: visible surfaces
+        if (m > max_abs) m = max_abs;
+        q[(i0 * dims[1] + i1) * dims[2] + i2] = (f == 0 || (rng.Next() & 1)) ? m : -m;
+      }
+}
+
+inline std::vector<uint8_t> BuildSceneVector(const SceneVector& v) {
+  const SceneHeader h = SceneVectorHeader(v);
+  Lcg rng(v.seed);
+  ContainerWriter writer;
+  ByteWriter head;
+  WriteSceneHeader(h, &head);
+  writer.AddChunk(kChunkHead, head.bytes());
+  if (h.has_occupancy) {
+    ByteWriter occ;
+    const int mres[3] = {7, 6, 5};
+    for (float x : h.aabb_min) occ.F32(x);
+    for (float x : h.aabb_max) occ.F32(x);
+    for (int r : mres) occ.U16(uint16_t(r));
+    occ.U16(0);
+    std::vector<uint8_t> voxels(size_t(mres[0]) * mres[1] * mres[2], 0);
+    if (v.occupancy == OccupancyKind::kSphere) {
+      for (int z = 0; z < mres[2]; ++z)
+        for (int y = 0; y < mres[1]; ++y)
+          for (int x = 0; x < mres[0]; ++x) {
+            const double dx = x / 3.0 - 1, dy = y / 2.5 - 1, dz = z / 2.0 - 1;
+            voxels[(size_t(z) * mres[1] + y) * mres[0] + x] = dx * dx + dy * dy + dz * dz < 0.8;
+          }
+    }
+    occ.Bytes(EncodeOccupancy(voxels.data(), mres));
+    writer.AddChunk(kChunkOccupancy, occ.bytes());
+  }
+  const int32_t max_abs = v.coef_bits == 16 ? 32767 : 127;
+  for (int g = 0; g < 2; ++g) {
+    for (int t = 0; t < 6; ++t) {
+      if (h.ranks[g][t % 3] == 0) continue;
+      const int* dims = t < 3 ? v.plane_block : v.line_block;
+      int extent[3];
+      SceneTensorExtent(h, g, t, extent);
+      int blocks = 1;
+      for (int a = 0; a < 3; ++a) blocks *= (extent[a] + dims[a] - 1) / dims[a];
+      CoefContexts ctx;
+      if (!ctx.Init(BlockShape{dims[0], dims[1], dims[2]}).ok()) return {};
+      RangeEncoder enc;
+      std::vector<int32_t> q(size_t(dims[0]) * dims[1] * dims[2]);
+      for (int b = 0; b < blocks; ++b) {
+        MakeSceneBlock(rng, dims, max_abs, g == 0, q.data());
+        EncodeCoefBlock(enc, ctx, q.data());
+      }
+      ByteWriter c;
+      c.U8(uint8_t(g));
+      c.U8(uint8_t(t));
+      c.U8(uint8_t(v.coef_bits));
+      c.U8(0);
+      for (int a = 0; a < 3; ++a) c.U8(uint8_t(dims[a]));
+      c.U8(0);
+      c.F32(v.coef_bits == 16 ? 0.0005f : (g == 0 ? 0.125f : 0.03125f));
+      c.Bytes(enc.Finish());
+      writer.AddChunk(kChunkCoefficients, c.bytes());
+    }
+  }
+  // MLP weights in the layout of decoder/mlp.h: small values on a 1/256 lattice.
+  const int F = h.feature_dim, H = h.hidden, P = h.total_rank(1);
+  const int in = F + 3 + 2 * F * h.feature_pe_freqs + 2 * 3 * h.viewdir_pe_freqs;
+  const size_t count = size_t(F) * P + size_t(H) * in + H + size_t(H) * H + H + 3 * size_t(H) + 3;
+  ByteWriter mlp;
+  mlp.U8(uint8_t(v.mlp_precision));
+  mlp.U8(0);
+  mlp.U8(0);
+  mlp.U8(0);
+  for (size_t i = 0; i < count; ++i) {
+    const float w = float(int(rng.Below(257)) - 128) / 256.f;
+    if (v.mlp_precision == 1) {
+      mlp.F32(w);
+    } else {
+      mlp.U16(FloatToHalf(w));
+    }
+  }
+  writer.AddChunk(kChunkMlpWeights, mlp.bytes());
+  const std::string meta = std::string("{\"vector\":\"") + v.name + "\"}";
+  writer.AddChunk(kChunkMetadata, reinterpret_cast<const uint8_t*>(meta.data()), meta.size());
+  return writer.Finish();
+}
+
+}  // namespace conformance
+}  // namespace ecrf
+
+#endif  // ECRF_TESTS_COMMON_SCENE_VECTORS_H_

@@ -1,0 +1,256 @@
+// Scene decoding: the conformance streams decode to their checksums, the hand-made ones are
+// rebuilt bit for bit, every malformed stream is an error (never a crash), and the C API works.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "decoder/ray_marcher.h"
+#include "decoder/scene_decoder.h"
+#include "ecrf/decoder.h"
+#include "format/crc32.h"
+#include "tests/common/grid_md5.h"
+#include "tests/common/scene_vectors.h"
+
+namespace ecrf {
+namespace dec {
+namespace {
+
+const std::string kDir = std::string(ECRF_SOURCE_DIR) + "/tests/conformance/";
+
+std::vector<uint8_t> ReadFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::vector<uint8_t>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+std::map<std::string, std::string> SceneManifest() {
+  std::map<std::string, std::string> m;
+  std::ifstream in(kDir + "scenes.md5");
+  std::string file, md5;
+  while (in >> file >> md5) m[file] = md5;
+  return m;
+}
+
+Status Decode(const std::vector<uint8_t>& bytes, SceneField* field, SceneInfo* info = nullptr) {
+  return DecodeScene(bytes.data(), bytes.size(), DecodeOptions(), field, info);
+}
+
+TEST(SceneDecoder, ConformanceScenesDecodeToTheirMd5) {
+  const auto manifest = SceneManifest();
+  ASSERT_EQ(manifest.size(), conformance::SceneVectors().size() + 1) << "missing " << kDir << "scenes.md5";
+  for (const auto& [file, md5] : manifest) {
+    SceneField field;
+    const Status s = Decode(ReadFile(kDir + file), &field);
+    ASSERT_TRUE(s.ok()) << file << ": " << s.message();
+    EXPECT_EQ(conformance::SceneGridMd5(field), md5) << file;
+  }
+}
+
+TEST(SceneDecoder, HandMadeVectorsAreRebuiltBitExactly) {
+  for (const auto& v : conformance::SceneVectors()) {
+    EXPECT_EQ(conformance::BuildSceneVector(v), ReadFile(kDir + v.name + ".ecrf"))
+        << v.name << ": the stream syntax changed (see tests/conformance/README.md)";
+  }
+}
+
+TEST(SceneDecoder, ReportsWhatTheStreamHolds) {
+  for (const auto& v : conformance::SceneVectors()) {
+    SceneField field;
+    SceneInfo info;
+    ASSERT_TRUE(Decode(conformance::BuildSceneVector(v), &field, &info).ok()) << v.name;
+    for (int g = 0; g < 2; ++g) {
+      for (int t = 0; t < 6; ++t) {
+        const TensorChunkInfo& ti = info.tensors[g][t];
+        EXPECT_EQ(ti.present, v.ranks[g][t % 3] > 0) << v.name << " " << g << " " << t;
+        if (!ti.present) continue;
+        EXPECT_EQ(ti.coef_bits, v.coef_bits);
+        const int* block = t < 3 ? v.plane_block : v.line_block;
+        for (int a = 0; a < 3; ++a) EXPECT_EQ(ti.block[a], block[a]);
+        EXPECT_LE(ti.coded_blocks, ti.blocks);
+      }
+      for (int m = 0; m < 3; ++m) EXPECT_EQ((g ? field.appearance : field.density).ranks[m], v.ranks[g][m]);
+    }
+    EXPECT_EQ(field.has_mask, v.occupancy != conformance::OccupancyKind::kNone);
+    EXPECT_EQ(info.mlp_precision_bits, v.mlp_precision ? 32 : 16);
+    ASSERT_NE(info.metadata, nullptr);
+    EXPECT_EQ(std::string(reinterpret_cast<const char*>(info.metadata), info.metadata_size),
+              std::string("{\"vector\":\"") + v.name + "\"}");
+  }
+}
+
+// Recomputes every chunk CRC so mutations reach the chunk parsers instead of the checksum.
+void FixCrcs(std::vector<uint8_t>* bytes) {
+  size_t pos = 8;
+  while (pos + 12 <= bytes->size()) {
+    uint32_t length;
+    std::memcpy(&length, bytes->data() + pos + 4, 4);
+    if (length > bytes->size() - pos - 12) return;
+    const uint32_t crc = Crc32(bytes->data() + pos, 8 + size_t(length));
+    std::memcpy(bytes->data() + pos + 8 + length, &crc, 4);
+    pos += 12 + length;
+  }
+}
+
+TEST(SceneDecoder, EveryPrefixIsAnError) {
+  for (const char* name : {"scene_16bit", "scene_ranks_dropped"}) {
+    const std::vector<uint8_t> full = ReadFile(kDir + name + std::string(".ecrf"));
+    ASSERT_FALSE(full.empty());
+    for (size_t cut = 0; cut < full.size(); ++cut) {
+      SceneField field;
+      const Status s = DecodeScene(full.data(), cut, DecodeOptions(), &field, nullptr);
+      ASSERT_FALSE(s.ok()) << name << " prefix " << cut;
+      ASSERT_EQ(s.code(), kErrTruncated) << name << " prefix " << cut << ": " << s.message();
+    }
+  }
+}
+
+TEST(SceneDecoder, CorruptedStreamsFailCleanlyOrDecodeValidScenes) {
+  std::mt19937 rng(17);
+  int decoded = 0, failed = 0;
+  for (const auto& v : conformance::SceneVectors()) {
+    const std::vector<uint8_t> clean = conformance::BuildSceneVector(v);
+    for (int trial = 0; trial < 300; ++trial) {
+      std::vector<uint8_t> bytes = clean;
+      const int flips = 1 + int(rng() % 4);
+      for (int f = 0; f < flips; ++f) {
+        const size_t at = 8 + rng() % (bytes.size() - 8);
+        bytes[at] = trial % 3 == 0 ? uint8_t(rng()) : uint8_t(bytes[at] ^ (1u << (rng() % 8)));
+      }
+      FixCrcs(&bytes);
+      SceneField field;
+      const Status s = Decode(bytes, &field);
+      if (s.ok()) {
+        EXPECT_TRUE(field.Validate().ok());
+        ++decoded;
+      } else {
+        EXPECT_NE(s.message()[0], '\0');
+        ++failed;
+      }
+    }
+  }
+  EXPECT_GT(failed, 100);  // the parsers do reject what they see
+  std::printf("  %d corrupted streams rejected, %d still decoded to valid scenes\n", failed, decoded);
+}
+
+// Chunk-level syntax errors, each with its category.
+TEST(SceneDecoder, ChunkOrderAndUnknownChunks) {
+  const std::vector<uint8_t> good = conformance::BuildSceneVector(conformance::SceneVectors()[0]);
+  // Split the good stream into its chunks.
+  std::vector<std::pair<uint32_t, std::vector<uint8_t>>> chunks;
+  for (size_t pos = 8; pos < good.size();) {
+    uint32_t type, length;
+    std::memcpy(&type, good.data() + pos, 4);
+    std::memcpy(&length, good.data() + pos + 4, 4);
+    chunks.emplace_back(type, std::vector<uint8_t>(good.begin() + long(pos) + 8, good.begin() + long(pos) + 8 + length));
+    pos += 12 + length;
+  }
+  auto build = [](const std::vector<std::pair<uint32_t, std::vector<uint8_t>>>& list) {
+    ContainerWriter w;
+    for (const auto& [type, payload] : list) {
+      if (type != kChunkDone) w.AddChunk(type, payload);
+    }
+    return w.Finish();
+  };
+  SceneField field;
+  ASSERT_TRUE(Decode(build(chunks), &field).ok());
+
+  auto swapped = chunks;
+  std::swap(swapped[1], swapped[2]);  // two COEF chunks out of order
+  EXPECT_EQ(Decode(build(swapped), &field).code(), kErrCorrupt);
+
+  auto no_head = chunks;
+  no_head.erase(no_head.begin());
+  EXPECT_EQ(Decode(build(no_head), &field).code(), kErrCorrupt);
+
+  auto unknown_critical = chunks;
+  unknown_critical.insert(unknown_critical.begin() + 1, {FourCC("ZZZZ"), {1, 2, 3}});
+  EXPECT_EQ(Decode(build(unknown_critical), &field).code(), kErrUnsupported);
+
+  auto unknown_ancillary = chunks;
+  unknown_ancillary.insert(unknown_ancillary.begin() + 2, {FourCC("zzzz"), {1, 2, 3}});
+  EXPECT_TRUE(Decode(build(unknown_ancillary), &field).ok());
+
+  auto missing_mlp = chunks;
+  missing_mlp.erase(missing_mlp.end() - 3);  // MLPW (before meta and DONE)
+  EXPECT_EQ(Decode(build(missing_mlp), &field).code(), kErrCorrupt);
+}
+
+TEST(SceneDecoder, Int16StorageMatchesFloat) {
+  const std::vector<uint8_t> bytes = ReadFile(kDir + "scene_builtin.ecrf");
+  SceneField f32, i16;
+  ASSERT_TRUE(Decode(bytes, &f32).ok());
+  DecodeOptions o;
+  o.storage = GridStorage::kInt16;
+  ASSERT_TRUE(DecodeScene(bytes.data(), bytes.size(), o, &i16, nullptr).ok());
+  EXPECT_EQ(i16.density.storage, GridStorage::kInt16);
+  // 15-bit fixed point with the tensor's peak as full scale.
+  for (int m = 0; m < 3; ++m) {
+    const size_t n = f32.appearance.plane_count(m);
+    float peak = 0.f;
+    for (size_t i = 0; i < n; ++i) peak = std::max(peak, std::fabs(f32.appearance.plane_f32[m][i]));
+    for (size_t i = 0; i < n; ++i) {
+      const float back = i16.appearance.plane_i16[m][i] * i16.appearance.plane_scale[m];
+      ASSERT_NEAR(back, f32.appearance.plane_f32[m][i], peak / 32767.f * 0.51f + 1e-12f);
+    }
+  }
+}
+
+TEST(DecoderCApi, DecodeInfoTensorRenderAndErrors) {
+  ecrf_scene* scene = ecrf_scene_create();
+  ASSERT_NE(scene, nullptr);
+  const uint8_t garbage[16] = {'E', 'C', 'R', 'F', 1, 0, 0, 0, 'H', 'E', 'A', 'D', 255, 255, 255, 255};
+  EXPECT_EQ(ecrf_scene_decode(scene, garbage, sizeof(garbage), ECRF_STORAGE_FLOAT32), ECRF_ERR_LIMIT);
+  EXPECT_NE(std::strlen(ecrf_scene_message(scene)), 0u);
+  ecrf_scene_info info;
+  EXPECT_EQ(ecrf_scene_get_info(scene, &info), ECRF_ERR_INVALID_ARGUMENT);
+
+  const std::vector<uint8_t> bytes = ReadFile(kDir + "scene_empty_occupancy.ecrf");
+  ASSERT_EQ(ecrf_scene_decode(scene, bytes.data(), bytes.size(), ECRF_STORAGE_FLOAT32), ECRF_OK)
+      << ecrf_scene_message(scene);
+  EXPECT_STREQ(ecrf_scene_message(scene), "");
+  ASSERT_EQ(ecrf_scene_get_info(scene, &info), ECRF_OK);
+  EXPECT_EQ(info.grid_res[0], 8);
+  EXPECT_EQ(info.has_occupancy, 1);
+  EXPECT_EQ(info.stream_bytes, bytes.size());
+  const float* data = nullptr;
+  int shape[3];
+  size_t count = 0;
+  ASSERT_EQ(ecrf_scene_tensor(scene, 1, 0, &data, shape, &count), ECRF_OK);
+  EXPECT_EQ(count, size_t(shape[0]) * shape[1] * shape[2]);
+  EXPECT_EQ(ecrf_scene_tensor(scene, 2, 0, &data, shape, &count), ECRF_ERR_INVALID_ARGUMENT);
+
+  // An empty occupancy mask: every pixel is the background (1, 0.5, 0), however the rays run.
+  ecrf_camera cam;
+  const Camera orbit = OrbitCamera(24, 16, 0.4f, 0.3f, 3.f);
+  std::memcpy(cam.c2w, orbit.c2w, sizeof(cam.c2w));
+  cam.fx = orbit.fx;
+  cam.fy = orbit.fy;
+  cam.cx = orbit.cx;
+  cam.cy = orbit.cy;
+  cam.width = orbit.width;
+  cam.height = orbit.height;
+  ecrf_render_options ro;
+  ecrf_render_options_default(&ro);
+  ro.num_threads = 2;
+  std::vector<float> rgb(24 * 16 * 3);
+  std::vector<uint8_t> rgba(24 * 16 * 4);
+  ASSERT_EQ(ecrf_scene_render(scene, &cam, &ro, rgba.data(), rgb.data()), ECRF_OK) << ecrf_scene_message(scene);
+  for (size_t p = 0; p < 24 * 16; ++p) {
+    ASSERT_EQ(rgb[3 * p + 0], 1.f);
+    ASSERT_EQ(rgb[3 * p + 1], 0.5f);
+    ASSERT_EQ(rgb[3 * p + 2], 0.f);
+    ASSERT_EQ(rgba[4 * p + 3], 0);
+  }
+  cam.width = 0;
+  EXPECT_LT(ecrf_scene_render(scene, &cam, &ro, rgba.data(), nullptr), 0);
+  ecrf_scene_destroy(scene);
+}
+
+}  // namespace
+}  // namespace dec
+}  // namespace ecrf

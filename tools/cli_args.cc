@@ -1,0 +1,56 @@
+#include "tools/cli_args.h"
+
+#include <sys/stat.h>
+
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <stdexcept>
+
+namespace ecrf {
+namespace tools {
+
+float ParseFloat(const char* flag, const char* value) {
+  char* end = nullptr;
+  errno = 0;
+  const float v = std::strtof(value, &end);
+  if (errno || !end || *end || !(v >= 0.0f)) {
+    throw std::invalid_argument(std::string(flag) + ": '" + value + "' is not a non-negative number");
+  }
+  return v;
+}
+
+// "16x16x16" or "8x8" into n values, each a power of two <= 32.
+void ParseShape(const char* flag, const std::string& text, int n, int* out) {
+  size_t pos = 0;
+  for (int i = 0; i < n; ++i) {
+    const size_t x = text.find('x', pos);
+    const std::string part = text.substr(pos, x == std::string::npos ? std::string::npos : x - pos);
+    const int v = std::atoi(part.c_str());
+    if (part.empty() || v < 1 || v > 32 || (v & (v - 1)) || (i + 1 < n) == (x == std::string::npos)) {
+      throw std::invalid_argument(std::string(flag) + ": '" + text + "' is not " + std::to_string(n) +
+                                  " powers of two <= 32 joined by 'x'");
+    }
+    out[i] = v;
+    pos = x == std::string::npos ? text.size() : x + 1;
+  }
+}
+
+int ParseInt(const char* flag, const char* value) {
+  char* end = nullptr;
+  errno = 0;
+  const long v = std::strtol(value, &end, 10);
+  if (errno || !end || *end || v < 0 || v > 1000000000) {
+    throw std::invalid_argument(std::string(flag) + ": '" + value + "' is not a non-negative integer");
+  }
+  return int(v);
+}
+
+void MakeDirectory(const std::string& dir) {
+  if (mkdir(dir.c_str(), 0755) != 0 && errno != EEXIST) {
+    throw std::runtime_error(dir + ": cannot create directory: " + std::strerror(errno));
+  }
+}
+
+}  // namespace tools
+}  // namespace ecrf

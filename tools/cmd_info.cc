@@ -1,0 +1,82 @@
+// `ecrf info SCENE.ecrf [--md5]`: what a stream holds (chunks, sizes, grid, ranks, steps) and,
+// with --md5, the checksums of its decoded grids.
+#include <cstdio>
+#include <cstring>
+#include <string>
+
+#include "tools/commands.h"
+#include "tools/decoded_scene.h"
+#include "tests/common/grid_md5.h"
+#include "trainer/rate_state.h"
+
+namespace ecrf {
+namespace tools {
+
+int RunInfo(int argc, char** argv) {
+  std::string path;
+  bool md5 = false;
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--md5")) {
+      md5 = true;
+    } else if (argv[i][0] == '-' || !path.empty()) {
+      std::fprintf(stderr, "usage: ecrf info SCENE.ecrf [--md5]\n");
+      return 2;
+    } else {
+      path = argv[i];
+    }
+  }
+  if (path.empty()) {
+    std::fprintf(stderr, "usage: ecrf info SCENE.ecrf [--md5]\n");
+    return 2;
+  }
+  const LoadedScene s = LoadSceneFile(path);
+  const dec::SceneInfo& in = s.info;
+  const SceneHeader& h = in.header;
+  std::printf("%s: ecrf stream version %u.%u, %zu bytes, decoded in %.1f ms\n", path.c_str(),
+              in.version_major, in.version_minor, in.stream_bytes, s.decode_seconds * 1e3);
+  std::printf("box      [%g %g %g] - [%g %g %g]\n", h.aabb_min[0], h.aabb_min[1], h.aabb_min[2],
+              h.aabb_max[0], h.aabb_max[1], h.aabb_max[2]);
+  std::printf("grid     %u x %u x %u; density ranks %u %u %u; appearance ranks %u %u %u\n", h.res[0],
+              h.res[1], h.res[2], h.ranks[0][0], h.ranks[0][1], h.ranks[0][2], h.ranks[1][0],
+              h.ranks[1][1], h.ranks[1][2]);
+  std::printf("render   %u samples/ray, step %g, near %g, far %g, background %g %g %g\n", h.num_samples,
+              h.step_size, h.near_far[0], h.near_far[1], h.background[0], h.background[1],
+              h.background[2]);
+  std::printf("mlp      features %u, PE %u/%u, hidden %u, float%d\n", h.feature_dim, h.feature_pe_freqs,
+              h.viewdir_pe_freqs, h.hidden, in.mlp_precision_bits);
+  std::printf("\n%-20s %10s %8s %10s %10s %12s%s\n", "chunk", "bytes", "bits", "block", "step",
+              "coded blocks", md5 ? "  md5 of decoded float32 values" : "");
+  std::printf("%-20s %10u\n", "HEAD", in.head_bytes);
+  if (h.has_occupancy) {
+    std::printf("%-20s %10u   %dx%dx%d mask, %zu occupied voxels\n", "OCCU", in.occupancy_bytes,
+                in.occupancy_res[0], in.occupancy_res[1], in.occupancy_res[2], in.occupied_voxels);
+  }
+  for (int g = 0; g < 2; ++g) {
+    for (int t = 0; t < 6; ++t) {
+      const dec::TensorChunkInfo& ti = in.tensors[g][t];
+      if (!ti.present) {
+        std::printf("%-20s %10s\n", trainer::RateTensorName(g * 6 + t), "rank 0");
+        continue;
+      }
+      char block[32], coded[32];
+      std::snprintf(block, sizeof(block), "%dx%dx%d", ti.block[0], ti.block[1], ti.block[2]);
+      std::snprintf(coded, sizeof(coded), "%u/%u", ti.coded_blocks, ti.blocks);
+      std::printf("%-20s %10u %8d %10s %10.4g %12s", trainer::RateTensorName(g * 6 + t),
+                  ti.payload_bytes, ti.coef_bits, block, double(ti.step), coded);
+      if (md5) {
+        std::printf("  %s", conformance::TensorMd5(g == 0 ? s.field->density : s.field->appearance, t).c_str());
+      }
+      std::printf("\n");
+    }
+  }
+  std::printf("%-20s %10u\n", "MLPW", in.mlp_bytes);
+  if (in.metadata_bytes) {
+    std::printf("%-20s %10u   %.*s\n", "meta", in.metadata_bytes, int(in.metadata_size),
+                reinterpret_cast<const char*>(in.metadata));
+  }
+  if (md5) std::printf("\ngrids md5 %s\n", conformance::SceneGridMd5(*s.field).c_str());
+  return 0;
+}
+
+}  // namespace tools
+}  // namespace ecrf

@@ -1,0 +1,237 @@
+// `ecrf render SCENE.ecrf (--views transforms_SPLIT.json | --orbit N) -o OUT_DIR`: PNG renders of
+// a decoded stream, and `ecrf eval SCENE.ecrf --data DIR`: PSNR / SSIM against a test split.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <string>
+
+#include "tools/cli_args.h"
+#include "tools/commands.h"
+#include "tools/decoded_scene.h"
+#include "trainer/camera.h"
+#include "trainer/checkpoint.h"
+
+namespace ecrf {
+namespace tools {
+namespace {
+
+const char kRenderUsage[] =
+    "usage: ecrf render SCENE.ecrf (--views DIR/transforms_SPLIT.json | --orbit N) -o OUT_DIR\n"
+    "  -W N, -H N          image size for --orbit (default 400x400)\n"
+    "  --radius R          orbit radius (default 4)\n"
+    "  --elevation DEG     orbit elevation (default 30)\n"
+    "  --max-views N       render at most N views\n"
+    "  --threads N         render threads (default 1; 0 = all cores)\n"
+    "  --int16             keep the grids in 16-bit fixed point (half the memory)\n";
+
+const char kEvalUsage[] =
+    "usage: ecrf eval SCENE.ecrf --data DIR [options]\n"
+    "  --split NAME        split to score (default test)\n"
+    "  --downscale N       shrink the images by N\n"
+    "  --stride K          every K-th view\n"
+    "  --max-views N       at most N views\n"
+    "  --threads N         render threads (default 1; 0 = all cores)\n"
+    "  --int16             16-bit fixed-point grids\n"
+    "  --json FILE         write the figures as JSON\n";
+
+struct CommonArgs {
+  std::string scene;
+  int threads = 1;
+  bool int16 = false;
+  int max_views = 0;
+};
+
+// Consumes the flags both commands share; false if argv[i] is not one of them.
+bool ParseCommon(int argc, char** argv, int* i, CommonArgs* c) {
+  const std::string a = argv[*i];
+  auto value = [&]() -> const char* {
+    if (*i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
+    return argv[++*i];
+  };
+  if (a == "--threads") {
+    c->threads = ParseInt("--threads", value());
+  } else if (a == "--int16") {
+    c->int16 = true;
+  } else if (a == "--max-views") {
+    c->max_views = ParseInt("--max-views", value());
+  } else if (a[0] != '-' && c->scene.empty()) {
+    c->scene = a;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+dec::RenderOptions RenderOptionsFor(const CommonArgs& c) {
+  dec::RenderOptions o;
+  o.num_threads = c.threads;
+  return o;
+}
+
+// "DIR/transforms_test.json" -> DIR, "test".
+void SplitViewsPath(const std::string& path, std::string* dir, std::string* split) {
+  const size_t slash = path.find_last_of('/');
+  *dir = slash == std::string::npos ? "." : path.substr(0, slash);
+  const std::string base = slash == std::string::npos ? path : path.substr(slash + 1);
+  const std::string prefix = "transforms_", suffix = ".json";
+  if (base.size() <= prefix.size() + suffix.size() || base.compare(0, prefix.size(), prefix) ||
+      base.compare(base.size() - suffix.size(), suffix.size(), suffix)) {
+    throw std::invalid_argument("--views: '" + path + "' is not named transforms_SPLIT.json");
+  }
+  *split = base.substr(prefix.size(), base.size() - prefix.size() - suffix.size());
+}
+
+trainer::Camera OrbitView(int width, int height, double azimuth, double elevation, double radius) {
+  const dec::Camera d = dec::OrbitCamera(width, height, float(azimuth), float(elevation), float(radius));
+  trainer::Camera c;
+  c.width = width;
+  c.height = height;
+  c.fx = d.fx;
+  c.fy = d.fy;
+  c.cx = d.cx;
+  c.cy = d.cy;
+  for (int r = 0; r < 3; ++r) {
+    for (int k = 0; k < 4; ++k) c.c2w[r][k] = d.c2w[r * 4 + k];
+  }
+  return c;
+}
+
+double Seconds(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+int RunRender(int argc, char** argv) {
+  CommonArgs c;
+  std::string views, out;
+  int orbit = 0, width = 400, height = 400;
+  double radius = 4.0, elevation = 30.0;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&]() -> const char* {
+      if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
+      return argv[++i];
+    };
+    if (a == "--help" || a == "-h") {
+      std::fputs(kRenderUsage, stdout);
+      return 0;
+    } else if (a == "--views") {
+      views = value();
+    } else if (a == "--orbit") {
+      orbit = ParseInt("--orbit", value());
+    } else if (a == "-W") {
+      width = ParseInt("-W", value());
+    } else if (a == "-H") {
+      height = ParseInt("-H", value());
+    } else if (a == "--radius") {
+      radius = ParseFloat("--radius", value());
+    } else if (a == "--elevation") {
+      elevation = ParseFloat("--elevation", value());
+    } else if (a == "-o" || a == "--out") {
+      out = value();
+    } else if (!ParseCommon(argc, argv, &i, &c)) {
+      std::fprintf(stderr, "ecrf render: unexpected argument '%s'\n\n%s", a.c_str(), kRenderUsage);
+      return 2;
+    }
+  }
+  if (c.scene.empty() || out.empty() || (views.empty() == (orbit == 0)) || width < 1 || height < 1) {
+    std::fprintf(stderr, "ecrf render: needs SCENE.ecrf, -o OUT_DIR and one of --views / --orbit\n\n%s",
+                 kRenderUsage);
+    return 2;
+  }
+  std::vector<std::pair<std::string, trainer::Camera>> cameras;
+  if (!views.empty()) {
+    std::string dir, split;
+    SplitViewsPath(views, &dir, &split);
+    for (const trainer::ViewSource& v : trainer::ReadDatasetManifest(dir, split).views) {
+      std::string name = v.name;
+      for (char& ch : name) {
+        if (ch == '/') ch = '_';
+      }
+      cameras.emplace_back(name, v.camera);
+    }
+  } else {
+    for (int k = 0; k < orbit; ++k) {
+      char name[32];
+      std::snprintf(name, sizeof(name), "orbit_%03d", k);
+      cameras.emplace_back(name, OrbitView(width, height, 2.0 * M_PI * k / orbit,
+                                           elevation * M_PI / 180.0, radius));
+    }
+  }
+  if (c.max_views > 0 && cameras.size() > size_t(c.max_views)) cameras.resize(size_t(c.max_views));
+  const LoadedScene s = LoadSceneFile(c.scene, c.int16 ? dec::GridStorage::kInt16 : dec::GridStorage::kFloat32);
+  MakeDirectory(out);
+  double seconds = 0.0;
+  dec::RenderStats stats;
+  for (const auto& [name, camera] : cameras) {
+    const auto start = std::chrono::steady_clock::now();
+    const trainer::Image img = RenderDecoded(*s.field, camera, RenderOptionsFor(c), &stats);
+    seconds += Seconds(start);
+    trainer::SavePng(out + "/" + name + ".png", img);
+  }
+  std::printf("rendered %zu views into %s: %.1f ms/view (%d thread%s), decode %.1f ms, "
+              "%.2f M samples/view, %.2f M MLP samples/view\n",
+              cameras.size(), out.c_str(), 1e3 * seconds / std::max<size_t>(1, cameras.size()), c.threads,
+              c.threads == 1 ? "" : "s", 1e3 * s.decode_seconds,
+              stats.samples / 1e6 / std::max<size_t>(1, cameras.size()),
+              stats.color_samples / 1e6 / std::max<size_t>(1, cameras.size()));
+  return 0;
+}
+
+int RunEval(int argc, char** argv) {
+  CommonArgs c;
+  std::string data, split = "test", json_path;
+  int stride = 1, downscale = 1;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&]() -> const char* {
+      if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
+      return argv[++i];
+    };
+    if (a == "--help" || a == "-h") {
+      std::fputs(kEvalUsage, stdout);
+      return 0;
+    } else if (a == "--data") {
+      data = value();
+    } else if (a == "--split") {
+      split = value();
+    } else if (a == "--stride") {
+      stride = std::max(1, ParseInt("--stride", value()));
+    } else if (a == "--downscale") {
+      downscale = std::max(1, ParseInt("--downscale", value()));
+    } else if (a == "--json") {
+      json_path = value();
+    } else if (!ParseCommon(argc, argv, &i, &c)) {
+      std::fprintf(stderr, "ecrf eval: unexpected argument '%s'\n\n%s", a.c_str(), kEvalUsage);
+      return 2;
+    }
+  }
+  if (c.scene.empty() || data.empty()) {
+    std::fprintf(stderr, "ecrf eval: needs SCENE.ecrf and --data DIR\n\n%s", kEvalUsage);
+    return 2;
+  }
+  const LoadedScene s = LoadSceneFile(c.scene, c.int16 ? dec::GridStorage::kInt16 : dec::GridStorage::kFloat32);
+  const trainer::Dataset test = trainer::LoadDataset(data, split, downscale);
+  const trainer::EvalResult r = EvaluateDecoded(*s.field, test, stride, c.max_views, RenderOptionsFor(c), false);
+  std::printf("%s: %zu bytes, PSNR %.2f dB, SSIM %.4f over %d %s views; decode %.1f ms, render %.1f ms/view "
+              "(%d thread%s, %s grids)\n",
+              c.scene.c_str(), s.bytes.size(), r.psnr, r.ssim, r.views, split.c_str(), 1e3 * s.decode_seconds,
+              1e3 * r.seconds_per_view, c.threads, c.threads == 1 ? "" : "s", c.int16 ? "int16" : "float32");
+  if (!json_path.empty()) {
+    nlohmann::json j = {{"scene", c.scene},          {"bytes", s.bytes.size()},
+                        {"psnr", r.psnr},            {"ssim", r.ssim},
+                        {"views", r.views},          {"decode_seconds", s.decode_seconds},
+                        {"render_seconds_per_view", r.seconds_per_view},
+                        {"threads", c.threads},      {"grid_storage", c.int16 ? "int16" : "float32"}};
+    const std::string text = j.dump(2) + "\n";
+    trainer::WriteFileAtomically(json_path, text.data(), text.size());
+  }
+  return 0;
+}
+
+}  // namespace tools
+}  // namespace ecrf

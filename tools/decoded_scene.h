@@ -1,0 +1,45 @@
+// Host-side helpers around the embeddable decoder: read an .ecrf file, render dataset cameras
+// from the decoded scene (with the trainer's ray generation, so lens distortion is honoured) and
+// score the renders against ground truth.
+#ifndef ECRF_TOOLS_DECODED_SCENE_H_
+#define ECRF_TOOLS_DECODED_SCENE_H_
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "decoder/ray_marcher.h"
+#include "decoder/scene_decoder.h"
+#include "trainer/dataset.h"
+#include "trainer/image_io.h"
+#include "trainer/trainer.h"
+
+namespace ecrf {
+namespace tools {
+
+struct LoadedScene {
+  std::vector<uint8_t> bytes;
+  std::unique_ptr<dec::SceneField> field;
+  dec::SceneInfo info;  // info.metadata points into bytes
+  double decode_seconds = 0.0;
+};
+
+// Throws std::runtime_error naming the file and the decoder's message.
+LoadedScene DecodeSceneBytes(std::vector<uint8_t> bytes, const std::string& name,
+                             dec::GridStorage storage = dec::GridStorage::kFloat32);
+LoadedScene LoadSceneFile(const std::string& path,
+                          dec::GridStorage storage = dec::GridStorage::kFloat32);
+
+// RGB render of one camera; stats accumulate when given.
+trainer::Image RenderDecoded(const dec::SceneField& scene, const trainer::Camera& camera,
+                             const dec::RenderOptions& options, dec::RenderStats* stats = nullptr);
+
+// Mean PSNR / SSIM over every stride-th test view (at most max_views; 0 = all).
+trainer::EvalResult EvaluateDecoded(const dec::SceneField& scene, const trainer::Dataset& test,
+                                    int stride, int max_views, const dec::RenderOptions& options,
+                                    bool keep_renders);
+
+}  // namespace tools
+}  // namespace ecrf
+
+#endif  // ECRF_TOOLS_DECODED_SCENE_H_

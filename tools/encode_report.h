@@ -1,0 +1,21 @@
+// Human-readable and JSON forms of the encoder's per-chunk size report.
+#ifndef ECRF_TOOLS_ENCODE_REPORT_H_
+#define ECRF_TOOLS_ENCODE_REPORT_H_
+
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "trainer/scene_encoder.h"
+
+namespace ecrf {
+namespace tools {
+
+void PrintEncodeReport(FILE* out, const trainer::EncodeReport& report);
+nlohmann::json EncodeReportJson(const trainer::EncodeReport& report);
+bool IsDirectory(const std::string& path);
+
+}  // namespace tools
+}  // namespace ecrf
+
+#endif  // ECRF_TOOLS_ENCODE_REPORT_H_
