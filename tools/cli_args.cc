@@ -52,5 +52,10 @@ void MakeDirectory(const std::string& dir) {
   }
 }
 
+const char* FlagValue(int argc, char** argv, int* i) {
+  if (*i + 1 >= argc) throw std::invalid_argument(std::string(argv[*i]) + " needs a value");
+  return argv[++*i];
+}
+
 }  // namespace tools
 }  // namespace ecrf

@@ -12,6 +12,8 @@ float ParseFloat(const char* flag, const char* value);  // non-negative
 int ParseInt(const char* flag, const char* value);      // non-negative
 // "16x16x16" or "8x8" into n values, each a power of two <= 32.
 void ParseShape(const char* flag, const std::string& text, int n, int* out);
+// The value after flag argv[*i] (advancing *i); throws if the command line ends there.
+const char* FlagValue(int argc, char** argv, int* i);
 // Creates one directory level (an existing directory is fine).
 void MakeDirectory(const std::string& dir);
 

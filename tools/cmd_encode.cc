@@ -33,10 +33,7 @@ int RunEncode(int argc, char** argv) {
   bool blocks_given = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    auto value = [&]() -> const char* {
-      if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
-      return argv[++i];
-    };
+    auto value = [&] { return FlagValue(argc, argv, &i); };
     if (a == "--help" || a == "-h") {
       std::fputs(kEncodeUsage, stdout);
       return 0;

@@ -47,10 +47,7 @@ struct CommonArgs {
 // Consumes the flags both commands share; false if argv[i] is not one of them.
 bool ParseCommon(int argc, char** argv, int* i, CommonArgs* c) {
   const std::string a = argv[*i];
-  auto value = [&]() -> const char* {
-    if (*i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
-    return argv[++*i];
-  };
+  auto value = [&] { return FlagValue(argc, argv, i); };
   if (a == "--threads") {
     c->threads = ParseInt("--threads", value());
   } else if (a == "--int16") {
@@ -112,10 +109,7 @@ int RunRender(int argc, char** argv) {
   double radius = 4.0, elevation = 30.0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    auto value = [&]() -> const char* {
-      if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
-      return argv[++i];
-    };
+    auto value = [&] { return FlagValue(argc, argv, &i); };
     if (a == "--help" || a == "-h") {
       std::fputs(kRenderUsage, stdout);
       return 0;
@@ -188,10 +182,7 @@ int RunEval(int argc, char** argv) {
   int stride = 1, downscale = 1;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    auto value = [&]() -> const char* {
-      if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
-      return argv[++i];
-    };
+    auto value = [&] { return FlagValue(argc, argv, &i); };
     if (a == "--help" || a == "-h") {
       std::fputs(kEvalUsage, stdout);
       return 0;

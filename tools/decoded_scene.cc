@@ -53,14 +53,7 @@ trainer::Image RenderDecoded(const dec::SceneField& scene, const trainer::Camera
   for (int y0 = 0; y0 < camera.height; y0 += rows_per_chunk) {
     const int rows = std::min(rows_per_chunk, camera.height - y0);
     const size_t n = size_t(rows) * camera.width;
-    origins.resize(n * 3);
-    dirs.resize(n * 3);
-    for (int y = 0; y < rows; ++y) {
-      for (int x = 0; x < camera.width; ++x) {
-        const size_t i = size_t(y) * camera.width + x;
-        trainer::GenerateRay(camera, x, y0 + y, &origins[3 * i], &dirs[3 * i]);
-      }
-    }
+    trainer::GenerateRowRays(camera, y0, rows, &origins, &dirs);
     dec::RenderStats chunk_stats;
     st = marcher.RenderRays(n, origins.data(), dirs.data(),
                             &img.pixels[size_t(y0) * camera.width * 3], nullptr, &chunk_stats);

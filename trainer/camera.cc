@@ -46,6 +46,19 @@ void UndistortNormalized(const Camera& camera, double xd, double yd, double* x_o
   *y_out = y;
 }
 
+void GenerateRowRays(const Camera& camera, int y0, int rows, std::vector<float>* origins,
+                     std::vector<float>* dirs) {
+  const size_t n = static_cast<size_t>(rows) * camera.width;
+  origins->resize(n * 3);
+  dirs->resize(n * 3);
+  for (int y = 0; y < rows; ++y) {
+    for (int x = 0; x < camera.width; ++x) {
+      const size_t i = static_cast<size_t>(y) * camera.width + x;
+      GenerateRay(camera, x, y0 + y, &(*origins)[3 * i], &(*dirs)[3 * i]);
+    }
+  }
+}
+
 void GenerateRay(const Camera& camera, double px, double py, float origin[3], float dir[3]) {
   // Normalised coordinates in OpenCV orientation (y down), where the distortion model lives.
   double x = (px + 0.5 - camera.cx) / camera.fx;

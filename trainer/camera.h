@@ -2,6 +2,8 @@
 #ifndef ECRF_TRAINER_CAMERA_H_
 #define ECRF_TRAINER_CAMERA_H_
 
+#include <vector>
+
 namespace ecrf::trainer {
 
 // Intrinsics in pixels for an image of width x height; (0, 0) is the top-left corner of the
@@ -28,6 +30,10 @@ double FocalFromFieldOfView(double extent_pixels, double field_of_view);
 // hits pixel i's centre, px = i - 0.25 a quarter pixel left of it (for supersampling).
 // `dir` has unit length, as TensoRF's ray directions do; `origin` is the camera centre.
 void GenerateRay(const Camera& camera, double px, double py, float origin[3], float dir[3]);
+
+// Rays of pixel rows [y0, y0 + rows), row-major: origins and dirs are resized to rows*width*3.
+void GenerateRowRays(const Camera& camera, int y0, int rows, std::vector<float>* origins,
+                     std::vector<float>* dirs);
 
 // OpenCV distortion of an undistorted normalised image point (x right, y down, z = 1).
 void DistortNormalized(const Camera& camera, double x, double y, double* xd, double* yd);

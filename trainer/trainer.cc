@@ -125,14 +125,7 @@ Image RenderView(const TensorfModel& model, const Camera& camera) {
   for (int y0 = 0; y0 < camera.height; y0 += rows_per_chunk) {
     const int rows = std::min(rows_per_chunk, camera.height - y0);
     const int n = rows * camera.width;
-    origins.resize(size_t(n) * 3);
-    dirs.resize(size_t(n) * 3);
-    for (int y = 0; y < rows; ++y) {
-      for (int x = 0; x < camera.width; ++x) {
-        const size_t i = size_t(y) * camera.width + x;
-        GenerateRay(camera, x, y0 + y, &origins[3 * i], &dirs[3 * i]);
-      }
-    }
+    GenerateRowRays(camera, y0, rows, &origins, &dirs);
     RenderRays(model, n, origins.data(), dirs.data(), &img.pixels[size_t(y0) * camera.width * 3], nullptr);
   }
   return img;

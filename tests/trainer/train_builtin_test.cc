@@ -5,6 +5,11 @@
 #include <cstdio>
 #include <string>
 
+#include "decoder/ray_marcher.h"
+#include "decoder/scene_decoder.h"
+#include "trainer/camera.h"
+#include "trainer/image_metrics.h"
+#include "trainer/scene_encoder.h"
 #include "trainer/trainer.h"
 
 namespace ecrf {
@@ -33,7 +38,8 @@ TEST(TrainBuiltin, ReachesHeldOutPsnrAndCheckpointsRestore) {
   const double untrained_psnr = Evaluate(untrained, test, 1, 0, false).psnr;
 
   TensorfModel model(ConfigFor(o, train));
-  const TrainResult r = Train(o, train, test, &model);
+  RateState rate;
+  const TrainResult r = Train(o, train, test, &model, &rate);
   std::printf("  untrained %.2f dB, trained %.2f dB (SSIM %.4f) in %.1f s\n", untrained_psnr,
               r.test.psnr, r.test.ssim, r.train_seconds);
   // Thresholds from measurements (see README "Tests"): an untrained field renders almost white
@@ -50,6 +56,38 @@ TEST(TrainBuiltin, ReachesHeldOutPsnrAndCheckpointsRestore) {
   const Image b = RenderView(restored, test.views[0].camera);
   ASSERT_EQ(a.pixels.size(), b.pixels.size());
   for (size_t i = 0; i < a.pixels.size(); ++i) ASSERT_EQ(a.pixels[i], b.pixels[i]) << i;
+
+  // The encoded file, decoded by the embeddable decoder, renders the held-out views almost as
+  // well as the float model: 8-bit quantization of the DCT coefficients costs little.
+  EncodeOptions eo;
+  eo.blocks = rate.config;
+  eo.steps = rate.steps;
+  EncodeReport report;
+  const std::vector<uint8_t> bytes = EncodeScene(model, eo, &report);
+  dec::SceneField field;
+  const Status st = dec::DecodeScene(bytes.data(), bytes.size(), dec::DecodeOptions(), &field, nullptr);
+  ASSERT_TRUE(st.ok()) << st.message();
+  dec::RayMarcher marcher;
+  ASSERT_TRUE(marcher.Init(&field, dec::RenderOptions()).ok());
+  double decoded_psnr = 0.0;
+  for (const View& v : test.views) {
+    const int n = v.camera.width * v.camera.height;
+    std::vector<float> origins, dirs;
+    GenerateRowRays(v.camera, 0, v.camera.height, &origins, &dirs);
+    Image img;
+    img.width = v.camera.width;
+    img.height = v.camera.height;
+    img.channels = 3;
+    img.pixels.resize(size_t(n) * 3);
+    ASSERT_TRUE(marcher.RenderRays(size_t(n), origins.data(), dirs.data(), img.pixels.data(), nullptr).ok());
+    decoded_psnr += Psnr(img, v.rgb) / double(test.views.size());
+  }
+  size_t float_bytes = 0;
+  for (const auto& p : model.NamedParameters()) float_bytes += p.size * sizeof(float);
+  std::printf("  encoded %zu bytes (float32 %zu): decoded PSNR %.2f dB vs float %.2f dB\n", bytes.size(),
+              float_bytes, decoded_psnr, r.test.psnr);
+  EXPECT_GT(decoded_psnr, r.test.psnr - 0.3);
+  EXPECT_LT(bytes.size() * 8, float_bytes);
 }
 
 }  // namespace
