@@ -62,7 +62,8 @@ TEST(SceneDecoder, ReportsWhatTheStreamHolds) {
   for (const auto& v : conformance::SceneVectors()) {
     SceneField field;
     SceneInfo info;
-    ASSERT_TRUE(Decode(conformance::BuildSceneVector(v), &field, &info).ok()) << v.name;
+    const std::vector<uint8_t> bytes = conformance::BuildSceneVector(v);  // info.metadata points here
+    ASSERT_TRUE(Decode(bytes, &field, &info).ok()) << v.name;
     for (int g = 0; g < 2; ++g) {
       for (int t = 0; t < 6; ++t) {
         const TensorChunkInfo& ti = info.tensors[g][t];
