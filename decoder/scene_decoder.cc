@@ -150,7 +150,8 @@ Status DecodeOccupancyChunk(const ChunkView& chunk, SceneField* scene, SceneInfo
   int res[3];
   uint64_t voxels = 1;
   for (int a = 0; a < 3; ++a) {
-    ECRF_CHECK_OR_RETURN(std::isfinite(lo[a]) && std::isfinite(hi[a]) && hi[a] > lo[a],
+    ECRF_CHECK_OR_RETURN(std::isfinite(lo[a]) && std::isfinite(hi[a]) && hi[a] > lo[a] &&
+                             std::isfinite(hi[a] - lo[a]),
                          kErrCorrupt, "OCCU: empty or non-finite box on axis %d", a);
     ECRF_CHECK_OR_RETURN(res16[a] >= 2 && res16[a] <= kMaxSceneGridRes, kErrLimit,
                          "OCCU: resolution %u on axis %d is outside [2, %d]", res16[a], a,
@@ -289,6 +290,17 @@ Status DecodeScene(const uint8_t* data, size_t size, const DecodeOptions& option
     }
     if (chunk.type == kChunkHead && expect == Expect::kHead) {
       ECRF_RETURN_IF_ERROR(ParseSceneHeader(chunk.data, chunk.size, &h));
+      uint64_t values = 0;
+      for (int g = 0; g < kNumSceneGrids; ++g) {
+        for (int m = 0; m < 3; ++m) {
+          values += (uint64_t(h.res[kMatMode[m][0]]) * h.res[kMatMode[m][1]] + h.res[kVecMode[m]]) *
+                    h.ranks[g][m];
+        }
+      }
+      ECRF_CHECK_OR_RETURN(values * 4 <= options.max_grid_bytes, kErrLimit,
+                           "HEAD: the grids need %llu bytes, more than this decoder allows (%llu)",
+                           static_cast<unsigned long long>(values * 4),
+                           static_cast<unsigned long long>(options.max_grid_bytes));
       info.head_bytes = chunk.size;
       ApplyHeader(h, scene);
       int res[3], ranks[kNumSceneGrids][3];

@@ -21,6 +21,10 @@ struct DecodeOptions {
   // kInt16 halves the grid memory (values rounded to 16-bit fixed point with one scale per
   // tensor after the normative float32 reconstruction).
   GridStorage storage = GridStorage::kFloat32;
+  // The decoded grids may take at most this many bytes as float32 (checked at HEAD, before
+  // anything is allocated). Small devices lower it: a few hundred bytes of stream can describe
+  // 1 GiB of all-zero grids within the format's own limits.
+  uint64_t max_grid_bytes = uint64_t{1} << 30;
 };
 
 // What the stream held, for `ecrf info` and reports.

@@ -1,4 +1,4 @@
-// Context-modelled coding of one quantized DCT block (docs/spec/entropy_coding.md,
+// Context-modelled coding of one quantized DCT block (SPEC.md section 4,
 // "Coefficient block syntax").
 //
 // Per block: a coded flag (all-zero blocks cost one well-predicted binary symbol), the

@@ -1,5 +1,5 @@
 // The adaptive state of the coefficient coder for one block shape, and the context derivations
-// that encoder and decoder must share exactly (docs/spec/entropy_coding.md, "Contexts").
+// that encoder and decoder must share exactly (SPEC.md section 4, "Contexts").
 #ifndef ECRF_FORMAT_COEF_CONTEXTS_H_
 #define ECRF_FORMAT_COEF_CONTEXTS_H_
 

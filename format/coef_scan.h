@@ -2,7 +2,7 @@
 //
 // The scan visits coefficients from low to high frequency so that the zeros of a quantized DCT
 // block gather at the end, where a single end-of-block position codes them all. The order is a
-// pure function of the shape (docs/spec/entropy_coding.md, "Scan order").
+// pure function of the shape (SPEC.md section 4, "Scan order").
 #ifndef ECRF_FORMAT_COEF_SCAN_H_
 #define ECRF_FORMAT_COEF_SCAN_H_
 

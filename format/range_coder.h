@@ -4,7 +4,7 @@
 // probabilities are floored by kCdfMinProb so no symbol ever gets an empty interval, and
 // count-based adaptation (fast while a context is young, slower once it has seen 32 symbols).
 // It was chosen because it is proven, needs only 32-bit integer arithmetic (the decoder runs
-// on microcontrollers and WASM) and is specified bit-exactly in docs/spec/entropy_coding.md.
+// on microcontrollers and WASM) and is specified bit-exactly in SPEC.md section 3.
 //
 // CDF layout: a context for an alphabet of N symbols (2 <= N <= 16) is uint16_t cdf[N + 1].
 // cdf[i] = 32768 * P(symbol > i) ("inverse CDF"), so cdf[N - 1] is always 0, and cdf[N] is

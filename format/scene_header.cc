@@ -47,8 +47,9 @@ Status ParseSceneHeader(const uint8_t* payload, size_t size, SceneHeader* h) {
   for (float& v : h->aabb_min) ECRF_RETURN_IF_ERROR(ReadFinite(&r, &v, "aabb_min"));
   for (float& v : h->aabb_max) ECRF_RETURN_IF_ERROR(ReadFinite(&r, &v, "aabb_max"));
   for (int a = 0; a < 3; ++a) {
-    ECRF_CHECK_OR_RETURN(h->aabb_max[a] > h->aabb_min[a], kErrCorrupt,
-                         "HEAD: aabb is empty on axis %d (%g >= %g)", a, double(h->aabb_min[a]),
+    ECRF_CHECK_OR_RETURN(h->aabb_max[a] > h->aabb_min[a] && std::isfinite(h->aabb_max[a] - h->aabb_min[a]),
+                         kErrCorrupt,
+                         "HEAD: aabb is empty or too wide on axis %d (%g, %g)", a, double(h->aabb_min[a]),
                          double(h->aabb_max[a]));
   }
   for (int a = 0; a < 3; ++a) {
@@ -81,6 +82,7 @@ Status ParseSceneHeader(const uint8_t* payload, size_t size, SceneHeader* h) {
   ECRF_CHECK_OR_RETURN(h->num_samples >= 1 && h->num_samples <= kMaxSceneSamples, kErrLimit,
                        "HEAD: num_samples %u is outside [1, %u]", h->num_samples, kMaxSceneSamples);
   ECRF_RETURN_IF_ERROR(ReadFinite(&r, &h->weight_threshold, "weight_threshold"));
+  ECRF_CHECK_OR_RETURN(h->weight_threshold >= 0.f, kErrCorrupt, "HEAD: weight_threshold is negative");
   ECRF_RETURN_IF_ERROR(ReadFinite(&r, &h->near_far[0], "near"));
   ECRF_RETURN_IF_ERROR(ReadFinite(&r, &h->near_far[1], "far"));
   ECRF_CHECK_OR_RETURN(h->near_far[0] <= h->near_far[1], kErrCorrupt, "HEAD: near > far");

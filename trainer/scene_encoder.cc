@@ -261,12 +261,14 @@ std::vector<uint8_t> EncodeScene(const TensorfModel& model, const EncodeOptions&
     throw std::invalid_argument("EncodeScene: expected 12 quantization steps, got " +
                                 std::to_string(o.steps.size()));
   }
-  const std::vector<float> steps =
+  std::vector<float> steps =
       o.steps.empty() ? ChooseQuantSteps(model, o.blocks, o.coef_bits) : o.steps;
-  for (float s : steps) {
-    if (!(s >= 0x1p-64f && s <= 0x1p64f)) {
-      throw std::invalid_argument("quantization step " + std::to_string(s) + " outside [2^-64, 2^64]");
+  for (float& s : steps) {
+    if (!(s > 0.f && s <= 0x1p64f)) {
+      throw std::invalid_argument("quantization step " + std::to_string(s) + " outside (0, 2^64]");
     }
+    // The stream's smallest step; a tensor this small codes as zeros either way.
+    s = std::max(s, 0x1p-64f);
   }
   EncodeReport report;
   const SceneTensors full = FromModel(model);
@@ -300,7 +302,12 @@ std::vector<uint8_t> EncodeScene(const TensorfModel& model, const EncodeOptions&
       for (int m = 0; m < 3; ++m) {
         for (uint8_t k : keep[1][m]) app_left |= k != 0;
       }
-      if (!app_left && !keep[1][0].empty()) keep[1][0][0] = 1;
+      for (int m = 0; m < 3 && !app_left; ++m) {
+        if (!keep[1][m].empty()) {
+          keep[1][m][0] = 1;
+          app_left = true;
+        }
+      }
       const SceneTensors reduced = DropComponents(full, keep);
       bytes = Assemble(reduced, steps, o, &report);
       Decode(bytes, &decoded);

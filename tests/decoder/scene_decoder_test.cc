@@ -181,6 +181,18 @@ TEST(SceneDecoder, ChunkOrderAndUnknownChunks) {
   EXPECT_EQ(Decode(build(missing_mlp), &field).code(), kErrCorrupt);
 }
 
+TEST(SceneDecoder, GridBudgetIsCheckedBeforeAllocating) {
+  const std::vector<uint8_t> bytes = ReadFile(kDir + "scene_2d_blocks.ecrf");
+  DecodeOptions o;
+  o.max_grid_bytes = 1000;
+  SceneField field;
+  const Status s = DecodeScene(bytes.data(), bytes.size(), o, &field, nullptr);
+  EXPECT_EQ(s.code(), kErrLimit) << s.message();
+  EXPECT_TRUE(field.density.plane_f32[0].empty());
+  o.max_grid_bytes = 1 << 20;
+  EXPECT_TRUE(DecodeScene(bytes.data(), bytes.size(), o, &field, nullptr).ok());
+}
+
 TEST(SceneDecoder, Int16StorageMatchesFloat) {
   const std::vector<uint8_t> bytes = ReadFile(kDir + "scene_builtin.ecrf");
   SceneField f32, i16;

@@ -167,6 +167,8 @@ TEST(SceneCodec, RejectsImpossibleOptions) {
   EXPECT_THROW(EncodeScene(model, o), std::invalid_argument);
   o.steps.assign(12, 0.f);
   EXPECT_THROW(EncodeScene(model, o), std::invalid_argument);
+  o.steps.assign(12, 1e-30f);  // clamped to the smallest legal step: still a valid stream
+  EXPECT_EQ(DecodeOrDie(EncodeScene(model, o)).appearance.total_rank(), 12);
 }
 
 // The reference renders of tests/conformance: this renderer reproduces them within the
@@ -184,7 +186,7 @@ TEST(SceneCodec, ConformanceScenesRenderLikeTheirReferences) {
     const bool builtin = name == "scene_builtin";
     const dec::Camera cam = builtin ? dec::OrbitCamera(64, 64, 0.3f, 0.45f, 4.0f)
                                     : dec::OrbitCamera(48, 48, 0.7f, 0.5f, 3.5f);
-    dec::RenderOptions ro;
+    dec::RenderOptions ro;  // default accelerations: within the tolerance of the exact process
     ro.num_threads = 2;
     dec::RayMarcher marcher;
     ASSERT_TRUE(marcher.Init(&field, ro).ok());
