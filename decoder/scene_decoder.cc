@@ -17,9 +17,6 @@ namespace ecrf {
 namespace dec {
 namespace {
 
-constexpr size_t kOccupancyHeaderBytes = 32;
-constexpr size_t kCoefHeaderBytes = 12;
-constexpr size_t kMlpHeaderBytes = 4;
 const char* const kGridNames[kNumSceneGrids] = {"density", "appearance"};
 const char* const kTensorNames[kTensorsPerSceneGrid] = {"plane 0", "plane 1", "plane 2",
                                                         "line 0",  "line 1",  "line 2"};
