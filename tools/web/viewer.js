@@ -1,0 +1,326 @@
+// ecrf web viewer: the WebAssembly build of the embeddable decoder (scripts/build-wasm.sh) behind a
+// file input, an info panel and an orbit view on a <canvas>. Plain script, no dependencies.
+//
+// The first part (orbitCamera, EcrfDecoder) has no DOM code: tools/web/smoke_test.mjs loads this
+// same file in node and checks it against the conformance reference render.
+'use strict';
+
+(function () {
+  const f32 = Math.fround;
+
+  // Port of ecrf::dec::OrbitCamera (decoder/ray_marcher.cc), in float32 arithmetic step by step:
+  // orbit around the origin, +z up, camera looking at the origin (OpenGL: looks down -z, +y up).
+  // Returns {c2w: 12 floats (3x4 row-major camera-to-world), fx, fy, cx, cy, width, height}.
+  function orbitCamera(width, height, azimuthRad, elevationRad, radius) {
+    const az = f32(azimuthRad), el = f32(elevationRad), r = f32(radius);
+    const ce = f32(Math.cos(el)), se = f32(Math.sin(el));
+    const ca = f32(Math.cos(az)), sa = f32(Math.sin(az));
+    const pos = [f32(f32(r * ce) * ca), f32(f32(r * ce) * sa), f32(r * se)];
+    const z = [f32(pos[0] / r), f32(pos[1] / r), f32(pos[2] / r)];  // camera +z (backwards)
+    const up = [0, 0, 1];
+    const x = [f32(f32(up[1] * z[2]) - f32(up[2] * z[1])),
+               f32(f32(up[2] * z[0]) - f32(up[0] * z[2])),
+               f32(f32(up[0] * z[1]) - f32(up[1] * z[0]))];
+    const xn = f32(Math.sqrt(f32(f32(f32(x[0] * x[0]) + f32(x[1] * x[1])) + f32(x[2] * x[2]))));
+    for (let a = 0; a < 3; ++a) x[a] = f32(x[a] / xn);
+    const y = [f32(f32(z[1] * x[2]) - f32(z[2] * x[1])),
+               f32(f32(z[2] * x[0]) - f32(z[0] * x[2])),
+               f32(f32(z[0] * x[1]) - f32(z[1] * x[0]))];
+    const c2w = new Array(12);
+    for (let a = 0; a < 3; ++a) {
+      c2w[4 * a + 0] = x[a];
+      c2w[4 * a + 1] = y[a];
+      c2w[4 * a + 2] = z[a];
+      c2w[4 * a + 3] = pos[a];
+    }
+    const fov = f32(0.6911112070083618);
+    const fx = f32(f32(0.5 * width) / f32(Math.tan(f32(0.5 * fov))));
+    return {c2w, fx, fy: fx, cx: f32(0.5 * width), cy: f32(0.5 * height), width, height};
+  }
+
+  // Rows [y0, y0 + rows) of `camera`'s image as a camera of their own: the same rays, bit for bit
+  // (the pixel offsets j + 0.5 - cy are exact in float32 either way).
+  function stripCamera(camera, y0, rows) {
+    return {...camera, height: rows, cy: f32(camera.cy - y0)};
+  }
+
+  // Byte layouts of the C structs on wasm32 (int, float, size_t and pointers are 4 bytes).
+  const INFO_BYTES = 112, CAMERA_BYTES = 72, OPTIONS_BYTES = 16;
+
+  // One decoded scene over the C API of decoder/include/ecrf/decoder.h. `module` is the
+  // instance that createEcrfDecoder() (build-wasm/ecrf_decoder.js) resolves to.
+  class EcrfDecoder {
+    constructor(module) {
+      this.m = module;
+      this.scene = module._ecrf_scene_create();
+      if (!this.scene) throw new Error('ecrf_scene_create: out of memory');
+      this.image = 0;
+      this.imageBytes = 0;
+    }
+
+    version() { return this.m.UTF8ToString(this.m._ecrf_version_string()); }
+
+    message() { return this.m.UTF8ToString(this.m._ecrf_scene_message(this.scene)); }
+
+    // bytes: Uint8Array of a whole .ecrf file. Throws with the decoder's message on failure.
+    decode(bytes, storage = 0) {
+      const m = this.m;
+      const ptr = m._malloc(Math.max(1, bytes.length));
+      if (!ptr) throw new Error('out of memory copying the stream');
+      m.HEAPU8.set(bytes, ptr);
+      const rc = m._ecrf_scene_decode(this.scene, ptr, bytes.length, storage);
+      m._free(ptr);
+      if (rc < 0) throw new Error(`decode failed (${rc}): ${this.message()}`);
+    }
+
+    info() {
+      const m = this.m;
+      const p = m._malloc(INFO_BYTES);
+      const rc = m._ecrf_scene_get_info(this.scene, p);
+      if (rc < 0) { m._free(p); throw new Error(`ecrf_scene_get_info failed (${rc})`); }
+      const f = (off, n) => Array.from(m.HEAPF32.subarray((p + off) >> 2, ((p + off) >> 2) + n));
+      const i = (off, n) => Array.from(m.HEAP32.subarray((p + off) >> 2, ((p + off) >> 2) + n));
+      const u = (off) => m.HEAP32[(p + off) >> 2] >>> 0;
+      const info = {
+        aabbMin: f(0, 3), aabbMax: f(12, 3), gridRes: i(24, 3), densityRanks: i(36, 3),
+        appearanceRanks: i(48, 3), hasOccupancy: i(60, 1)[0] !== 0, occupancyRes: i(64, 3),
+        numSamples: i(76, 1)[0], stepSize: f(80, 1)[0], nearPlane: f(84, 1)[0],
+        farPlane: f(88, 1)[0], background: f(92, 3), streamBytes: u(104), gridBytes: u(108),
+      };
+      m._free(p);
+      return info;
+    }
+
+    // Renders `camera` (orbitCamera's shape) and returns a fresh Uint8ClampedArray of
+    // width*height*4 RGBA bytes (alpha = opacity). Always one thread: no pthreads in this build.
+    // options: {skipEmptySpace, earlyStopTransmittance, maxSamples}; omitted fields keep
+    // ecrf_render_options_default's values.
+    render(camera, options = {}) {
+      const m = this.m;
+      const bytes = camera.width * camera.height * 4;
+      if (bytes > this.imageBytes) {
+        if (this.image) m._free(this.image);
+        this.image = m._malloc(bytes);
+        this.imageBytes = this.image ? bytes : 0;
+        if (!this.image) throw new Error('out of memory for the image');
+      }
+      const cam = m._malloc(CAMERA_BYTES + OPTIONS_BYTES);
+      const opt = cam + CAMERA_BYTES;
+      const c = cam >> 2;
+      m.HEAPF32.set(camera.c2w, c);
+      m.HEAPF32[c + 12] = camera.fx;
+      m.HEAPF32[c + 13] = camera.fy;
+      m.HEAPF32[c + 14] = camera.cx;
+      m.HEAPF32[c + 15] = camera.cy;
+      m.HEAP32[c + 16] = camera.width;
+      m.HEAP32[c + 17] = camera.height;
+      m._ecrf_render_options_default(opt);
+      const o = opt >> 2;
+      m.HEAP32[o + 0] = 1;  // num_threads
+      if (options.skipEmptySpace !== undefined) m.HEAP32[o + 1] = options.skipEmptySpace ? 1 : 0;
+      if (options.earlyStopTransmittance !== undefined) m.HEAPF32[o + 2] = options.earlyStopTransmittance;
+      if (options.maxSamples !== undefined) m.HEAP32[o + 3] = options.maxSamples;
+      const rc = m._ecrf_scene_render(this.scene, cam, opt, this.image, 0);
+      m._free(cam);
+      if (rc < 0) throw new Error(`render failed (${rc}): ${this.message()}`);
+      // Copy out: HEAPU8 is replaced when memory grows.
+      return new Uint8ClampedArray(m.HEAPU8.subarray(this.image, this.image + bytes));
+    }
+
+    destroy() {
+      if (this.image) this.m._free(this.image);
+      if (this.scene) this.m._ecrf_scene_destroy(this.scene);
+      this.image = this.scene = 0;
+    }
+  }
+
+  const api = {orbitCamera, stripCamera, EcrfDecoder};
+  if (typeof module !== 'undefined' && module.exports) module.exports = api;
+  globalThis.ecrfWeb = api;
+  if (typeof document === 'undefined') return;  // node or a render worker: no page
+
+  // ---- The page --------------------------------------------------------------------------------
+  // The page decodes the file itself (for the info panel), then hands it to render workers
+  // (render_worker.js), each with its own decoder instance; a view is cut into strips of
+  // STRIP_ROWS rows that idle workers take in turn and that are drawn as they arrive. A new
+  // slider position starts a new frame: strips of older frames are dropped.
+  const STRIP_ROWS = 16;
+  const $ = (id) => document.getElementById(id);
+  const deg = (v) => (Number(v) * Math.PI) / 180;
+  let decoderModule = null;
+  let sceneId = 0, lastBytes = null;
+  let workers = [];        // {worker, ready, busy}
+  let frame = null;        // {id, size, az, el, next, done, strips, t0, cpuMs}
+  let frameCounter = 0;
+
+  function status(text, error = false) {
+    $('status').textContent = text;
+    $('status').className = error ? 'error' : '';
+  }
+
+  function showInfo(name, version, info, decodeMs) {
+    const r3 = (v) => v.join(' x ');
+    const fmt = (v) => v.map((x) => x.toFixed(3)).join(', ');
+    const rows = [
+      ['file', name],
+      ['decoder', version],
+      ['stream', `${info.streamBytes.toLocaleString()} bytes`],
+      ['grid', r3(info.gridRes)],
+      ['density ranks', info.densityRanks.join(', ')],
+      ['appearance ranks', info.appearanceRanks.join(', ')],
+      ['decoded grids', `${info.gridBytes.toLocaleString()} bytes`],
+      ['occupancy', info.hasOccupancy ? r3(info.occupancyRes) : 'none'],
+      ['box', `[${fmt(info.aabbMin)}] .. [${fmt(info.aabbMax)}]`],
+      ['samples per ray', `${info.numSamples} (step ${info.stepSize.toFixed(4)})`],
+      ['decode time', `${decodeMs.toFixed(1)} ms`],
+    ];
+    const table = $('info');
+    table.textContent = '';
+    for (const [k, v] of rows) {
+      const tr = table.insertRow();
+      tr.insertCell().textContent = k;
+      tr.insertCell().textContent = v;
+    }
+  }
+
+  function workerCount() {
+    return Math.max(1, Math.min(Number($('workers').value) || 1, 16));
+  }
+
+  // Starts (or restarts) the render workers for the current scene.
+  function startWorkers(bytes) {
+    for (const w of workers) w.worker.terminate();
+    workers = [];
+    frame = null;
+    for (let k = 0; k < workerCount(); ++k) {
+      const w = {worker: new Worker('render_worker.js'), ready: false, busy: false};
+      w.worker.onmessage = (ev) => onWorkerMessage(w, ev.data);
+      w.worker.onerror = (ev) => status(`render worker: ${ev.message}`, true);
+      w.worker.postMessage({type: 'load', sceneId, bytes});
+      workers.push(w);
+    }
+  }
+
+  function onWorkerMessage(w, msg) {
+    if (msg.sceneId !== sceneId) return;  // a message about an older scene
+    if (msg.type === 'loaded') {
+      w.ready = true;
+      if (!frame) requestRender();
+    } else if (msg.type === 'error') {
+      w.busy = false;
+      status(msg.message, true);
+    } else if (msg.type === 'strip') {
+      w.busy = false;
+      if (frame && msg.frame === frame.id) {
+        const canvas = $('view');
+        canvas.getContext('2d').putImageData(new ImageData(msg.rgba, frame.size, msg.rows), 0, msg.y0);
+        frame.cpuMs += msg.ms;
+        if (++frame.done === frame.strips) {
+          const ms = performance.now() - frame.t0;
+          const busy = workers.filter((x) => x.ready).length;
+          $('render-time').textContent = `${frame.size}x${frame.size} in ${ms.toFixed(0)} ms ` +
+              `(${busy} worker${busy > 1 ? 's' : ''}, ${frame.cpuMs.toFixed(0)} ms of rendering)`;
+          $('view').dataset.rendered = `${frame.id}`;
+        }
+      }
+    }
+    dispatch();
+  }
+
+  // Gives the next strip of the current frame to every idle worker.
+  function dispatch() {
+    if (!frame) return;
+    for (const w of workers) {
+      if (!w.ready || w.busy || frame.next >= frame.strips) continue;
+      const y0 = frame.next++ * STRIP_ROWS;
+      const rows = Math.min(STRIP_ROWS, frame.size - y0);
+      w.busy = true;
+      w.worker.postMessage({type: 'strip', sceneId, frame: frame.id, size: frame.size,
+                            az: deg(frame.az), el: deg(frame.el), y0, rows});
+    }
+  }
+
+  function requestRender() {
+    const az = Number($('azimuth').value), el = Number($('elevation').value);
+    $('azimuth-value').textContent = `${az}°`;
+    $('elevation-value').textContent = `${el}°`;
+    if (!workers.length) return;
+    const size = Number($('size').value);
+    const canvas = $('view');
+    if (canvas.width !== size) canvas.width = canvas.height = size;
+    $('render-time').textContent = `rendering ${size}x${size}…`;
+    frame = {id: ++frameCounter, size, az, el, next: 0, done: 0,
+             strips: Math.ceil(size / STRIP_ROWS), t0: performance.now(), cpuMs: 0};
+    dispatch();
+  }
+
+  function load(name, bytes) {
+    if (!decoderModule) { status('the decoder is still loading', true); return; }
+    const decoder = new EcrfDecoder(decoderModule);
+    try {
+      const t0 = performance.now();
+      decoder.decode(bytes);
+      const ms = performance.now() - t0;
+      showInfo(name, decoder.version(), decoder.info(), ms);
+      status(`decoded ${name}`);
+      document.body.classList.add('loaded');
+      ++sceneId;
+      lastBytes = bytes;
+      startWorkers(bytes);
+    } catch (e) {
+      $('info').textContent = '';
+      document.body.classList.remove('loaded');
+      status(e.message, true);
+    } finally {
+      decoder.destroy();  // the workers keep their own copies
+    }
+  }
+
+  async function loadUrl(url) {
+    status(`fetching ${url}`);
+    try {
+      const response = await fetch(url);
+      if (!response.ok) throw new Error(`${url}: HTTP ${response.status}`);
+      load(url.split('/').pop(), new Uint8Array(await response.arrayBuffer()));
+    } catch (e) {
+      status(e.message, true);
+    }
+  }
+
+  window.addEventListener('DOMContentLoaded', async () => {
+    const hw = Math.max(1, Math.min(navigator.hardwareConcurrency || 2, 16));
+    for (let k = 1; k <= hw; k *= 2) $('workers').add(new Option(String(k), String(k)));
+    if ((hw & (hw - 1)) !== 0) $('workers').add(new Option(String(hw), String(hw)));
+    $('workers').value = String(hw);
+    $('file').addEventListener('change', async (ev) => {
+      const file = ev.target.files[0];
+      if (file) load(file.name, new Uint8Array(await file.arrayBuffer()));
+    });
+    $('builtin').addEventListener('click', () => loadUrl($('builtin').dataset.url));
+    for (const id of ['azimuth', 'elevation']) $(id).addEventListener('input', requestRender);
+    $('size').addEventListener('change', requestRender);
+    $('workers').addEventListener('change', () => {
+      // The workers hold the scene: restart them from the file the page still has.
+      if (lastBytes) startWorkers(lastBytes);
+    });
+    if (typeof createEcrfDecoder !== 'function') {
+      status('build-wasm/ecrf_decoder.js did not load: run bash scripts/build-wasm.sh and serve ' +
+             'the repository root over HTTP', true);
+      return;
+    }
+    try {
+      decoderModule = await createEcrfDecoder();
+    } catch (e) {
+      status(`the WebAssembly decoder failed to load: ${e}`, true);
+      return;
+    }
+    status('ready: choose a .ecrf file');
+    // ?scene=URL loads a stream at start, e.g. ?scene=../../tests/conformance/scene_builtin.ecrf
+    // (&az=, &el= in degrees, &size=, &workers=).
+    const params = new URLSearchParams(location.search);
+    for (const [key, id] of [['az', 'azimuth'], ['el', 'elevation'], ['size', 'size'], ['workers', 'workers']]) {
+      if (params.has(key)) $(id).value = params.get(key);
+    }
+    if (params.has('scene')) loadUrl(params.get('scene'));
+  });
+})();
