@@ -137,14 +137,14 @@ Status DecodeCoefficientChunk(const ChunkView& chunk, const SceneHeader& h, int 
 
 Status DecodeOccupancyChunk(const ChunkView& chunk, SceneField* scene, SceneInfo* info) {
   ByteReader r(chunk.data, chunk.size);
-  float lo[3], hi[3];
-  uint16_t res16[3], reserved = 0;
+  float lo[3] = {0.f, 0.f, 0.f}, hi[3] = {0.f, 0.f, 0.f};
+  uint16_t res16[3] = {0, 0, 0}, reserved = 0;
   for (float& v : lo) ECRF_RETURN_IF_ERROR(r.ReadF32(&v, "OCCU aabb_min"));
   for (float& v : hi) ECRF_RETURN_IF_ERROR(r.ReadF32(&v, "OCCU aabb_max"));
   for (uint16_t& v : res16) ECRF_RETURN_IF_ERROR(r.ReadU16(&v, "OCCU resolution"));
   ECRF_RETURN_IF_ERROR(r.ReadU16(&reserved, "OCCU reserved"));
   ECRF_CHECK_OR_RETURN(reserved == 0, kErrCorrupt, "OCCU: reserved field must be 0");
-  int res[3];
+  int res[3] = {0, 0, 0};
   uint64_t voxels = 1;
   for (int a = 0; a < 3; ++a) {
     ECRF_CHECK_OR_RETURN(std::isfinite(lo[a]) && std::isfinite(hi[a]) && hi[a] > lo[a] &&
