@@ -10,6 +10,11 @@ cmake -S . -B build-test -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DECRF_NATIV
 cmake --build build-test -j"$jobs"
 ctest --test-dir build-test -j"$jobs" --output-on-failure
 
+echo "== format/ and decoder/ as the main job builds them (Release -O3, -Werror sees more there)"
+cmake -S . -B build-embedded -G Ninja -DCMAKE_BUILD_TYPE=Release -DECRF_NATIVE=ON \
+      -DECRF_BUILD_TRAINER=OFF -DECRF_BUILD_TESTS=OFF >/dev/null
+cmake --build build-embedded -j"$jobs"
+
 echo "== format/ and decoder/ under ASan+UBSan"
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DECRF_SANITIZE=ON \
       -DECRF_BUILD_TRAINER=OFF >/dev/null
