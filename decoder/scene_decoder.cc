@@ -287,13 +287,7 @@ Status DecodeScene(const uint8_t* data, size_t size, const DecodeOptions& option
     }
     if (chunk.type == kChunkHead && expect == Expect::kHead) {
       ECRF_RETURN_IF_ERROR(ParseSceneHeader(chunk.data, chunk.size, &h));
-      uint64_t values = 0;
-      for (int g = 0; g < kNumSceneGrids; ++g) {
-        for (int m = 0; m < 3; ++m) {
-          values += (uint64_t(h.res[kMatMode[m][0]]) * h.res[kMatMode[m][1]] + h.res[kVecMode[m]]) *
-                    h.ranks[g][m];
-        }
-      }
+      const uint64_t values = SceneGridValues(h);
       ECRF_CHECK_OR_RETURN(values * 4 <= options.max_grid_bytes, kErrLimit,
                            "HEAD: the grids need %llu bytes, more than this decoder allows (%llu)",
                            static_cast<unsigned long long>(values * 4),

@@ -58,17 +58,15 @@ Status ParseSceneHeader(const uint8_t* payload, size_t size, SceneHeader* h) {
                          "HEAD: grid resolution %u on axis %d is outside [2, %d]", h->res[a], a,
                          kMaxSceneGridRes);
   }
-  uint64_t values = 0;
   for (int g = 0; g < kNumSceneGrids; ++g) {
     for (int m = 0; m < 3; ++m) {
       ECRF_RETURN_IF_ERROR(r.ReadU16(&h->ranks[g][m], "rank"));
       ECRF_CHECK_OR_RETURN(h->ranks[g][m] <= kMaxSceneRank, kErrLimit,
                            "HEAD: %s rank %u of mode %d exceeds %d",
                            g == 0 ? "density" : "appearance", h->ranks[g][m], m, kMaxSceneRank);
-      const uint64_t plane = uint64_t(h->res[kMatModeU[m]]) * h->res[kMatModeV[m]];
-      values += (plane + h->res[kVecModeW[m]]) * h->ranks[g][m];
     }
   }
+  const uint64_t values = SceneGridValues(*h);
   ECRF_CHECK_OR_RETURN(values <= kMaxSceneGridValues, kErrLimit,
                        "HEAD: the grids hold %llu values, more than the limit of %llu",
                        static_cast<unsigned long long>(values),
@@ -112,6 +110,17 @@ Status ParseSceneHeader(const uint8_t* payload, size_t size, SceneHeader* h) {
   ECRF_RETURN_IF_ERROR(r.ReadU8(&reserved, "reserved"));
   ECRF_CHECK_OR_RETURN(reserved == 0, kErrCorrupt, "HEAD: reserved byte is %u, must be 0", reserved);
   return Status::Ok();
+}
+
+uint64_t SceneGridValues(const SceneHeader& h) {
+  uint64_t values = 0;
+  for (int g = 0; g < kNumSceneGrids; ++g) {
+    for (int m = 0; m < 3; ++m) {
+      const uint64_t plane = uint64_t(h.res[kMatModeU[m]]) * h.res[kMatModeV[m]];
+      values += (plane + h.res[kVecModeW[m]]) * h.ranks[g][m];
+    }
+  }
+  return values;
 }
 
 void SceneTensorExtent(const SceneHeader& h, int grid, int tensor, int extent[3]) {

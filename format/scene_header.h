@@ -59,6 +59,9 @@ void WriteSceneHeader(const SceneHeader& header, ByteWriter* out);
 // Parses and validates a HEAD payload (exactly kSceneHeaderBytes).
 Status ParseSceneHeader(const uint8_t* payload, size_t size, SceneHeader* header);
 
+// Number of float32 values of all twelve tensors (SPEC.md 6.2 GridValues).
+uint64_t SceneGridValues(const SceneHeader& header);
+
 // Extent of tensor t (0..5) of a grid as a block-DCT view (SPEC.md 6.4): planes
 // {rank, res[v], res[u]}, lines {1, rank, res[w]}.
 void SceneTensorExtent(const SceneHeader& header, int grid, int tensor, int extent[3]);

@@ -46,6 +46,11 @@ int ParseInt(const char* flag, const char* value) {
   return int(v);
 }
 
+bool IsDirectory(const std::string& path) {
+  struct stat st;
+  return stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
+}
+
 void MakeDirectory(const std::string& dir) {
   if (mkdir(dir.c_str(), 0755) != 0 && errno != EEXIST) {
     throw std::runtime_error(dir + ": cannot create directory: " + std::strerror(errno));

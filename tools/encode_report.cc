@@ -1,18 +1,11 @@
 #include "tools/encode_report.h"
 
-#include <sys/stat.h>
-
 #include <algorithm>
 
 #include "trainer/rate_state.h"
 
 namespace ecrf {
 namespace tools {
-
-bool IsDirectory(const std::string& path) {
-  struct stat st;
-  return stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
-}
 
 void PrintEncodeReport(FILE* out, const trainer::EncodeReport& r) {
   std::fprintf(out, "%-20s %10s %9s %12s %8s %10s\n", "chunk", "bytes", "bits/coef", "zero blocks",

@@ -4,7 +4,6 @@
 
 #include <cstdio>
 #include <nlohmann/json.hpp>
-#include <string>
 
 #include "trainer/scene_encoder.h"
 
@@ -13,7 +12,6 @@ namespace tools {
 
 void PrintEncodeReport(FILE* out, const trainer::EncodeReport& report);
 nlohmann::json EncodeReportJson(const trainer::EncodeReport& report);
-bool IsDirectory(const std::string& path);
 
 }  // namespace tools
 }  // namespace ecrf

@@ -66,7 +66,6 @@ SceneTensors FromModel(const TensorfModel& model) {
 SceneTensors DropComponents(const SceneTensors& in, const std::vector<uint8_t> keep[2][3]) {
   SceneTensors out = in;
   const SceneHeader& h = in.header;
-  static constexpr int kU[3] = {0, 0, 1}, kV[3] = {1, 2, 2}, kW[3] = {2, 1, 0};
   for (int g = 0; g < 2; ++g) {
     for (int m = 0; m < 3; ++m) {
       const int rank = h.ranks[g][m];
@@ -76,8 +75,8 @@ SceneTensors DropComponents(const SceneTensors& in, const std::vector<uint8_t> k
       }
       const int nk = static_cast<int>(kept.size());
       out.header.ranks[g][m] = static_cast<uint16_t>(nk);
-      const size_t plane_cells = size_t(h.res[kU[m]]) * h.res[kV[m]];
-      const size_t line_cells = h.res[kW[m]];
+      const size_t plane_cells = size_t(h.res[kMatMode[m][0]]) * h.res[kMatMode[m][1]];
+      const size_t line_cells = h.res[kVecMode[m]];
       for (int kind = 0; kind < 2; ++kind) {
         const size_t cells = kind == 0 ? plane_cells : line_cells;
         const std::vector<float>& src = in.tensors[g][kind * 3 + m];
@@ -111,17 +110,10 @@ SceneTensors DropComponents(const SceneTensors& in, const std::vector<uint8_t> k
 }
 
 GridBlockLayout LayoutOf(const SceneHeader& h, int g, int t, const RateConfig& blocks) {
-  int extent[3];
-  SceneTensorExtent(h, g, t, extent);
-  const int m = t % 3;
-  const long rank = h.ranks[g][m];
-  static constexpr int kU[3] = {0, 0, 1};
-  if (t < 3) {
-    const long stride[3] = {1, long(h.res[kU[m]]) * rank, rank};
-    return MakeBlockLayout(extent, stride, blocks.plane_block);
-  }
-  const long stride[3] = {0, 1, rank};
-  return MakeBlockLayout(extent, stride, blocks.line_block);
+  const std::array<int, 3> res = {h.res[0], h.res[1], h.res[2]};
+  const int rank = h.ranks[g][t % 3];
+  return t < 3 ? PlaneBlockLayout(res, rank, t, blocks.plane_block)
+               : LineBlockLayout(res, rank, t - 3, blocks.line_block);
 }
 
 std::vector<uint8_t> EncodeCoefficients(const SceneTensors& s, int g, int t, float step,
