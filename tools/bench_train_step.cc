@@ -1,6 +1,7 @@
-// `ecrf bench train-step`: times TrainStep (forward + backward incl. the appearance head) on a
-// synthetic Blender-like scene: aabb [-1.5,1.5]^3, cameras on a sphere of radius 4, an opaque
-// soft blob in the middle of a randomly initialised VM-192 field.
+// `ecrf bench train`: times one training iteration as the trainer runs it (zero the gradients,
+// TrainStep = forward + backward incl. the appearance head, density L1, Adam on grids and head)
+// on a synthetic Blender-like scene: aabb [-1.5,1.5]^3, cameras on a sphere of radius 4, an
+// opaque soft blob in the middle of a randomly initialised VM-192 field.
 //
 //   --res N          grid resolution per axis (128)
 //   --rays N         rays per batch (4096)
@@ -8,6 +9,10 @@
 //   --threads LIST   comma-separated thread counts (1,2)
 //   --mask 0|1       update the alpha mask (and shrink) before timing (0: no mask)
 //   --early-stop T   early_stop_transmittance (0)
+//   --blob-peak F    peak density feature of the blob (14); larger -> more opaque -> fewer
+//                    appearance samples per ray (e.g. 40 gives about the 0.14 M of the reference
+//                    PyTorch run's iterations 150-320)
+//   --json FILE      also write the figures of the last thread count as JSON
 #include <omp.h>
 #include <sys/resource.h>
 
@@ -20,6 +25,8 @@
 #include <string>
 #include <vector>
 
+#include "tools/bench_json.h"
+#include "trainer/adam.h"
 #include "trainer/tensorf_model.h"
 #include "trainer/volume_render.h"
 
@@ -91,8 +98,8 @@ void MakeRays(int n, uint32_t seed, std::vector<float>* o, std::vector<float>* d
 
 int RunTrainStepBench(int argc, char** argv) {
   int res = 128, rays = 4096, reps = 5, mask = 0;
-  float early = 0.f;
-  std::string threads_arg = "1,2";
+  float early = 0.f, blob_peak = 14.f;
+  std::string threads_arg = "1,2", json_path;
   for (int i = 1; i < argc; ++i) {
     auto next = [&](const char* name) -> const char* {
       if (i + 1 >= argc) {
@@ -107,8 +114,13 @@ int RunTrainStepBench(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--threads")) threads_arg = next("--threads");
     else if (!std::strcmp(argv[i], "--mask")) mask = std::atoi(next("--mask"));
     else if (!std::strcmp(argv[i], "--early-stop")) early = static_cast<float>(std::atof(next("--early-stop")));
+    else if (!std::strcmp(argv[i], "--blob-peak")) blob_peak = static_cast<float>(std::atof(next("--blob-peak")));
+    else if (!std::strcmp(argv[i], "--json")) json_path = next("--json");
     else {
-      std::fprintf(stderr, "unknown argument %s\n", argv[i]);
+      std::fprintf(stderr,
+                   "unknown argument %s\nusage: ecrf bench train [--res N] [--rays N] [--reps N] "
+                   "[--threads 1,2] [--mask 0|1] [--early-stop T] [--blob-peak F] [--json FILE]\n",
+                   argv[i]);
       return 2;
     }
   }
@@ -119,12 +131,17 @@ int RunTrainStepBench(int argc, char** argv) {
     thread_counts.push_back(std::atoi(threads_arg.substr(pos, comma - pos).c_str()));
     pos = comma + 1;
   }
+  if (res < 2 || rays < 1 || reps < 1 || thread_counts.empty() ||
+      *std::min_element(thread_counts.begin(), thread_counts.end()) < 1) {
+    std::fprintf(stderr, "bench train: need --res >= 2, --rays >= 1, --reps >= 1, threads >= 1\n");
+    return 2;
+  }
 
   TensorfConfig config;
   config.early_stop_transmittance = early;
   TensorfModel model(config);
   model.Initialize({res, res, res}, 1);
-  AddBlob(model, 14.f);  // feature up to 14 -> sigma up to softplus(4) ~ 4
+  AddBlob(model, blob_peak);  // feature up to blob_peak: sigma up to softplus(peak - 10)
   if (mask) {
     const trainer::Aabb box = model.UpdateAlphaMask({res, res, res});
     model.Shrink(box);
@@ -132,34 +149,66 @@ int RunTrainStepBench(int argc, char** argv) {
   std::vector<float> o, d, rgb;
   MakeRays(rays, 7, &o, &d, &rgb);
   std::printf("train-step bench: res %d^3 (after shrink %dx%dx%d), %d rays, %d samples/ray, mask %d, "
-              "early stop %g\n",
+              "early stop %g, blob peak %g\n",
               res, model.res()[0], model.res()[1], model.res()[2], rays, model.n_samples(), mask,
-              early);
+              early, blob_peak);
+  // The trainer's optimizers (trainer.cc): grids at lr 0.02, head at 1e-3.
+  trainer::Adam adam_density(model.density().params().size(), trainer::AdamConfig{});
+  trainer::Adam adam_app(model.appearance().params().size(), trainer::AdamConfig{});
+  trainer::Adam adam_head(model.head().params().size(), trainer::AdamConfig{});
+  BenchReport report;
   for (int threads : thread_counts) {
     omp_set_num_threads(threads);
     std::vector<double> times;
     TrainStepStats last;
-    double cpu = 0.0, wall = 0.0;
+    double cpu = 0.0, wall = 0.0, t_optim = 0.0;
     for (int rep = 0; rep <= reps; ++rep) {
-      model.ZeroGrads();
       const double t0 = omp_get_wtime(), c0 = CpuSeconds();
+      model.ZeroGrads();
       last = trainer::TrainStep(model, rays, o.data(), d.data(), rgb.data(), 100 + rep);
+      const double t1 = omp_get_wtime();
+      model.DensityL1(8e-5f);
+      adam_density.Step(model.density().params().data(), model.density().grads().data(),
+                        model.density().params().size(), 0.02f);
+      adam_app.Step(model.appearance().params().data(), model.appearance().grads().data(),
+                    model.appearance().params().size(), 0.02f);
+      adam_head.Step(model.head().params().data(), model.head().grads().data(),
+                     model.head().params().size(), 1e-3f);
       const double dt = omp_get_wtime() - t0;
       if (rep > 0) {
         times.push_back(dt);
         cpu += CpuSeconds() - c0;
         wall += dt;
+        t_optim = omp_get_wtime() - t1;
       }
     }
     std::sort(times.begin(), times.end());
+    const double median = times[times.size() / 2];
     // cpu / (threads * wall) < 1 means other processes competed for the cores.
     std::printf(
         "threads %d: median %.3f s (min %.3f), cpu/(threads*wall) %.2f | density samples %ld, "
-        "appearance samples %ld | last step: march %.3f head %.3f composite %.3f scatter %.3f | "
-        "peak RSS %.0f MB\n",
-        threads, times[times.size() / 2], times[0], cpu / (threads * wall), last.density_samples,
+        "appearance samples %ld | last step: march %.3f head %.3f composite %.3f scatter %.3f "
+        "L1+adam %.3f | peak RSS %.0f MB\n",
+        threads, median, times[0], cpu / (threads * wall), last.density_samples,
         last.appearance_samples, last.t_march, last.t_head, last.t_composite, last.t_scatter,
-        PeakRssMb());
+        t_optim, PeakRssMb());
+    if (threads == thread_counts.back()) {
+      report.Add("threads", threads, "");
+      report.Add("step_median", median, "s");
+      report.Add("step_min", times[0], "s");
+      report.Add("density_samples", static_cast<double>(last.density_samples), "");
+      report.Add("appearance_samples", static_cast<double>(last.appearance_samples), "");
+      report.Add("march", last.t_march, "s");
+      report.Add("head", last.t_head, "s");
+      report.Add("composite", last.t_composite, "s");
+      report.Add("scatter", last.t_scatter, "s");
+      report.Add("l1_adam", t_optim, "s");
+      report.Add("peak_rss", PeakRssMb(), "MB");
+    }
+  }
+  if (!json_path.empty() && !report.WriteJson(json_path)) {
+    std::fprintf(stderr, "bench train: cannot write %s\n", json_path.c_str());
+    return 1;
   }
   return 0;
 }

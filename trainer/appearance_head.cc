@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "trainer/positional_encoding.h"
+#include "trainer/small_gemm.h"
 
 namespace ecrf {
 namespace trainer {
@@ -18,8 +19,6 @@ namespace {
 using RowMat = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 using MapM = Eigen::Map<RowMat>;
 using CMapM = Eigen::Map<const RowMat>;
-using StridedMapM = Eigen::Map<RowMat, 0, Eigen::OuterStride<>>;
-using ArrayMap = Eigen::Map<Eigen::ArrayXf>;
 
 constexpr int kRgb = 3;
 constexpr int kViewDim = 3;
@@ -108,14 +107,36 @@ struct Params {
   const float *basis, *w1, *b1, *w2, *b2, *w3, *b3;
 };
 
+// The weights transposed to in x out, the layout SmallGemm multiplies by from the right.
+struct TransposedWeights {
+  const float *basis, *w1, *w2, *w3;
+};
+
+// Fills `storage` with basis^T, W1^T, W2^T, W3^T and returns pointers into it.
+TransposedWeights TransposeWeights(const Dims& d, const Params& w, std::vector<float>* storage) {
+  const size_t sizes[4] = {static_cast<size_t>(d.p) * d.f, static_cast<size_t>(d.in) * d.h,
+                           static_cast<size_t>(d.h) * d.h, static_cast<size_t>(d.h) * kRgb};
+  storage->resize(sizes[0] + sizes[1] + sizes[2] + sizes[3]);
+  float* out = storage->data();
+  const float* src[4] = {w.basis, w.w1, w.w2, w.w3};
+  const int rows[4] = {d.f, d.h, d.h, kRgb};  // out
+  const int cols[4] = {d.p, d.in, d.h, d.h};  // in
+  const float* dst[4];
+  for (int t = 0; t < 4; ++t) {
+    MapM(out, cols[t], rows[t]) = CMapM(src[t], rows[t], cols[t]).transpose();
+    dst[t] = out;
+    out += sizes[t];
+  }
+  return TransposedWeights{dst[0], dst[1], dst[2], dst[3]};
+}
+
 // Runs the forward pass of rows [0, m) of a chunk. x: m x in (written), h1/h2: m x h (written),
 // rgb: m x 3 (written). pe_tmp: pe_tmp_per_row() * m floats.
-void ForwardChunk(const Dims& d, const Params& w, int m, const float* products,
-                  const float* viewdirs, float* x, float* h1, float* h2, float* rgb,
-                  float* pe_tmp) {
+void ForwardChunk(const Dims& d, const Params& w, const TransposedWeights& wt, int m,
+                  const float* products, const float* viewdirs, float* x, float* h1, float* h2,
+                  float* rgb, float* pe_tmp) {
   // features = products @ basis^T, written straight into x's first f columns.
-  StridedMapM feat(x, m, d.f, Eigen::OuterStride<>(d.in));
-  feat.noalias() = CMapM(products, m, d.p) * CMapM(w.basis, d.f, d.p).transpose();
+  SmallGemm(m, d.f, d.p, products, d.p, 1, wt.basis, d.f, x, d.in, false);
   for (int r = 0; r < m; ++r) {
     float* xr = x + static_cast<size_t>(r) * d.in + d.f;
     const float* v = viewdirs + static_cast<size_t>(r) * kViewDim;
@@ -126,19 +147,20 @@ void ForwardChunk(const Dims& d, const Params& w, int m, const float* products,
   PositionalEncodingRows(x, d.in, m, d.f, d.ff, x + d.pe_feat_offset(), d.in, pe_tmp);
   PositionalEncodingRows(x + d.f, d.in, m, kViewDim, d.fv, x + d.pe_view_offset(), d.in, pe_tmp);
 
-  MapM a1(h1, m, d.h);
-  a1.noalias() = CMapM(x, m, d.in) * CMapM(w.w1, d.h, d.in).transpose();
+  SmallGemm(m, d.h, d.in, x, d.in, 1, wt.w1, d.h, h1, d.h, false);
   BiasRelu(h1, w.b1, m, d.h);
-  MapM a2(h2, m, d.h);
-  a2.noalias() = a1 * CMapM(w.w2, d.h, d.h).transpose();
+  SmallGemm(m, d.h, d.h, h1, d.h, 1, wt.w2, d.h, h2, d.h, false);
   BiasRelu(h2, w.b2, m, d.h);
-  MapM z3(rgb, m, kRgb);
-  z3.noalias() = a2 * CMapM(w.w3, kRgb, d.h).transpose();
+  SmallGemm(m, kRgb, d.h, h2, d.h, 1, wt.w3, kRgb, rgb, kRgb, false);
+  // Sigmoid, element by element: Eigen's vectorised exp would give a row different bits
+  // depending on the buffer's alignment, and the training step promises the same gradients for
+  // any thread count.
   for (int r = 0; r < m; ++r) {
-    for (int j = 0; j < kRgb; ++j) rgb[r * kRgb + j] += w.b3[j];
+    for (int j = 0; j < kRgb; ++j) {
+      float& z = rgb[r * kRgb + j];
+      z = 1.0f / (1.0f + std::exp(-(z + w.b3[j])));
+    }
   }
-  ArrayMap z(rgb, static_cast<Eigen::Index>(m) * kRgb);
-  z = ((-z).exp() + 1.0f).inverse();  // sigmoid (vectorized exp)
 }
 
 }  // namespace
@@ -228,6 +250,7 @@ void AppearanceHead::Forward(int n, const float* products, const float* viewdirs
                  params_.data() + b1_offset(),    params_.data() + w2_offset(),
                  params_.data() + b2_offset(),    params_.data() + w3_offset(),
                  params_.data() + b3_offset()};
+  const TransposedWeights wt = TransposeWeights(d, w, &transposed_);
   const int chunk = chunk_rows_;
   const long num_chunks = (n + chunk - 1) / chunk;
   const int threads = ThreadsFor(num_chunks);
@@ -244,8 +267,8 @@ void AppearanceHead::Forward(int n, const float* products, const float* viewdirs
       prod = act.products + r0 * d.p;
     }
     float* out = act.rgb + r0 * kRgb;
-    ForwardChunk(d, w, m, prod, viewdirs + r0 * kViewDim, act.x + r0 * d.in, act.h1 + r0 * d.h,
-                 act.h2 + r0 * d.h, out, pe_tmp);
+    ForwardChunk(d, w, wt, m, prod, viewdirs + r0 * kViewDim, act.x + r0 * d.in,
+                 act.h1 + r0 * d.h, act.h2 + r0 * d.h, out, pe_tmp);
     std::memcpy(rgb + r0 * kRgb, out, sizeof(float) * m * kRgb);
   });
 }
@@ -258,6 +281,9 @@ void AppearanceHead::Infer(int n, const float* products, const float* viewdirs,
                  params_.data() + b1_offset(),    params_.data() + w2_offset(),
                  params_.data() + b2_offset(),    params_.data() + w3_offset(),
                  params_.data() + b3_offset()};
+  // Local: Infer is const and may run concurrently on one head.
+  std::vector<float> transposed;
+  const TransposedWeights wt = TransposeWeights(d, w, &transposed);
   const int chunk = chunk_rows_;
   const long num_chunks = (n + chunk - 1) / chunk;
   const int threads = ThreadsFor(num_chunks);
@@ -273,7 +299,7 @@ void AppearanceHead::Infer(int n, const float* products, const float* viewdirs,
     float* h2 = h1 + static_cast<size_t>(chunk) * d.h;
     const size_t r0 = static_cast<size_t>(c) * chunk;
     const int m = static_cast<int>(std::min<size_t>(chunk, n - r0));
-    ForwardChunk(d, w, m, products + r0 * d.p, viewdirs + r0 * kViewDim, x, h1, h2,
+    ForwardChunk(d, w, wt, m, products + r0 * d.p, viewdirs + r0 * kViewDim, x, h1, h2,
                  rgb + r0 * kRgb, pe_tmp);
   });
 }
@@ -308,57 +334,50 @@ void AppearanceHead::Backward(int n, const float* dl_drgb, float* dl_dproducts) 
     float* db = da + static_cast<size_t>(chunk) * d.h;
     float* dx = db + static_cast<size_t>(chunk) * d.h;
     float* dfeat = dx + static_cast<size_t>(chunk) * d.in;
-    MapM g_basis(g + basis_offset(), d.f, d.p);
-    MapM g_w1(g + w1_offset(), d.h, d.in);
-    MapM g_w2(g + w2_offset(), d.h, d.h);
-    MapM g_w3(g + w3_offset(), kRgb, d.h);
+    float* g_basis = g + basis_offset();
+    float* g_w1 = g + w1_offset();
+    float* g_w2 = g + w2_offset();
+    float* g_w3 = g + w3_offset();
     float* g_b1 = g + b1_offset();
     float* g_b2 = g + b2_offset();
     float* g_b3 = g + b3_offset();
-    {
-      const size_t r0 = static_cast<size_t>(c) * chunk;
-      const int m = static_cast<int>(std::min<size_t>(chunk, n - r0));
-      const float* x = act.x + r0 * d.in;
-      const float* h1 = act.h1 + r0 * d.h;
-      const float* h2 = act.h2 + r0 * d.h;
-      const float* rgb = act.rgb + r0 * kRgb;
-      const float* dl = dl_drgb + r0 * kRgb;
-      // Sigmoid.
-      for (int i = 0; i < m * kRgb; ++i) dz3[i] = dl[i] * rgb[i] * (1.0f - rgb[i]);
-      for (int r = 0; r < m; ++r) {
-        for (int j = 0; j < kRgb; ++j) g_b3[j] += dz3[r * kRgb + j];
-      }
-      const CMapM dz3m(dz3, m, kRgb);
-      const CMapM h2m(h2, m, d.h);
-      g_w3.noalias() += dz3m.transpose() * h2m;
-      // Layer 2.
-      MapM dam(da, m, d.h);
-      dam.noalias() = dz3m * CMapM(w3, kRgb, d.h);
-      ReluBackwardColSum(da, h2, m, d.h, g_b2);
-      const CMapM h1m(h1, m, d.h);
-      g_w2.noalias() += dam.transpose() * h1m;
-      // Layer 1.
-      MapM dbm(db, m, d.h);
-      dbm.noalias() = dam * CMapM(w2, d.h, d.h);
-      ReluBackwardColSum(db, h1, m, d.h, g_b1);
-      const CMapM xm(x, m, d.in);
-      g_w1.noalias() += dbm.transpose() * xm;
-      MapM dxm(dx, m, d.in);
-      dxm.noalias() = dbm * CMapM(w1, d.h, d.in);
-      // Features: direct input plus their positional encoding.
-      for (int r = 0; r < m; ++r) {
-        const float* dxr = dx + static_cast<size_t>(r) * d.in;
-        const float* xr = x + static_cast<size_t>(r) * d.in;
-        float* df = dfeat + static_cast<size_t>(r) * d.f;
-        for (int k = 0; k < d.f; ++k) df[k] = dxr[k];
-        PositionalEncodingBackward(xr + d.pe_feat_offset(), dxr + d.pe_feat_offset(), d.f, ff,
-                                   df);
-      }
-      // Basis.
-      const CMapM dfm(dfeat, m, d.f);
-      MapM(dl_dproducts + r0 * d.p, m, d.p).noalias() = dfm * CMapM(basis, d.f, d.p);
-      g_basis.noalias() += dfm.transpose() * CMapM(stored_products + r0 * d.p, m, d.p);
+    const size_t r0 = static_cast<size_t>(c) * chunk;
+    const int m = static_cast<int>(std::min<size_t>(chunk, n - r0));
+    const float* x = act.x + r0 * d.in;
+    const float* h1 = act.h1 + r0 * d.h;
+    const float* h2 = act.h2 + r0 * d.h;
+    const float* rgb = act.rgb + r0 * kRgb;
+    const float* dl = dl_drgb + r0 * kRgb;
+    const float* products = stored_products + r0 * d.p;
+    // Sigmoid.
+    for (int i = 0; i < m * kRgb; ++i) dz3[i] = dl[i] * rgb[i] * (1.0f - rgb[i]);
+    for (int r = 0; r < m; ++r) {
+      for (int j = 0; j < kRgb; ++j) g_b3[j] += dz3[r * kRgb + j];
     }
+    // Weight gradients are (dL/dout)^T @ in: SmallGemm reads the transpose through a_row = 1.
+    SmallGemm(kRgb, d.h, m, dz3, 1, kRgb, h2, d.h, g_w3, d.h, true);
+    // Layer 2.
+    SmallGemm(m, d.h, kRgb, dz3, kRgb, 1, w3, d.h, da, d.h, false);
+    ReluBackwardColSum(da, h2, m, d.h, g_b2);
+    SmallGemm(d.h, d.h, m, da, 1, d.h, h1, d.h, g_w2, d.h, true);
+    // Layer 1.
+    SmallGemm(m, d.h, d.h, da, d.h, 1, w2, d.h, db, d.h, false);
+    ReluBackwardColSum(db, h1, m, d.h, g_b1);
+    SmallGemm(d.h, d.in, m, db, 1, d.h, x, d.in, g_w1, d.in, true);
+    // dL/dx only for the columns that depend on the features (the view-direction PE columns
+    // at the end have no gradient path).
+    SmallGemm(m, d.pe_view_offset(), d.h, db, d.h, 1, w1, d.in, dx, d.in, false);
+    // Features: direct input plus their positional encoding.
+    for (int r = 0; r < m; ++r) {
+      const float* dxr = dx + static_cast<size_t>(r) * d.in;
+      const float* xr = x + static_cast<size_t>(r) * d.in;
+      float* df = dfeat + static_cast<size_t>(r) * d.f;
+      for (int k = 0; k < d.f; ++k) df[k] = dxr[k];
+      PositionalEncodingBackward(xr + d.pe_feat_offset(), dxr + d.pe_feat_offset(), d.f, ff, df);
+    }
+    // Basis.
+    SmallGemm(m, d.p, d.f, dfeat, d.f, 1, basis, d.p, dl_dproducts + r0 * d.p, d.p, false);
+    SmallGemm(d.f, d.p, m, dfeat, 1, d.f, products, d.p, g_basis, d.p, true);
   });
   // Deterministic reduction in thread order.
   for (int t = 0; t < threads; ++t) {

@@ -80,6 +80,7 @@ class AppearanceHead {
   std::vector<float> params_;
   std::vector<float> grads_;
   std::vector<float> scratch_;  // activations of the last Forward (reused, no per-call allocation)
+  std::vector<float> transposed_;      // the weights transposed for Forward's GEMMs
   std::vector<float> thread_scratch_;  // per-thread chunk temporaries of Forward / Backward
   std::vector<float> thread_grads_;    // per-thread gradient partial sums of Backward
   int last_n_ = -1;                    // batch size of the last Forward (-1: none)

@@ -30,24 +30,6 @@ float HashNormal(uint64_t seed, uint64_t k) {
   return static_cast<float>(std::sqrt(-2.0 * std::log(u1)) * std::cos(6.283185307179586 * u2));
 }
 
-// dst[0] += a, dst[1] += b atomically (dst 8-byte aligned), relaxed ordering.
-inline void AtomicAddPair(float* dst, float a, float b) {
-  typedef uint64_t __attribute__((may_alias)) AliasU64;
-  AliasU64* p = reinterpret_cast<AliasU64*>(dst);
-  uint64_t old_bits = __atomic_load_n(p, __ATOMIC_RELAXED);
-  for (;;) {
-    float f[2];
-    std::memcpy(f, &old_bits, sizeof(f));
-    f[0] += a;
-    f[1] += b;
-    uint64_t new_bits;
-    std::memcpy(&new_bits, f, sizeof(f));
-    if (__atomic_compare_exchange_n(p, &old_bits, new_bits, /*weak=*/true, __ATOMIC_RELAXED,
-                                    __ATOMIC_RELAXED))
-      return;
-  }
-}
-
 template <int kR>
 inline float DensityMode(const float* plane, int width, const float* line, int rank_rt, int x0,
                          int y0, int i0, float fu, float fv, float fw) {
@@ -194,24 +176,26 @@ void VmGrid::Products(const GridPoint& gp, float* out) const {
 }
 
 void VmGrid::Prefetch(const GridPoint& gp, bool for_write) const {
+  for (int m = 0; m < 3; ++m) PrefetchMode(gp, m, for_write);
+}
+
+void VmGrid::PrefetchMode(const GridPoint& gp, int m, bool for_write) const {
   const float* base = for_write ? grads_.data() : params_.data();
-  for (int m = 0; m < 3; ++m) {
-    const int u = kMatMode[m][0], v = kMatMode[m][1], w = kVecMode[m];
-    const int R = ranks_[m];
-    const int W = res_[u];
-    const float* c00 = base + plane_off_[m] + (static_cast<size_t>(gp.i0[v]) * W + gp.i0[u]) * R;
-    const float* c01 = c00 + static_cast<size_t>(W) * R;
-    const float* l0 = base + line_off_[m] + static_cast<size_t>(gp.i0[w]) * R;
-    for (int k = 0; k < 2 * R; k += 16) {
-      if (for_write) {
-        __builtin_prefetch(c00 + k, 1);
-        __builtin_prefetch(c01 + k, 1);
-        __builtin_prefetch(l0 + k, 1);
-      } else {
-        __builtin_prefetch(c00 + k);
-        __builtin_prefetch(c01 + k);
-        __builtin_prefetch(l0 + k);
-      }
+  const int u = kMatMode[m][0], v = kMatMode[m][1], w = kVecMode[m];
+  const int R = ranks_[m];
+  const int W = res_[u];
+  const float* c00 = base + plane_off_[m] + (static_cast<size_t>(gp.i0[v]) * W + gp.i0[u]) * R;
+  const float* c01 = c00 + static_cast<size_t>(W) * R;
+  const float* l0 = base + line_off_[m] + static_cast<size_t>(gp.i0[w]) * R;
+  for (int k = 0; k < 2 * R; k += 16) {
+    if (for_write) {
+      __builtin_prefetch(c00 + k, 1);
+      __builtin_prefetch(c01 + k, 1);
+      __builtin_prefetch(l0 + k, 1);
+    } else {
+      __builtin_prefetch(c00 + k);
+      __builtin_prefetch(c01 + k);
+      __builtin_prefetch(l0 + k);
     }
   }
 }
@@ -309,73 +293,53 @@ double VmGrid::L1(float weight) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// GridGradScatter
+// ModeGradScatter
 
-void GridGradScatter::Bind(VmGrid* grid, bool atomic) {
+void ModeGradScatter::Bind(VmGrid* grid, int mode) {
   grid_ = grid;
-  atomic_ = atomic;
-  int max_rank = 0;
-  for (int m = 0; m < 3; ++m) {
-    const int R = grid->ranks()[m];
-    max_rank = std::max(max_rank, R);
-    ModeCache& mc = modes_[m];
-    for (int s = 0; s < 16; ++s) mc.plane_key[s] = -1;
-    for (int s = 0; s < 4; ++s) mc.line_key[s] = -1;
-    mc.plane_acc.assign(static_cast<size_t>(16) * R, 0.f);
-    mc.line_acc.assign(static_cast<size_t>(4) * R, 0.f);
-  }
-  tmp_.assign(static_cast<size_t>(2) * max_rank, 0.f);
+  mode_ = mode;
+  rank_ = grid->ranks()[mode];
+  for (int s = 0; s < 16; ++s) plane_key_[s] = -1;
+  for (int s = 0; s < 4; ++s) line_key_[s] = -1;
+  plane_acc_.assign(static_cast<size_t>(16) * rank_, 0.f);
+  line_acc_.assign(static_cast<size_t>(4) * rank_, 0.f);
+  tmp_.assign(static_cast<size_t>(2) * rank_, 0.f);
 }
 
-void GridGradScatter::AddTo(float* dst, const float* src, int n) {
-  if (atomic_) {
-    int r = 0;
-    if ((reinterpret_cast<uintptr_t>(dst) & 7) == 0) {
-      // Two floats per 8-byte compare-and-swap: half the locked operations of `omp atomic`
-      // (which is itself a 4-byte CAS loop on x86).
-      for (; r + 1 < n; r += 2) AtomicAddPair(dst + r, src[r], src[r + 1]);
-    }
-    for (; r < n; ++r) {
-      const float val = src[r];
-#pragma omp atomic
-      dst[r] += val;
-    }
-  } else {
-    for (int r = 0; r < n; ++r) dst[r] += src[r];
+namespace {
+inline void AddAndClear(float* __restrict dst, float* __restrict acc, int n) {
+#pragma omp simd
+  for (int r = 0; r < n; ++r) {
+    dst[r] += acc[r];
+    acc[r] = 0.f;
   }
 }
+}  // namespace
 
-void GridGradScatter::FlushPlaneSlot(int m, int s) {
-  ModeCache& mc = modes_[m];
-  const int R = grid_->ranks()[m];
-  float* acc = mc.plane_acc.data() + static_cast<size_t>(s) * R;
-  AddTo(grid_->plane_grad(m) + static_cast<size_t>(mc.plane_key[s]) * R, acc, R);
-  std::fill(acc, acc + R, 0.f);
-  mc.plane_key[s] = -1;
+void ModeGradScatter::FlushPlaneSlot(int s) {
+  AddAndClear(grid_->plane_grad(mode_) + static_cast<size_t>(plane_key_[s]) * rank_,
+              plane_acc_.data() + static_cast<size_t>(s) * rank_, rank_);
+  plane_key_[s] = -1;
 }
 
-void GridGradScatter::FlushLineSlot(int m, int s) {
-  ModeCache& mc = modes_[m];
-  const int R = grid_->ranks()[m];
-  float* acc = mc.line_acc.data() + static_cast<size_t>(s) * R;
-  AddTo(grid_->line_grad(m) + static_cast<size_t>(mc.line_key[s]) * R, acc, R);
-  std::fill(acc, acc + R, 0.f);
-  mc.line_key[s] = -1;
+void ModeGradScatter::FlushLineSlot(int s) {
+  AddAndClear(grid_->line_grad(mode_) + static_cast<size_t>(line_key_[s]) * rank_,
+              line_acc_.data() + static_cast<size_t>(s) * rank_, rank_);
+  line_key_[s] = -1;
 }
 
-void GridGradScatter::Flush() {
-  for (int m = 0; m < 3; ++m) {
-    for (int s = 0; s < 16; ++s)
-      if (modes_[m].plane_key[s] >= 0) FlushPlaneSlot(m, s);
-    for (int s = 0; s < 4; ++s)
-      if (modes_[m].line_key[s] >= 0) FlushLineSlot(m, s);
-  }
+void ModeGradScatter::Flush() {
+  for (int s = 0; s < 16; ++s)
+    if (plane_key_[s] >= 0) FlushPlaneSlot(s);
+  for (int s = 0; s < 4; ++s)
+    if (line_key_[s] >= 0) FlushLineSlot(s);
 }
 
 template <bool kDensity, int kR>
-void GridGradScatter::AddMode(int m, const GridPoint& gp, float g_density, const float* g_mode) {
+void ModeGradScatter::Add(const GridPoint& gp, float g_density, const float* g_mode) {
+  const int m = mode_;
   const int u = kMatMode[m][0], v = kMatMode[m][1], w = kVecMode[m];
-  const int R = kR > 0 ? kR : grid_->ranks()[m];
+  const int R = kR > 0 ? kR : rank_;
   const int W = grid_->res()[u];
   const int x0 = gp.i0[u], y0 = gp.i0[v], i0 = gp.i0[w];
   const float fu = gp.f[u], fv = gp.f[v], fw = gp.f[w];
@@ -398,18 +362,17 @@ void GridGradScatter::AddMode(int m, const GridPoint& gp, float g_density, const
     dp[r] = g * l;
     dl[r] = g * p;
   }
-  ModeCache& mc = modes_[m];
   for (int c = 0; c < 4; ++c) {
     const float wc = cw[c];
     if (wc == 0.f) continue;
     const int x = x0 + (c & 1), y = y0 + (c >> 1);
     const int s = (x & 3) | ((y & 3) << 2);
     const int key = y * W + x;
-    if (mc.plane_key[s] != key) {
-      if (mc.plane_key[s] >= 0) FlushPlaneSlot(m, s);
-      mc.plane_key[s] = key;
+    if (plane_key_[s] != key) {
+      if (plane_key_[s] >= 0) FlushPlaneSlot(s);
+      plane_key_[s] = key;
     }
-    float* __restrict acc = mc.plane_acc.data() + static_cast<size_t>(s) * R;
+    float* __restrict acc = plane_acc_.data() + static_cast<size_t>(s) * R;
 #pragma omp simd
     for (int r = 0; r < R; ++r) acc[r] += wc * dp[r];
   }
@@ -418,39 +381,35 @@ void GridGradScatter::AddMode(int m, const GridPoint& gp, float g_density, const
     if (wc == 0.f) continue;
     const int i = i0 + c;
     const int s = i & 3;
-    if (mc.line_key[s] != i) {
-      if (mc.line_key[s] >= 0) FlushLineSlot(m, s);
-      mc.line_key[s] = i;
+    if (line_key_[s] != i) {
+      if (line_key_[s] >= 0) FlushLineSlot(s);
+      line_key_[s] = i;
     }
-    float* __restrict acc = mc.line_acc.data() + static_cast<size_t>(s) * R;
+    float* __restrict acc = line_acc_.data() + static_cast<size_t>(s) * R;
 #pragma omp simd
     for (int r = 0; r < R; ++r) acc[r] += wc * dl[r];
   }
 }
 
 template <bool kDensity>
-void GridGradScatter::Add(const GridPoint& gp, float g_density, const float* g_products) {
-  int off = 0;
-  for (int m = 0; m < 3; ++m) {
-    const int R = grid_->ranks()[m];
-    const float* g_mode = kDensity ? nullptr : g_products + off;
-    switch (R) {
-      case 16:
-        AddMode<kDensity, 16>(m, gp, g_density, g_mode);
-        break;
-      case 48:
-        AddMode<kDensity, 48>(m, gp, g_density, g_mode);
-        break;
-      default:
-        AddMode<kDensity, 0>(m, gp, g_density, g_mode);
-    }
-    off += R;
+void ModeGradScatter::Dispatch(const GridPoint& gp, float g_density, const float* g_mode) {
+  switch (rank_) {
+    case 16:
+      Add<kDensity, 16>(gp, g_density, g_mode);
+      break;
+    case 48:
+      Add<kDensity, 48>(gp, g_density, g_mode);
+      break;
+    default:
+      Add<kDensity, 0>(gp, g_density, g_mode);
   }
 }
 
-void GridGradScatter::AddDensity(const GridPoint& gp, float g) { Add<true>(gp, g, nullptr); }
+void ModeGradScatter::AddDensity(const GridPoint& gp, float g) { Dispatch<true>(gp, g, nullptr); }
 
-void GridGradScatter::AddProducts(const GridPoint& gp, const float* g) { Add<false>(gp, 0.f, g); }
+void ModeGradScatter::AddProducts(const GridPoint& gp, const float* g) {
+  Dispatch<false>(gp, 0.f, g);
+}
 
 }  // namespace trainer
 }  // namespace ecrf

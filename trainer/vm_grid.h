@@ -96,8 +96,9 @@ class VmGrid {
   void Products(const GridPoint& gp, float* out) const;
 
   // Software prefetch of everything Density/Products(gp) reads; with for_write, of the same
-  // offsets in grads() (what GridGradScatter will update).
+  // offsets in grads() (what ModeGradScatter will update). PrefetchMode: mode m only.
   void Prefetch(const GridPoint& gp, bool for_write = false) const;
+  void PrefetchMode(const GridPoint& gp, int m, bool for_write) const;
 
   // F.interpolate(bilinear / linear, align_corners=True) of every plane and line to new_res.
   void UpsampleTo(const std::array<int, 3>& new_res);
@@ -119,42 +120,39 @@ class VmGrid {
   std::vector<float> grads_;
 };
 
-// Scatters sample gradients into a VmGrid's grads(), one instance per thread. Consecutive samples
-// of one ray mostly touch the same plane/line vertices, so per-vertex rank vectors are accumulated
-// in a small direct-mapped cache (plane slot (x&3)|((y&3)<<2), line slot i&3: along a ray the
-// indices are monotone, so a slot is only evicted once its vertex is behind the ray) and written to
-// the grid with `omp atomic` adds on eviction / Flush(). Call Flush() at the end of every ray (and
-// before reading grads).
-class GridGradScatter {
+// Scatters sample gradients into one mode (plane m and line m) of a VmGrid's grads(). The scatter
+// runs as one task per (grid, mode): a task owns its plane and line, so it needs no atomics and
+// its sums do not depend on how tasks are spread over threads (the training step is
+// deterministic for any thread count). Consecutive samples of a ray mostly touch the same
+// vertices, so per-vertex rank vectors are accumulated in a small direct-mapped cache (plane slot
+// (x&3)|((y&3)<<2), line slot i&3) and added to the grid on eviction and at Flush(). Call Flush()
+// before reading grads.
+class ModeGradScatter {
  public:
-  GridGradScatter() = default;
-  // atomic: use atomic adds (several threads scatter into the same grid concurrently).
-  void Bind(VmGrid* grid, bool atomic);
-  // Gradient g of Density(gp).
+  ModeGradScatter() = default;
+  void Bind(VmGrid* grid, int mode);
+  // This mode's share of the gradient g of Density(gp).
   void AddDensity(const GridPoint& gp, float g);
-  // Gradient g[total_rank] of Products(gp).
+  // Gradient of this mode's products: g[r] = dL/d(Products(gp)[rank_offset(mode) + r]).
   void AddProducts(const GridPoint& gp, const float* g);
   void Flush();
 
  private:
-  struct ModeCache {
-    int plane_key[16];
-    int line_key[4];
-    std::vector<float> plane_acc;  // 16 x rank
-    std::vector<float> line_acc;   // 4 x rank
-  };
-  template <bool kDensity>
-  void Add(const GridPoint& gp, float g_density, const float* g_products);
   template <bool kDensity, int kR>
-  void AddMode(int m, const GridPoint& gp, float g_density, const float* g_mode);
-  void FlushPlaneSlot(int m, int s);
-  void FlushLineSlot(int m, int s);
-  void AddTo(float* dst, const float* src, int n);
+  void Add(const GridPoint& gp, float g_density, const float* g_mode);
+  template <bool kDensity>
+  void Dispatch(const GridPoint& gp, float g_density, const float* g_mode);
+  void FlushPlaneSlot(int s);
+  void FlushLineSlot(int s);
 
   VmGrid* grid_ = nullptr;
-  bool atomic_ = false;
-  ModeCache modes_[3];
-  std::vector<float> tmp_;  // 2 x max rank
+  int mode_ = 0;
+  int rank_ = 0;
+  int plane_key_[16];
+  int line_key_[4];
+  std::vector<float> plane_acc_;  // 16 x rank
+  std::vector<float> line_acc_;   // 4 x rank
+  std::vector<float> tmp_;        // 2 x rank
 };
 
 }  // namespace trainer

@@ -24,6 +24,7 @@ uint64_t SplitMix64(uint64_t x) {
 
 // One evaluated sample of a ray (inside the aabb and the alpha mask).
 struct SampleRec {
+  GridPoint gp;  // kept so the gather and scatter passes need not locate the sample again
   float t;
   float feat;   // density feature + shift; after the composite pass: dL/d(feature)
   float alpha;
@@ -57,7 +58,7 @@ struct Workspace {
   std::vector<std::vector<Candidate>> candidates;  // per thread, one ray at a time
   std::vector<RayRec> rays;
   std::vector<float> products, viewdirs, rgb, dl_drgb, dl_dproducts;
-  std::vector<GridGradScatter> density_scatter, app_scatter;  // per thread
+  ModeGradScatter scatter[6];  // per (grid, mode) task: density modes 0-2, appearance modes 0-2
 
   void Prepare(int n_rays, int threads) {
     if (static_cast<int>(samples.size()) < threads) samples.resize(threads);
@@ -157,6 +158,7 @@ int MarchRay(const MarchParams& p, const float* o, const float* d, float jitter,
     const float alpha = 1.f - std::exp(-sigma * p.dscale);
     const float w = alpha * trans;
     SampleRec rec;
+    rec.gp = cand[k].gp;
     rec.t = cand[k].t;
     rec.feat = feat;
     rec.alpha = alpha;
@@ -197,8 +199,8 @@ int64_t MarchBatch(const MarchParams& p, Workspace& ws, int n_rays, const float*
 
 // Appearance products and view directions of the appearance samples of rays [r0, r1), into
 // rows 0..rows-1 (row = app_start - base + local index).
-void GatherAppearance(const MarchParams& p, const VmGrid& app, Workspace& ws, int r0, int r1,
-                      const float* origins, const float* dirs, int64_t base, int64_t rows) {
+void GatherAppearance(const VmGrid& app, Workspace& ws, int r0, int r1, const float* dirs,
+                      int64_t base, int64_t rows) {
   const int P = app.total_rank();
   ws.products.resize(static_cast<size_t>(rows) * P);
   ws.viewdirs.resize(static_cast<size_t>(rows) * 3);
@@ -207,16 +209,11 @@ void GatherAppearance(const MarchParams& p, const VmGrid& app, Workspace& ws, in
     const RayRec& rr = ws.rays[r];
     if (rr.app_count == 0) continue;
     const SampleRec* s = ws.samples[rr.tid].data() + rr.offset;
-    const float* o = origins + 3 * r;
     const float* d = dirs + 3 * r;
     for (int k = 0; k < rr.count; ++k) {
       if (s[k].app < 0) continue;
       const int64_t row = rr.app_start - base + s[k].app;
-      float x[3];
-      PointAt(o, d, s[k].t, x);
-      GridPoint gp;
-      ToGridPoint(p, x, &gp);
-      app.Products(gp, ws.products.data() + static_cast<size_t>(row) * P);
+      app.Products(s[k].gp, ws.products.data() + static_cast<size_t>(row) * P);
       float* vd = ws.viewdirs.data() + static_cast<size_t>(row) * 3;
       vd[0] = d[0];
       vd[1] = d[1];
@@ -277,10 +274,6 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
   stats.appearance_samples = n_app;
 
   const int P = model.appearance().total_rank();
-  if (static_cast<int>(ws.density_scatter.size()) < threads) {
-    ws.density_scatter.resize(threads);
-    ws.app_scatter.resize(threads);
-  }
   VmGrid& density = model.density();
   VmGrid& appearance = model.appearance();
   AppearanceHead& head = model.head();
@@ -300,10 +293,12 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
     const int64_t rows = ws.rays[r1 - 1].app_start + ws.rays[r1 - 1].app_count - base;
 
     // Appearance inputs + head forward.
-    GatherAppearance(p, appearance, ws, r0, r1, origins, dirs, base, rows);
+    GatherAppearance(appearance, ws, r0, r1, dirs, base, rows);
     ws.rgb.resize(static_cast<size_t>(rows) * 3);
     ws.dl_drgb.resize(static_cast<size_t>(rows) * 3);
     stats.t_march += lap();
+    // ws.products stays untouched until head.Backward below, so the head need not copy it.
+    head.set_borrow_products(true);
     if (rows > 0) head.Forward(static_cast<int>(rows), ws.products.data(), ws.viewdirs.data(), ws.rgb.data());
     stats.t_head += lap();
 
@@ -365,52 +360,42 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
     if (rows > 0) head.Backward(static_cast<int>(rows), ws.dl_drgb.data(), ws.dl_dproducts.data());
     stats.t_head += lap();
 
-    // Scatter grid gradients (vertex-cached, atomic when multi-threaded).
-#pragma omp parallel if (nr >= kMinParallelRays)
-    {
-      const int tid = omp_get_thread_num();
-      const bool atomic = omp_get_num_threads() > 1;
-      GridGradScatter& ds = ws.density_scatter[tid];
-      GridGradScatter& as = ws.app_scatter[tid];
-      ds.Bind(&density, atomic);
-      as.Bind(&appearance, atomic);
-      std::vector<Candidate>& cand = ws.candidates[tid];
-#pragma omp for schedule(dynamic, 16)
+    // Scatter grid gradients: one task per (grid, mode), each the only writer of its plane and
+    // line (no atomics; the sums are the same for every thread count).
+#pragma omp parallel for schedule(dynamic, 1) if (nr >= kMinParallelRays)
+    for (int task = 0; task < 6; ++task) {
+      const bool is_density = task < 3;
+      const int m = task % 3;
+      VmGrid& grid = is_density ? density : appearance;
+      ModeGradScatter& sc = ws.scatter[task];
+      sc.Bind(&grid, m);
+      const int mode_offset = appearance.rank_offset(m);
       for (int r = r0; r < r1; ++r) {
         const RayRec& rr = ws.rays[r];
+        if (!is_density && rr.app_count == 0) continue;
         const SampleRec* s = ws.samples[rr.tid].data() + rr.offset;
-        const float* o = origins + 3 * r;
-        const float* d = dirs + 3 * r;
-        const float* dprod = ws.dl_dproducts.data() + static_cast<size_t>(rr.app_start - base) * P;
-        cand.resize(rr.count);
-        for (int k = 0; k < rr.count; ++k) {
-          float x[3];
-          PointAt(o, d, s[k].t, x);
-          ToGridPoint(p, x, &cand[k].gp);
-        }
+        const float* dprod =
+            ws.dl_dproducts.data() + static_cast<size_t>(rr.app_start - base) * P + mode_offset;
         for (int k = 0; k < std::min(rr.count, kPrefetchDistance); ++k) {
-          density.Prefetch(cand[k].gp);
-          density.Prefetch(cand[k].gp, true);
+          grid.PrefetchMode(s[k].gp, m, false);
+          grid.PrefetchMode(s[k].gp, m, true);
         }
         for (int k = 0; k < rr.count; ++k) {
           // Prefetch only when the sample ahead enters a new cell (otherwise it is cached).
-          if (k + kPrefetchDistance < rr.count &&
-              !SameCell(cand[k + kPrefetchDistance].gp, cand[k + kPrefetchDistance - 1].gp)) {
-            const GridPoint& ahead = cand[k + kPrefetchDistance].gp;
-            density.Prefetch(ahead);
-            density.Prefetch(ahead, true);
-            if (s[k + kPrefetchDistance].app >= 0 || s[k + kPrefetchDistance - 1].app >= 0) {
-              appearance.Prefetch(ahead);
-              appearance.Prefetch(ahead, true);
-            }
+          const int ahead = k + kPrefetchDistance;
+          if (ahead < rr.count && !SameCell(s[ahead].gp, s[ahead - 1].gp) &&
+              (is_density || s[ahead].app >= 0 || s[ahead - 1].app >= 0)) {
+            grid.PrefetchMode(s[ahead].gp, m, false);
+            grid.PrefetchMode(s[ahead].gp, m, true);
           }
-          const float gfeat = s[k].feat;
-          if (gfeat != 0.f) ds.AddDensity(cand[k].gp, gfeat);
-          if (s[k].app >= 0) as.AddProducts(cand[k].gp, dprod + static_cast<size_t>(s[k].app) * P);
+          if (is_density) {
+            if (s[k].feat != 0.f) sc.AddDensity(s[k].gp, s[k].feat);
+          } else if (s[k].app >= 0) {
+            sc.AddProducts(s[k].gp, dprod + static_cast<size_t>(s[k].app) * P);
+          }
         }
-        ds.Flush();
-        as.Flush();
       }
+      sc.Flush();
     }
     stats.t_scatter += lap();
     r0 = r1;
@@ -435,7 +420,7 @@ void RenderRays(const TensorfModel& model, int n_rays, const float* origins, con
     const float* d = dirs + 3 * static_cast<size_t>(begin);
     ws.Prepare(n, threads);
     const int64_t n_app = MarchBatch(p, ws, n, o, d, /*train=*/false, 0);
-    GatherAppearance(p, model.appearance(), ws, 0, n, o, d, 0, n_app);
+    GatherAppearance(model.appearance(), ws, 0, n, d, 0, n_app);
     ws.rgb.resize(static_cast<size_t>(n_app) * 3);
     if (n_app > 0)
       model.head().Infer(static_cast<int>(n_app), ws.products.data(), ws.viewdirs.data(),

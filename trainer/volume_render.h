@@ -24,7 +24,8 @@
 // colour samples; per chunk the appearance products of all colour samples are gathered into
 // one contiguous rows x P matrix, the head runs forward, the compositing forward/backward runs
 // per ray (O(n) suffix sum), the head runs backward, and the grid gradients are scattered
-// (GridGradScatter: per-vertex accumulation along the ray, atomic adds on eviction).
+// (ModeGradScatter: one task per grid and mode, each the only writer of its plane and line, so
+// no atomics and the same sums for every thread count).
 #ifndef ECRF_TRAINER_VOLUME_RENDER_H_
 #define ECRF_TRAINER_VOLUME_RENDER_H_
 

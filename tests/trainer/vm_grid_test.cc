@@ -106,7 +106,7 @@ TEST(VmGridTest, SamplingMatchesReferenceGridSample) {
 // L(params) = sum_k a_k Density(x_k) + sum_k b_k . Products(x_k) is linear in every single
 // entry, so central differences are exact up to rounding: checks the scatter (incl. its vertex
 // cache, with non-monotone point sequences) for every entry of the grid.
-void CheckScatterAgainstFd(bool atomic, int threads) {
+void CheckScatterAgainstFd(int threads) {
   VmGrid g = MakeGrid({6, 5, 7}, {2, 3, 4}, 11);
   auto pts = RandomPoints(40, 5);
   // Points on vertices / cell faces exercise zero-weight corners.
@@ -133,16 +133,16 @@ void CheckScatterAgainstFd(bool atomic, int threads) {
   };
   g.ZeroGrads();
   const int n = static_cast<int>(pts.size());
-#pragma omp parallel num_threads(threads)
-  {
-    GridGradScatter s;
-    s.Bind(&g, atomic);
-#pragma omp for schedule(dynamic, 1)
+  // One task per mode, spread over threads (each task is the only writer of its plane and line).
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
+  for (int m = 0; m < 3; ++m) {
+    ModeGradScatter s;
+    s.Bind(&g, m);
     for (int k = 0; k < n; ++k) {
       GridPoint gp;
       LocateGridPoint(pts[k].data(), g.res(), &gp);
       s.AddDensity(gp, a[k]);
-      s.AddProducts(gp, b.data() + static_cast<size_t>(k) * g.total_rank());
+      s.AddProducts(gp, b.data() + static_cast<size_t>(k) * g.total_rank() + g.rank_offset(m));
     }
     s.Flush();
   }
@@ -159,16 +159,16 @@ void CheckScatterAgainstFd(bool atomic, int threads) {
   }
 }
 
-TEST(VmGridTest, ScatterMatchesFiniteDifferences) { CheckScatterAgainstFd(false, 1); }
-TEST(VmGridTest, AtomicScatterMatchesFiniteDifferences) { CheckScatterAgainstFd(true, 2); }
+TEST(VmGridTest, ScatterMatchesFiniteDifferences) { CheckScatterAgainstFd(1); }
+TEST(VmGridTest, ScatterOverThreadsMatchesFiniteDifferences) { CheckScatterAgainstFd(2); }
 
 TEST(VmGridTest, ScatterCacheAlongMonotoneRayEqualsDirectSum) {
   // Many samples along a line through a larger grid (the production access pattern).
   VmGrid g = MakeGrid({20, 24, 18}, {4, 4, 4}, 2);
   VmGrid ref = g;
   std::vector<float> gprod(g.total_rank(), 0.f);
-  GridGradScatter s;
-  s.Bind(&g, false);
+  ModeGradScatter s[3];
+  for (int m = 0; m < 3; ++m) s[m].Bind(&g, m);
   std::vector<std::array<float, 3>> pts;
   for (int i = 0; i < 300; ++i) {
     const float t = -1.f + 2.f * i / 299.f;
@@ -178,10 +178,12 @@ TEST(VmGridTest, ScatterCacheAlongMonotoneRayEqualsDirectSum) {
     GridPoint gp;
     LocateGridPoint(pts[k].data(), g.res(), &gp);
     for (int r = 0; r < g.total_rank(); ++r) gprod[r] = std::sin(0.1f * (k + r));
-    s.AddDensity(gp, std::cos(0.05f * k));
-    s.AddProducts(gp, gprod.data());
+    for (int m = 0; m < 3; ++m) {
+      s[m].AddDensity(gp, std::cos(0.05f * k));
+      s[m].AddProducts(gp, gprod.data() + g.rank_offset(m));
+    }
   }
-  s.Flush();
+  for (int m = 0; m < 3; ++m) s[m].Flush();
   // Direct (uncached) accumulation in double.
   std::vector<double> direct(ref.params().size(), 0.0);
   for (size_t k = 0; k < pts.size(); ++k) {

@@ -287,10 +287,10 @@ TEST(VolumeRenderTest, TrainStepSameGradientsWithOneAndTwoThreads) {
   omp_set_num_threads(saved);
   EXPECT_NEAR(sa.loss, sb.loss, 1e-9);
   EXPECT_EQ(sa.density_samples, sb.density_samples);
-  for (size_t i = 0; i < a.density().grads().size(); ++i)
-    ASSERT_NEAR(a.density().grads()[i], b.density().grads()[i], 1e-7 + 1e-4 * std::fabs(a.density().grads()[i]));
-  for (size_t i = 0; i < a.appearance().grads().size(); ++i)
-    ASSERT_NEAR(a.appearance().grads()[i], b.appearance().grads()[i], 1e-7 + 1e-4 * std::fabs(a.appearance().grads()[i]));
+  // Each (grid, mode) is scattered by one task in ray order, so the grid gradients are the same
+  // bits for any thread count (only the head's weight gradients are summed per thread).
+  ASSERT_EQ(a.density().grads(), b.density().grads());
+  ASSERT_EQ(a.appearance().grads(), b.appearance().grads());
 }
 
 TEST(VolumeRenderTest, HeadChunkingAndMaskKeepResults) {
