@@ -44,6 +44,12 @@ inline bool SameCell(const GridPoint& a, const GridPoint& b) {
   return a.i0[0] == b.i0[0] && a.i0[1] == b.i0[1] && a.i0[2] == b.i0[2];
 }
 
+// Grows v to at least n elements and never shrinks it: a shrink followed by a regrow would
+// zero-fill the regrown part again (the chunks of one batch have different sizes).
+inline void EnsureSize(std::vector<float>& v, size_t n) {
+  if (v.size() < n) v.resize(n);
+}
+
 struct RayRec {
   int tid;         // thread whose sample buffer holds the samples
   int count;
@@ -202,8 +208,8 @@ int64_t MarchBatch(const MarchParams& p, Workspace& ws, int n_rays, const float*
 void GatherAppearance(const VmGrid& app, Workspace& ws, int r0, int r1, const float* dirs,
                       int64_t base, int64_t rows) {
   const int P = app.total_rank();
-  ws.products.resize(static_cast<size_t>(rows) * P);
-  ws.viewdirs.resize(static_cast<size_t>(rows) * 3);
+  EnsureSize(ws.products, static_cast<size_t>(rows) * P);
+  EnsureSize(ws.viewdirs, static_cast<size_t>(rows) * 3);
 #pragma omp parallel for schedule(dynamic, 16) if (r1 - r0 >= kMinParallelRays)
   for (int r = r0; r < r1; ++r) {
     const RayRec& rr = ws.rays[r];
@@ -294,8 +300,8 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
 
     // Appearance inputs + head forward.
     GatherAppearance(appearance, ws, r0, r1, dirs, base, rows);
-    ws.rgb.resize(static_cast<size_t>(rows) * 3);
-    ws.dl_drgb.resize(static_cast<size_t>(rows) * 3);
+    EnsureSize(ws.rgb, static_cast<size_t>(rows) * 3);
+    EnsureSize(ws.dl_drgb, static_cast<size_t>(rows) * 3);
     stats.t_march += lap();
     // ws.products stays untouched until head.Backward below, so the head need not copy it.
     head.set_borrow_products(true);
@@ -356,7 +362,7 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
     stats.t_composite += lap();
 
     // Head backward.
-    ws.dl_dproducts.resize(static_cast<size_t>(rows) * P);
+    EnsureSize(ws.dl_dproducts, static_cast<size_t>(rows) * P);
     if (rows > 0) head.Backward(static_cast<int>(rows), ws.dl_drgb.data(), ws.dl_dproducts.data());
     stats.t_head += lap();
 
@@ -421,7 +427,7 @@ void RenderRays(const TensorfModel& model, int n_rays, const float* origins, con
     ws.Prepare(n, threads);
     const int64_t n_app = MarchBatch(p, ws, n, o, d, /*train=*/false, 0);
     GatherAppearance(model.appearance(), ws, 0, n, d, 0, n_app);
-    ws.rgb.resize(static_cast<size_t>(n_app) * 3);
+    EnsureSize(ws.rgb, static_cast<size_t>(n_app) * 3);
     if (n_app > 0)
       model.head().Infer(static_cast<int>(n_app), ws.products.data(), ws.viewdirs.data(),
                          ws.rgb.data());
