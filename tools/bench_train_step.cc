@@ -156,6 +156,8 @@ int RunTrainStepBench(int argc, char** argv) {
   trainer::Adam adam_density(model.density().params().size(), trainer::AdamConfig{});
   trainer::Adam adam_app(model.appearance().params().size(), trainer::AdamConfig{});
   trainer::Adam adam_head(model.head().params().size(), trainer::AdamConfig{});
+  const std::vector<float> density0 = model.density().params(), app0 = model.appearance().params(),
+                           head0 = model.head().params();
   BenchReport report;
   for (int threads : thread_counts) {
     omp_set_num_threads(threads);
@@ -163,6 +165,11 @@ int RunTrainStepBench(int argc, char** argv) {
     TrainStepStats last;
     double cpu = 0.0, wall = 0.0, t_optim = 0.0;
     for (int rep = 0; rep <= reps; ++rep) {
+      // Every step starts from the same field (Adam would otherwise train it between steps and
+      // change the sample counts); copied into the existing buffers, outside the timing.
+      std::copy(density0.begin(), density0.end(), model.density().params().begin());
+      std::copy(app0.begin(), app0.end(), model.appearance().params().begin());
+      std::copy(head0.begin(), head0.end(), model.head().params().begin());
       const double t0 = omp_get_wtime(), c0 = CpuSeconds();
       model.ZeroGrads();
       last = trainer::TrainStep(model, rays, o.data(), d.data(), rgb.data(), 100 + rep);

@@ -126,8 +126,9 @@ class VmGrid {
 // deterministic for any thread count). Consecutive samples of a ray mostly touch the same
 // vertices, so per-vertex rank vectors are accumulated in a small direct-mapped cache (plane slot
 // (x&3)|((y&3)<<2), line slot i&3) and added to the grid on eviction and at Flush(). Call Flush()
-// before reading grads.
-class ModeGradScatter {
+// before reading grads. Cache-line aligned: tasks on different threads keep their slot keys in
+// adjacent instances, which would otherwise share cache lines.
+class alignas(64) ModeGradScatter {
  public:
   ModeGradScatter() = default;
   void Bind(VmGrid* grid, int mode);
