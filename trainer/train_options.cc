@@ -12,8 +12,8 @@ TrainOptions PresetOptions(const std::string& name) {
   if (name == "paper") return o;
   if (name == "fast") {
     // The CPU preset: TensoRF's schedule compressed 10x (3k iterations) with a 180^3 final grid.
-    // On chair-400 with 2 cores it passes 32.5 dB test PSNR after 7.3 minutes of training and
-    // ends at 35.2 dB after 16 minutes (10 test views; README "Measured"). The small early grid
+    // On chair-400 with 2 cores it passes 32.4 dB test PSNR after 3.1 minutes of training and
+    // ends at 35.1 dB after 6.4 minutes (10 test views; README "Measured"). The small early grid
     // and the early alpha mask matter most: after the shrink at iteration 300 a batch costs
     // 0.13 M density samples instead of 0.49 M.
     o.iters = 3000;

@@ -58,20 +58,29 @@ struct RayRec {
   int app_count;
 };
 
+// One thread's sample buffers. Cache-line aligned: every push_back writes the vector's end
+// pointer, and two threads' vector headers on one line made marching scale 1.3x on 2 threads.
+struct alignas(64) ThreadSamples {
+  std::vector<SampleRec> samples;
+  std::vector<Candidate> candidates;  // one ray at a time
+};
+
 // Scratch of one batch; reused across steps so steady-state steps do not allocate.
 struct Workspace {
-  std::vector<std::vector<SampleRec>> samples;  // per thread
-  std::vector<std::vector<Candidate>> candidates;  // per thread, one ray at a time
+  std::vector<ThreadSamples> per_thread;
   std::vector<RayRec> rays;
   std::vector<float> products, viewdirs, rgb, dl_drgb, dl_dproducts;
   ModeGradScatter scatter[6];  // per (grid, mode) task: density modes 0-2, appearance modes 0-2
 
   void Prepare(int n_rays, int threads) {
-    if (static_cast<int>(samples.size()) < threads) samples.resize(threads);
-    if (static_cast<int>(candidates.size()) < threads) candidates.resize(threads);
-    for (auto& s : samples) s.clear();
+    if (static_cast<int>(per_thread.size()) < threads) per_thread.resize(threads);
+    for (auto& t : per_thread) t.samples.clear();
     rays.resize(n_rays);
   }
+  const SampleRec* SamplesOf(const RayRec& rr) const {
+    return per_thread[rr.tid].samples.data() + rr.offset;
+  }
+  SampleRec* SamplesOf(const RayRec& rr) { return per_thread[rr.tid].samples.data() + rr.offset; }
 };
 
 struct MarchParams {
@@ -184,8 +193,8 @@ int64_t MarchBatch(const MarchParams& p, Workspace& ws, int n_rays, const float*
 #pragma omp parallel if (n_rays >= kMinParallelRays)
   {
     const int tid = omp_get_thread_num();
-    std::vector<SampleRec>& buf = ws.samples[tid];
-    std::vector<Candidate>& cand = ws.candidates[tid];
+    std::vector<SampleRec>& buf = ws.per_thread[tid].samples;
+    std::vector<Candidate>& cand = ws.per_thread[tid].candidates;
 #pragma omp for schedule(dynamic, 16)
     for (int r = 0; r < n_rays; ++r) {
       const float jitter = train ? RayJitter(seed, r) : 0.f;
@@ -214,7 +223,7 @@ void GatherAppearance(const VmGrid& app, Workspace& ws, int r0, int r1, const fl
   for (int r = r0; r < r1; ++r) {
     const RayRec& rr = ws.rays[r];
     if (rr.app_count == 0) continue;
-    const SampleRec* s = ws.samples[rr.tid].data() + rr.offset;
+    const SampleRec* s = ws.SamplesOf(rr);
     const float* d = dirs + 3 * r;
     for (int k = 0; k < rr.count; ++k) {
       if (s[k].app < 0) continue;
@@ -313,7 +322,7 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
     if (nr >= kMinParallelRays)
     for (int r = r0; r < r1; ++r) {
       const RayRec& rr = ws.rays[r];
-      SampleRec* s = ws.samples[rr.tid].data() + rr.offset;
+      SampleRec* s = ws.SamplesOf(rr);
       const int64_t row0 = rr.app_start - base;
       n_density += rr.count;
       float c[3] = {0.f, 0.f, 0.f};
@@ -379,7 +388,7 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
       for (int r = r0; r < r1; ++r) {
         const RayRec& rr = ws.rays[r];
         if (!is_density && rr.app_count == 0) continue;
-        const SampleRec* s = ws.samples[rr.tid].data() + rr.offset;
+        const SampleRec* s = ws.SamplesOf(rr);
         const float* dprod =
             ws.dl_dproducts.data() + static_cast<size_t>(rr.app_start - base) * P + mode_offset;
         for (int k = 0; k < std::min(rr.count, kPrefetchDistance); ++k) {
@@ -434,7 +443,7 @@ void RenderRays(const TensorfModel& model, int n_rays, const float* origins, con
 #pragma omp parallel for schedule(dynamic, 16) if (n >= kMinParallelRays)
     for (int r = 0; r < n; ++r) {
       const RayRec& rr = ws.rays[r];
-      const SampleRec* s = ws.samples[rr.tid].data() + rr.offset;
+      const SampleRec* s = ws.SamplesOf(rr);
       float c[3] = {0.f, 0.f, 0.f};
       float acc = 0.f, depth = 0.f;
       for (int k = 0; k < rr.count; ++k) {
