@@ -18,55 +18,74 @@ int RoundUp(int v, int m) { return (v + m - 1) / m * m; }
 // compiler): plain loops over small accumulator arrays get scalarised by GCC's SLP pass.
 #if defined(__GNUC__)
 typedef float V4 __attribute__((vector_size(16)));
+#if defined(__AVX512F__)
+typedef float VWide __attribute__((vector_size(64)));
+#elif defined(__AVX__)
+typedef float VWide __attribute__((vector_size(32)));
+#else
+typedef V4 VWide;  // wider generic vectors are lowered through the stack on SSE / NEON / wasm
+#endif
+
+// Columns [j0, j0 + 2 * lanes of V) of 4 rows. Named accumulators (not arrays) so they stay in
+// registers. Every element sums over k in the same order whatever V is (and the build does not
+// contract a * b + c into an FMA), so the vector width never changes a result.
+template <typename V>
+inline void Block4(const float* x0, const float* x1, const float* x2, const float* x3, int K,
+                   const float* wt, int ldw, const float* bias, int j0, bool relu, float* y0,
+                   float* y1, float* y2, float* y3) {
+  constexpr int kLanes = sizeof(V) / sizeof(float);
+  V a0, b0, a1, b1, a2, b2, a3, b3;
+  std::memcpy(&a0, bias + j0, sizeof(V));
+  std::memcpy(&b0, bias + j0 + kLanes, sizeof(V));
+  a1 = a2 = a3 = a0;
+  b1 = b2 = b3 = b0;
+  const float* w = wt + j0;
+  for (int k = 0; k < K; ++k, w += ldw) {
+    V wa, wb;
+    std::memcpy(&wa, w, sizeof(V));
+    std::memcpy(&wb, w + kLanes, sizeof(V));
+    const float s0 = x0[k], s1 = x1[k], s2 = x2[k], s3 = x3[k];
+    a0 += s0 * wa;
+    b0 += s0 * wb;
+    a1 += s1 * wa;
+    b1 += s1 * wb;
+    a2 += s2 * wa;
+    b2 += s2 * wb;
+    a3 += s3 * wa;
+    b3 += s3 * wb;
+  }
+  if (relu) {
+    const V z = a0 - a0;  // zeros of any width
+    a0 = a0 > z ? a0 : z;
+    b0 = b0 > z ? b0 : z;
+    a1 = a1 > z ? a1 : z;
+    b1 = b1 > z ? b1 : z;
+    a2 = a2 > z ? a2 : z;
+    b2 = b2 > z ? b2 : z;
+    a3 = a3 > z ? a3 : z;
+    b3 = b3 > z ? b3 : z;
+  }
+  std::memcpy(y0 + j0, &a0, sizeof(V));
+  std::memcpy(y0 + j0 + kLanes, &b0, sizeof(V));
+  std::memcpy(y1 + j0, &a1, sizeof(V));
+  std::memcpy(y1 + j0 + kLanes, &b1, sizeof(V));
+  std::memcpy(y2 + j0, &a2, sizeof(V));
+  std::memcpy(y2 + j0 + kLanes, &b2, sizeof(V));
+  std::memcpy(y3 + j0, &a3, sizeof(V));
+  std::memcpy(y3 + j0 + kLanes, &b3, sizeof(V));
+}
 
 template <int kCols>
 void Gemm4(const float* x0, const float* x1, const float* x2, const float* x3, int K,
            const float* wt, int ldw, const float* bias, int ncols, bool relu, float* y0, float* y1,
            float* y2, float* y3) {
-  static_assert(kCols == 8, "two 4-float vectors per row");
-  // 16-byte vectors only: wider generic vectors are lowered through the stack on SSE targets.
-  // Named accumulators (not arrays) so they stay in registers: 8 of 16 xmm / NEON / simd128.
-  for (int j0 = 0; j0 < ncols; j0 += 8) {
-    V4 a0, b0, a1, b1, a2, b2, a3, b3;
-    std::memcpy(&a0, bias + j0, sizeof(V4));
-    std::memcpy(&b0, bias + j0 + 4, sizeof(V4));
-    a1 = a2 = a3 = a0;
-    b1 = b2 = b3 = b0;
-    const float* w = wt + j0;
-    for (int k = 0; k < K; ++k, w += ldw) {
-      V4 wa, wb;
-      std::memcpy(&wa, w, sizeof(V4));
-      std::memcpy(&wb, w + 4, sizeof(V4));
-      const float s0 = x0[k], s1 = x1[k], s2 = x2[k], s3 = x3[k];
-      a0 += s0 * wa;
-      b0 += s0 * wb;
-      a1 += s1 * wa;
-      b1 += s1 * wb;
-      a2 += s2 * wa;
-      b2 += s2 * wb;
-      a3 += s3 * wa;
-      b3 += s3 * wb;
-    }
-    if (relu) {
-      const V4 z = {0, 0, 0, 0};
-      a0 = a0 > z ? a0 : z;
-      b0 = b0 > z ? b0 : z;
-      a1 = a1 > z ? a1 : z;
-      b1 = b1 > z ? b1 : z;
-      a2 = a2 > z ? a2 : z;
-      b2 = b2 > z ? b2 : z;
-      a3 = a3 > z ? a3 : z;
-      b3 = b3 > z ? b3 : z;
-    }
-    std::memcpy(y0 + j0, &a0, sizeof(V4));
-    std::memcpy(y0 + j0 + 4, &b0, sizeof(V4));
-    std::memcpy(y1 + j0, &a1, sizeof(V4));
-    std::memcpy(y1 + j0 + 4, &b1, sizeof(V4));
-    std::memcpy(y2 + j0, &a2, sizeof(V4));
-    std::memcpy(y2 + j0 + 4, &b2, sizeof(V4));
-    std::memcpy(y3 + j0, &a3, sizeof(V4));
-    std::memcpy(y3 + j0 + 4, &b3, sizeof(V4));
-  }
+  static_assert(kCols == 8, "columns come in multiples of two 4-float vectors");
+  constexpr int kWide = 2 * static_cast<int>(sizeof(VWide) / sizeof(float));
+  int j0 = 0;
+  for (; j0 + kWide <= ncols; j0 += kWide)
+    Block4<VWide>(x0, x1, x2, x3, K, wt, ldw, bias, j0, relu, y0, y1, y2, y3);
+  for (; j0 < ncols; j0 += 8)
+    Block4<V4>(x0, x1, x2, x3, K, wt, ldw, bias, j0, relu, y0, y1, y2, y3);
 }
 #else
 template <int kCols>
