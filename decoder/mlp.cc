@@ -27,8 +27,8 @@ typedef V4 VWide;  // wider generic vectors are lowered through the stack on SSE
 #endif
 
 // Columns [j0, j0 + 2 * lanes of V) of 4 rows. Named accumulators (not arrays) so they stay in
-// registers. Every element sums over k in the same order whatever V is (and the build does not
-// contract a * b + c into an FMA), so the vector width never changes a result.
+// registers. Every element sums over k in the same order whatever V is, and a compiler that
+// contracts a * b + c into an FMA does so at every width: the width never changes a result.
 template <typename V>
 inline void Block4(const float* x0, const float* x1, const float* x2, const float* x3, int K,
                    const float* wt, int ldw, const float* bias, int j0, bool relu, float* y0,

@@ -1,6 +1,5 @@
 #include "trainer/adam.h"
 
-#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -33,17 +32,23 @@ void Adam::Step(float* params, const float* grads, size_t size, float learning_r
   const long blocks = static_cast<long>((size + kBlock - 1) / kBlock);
   float* m_all = m_.data();
   float* v_all = v_.data();
+  // A plain loop, not Eigen arrays: Eigen peels unaligned elements into scalar code that the
+  // compiler contracts into FMAs while its packet code stays mul + add, so an element's update
+  // depended on the buffer's address (and two runs of one seed drifted apart).
 #pragma omp parallel for schedule(static) if (blocks > 4)
   for (long b = 0; b < blocks; ++b) {
     const size_t begin = static_cast<size_t>(b) * kBlock;
-    const Eigen::Index len = static_cast<Eigen::Index>(std::min<size_t>(kBlock, size - begin));
-    Eigen::Map<Eigen::ArrayXf> p(params + begin, len);
-    Eigen::Map<const Eigen::ArrayXf> g(grads + begin, len);
-    Eigen::Map<Eigen::ArrayXf> m(m_all + begin, len);
-    Eigen::Map<Eigen::ArrayXf> v(v_all + begin, len);
-    m += one_minus_beta1 * (g - m);                   // exp_avg.lerp_(grad, 1 - beta1)
-    v = v * beta2 + (one_minus_beta2 * g) * g;        // mul_(beta2).addcmul_(g, g, 1 - beta2)
-    p += neg_step_size * (m / (v.sqrt() / bias_correction2_sqrt + eps));  // addcdiv_
+    const size_t end = std::min<size_t>(begin + kBlock, size);
+    float* __restrict p = params;
+    const float* __restrict g = grads;
+    float* __restrict m = m_all;
+    float* __restrict v = v_all;
+#pragma omp simd
+    for (size_t i = begin; i < end; ++i) {
+      m[i] += one_minus_beta1 * (g[i] - m[i]);             // exp_avg.lerp_(grad, 1 - beta1)
+      v[i] = v[i] * beta2 + (one_minus_beta2 * g[i]) * g[i];  // mul_(beta2).addcmul_(g, g, 1 - beta2)
+      p[i] += neg_step_size * (m[i] / (std::sqrt(v[i]) / bias_correction2_sqrt + eps));  // addcdiv_
+    }
   }
 }
 

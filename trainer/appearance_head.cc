@@ -21,6 +21,7 @@ using MapM = Eigen::Map<RowMat>;
 using CMapM = Eigen::Map<const RowMat>;
 
 constexpr int kRgb = 3;
+constexpr long kGradSlots = 16;  // partial sums of Backward's weight gradients
 constexpr int kViewDim = 3;
 
 // Fills n floats with U(-bound, bound) from a portable bit-exact recipe (24 random bits each).
@@ -85,10 +86,7 @@ int ThreadsFor(long chunks) {
 }
 
 // Runs body(chunk, thread) for chunk in [0, num_chunks), statically partitioned over `threads`
-// OpenMP threads (contiguous ranges, so results are deterministic for a thread count).
-// With one thread no parallel region is opened: inside a team of one, Eigen would start its own
-// (nested, hence one-thread) parallel GEMM sized for nbThreads() threads, which is very slow.
-// Inside a real team (>1) Eigen sees omp_get_num_threads() > 1 and runs each GEMM serially.
+// OpenMP threads (contiguous ranges). With one thread no parallel region is opened.
 template <typename Body>
 void ForChunks(int threads, long num_chunks, Body&& body) {
   if (threads <= 1) {
@@ -318,18 +316,20 @@ void AppearanceHead::Backward(int n, const float* dl_drgb, float* dl_dproducts) 
   const float* w3 = params_.data() + w3_offset();
   const int chunk = chunk_rows_;
   const long num_chunks = (n + chunk - 1) / chunk;
-  const int threads = ThreadsFor(num_chunks);
+  // Weight gradients are summed per slot (a fixed run of consecutive chunks) and the slots in
+  // order: the same bits for any thread count, unlike per-thread partial sums.
+  const long slots = std::min<long>(kGradSlots, num_chunks);
+  const int threads = ThreadsFor(slots);
   const size_t per_thread = d.thread_per_row() * chunk;
   if (thread_scratch_.size() < per_thread * threads) thread_scratch_.resize(per_thread * threads);
   const size_t np = params_.size();
-  if (thread_grads_.size() < np * threads) thread_grads_.resize(np * threads);
+  if (slot_grads_.size() < np * slots) slot_grads_.resize(np * slots);
   const int ff = d.ff;
-  std::fill(thread_grads_.begin(), thread_grads_.begin() + np * threads, 0.0f);
+  std::fill(slot_grads_.begin(), slot_grads_.begin() + np * slots, 0.0f);
   float* const thread_scratch = thread_scratch_.data();
-  float* const thread_grads = thread_grads_.data();
-  ForChunks(threads, num_chunks, [&](long c, int t) {
-    float* g = thread_grads + np * t;
-    float* dz3 = thread_scratch + per_thread * t + d.pe_tmp_per_row() * chunk;
+  float* const slot_grads = slot_grads_.data();
+  auto backward_chunk = [&](long c, float* scratch, float* g) {
+    float* dz3 = scratch + d.pe_tmp_per_row() * chunk;
     float* da = dz3 + static_cast<size_t>(chunk) * kRgb;
     float* db = da + static_cast<size_t>(chunk) * d.h;
     float* dx = db + static_cast<size_t>(chunk) * d.h;
@@ -378,10 +378,13 @@ void AppearanceHead::Backward(int n, const float* dl_drgb, float* dl_dproducts) 
     // Basis.
     SmallGemm(m, d.p, d.f, dfeat, d.f, 1, basis, d.p, dl_dproducts + r0 * d.p, d.p, false);
     SmallGemm(d.f, d.p, m, dfeat, 1, d.f, products, d.p, g_basis, d.p, true);
+  };
+  ForChunks(threads, slots, [&](long slot, int t) {
+    for (long c = slot * num_chunks / slots; c < (slot + 1) * num_chunks / slots; ++c)
+      backward_chunk(c, thread_scratch + per_thread * t, slot_grads + np * slot);
   });
-  // Deterministic reduction in thread order.
-  for (int t = 0; t < threads; ++t) {
-    const float* g = thread_grads_.data() + np * t;
+  for (long slot = 0; slot < slots; ++slot) {
+    const float* g = slot_grads_.data() + np * slot;
     float* out = grads_.data();
     for (size_t i = 0; i < np; ++i) out[i] += g[i];
   }

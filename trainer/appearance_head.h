@@ -82,7 +82,7 @@ class AppearanceHead {
   std::vector<float> scratch_;  // activations of the last Forward (reused, no per-call allocation)
   std::vector<float> transposed_;      // the weights transposed for Forward's GEMMs
   std::vector<float> thread_scratch_;  // per-thread chunk temporaries of Forward / Backward
-  std::vector<float> thread_grads_;    // per-thread gradient partial sums of Backward
+  std::vector<float> slot_grads_;      // Backward's gradient partial sums, one per run of chunks
   int last_n_ = -1;                    // batch size of the last Forward (-1: none)
   bool borrow_products_ = false;
   bool last_borrowed_ = false;  // borrow_products_ as it was at the last Forward

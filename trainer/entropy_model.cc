@@ -17,6 +17,7 @@ namespace {
 
 constexpr int kChunk = 64;             // values per inner chunk (2 * kChunk network inputs)
 constexpr size_t kWorkItem = 2048;     // values per OpenMP work item
+constexpr long kSumSlots = 16;         // runs of work items summed apart, then in order
 constexpr int kP = kEntropyParamsPerModel;
 
 uint64_t SplitMix64(uint64_t x) {
@@ -348,33 +349,42 @@ double FactorizedEntropyModel::Bits(const float* x, const EntropySegment* segmen
       items.push_back({seg.model, b, std::min(seg.end, b + kWorkItem)});
     }
   }
-  double total = 0.0;
   const long num_items = static_cast<long>(items.size());
   size_t num_values = 0;
   for (const Item& item : items) num_values += item.end - item.begin;
   std::vector<ModelView<float>> views;
   views.reserve(num_models_);
   for (int c = 0; c < num_models_; ++c) views.emplace_back(model_params(c));
+  // Items are summed in fixed runs (slots) and the slots in order, so the totals and parameter
+  // gradients are the same bits for any thread count and schedule.
+  const long slots = std::min<long>(kSumSlots, num_items);
+  const size_t np = accumulate_param_grads ? params_.size() : 0;
+  std::vector<double> slot_totals(static_cast<size_t>(slots), 0.0);
+  std::vector<double> slot_grads(np * static_cast<size_t>(slots), 0.0);
   // Small calls run serially (a parallel region costs more than ~10k values' evaluation).
-#pragma omp parallel if (num_items > 1 && num_values > 16384) reduction(+ : total)
+#pragma omp parallel if (num_items > 1 && num_values > 16384)
   {
     ChunkState<float>* st = new ChunkState<float>;
-    std::vector<double> local(accumulate_param_grads ? params_.size() : 0, 0.0);
     ChunkGrad<float> cg;
 #pragma omp for schedule(dynamic, 1)
-    for (long it = 0; it < num_items; ++it) {
-      const Item& item = items[it];
-      const ModelView<float>& mv = views[item.model];
-      cg.Zero();
-      total += RunItemFloat(mv, options_, x, item.begin, item.end, grad_scale, bits, dbits_dx,
-                            accumulate_param_grads ? &cg : nullptr, *st);
-      if (accumulate_param_grads) AddParamGrads(mv, cg, local.data() + item.model * kP);
-    }
-    if (accumulate_param_grads) {
-#pragma omp critical(ecrf_entropy_grads)
-      for (size_t i = 0; i < local.size(); ++i) grads_[i] += static_cast<float>(local[i]);
+    for (long slot = 0; slot < slots; ++slot) {
+      double* local = slot_grads.data() + np * slot;
+      for (long it = slot * num_items / slots; it < (slot + 1) * num_items / slots; ++it) {
+        const Item& item = items[it];
+        const ModelView<float>& mv = views[item.model];
+        cg.Zero();
+        slot_totals[slot] += RunItemFloat(mv, options_, x, item.begin, item.end, grad_scale, bits,
+                                          dbits_dx, accumulate_param_grads ? &cg : nullptr, *st);
+        if (accumulate_param_grads) AddParamGrads(mv, cg, local + item.model * kP);
+      }
     }
     delete st;
+  }
+  double total = 0.0;
+  for (long slot = 0; slot < slots; ++slot) {
+    total += slot_totals[slot];
+    const double* local = slot_grads.data() + np * slot;
+    for (size_t i = 0; i < np; ++i) grads_[i] += static_cast<float>(local[i]);
   }
   return total;
 }

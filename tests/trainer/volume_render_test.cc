@@ -287,10 +287,11 @@ TEST(VolumeRenderTest, TrainStepSameGradientsWithOneAndTwoThreads) {
   omp_set_num_threads(saved);
   EXPECT_NEAR(sa.loss, sb.loss, 1e-9);
   EXPECT_EQ(sa.density_samples, sb.density_samples);
-  // Each (grid, mode) is scattered by one task in ray order, so the grid gradients are the same
-  // bits for any thread count (only the head's weight gradients are summed per thread).
+  // Each (grid, mode) is scattered by one task in ray order and the head sums its weight
+  // gradients in fixed runs of chunks, so every gradient is the same bits for any thread count.
   ASSERT_EQ(a.density().grads(), b.density().grads());
   ASSERT_EQ(a.appearance().grads(), b.appearance().grads());
+  ASSERT_EQ(a.head().grads(), b.head().grads());
 }
 
 TEST(VolumeRenderTest, HeadChunkingAndMaskKeepResults) {
