@@ -9,10 +9,11 @@ namespace {
 
 constexpr int kPad = 8;   // output widths of the hidden layers / basis are padded to this
 constexpr int kOutPad = 8;
+static_assert(kPad % 8 == 0 && kOutPad % 8 == 0, "Gemm4 writes columns in runs of 8");
 
 int RoundUp(int v, int m) { return (v + m - 1) / m * m; }
 
-// y_r[j] = bias[j] + sum_k x_r[k] * wt[k * ldw + j] for 4 rows r, j < ncols (multiple of kCols),
+// y_r[j] = bias[j] + sum_k x_r[k] * wt[k * ldw + j] for 4 rows r, j < ncols (multiple of 8),
 // optional ReLU. The k loop is sequential for every element, identical for all rows.
 // GCC/Clang generic vectors (lowered to SSE/AVX/NEON/wasm-simd128, or scalar code, by the
 // compiler): plain loops over small accumulator arrays get scalarised by GCC's SLP pass.
@@ -75,11 +76,9 @@ inline void Block4(const float* x0, const float* x1, const float* x2, const floa
   std::memcpy(y3 + j0 + kLanes, &b3, sizeof(V));
 }
 
-template <int kCols>
 void Gemm4(const float* x0, const float* x1, const float* x2, const float* x3, int K,
            const float* wt, int ldw, const float* bias, int ncols, bool relu, float* y0, float* y1,
            float* y2, float* y3) {
-  static_assert(kCols == 8, "columns come in multiples of two 4-float vectors");
   constexpr int kWide = 2 * static_cast<int>(sizeof(VWide) / sizeof(float));
   int j0 = 0;
   for (; j0 + kWide <= ncols; j0 += kWide)
@@ -88,7 +87,6 @@ void Gemm4(const float* x0, const float* x1, const float* x2, const float* x3, i
     Block4<V4>(x0, x1, x2, x3, K, wt, ldw, bias, j0, relu, y0, y1, y2, y3);
 }
 #else
-template <int kCols>
 void Gemm4(const float* x0, const float* x1, const float* x2, const float* x3, int K,
            const float* wt, int ldw, const float* bias, int ncols, bool relu, float* y0, float* y1,
            float* y2, float* y3) {
@@ -109,14 +107,13 @@ void Gemm4(const float* x0, const float* x1, const float* x2, const float* x3, i
 #endif
 
 // rows (multiple of 4) x K times wt, rows contiguous with strides ldx / ldy.
-template <int kCols>
 void GemmRows(int rows, const float* x, int ldx, int K, const float* wt, int ldw,
               const float* bias, bool relu, float* y, int ldy) {
   for (int r = 0; r < rows; r += 4) {
     const float* xr = x + static_cast<size_t>(r) * ldx;
     float* yr = y + static_cast<size_t>(r) * ldy;
-    Gemm4<kCols>(xr, xr + ldx, xr + 2 * ldx, xr + 3 * ldx, K, wt, ldw, bias, ldw, relu, yr,
-                 yr + ldy, yr + 2 * ldy, yr + 3 * ldy);
+    Gemm4(xr, xr + ldx, xr + 2 * ldx, xr + 3 * ldx, K, wt, ldw, bias, ldw, relu, yr, yr + ldy,
+          yr + 2 * ldy, yr + 3 * ldy);
   }
 }
 
@@ -324,8 +321,8 @@ void AppearanceMlp::Infer(int rows, const float* products, size_t products_strid
         x[q] = r + q < n ? products + static_cast<size_t>(r0 + r + q) * products_stride : zero_row;
       }
       float* y = feat + static_cast<size_t>(r) * fd_pad_;
-      Gemm4<kPad>(x[0], x[1], x[2], x[3], P, weights_ + o_basis_, fd_pad_, wz, fd_pad_, false, y,
-                  y + fd_pad_, y + 2 * fd_pad_, y + 3 * fd_pad_);
+      Gemm4(x[0], x[1], x[2], x[3], P, weights_ + o_basis_, fd_pad_, wz, fd_pad_, false, y,
+            y + fd_pad_, y + 2 * fd_pad_, y + 3 * fd_pad_);
     }
     // PE arguments for the whole chunk, one vectorised sin/cos pass.
     for (int r = 0; r < n4; ++r) {
@@ -360,12 +357,12 @@ void AppearanceMlp::Infer(int rows, const float* products, size_t products_strid
       std::memcpy(x, s + nf, nv * sizeof(float));
       std::memcpy(x + nv, c + nf, nv * sizeof(float));
     }
-    GemmRows<kPad>(n4, in, in_stride_, in_dim_, weights_ + o_w1_, hid_pad_, weights_ + o_b1_, true,
-                   h1, hid_pad_);
-    GemmRows<kPad>(n4, h1, hid_pad_, H, weights_ + o_w2_, hid_pad_, weights_ + o_b2_, true, h2,
-                   hid_pad_);
-    GemmRows<kOutPad>(n4, h2, hid_pad_, H, weights_ + o_w3_, kOutPad, weights_ + o_b3_, false, out,
-                      kOutPad);
+    GemmRows(n4, in, in_stride_, in_dim_, weights_ + o_w1_, hid_pad_, weights_ + o_b1_, true, h1,
+             hid_pad_);
+    GemmRows(n4, h1, hid_pad_, H, weights_ + o_w2_, hid_pad_, weights_ + o_b2_, true, h2,
+             hid_pad_);
+    GemmRows(n4, h2, hid_pad_, H, weights_ + o_w3_, kOutPad, weights_ + o_b3_, false, out,
+             kOutPad);
     for (int r = 0; r < n; ++r) {
       for (int c = 0; c < 3; ++c) {
         rgb[static_cast<size_t>(r0 + r) * 3 + c] =

@@ -294,6 +294,8 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
   AppearanceHead& head = model.head();
   const float grad_scale = 2.f / (3.f * static_cast<float>(n_rays));
   const int64_t max_rows = std::max(1, cfg.head_chunk_rows);
+  // Each chunk's ws.products stays untouched until its head.Backward, so the head need not copy it.
+  head.set_borrow_products(true);
   double sse = 0.0;
   long n_density = 0;
 
@@ -312,8 +314,6 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
     EnsureSize(ws.rgb, static_cast<size_t>(rows) * 3);
     EnsureSize(ws.dl_drgb, static_cast<size_t>(rows) * 3);
     stats.t_march += lap();
-    // ws.products stays untouched until head.Backward below, so the head need not copy it.
-    head.set_borrow_products(true);
     if (rows > 0) head.Forward(static_cast<int>(rows), ws.products.data(), ws.viewdirs.data(), ws.rgb.data());
     stats.t_head += lap();
 
