@@ -27,13 +27,6 @@ int Record(ecrf_scene* scene, const ecrf::Status& status) {
   return status.code();
 }
 
-size_t GridBytes(const ecrf::dec::VmGrid& g) {
-  const size_t element = g.storage == ecrf::dec::GridStorage::kInt16 ? 2 : 4;
-  size_t n = 0;
-  for (int m = 0; m < 3; ++m) n += g.plane_count(m) + g.line_count(m);
-  return n * element;
-}
-
 }  // namespace
 
 extern "C" {
@@ -45,6 +38,8 @@ void ecrf_render_options_default(ecrf_render_options* o) {
   o->skip_empty_space = d.skip_empty_space ? 1 : 0;
   o->early_stop_transmittance = d.early_stop_transmittance;
   o->max_samples = d.max_samples;
+  o->step_scale = d.step_scale;
+  o->weight_threshold = d.weight_threshold;
 }
 
 ecrf_scene* ecrf_scene_create(void) { return new (std::nothrow) ecrf_scene(); }
@@ -91,7 +86,7 @@ int ecrf_scene_get_info(const ecrf_scene* scene, ecrf_scene_info* out) {
   out->near_plane = f.near_far[0];
   out->far_plane = f.near_far[1];
   out->stream_bytes = scene->info.stream_bytes;
-  out->grid_bytes = GridBytes(f.density) + GridBytes(f.appearance);
+  out->grid_bytes = f.density.StorageBytes() + f.appearance.StorageBytes();
   return ECRF_OK;
 }
 
@@ -133,6 +128,8 @@ int ecrf_scene_render(ecrf_scene* scene, const ecrf_camera* camera,
     o.skip_empty_space = options->skip_empty_space != 0;
     o.early_stop_transmittance = options->early_stop_transmittance;
     o.max_samples = options->max_samples;
+    o.step_scale = options->step_scale;
+    o.weight_threshold = options->weight_threshold;
   }
   ecrf::dec::Camera cam;
   std::memcpy(cam.c2w, camera->c2w, sizeof(cam.c2w));

@@ -115,6 +115,12 @@ struct VmGrid {
     return static_cast<size_t>(res[kMatMode[m][1]]) * res[kMatMode[m][0]] * ranks[m];
   }
   size_t line_count(int m) const { return static_cast<size_t>(res[kVecMode[m]]) * ranks[m]; }
+  // Memory the values hold in this storage.
+  size_t StorageBytes() const {
+    size_t n = 0;
+    for (int m = 0; m < 3; ++m) n += plane_count(m) + line_count(m);
+    return n * (storage == GridStorage::kInt16 ? 2 : 4);
+  }
   // Element index inside plane m (y along v, x along u) and line m.
   size_t plane_index(int m, int y, int x, int r) const {
     return (static_cast<size_t>(y) * res[kMatMode[m][0]] + x) * ranks[m] + r;

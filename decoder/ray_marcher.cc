@@ -298,6 +298,12 @@ Status RayMarcher::Init(const SceneField* scene, const RenderOptions& options) {
   ECRF_CHECK_OR_RETURN(options.early_stop_transmittance >= 0.f &&
                            options.early_stop_transmittance <= 1.f,
                        kErrInvalidArgument, "render: early_stop_transmittance not in [0, 1]");
+  ECRF_CHECK_OR_RETURN(options.step_scale >= kMinStepScale && options.step_scale <= kMaxStepScale,
+                       kErrInvalidArgument, "render: step_scale %g not in [1/16, 64]",
+                       static_cast<double>(options.step_scale));
+  ECRF_CHECK_OR_RETURN(!(options.weight_threshold > 1.f) && !std::isnan(options.weight_threshold),
+                       kErrInvalidArgument, "render: weight_threshold %g above 1",
+                       static_cast<double>(options.weight_threshold));
   int threads = options.num_threads;
   if (threads == 0) {
     const unsigned hw = std::thread::hardware_concurrency();
@@ -349,12 +355,17 @@ Status RayMarcher::Run(Job* job, RenderStats* stats) {
   }
   c.step = s.StepSize();
   c.n = s.NumSamples();
+  if (options_.step_scale != 1.f) {
+    c.step *= options_.step_scale;
+    const double n = std::ceil(static_cast<double>(c.n) / static_cast<double>(options_.step_scale));
+    c.n = n >= 1e9 ? 1000000000 : static_cast<int>(n);
+  }
   if (options_.max_samples > 0 && options_.max_samples < c.n) c.n = options_.max_samples;
   c.near = s.near_far[0];
   c.far = s.near_far[1];
   c.shift = s.density_shift;
   c.dscale = s.distance_scale;
-  c.wthr = s.weight_threshold;
+  c.wthr = options_.weight_threshold >= 0.f ? options_.weight_threshold : s.weight_threshold;
   c.early = options_.early_stop_transmittance;
   c.mask = s.has_mask ? &s.mask : nullptr;
   ECRF_CHECK_OR_RETURN(c.mask == nullptr || c.mask->acceleration_ready(), kErrInvalidArgument,

@@ -42,6 +42,7 @@ void CameraRay(const Camera& camera, int i, int j, float origin[3], float dir[3]
 
 inline constexpr int kMaxRenderThreads = 64;
 inline constexpr int64_t kMaxImagePixels = int64_t{1} << 26;
+inline constexpr float kMinStepScale = 1.f / 16, kMaxStepScale = 64.f;
 
 struct RenderOptions {
   int num_threads = 1;        // 0: std::thread::hardware_concurrency(); 1: no thread is created
@@ -50,6 +51,12 @@ struct RenderOptions {
   // Stop a ray once T < this (0: off, the reference). Samples past that point have weight <= T,
   // so with a value <= weight_threshold only acc changes, by < this value.
   float early_stop_transmittance = 1e-4f;
+  // Speed knobs that leave the reference process (SPEC.md 7.8). step_scale multiplies the
+  // distance between samples and divides their number (rounded up), so a ray covers the same
+  // length with fewer samples; 1 is the reference.
+  float step_scale = 1.f;
+  // Colour only samples whose weight exceeds this; negative: the scene's weight_threshold.
+  float weight_threshold = -1.f;
   int tile_size = 8;          // image tiles are tile_size^2 pixels; RenderRays uses tile_size^2 rays
   int batch_rows = 256;       // appearance samples per MLP batch
 };

@@ -52,9 +52,17 @@ bool IsDirectory(const std::string& path) {
 }
 
 void MakeDirectory(const std::string& dir) {
+  // Parents first, as `mkdir -p` does: "-o run/x" in an empty directory must work.
+  for (size_t slash = dir.find('/', 1); slash != std::string::npos; slash = dir.find('/', slash + 1)) {
+    const std::string parent = dir.substr(0, slash);
+    if (mkdir(parent.c_str(), 0755) != 0 && errno != EEXIST) {
+      throw std::runtime_error(dir + ": cannot create directory " + parent + ": " + std::strerror(errno));
+    }
+  }
   if (mkdir(dir.c_str(), 0755) != 0 && errno != EEXIST) {
     throw std::runtime_error(dir + ": cannot create directory: " + std::strerror(errno));
   }
+  if (!IsDirectory(dir)) throw std::runtime_error(dir + ": exists and is not a directory");
 }
 
 const char* FlagValue(int argc, char** argv, int* i) {

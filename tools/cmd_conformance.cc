@@ -115,6 +115,10 @@ int CheckOrWriteScenes(const std::string& dir, bool write, bool retrain, std::os
 }  // namespace
 
 int RunConformance(int argc, char** argv) {
+  if (argc == 2 && (!std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h"))) {
+    std::printf("usage: ecrf conformance --write DIR [--retrain-builtin] | --check DIR\n");
+    return 0;
+  }
   const bool retrain = argc == 4 && !std::strcmp(argv[3], "--retrain-builtin");
   if ((argc != 3 && !retrain) || (std::strcmp(argv[1], "--write") && std::strcmp(argv[1], "--check"))) {
     std::fprintf(stderr, "usage: ecrf conformance --write DIR [--retrain-builtin] | --check DIR\n");

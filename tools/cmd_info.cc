@@ -16,7 +16,10 @@ int RunInfo(int argc, char** argv) {
   std::string path;
   bool md5 = false;
   for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--md5")) {
+    if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
+      std::printf("usage: ecrf info SCENE.ecrf [--md5]\n");
+      return 0;
+    } else if (!std::strcmp(argv[i], "--md5")) {
       md5 = true;
     } else if (argv[i][0] == '-' || !path.empty()) {
       std::fprintf(stderr, "usage: ecrf info SCENE.ecrf [--md5]\n");

@@ -28,8 +28,9 @@ const char kRenderUsage[] =
     "  --int16             keep the grids in 16-bit fixed point (half the memory)\n";
 
 const char kEvalUsage[] =
-    "usage: ecrf eval SCENE.ecrf --data DIR [options]\n"
+    "usage: ecrf eval SCENE.ecrf (--data DIR | --scene builtin) [options]\n"
     "  --split NAME        split to score (default test)\n"
+    "  --seed N            the built-in scene's seed (as given to train)\n"
     "  --downscale N       shrink the images by N\n"
     "  --stride K          every K-th view\n"
     "  --max-views N       at most N views\n"
@@ -37,11 +38,26 @@ const char kEvalUsage[] =
     "  --int16             16-bit fixed-point grids\n"
     "  --json FILE         write the figures as JSON\n";
 
+// Speed knobs of the renderer (SPEC.md 7.8), shared by render and eval.
+const char kRenderKnobUsage[] =
+    "speed knobs (SPEC.md 7.8; defaults give the reference image up to early termination):\n"
+    "  --no-skip           do not skip empty space (same image, slower)\n"
+    "  --early-stop T      stop a ray when its transmittance is below T (default 1e-4; 0 = off)\n"
+    "  --samples N         at most N samples per ray (default: the scene's)\n"
+    "  --step-scale S      S x the sample spacing, 1/S the samples (default 1)\n"
+    "  --weight-threshold W  run the MLP only for samples of weight > W (default: the scene's)\n";
+
+void PrintUsage(FILE* out, const char* usage) {
+  std::fputs(usage, out);
+  std::fputs(kRenderKnobUsage, out);
+}
+
 struct CommonArgs {
   std::string scene;
   int threads = 1;
   bool int16 = false;
   int max_views = 0;
+  dec::RenderOptions render;
 };
 
 // Consumes the flags both commands share; false if argv[i] is not one of them.
@@ -54,6 +70,16 @@ bool ParseCommon(int argc, char** argv, int* i, CommonArgs* c) {
     c->int16 = true;
   } else if (a == "--max-views") {
     c->max_views = ParseInt("--max-views", value());
+  } else if (a == "--no-skip") {
+    c->render.skip_empty_space = false;
+  } else if (a == "--early-stop") {
+    c->render.early_stop_transmittance = ParseFloat("--early-stop", value());
+  } else if (a == "--samples") {
+    c->render.max_samples = ParseInt("--samples", value());
+  } else if (a == "--step-scale") {
+    c->render.step_scale = ParseFloat("--step-scale", value());
+  } else if (a == "--weight-threshold") {
+    c->render.weight_threshold = ParseFloat("--weight-threshold", value());
   } else if (a[0] != '-' && c->scene.empty()) {
     c->scene = a;
   } else {
@@ -63,7 +89,7 @@ bool ParseCommon(int argc, char** argv, int* i, CommonArgs* c) {
 }
 
 dec::RenderOptions RenderOptionsFor(const CommonArgs& c) {
-  dec::RenderOptions o;
+  dec::RenderOptions o = c.render;
   o.num_threads = c.threads;
   return o;
 }
@@ -111,7 +137,7 @@ int RunRender(int argc, char** argv) {
     const std::string a = argv[i];
     auto value = [&] { return FlagValue(argc, argv, &i); };
     if (a == "--help" || a == "-h") {
-      std::fputs(kRenderUsage, stdout);
+      PrintUsage(stdout, kRenderUsage);
       return 0;
     } else if (a == "--views") {
       views = value();
@@ -128,13 +154,14 @@ int RunRender(int argc, char** argv) {
     } else if (a == "-o" || a == "--out") {
       out = value();
     } else if (!ParseCommon(argc, argv, &i, &c)) {
-      std::fprintf(stderr, "ecrf render: unexpected argument '%s'\n\n%s", a.c_str(), kRenderUsage);
+      std::fprintf(stderr, "ecrf render: unexpected argument '%s'\n", a.c_str());
+      PrintUsage(stderr, kRenderUsage);
       return 2;
     }
   }
   if (c.scene.empty() || out.empty() || (views.empty() == (orbit == 0)) || width < 1 || height < 1) {
-    std::fprintf(stderr, "ecrf render: needs SCENE.ecrf, -o OUT_DIR and one of --views / --orbit\n\n%s",
-                 kRenderUsage);
+    std::fprintf(stderr, "ecrf render: needs SCENE.ecrf, -o OUT_DIR and one of --views / --orbit\n\n");
+    PrintUsage(stderr, kRenderUsage);
     return 2;
   }
   std::vector<std::pair<std::string, trainer::Camera>> cameras;
@@ -180,14 +207,21 @@ int RunEval(int argc, char** argv) {
   CommonArgs c;
   std::string data, split = "test", json_path;
   int stride = 1, downscale = 1;
+  bool builtin = false;
+  uint32_t seed = trainer::TrainOptions().seed;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&] { return FlagValue(argc, argv, &i); };
     if (a == "--help" || a == "-h") {
-      std::fputs(kEvalUsage, stdout);
+      PrintUsage(stdout, kEvalUsage);
       return 0;
     } else if (a == "--data") {
       data = value();
+    } else if (a == "--scene") {
+      if (std::string(value()) != "builtin") throw std::invalid_argument("--scene: only 'builtin' is known");
+      builtin = true;
+    } else if (a == "--seed") {
+      seed = uint32_t(ParseInt("--seed", value()));
     } else if (a == "--split") {
       split = value();
     } else if (a == "--stride") {
@@ -197,16 +231,18 @@ int RunEval(int argc, char** argv) {
     } else if (a == "--json") {
       json_path = value();
     } else if (!ParseCommon(argc, argv, &i, &c)) {
-      std::fprintf(stderr, "ecrf eval: unexpected argument '%s'\n\n%s", a.c_str(), kEvalUsage);
+      std::fprintf(stderr, "ecrf eval: unexpected argument '%s'\n", a.c_str());
+      PrintUsage(stderr, kEvalUsage);
       return 2;
     }
   }
-  if (c.scene.empty() || data.empty()) {
-    std::fprintf(stderr, "ecrf eval: needs SCENE.ecrf and --data DIR\n\n%s", kEvalUsage);
+  if (c.scene.empty() || data.empty() == !builtin) {
+    std::fprintf(stderr, "ecrf eval: needs SCENE.ecrf and one of --data DIR / --scene builtin\n\n");
+    PrintUsage(stderr, kEvalUsage);
     return 2;
   }
   const LoadedScene s = LoadSceneFile(c.scene, c.int16 ? dec::GridStorage::kInt16 : dec::GridStorage::kFloat32);
-  const trainer::Dataset test = trainer::LoadDataset(data, split, downscale);
+  const trainer::Dataset test = builtin ? BuiltinDataset(split, seed) : trainer::LoadDataset(data, split, downscale);
   const trainer::EvalResult r = EvaluateDecoded(*s.field, test, stride, c.max_views, RenderOptionsFor(c), false);
   std::printf("%s: %zu bytes, PSNR %.2f dB, SSIM %.4f over %d %s views; decode %.1f ms, render %.1f ms/view "
               "(%d thread%s, %s grids)\n",

@@ -12,6 +12,7 @@ int RunEncode(int argc, char** argv);
 int RunInfo(int argc, char** argv);
 int RunRender(int argc, char** argv);
 int RunEval(int argc, char** argv);
+int RunReport(int argc, char** argv);
 
 }  // namespace tools
 }  // namespace ecrf

@@ -63,17 +63,60 @@ trainer::Image RenderDecoded(const dec::SceneField& scene, const trainer::Camera
   return img;
 }
 
+trainer::Dataset BuiltinDataset(const std::string& split, uint32_t seed) {
+  trainer::TrainOptions o = trainer::PresetOptions("tiny");
+  o.builtin_scene = true;
+  o.seed = seed;
+  return trainer::LoadTrainingViews(o, split);
+}
+
+trainer::Image ResizeBilinear(const trainer::Image& image, int width, int height) {
+  trainer::Image out = trainer::MakeImage(width, height, image.channels);
+  const int c = image.channels;
+  const float sx = float(image.width) / width, sy = float(image.height) / height;
+  for (int y = 0; y < height; ++y) {
+    const float fy = std::clamp((y + 0.5f) * sy - 0.5f, 0.f, float(image.height - 1));
+    const int y0 = int(fy), y1 = std::min(y0 + 1, image.height - 1);
+    const float wy = fy - y0;
+    for (int x = 0; x < width; ++x) {
+      const float fx = std::clamp((x + 0.5f) * sx - 0.5f, 0.f, float(image.width - 1));
+      const int x0 = int(fx), x1 = std::min(x0 + 1, image.width - 1);
+      const float wx = fx - x0;
+      for (int k = 0; k < c; ++k) {
+        auto at = [&](int yy, int xx) { return image.pixels[(size_t(yy) * image.width + xx) * c + k]; };
+        const float top = at(y0, x0) + (at(y0, x1) - at(y0, x0)) * wx;
+        const float bottom = at(y1, x0) + (at(y1, x1) - at(y1, x0)) * wx;
+        out.pixels[(size_t(y) * width + x) * c + k] = top + (bottom - top) * wy;
+      }
+    }
+  }
+  return out;
+}
+
 trainer::EvalResult EvaluateDecoded(const dec::SceneField& scene, const trainer::Dataset& test,
                                     int stride, int max_views, const dec::RenderOptions& options,
-                                    bool keep_renders) {
+                                    bool keep_renders, int image_scale, dec::RenderStats* stats) {
   trainer::EvalResult r;
   double render_seconds = 0.0;
   stride = std::max(1, stride);
+  image_scale = std::max(1, image_scale);
   for (size_t v = 0; v < test.views.size(); v += size_t(stride)) {
     if (max_views > 0 && r.views >= max_views) break;
+    trainer::Camera camera = test.views[v].camera;
+    if (image_scale > 1) {
+      camera.width = std::max(1, camera.width / image_scale);
+      camera.height = std::max(1, camera.height / image_scale);
+      const double kx = double(camera.width) / test.views[v].camera.width;
+      const double ky = double(camera.height) / test.views[v].camera.height;
+      camera.fx *= kx;
+      camera.cx *= kx;
+      camera.fy *= ky;
+      camera.cy *= ky;
+    }
     const auto start = std::chrono::steady_clock::now();
-    trainer::Image img = RenderDecoded(scene, test.views[v].camera, options);
+    trainer::Image img = RenderDecoded(scene, camera, options, stats);
     render_seconds += SecondsSince(start);
+    if (image_scale > 1) img = ResizeBilinear(img, test.views[v].rgb.width, test.views[v].rgb.height);
     r.psnr += std::min(100.0, trainer::Psnr(img, test.views[v].rgb));
     r.ssim += trainer::Ssim(img, test.views[v].rgb);
     ++r.views;

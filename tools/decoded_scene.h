@@ -35,9 +35,18 @@ trainer::Image RenderDecoded(const dec::SceneField& scene, const trainer::Camera
                              const dec::RenderOptions& options, dec::RenderStats* stats = nullptr);
 
 // Mean PSNR / SSIM over every stride-th test view (at most max_views; 0 = all).
+// image_scale k > 1 renders at 1/k of the width and height (intrinsics scaled, distortion kept)
+// and scores the bilinear upsampling to full size: what a viewer shows while it refines.
 trainer::EvalResult EvaluateDecoded(const dec::SceneField& scene, const trainer::Dataset& test,
                                     int stride, int max_views, const dec::RenderOptions& options,
-                                    bool keep_renders);
+                                    bool keep_renders, int image_scale = 1,
+                                    dec::RenderStats* stats = nullptr);
+
+// The built-in scene's split as `ecrf train --scene builtin --seed seed` makes it.
+trainer::Dataset BuiltinDataset(const std::string& split, uint32_t seed);
+
+// Bilinear resampling with pixel centres aligned (as OpenGL's texture filtering).
+trainer::Image ResizeBilinear(const trainer::Image& image, int width, int height);
 
 }  // namespace tools
 }  // namespace ecrf

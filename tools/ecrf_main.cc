@@ -35,15 +35,29 @@ const Command kCommands[] = {
     {"eval", ecrf::tools::RunEval, "PSNR/SSIM of a stream: eval SCENE.ecrf --data DIR"},
     {"conformance", ecrf::tools::RunConformance,
      "rebuild (--write DIR) or check (--check DIR) the conformance vectors"},
+    {"report", ecrf::tools::RunReport,
+     "rate-distortion and speed-error reports: report sweep|render|compare|plot"},
     {"bench", RunBench, "benchmarks: bench coder|idct|mlp|train [--json FILE]"},
 };
 
-const Command kBenches[] = {
-    {"coder", ecrf::tools::RunCoderBench, "entropy coder and coefficient coding"},
-    {"idct", ecrf::tools::RunIdctBench, "integer inverse DCT"},
-    {"mlp", ecrf::tools::RunMlpBench, "appearance MLP forward/backward GEMMs"},
-    {"train", ecrf::tools::RunTrainStepBench, "one training step at the 128^3 and 300^3 phases"},
+struct Bench {
+  const char* name;
+  int (*run)(int argc, char** argv);
+  const char* help;
+  const char* usage;
 };
+
+const Bench kBenches[] = {
+    {"coder", ecrf::tools::RunCoderBench, "entropy coder and coefficient coding", "[--json FILE]"},
+    {"idct", ecrf::tools::RunIdctBench, "integer inverse DCT", "[--json FILE]"},
+    {"mlp", ecrf::tools::RunMlpBench, "appearance MLP forward/backward GEMMs",
+     "[--n N] [--threads 1,2] [--reps R] [--chunk ROWS] [--adam FLOATS] [--best] [--json FILE]"},
+    {"train", ecrf::tools::RunTrainStepBench, "one training step at the 128^3 and 300^3 phases",
+     "[--res N] [--rays N] [--reps N] [--threads 1,2] [--mask 0|1] [--early-stop T] [--blob-peak F] "
+     "[--json FILE]"},
+};
+
+bool IsHelpFlag(const char* a) { return !std::strcmp(a, "--help") || !std::strcmp(a, "-h"); }
 
 void PrintUsage(FILE* out) {
   std::fprintf(out, "usage: ecrf <command> [options]\n\ncommands:\n");
@@ -51,13 +65,21 @@ void PrintUsage(FILE* out) {
 }
 
 int RunBench(int argc, char** argv) {
-  if (argc < 2) {
-    std::fprintf(stderr, "usage: ecrf bench <what> [--json FILE]\n");
-    for (const Command& b : kBenches) std::fprintf(stderr, "  %-8s %s\n", b.name, b.help);
-    return 2;
+  if (argc < 2 || IsHelpFlag(argv[1])) {
+    FILE* out = argc < 2 ? stderr : stdout;
+    std::fprintf(out, "usage: ecrf bench <what> [options]\n");
+    for (const Bench& b : kBenches) std::fprintf(out, "  %-8s %s\n", b.name, b.help);
+    return argc < 2 ? 2 : 0;
   }
-  for (const Command& b : kBenches) {
-    if (std::strcmp(argv[1], b.name) == 0) return b.run(argc - 1, argv + 1);
+  for (const Bench& b : kBenches) {
+    if (std::strcmp(argv[1], b.name) != 0) continue;
+    for (int i = 2; i < argc; ++i) {
+      if (IsHelpFlag(argv[i])) {
+        std::printf("usage: ecrf bench %s %s\n  %s\n", b.name, b.usage, b.help);
+        return 0;
+      }
+    }
+    return b.run(argc - 1, argv + 1);
   }
   std::fprintf(stderr, "ecrf bench: unknown benchmark '%s'\n", argv[1]);
   return 2;

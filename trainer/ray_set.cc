@@ -54,8 +54,8 @@ void RaySet::Filter(const std::function<bool(const float*, const float*)>& keep)
   KeepFlagged(flags);
 }
 
-void RaySet::FilterChunked(
-    const std::function<void(int, const float*, const float*, uint8_t*)>& keep) {
+bool RaySet::FilterChunked(
+    const std::function<void(int, const float*, const float*, uint8_t*)>& keep, size_t min_keep) {
   const size_t chunk = 1 << 16;
   std::vector<float> o(chunk * 3), d(chunk * 3);
   std::vector<uint8_t> flags(active_.size());
@@ -68,7 +68,11 @@ void RaySet::FilterChunked(
     }
     keep(n, o.data(), d.data(), &flags[begin]);
   }
+  size_t kept = 0;
+  for (uint8_t f : flags) kept += f != 0;
+  if (kept < min_keep) return false;
   KeepFlagged(flags);
+  return true;
 }
 
 void RaySet::Shuffle(std::mt19937_64& rng) {

@@ -24,9 +24,11 @@ class RaySet {
   // Keeps the rays for which keep(origin, dir) holds; evaluated in parallel.
   void Filter(const std::function<bool(const float* origin, const float* dir)>& keep);
   // Same, for a test that runs on many rays at once: keep(n, origins, dirs, flags_out), called on
-  // consecutive chunks (the callback parallelises internally).
-  void FilterChunked(
-      const std::function<void(int n, const float* origins, const float* dirs, uint8_t* keep)>& keep);
+  // consecutive chunks (the callback parallelises internally). Keeps every ray and returns false
+  // when fewer than min_keep would remain (training cannot go on with no rays).
+  bool FilterChunked(
+      const std::function<void(int n, const float* origins, const float* dirs, uint8_t* keep)>& keep,
+      size_t min_keep = 1);
 
   // The next n rays of a shuffled order (TensoRF's SimpleSampler: consecutive slices of a random
   // permutation, reshuffled when exhausted). Outputs are n x 3 each.

@@ -393,11 +393,20 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
       }
       if (k == 1) {
         const TensorfModel& m = *model;
-        rays.FilterChunked([&m](int count, const float* org, const float* dir, uint8_t* keep) {
-          const std::vector<uint8_t> k = m.FilterRays(count, org, dir, false);
-          std::copy(k.begin(), k.end(), keep);
-        });
-        std::fprintf(stderr, "\nfiltered training rays: %zu of %zu remain\n", rays.size(), rays.total());
+        const bool filtered = rays.FilterChunked(
+            [&m](int count, const float* org, const float* dir, uint8_t* keep) {
+              const std::vector<uint8_t> k = m.FilterRays(count, org, dir, false);
+              std::copy(k.begin(), k.end(), keep);
+            },
+            size_t(o.batch_rays));
+        if (filtered) {
+          std::fprintf(stderr, "\nfiltered training rays: %zu of %zu remain\n", rays.size(), rays.total());
+        } else {
+          // An empty alpha mask this early means the density has not formed yet (a very short
+          // run scales the mask updates down with it); filtering would leave nothing to train on.
+          std::fprintf(stderr, "\nray filtering skipped at iteration %d: the alpha mask keeps fewer rays than one "
+                       "batch (the model has too little density yet; more --iters give it time)\n", it);
+        }
       }
     }
     for (size_t k = 0; k < upsample_at.size(); ++k) {

@@ -573,6 +573,78 @@ TEST(RayMarcherTest, EarlyTerminationChangesAlmostNothing) {
   EXPECT_EQ(s_on.color_samples, s_off.color_samples);
 }
 
+TEST(RayMarcherTest, StepScaleIsTheSceneWithAScaledStep) {
+  // SPEC.md 7.8: step_scale s renders exactly the scene whose step is step * s (one binary32
+  // product) and whose sample count is ceil(n / s): same bits as changing the scene itself.
+  TestScene ts;
+  BuildScene(SceneSpec(), &ts);
+  const Rays rays = MakeRays(ts.field, 31);
+  for (float scale : {0.5f, 2.f, 3.f}) {
+    RenderOptions scaled = Exact();
+    scaled.step_scale = scale;
+    std::vector<float> r1, a1, r2, a2;
+    RenderStats s1, s2;
+    RenderWith(ts.field, scaled, rays, &r1, &a1, &s1);
+    const float step = ts.field.StepSize();
+    const int n = ts.field.NumSamples();
+    ts.field.step_size = step * scale;
+    ts.field.n_samples = int(std::ceil(double(n) / scale));
+    RenderWith(ts.field, Exact(), rays, &r2, &a2, &s2);
+    EXPECT_EQ(r1, r2) << "scale " << scale;
+    EXPECT_EQ(a1, a2) << "scale " << scale;
+    EXPECT_EQ(s1.samples, s2.samples);
+    // And that scene still matches the naive reference process.
+    ExpectMatchesNaive(ts, Exact(), 32, 0.01);
+    ts.field.step_size = 0.f;
+    ts.field.n_samples = 0;
+  }
+  RenderOptions fine = Exact(), coarse = Exact();
+  fine.step_scale = 0.5f;
+  coarse.step_scale = 2.f;
+  std::vector<float> r, a;
+  RenderStats s_fine, s_coarse;
+  RenderWith(ts.field, fine, rays, &r, &a, &s_fine);
+  RenderWith(ts.field, coarse, rays, &r, &a, &s_coarse);
+  EXPECT_GT(s_fine.samples, 3 * s_coarse.samples);
+}
+
+TEST(RayMarcherTest, WeightThresholdOptionOverridesTheScene) {
+  TestScene ts;
+  BuildScene(SceneSpec(), &ts);
+  const Rays rays = MakeRays(ts.field, 33);
+  RenderOptions higher = Exact();
+  higher.weight_threshold = 0.02f;
+  std::vector<float> r1, a1, r2, a2, r0, a0;
+  RenderStats s0, s1, s2;
+  RenderWith(ts.field, Exact(), rays, &r0, &a0, &s0);
+  RenderWith(ts.field, higher, rays, &r1, &a1, &s1);
+  const float scene_threshold = ts.field.weight_threshold;
+  ts.field.weight_threshold = 0.02f;
+  RenderWith(ts.field, Exact(), rays, &r2, &a2, &s2);
+  ts.field.weight_threshold = scene_threshold;
+  EXPECT_EQ(r1, r2);
+  EXPECT_EQ(a1, a0);  // only colour is skipped, opacity is unchanged
+  EXPECT_LT(s1.color_samples, s0.color_samples);
+  EXPECT_EQ(s1.color_samples, s2.color_samples);
+}
+
+TEST(RayMarcherTest, RejectsSpeedKnobsOutOfRange) {
+  TestScene ts;
+  BuildScene(SceneSpec(), &ts);
+  for (float bad : {0.f, 1.f / 32, 65.f, NAN}) {
+    RenderOptions o;
+    o.step_scale = bad;
+    RayMarcher rm;
+    EXPECT_EQ(rm.Init(&ts.field, o).code(), kErrInvalidArgument) << bad;
+  }
+  for (float bad : {1.5f, NAN}) {
+    RenderOptions o;
+    o.weight_threshold = bad;
+    RayMarcher rm;
+    EXPECT_EQ(rm.Init(&ts.field, o).code(), kErrInvalidArgument) << bad;
+  }
+}
+
 TEST(RayMarcherTest, EmptyDensityRendersBackground) {
   // Empty alpha mask: every sample is skipped, the image is exactly white with alpha 0.
   SceneSpec spec;

@@ -259,6 +259,17 @@ TEST(DecoderCApi, DecodeInfoTensorRenderAndErrors) {
     ASSERT_EQ(rgb[3 * p + 2], 0.f);
     ASSERT_EQ(rgba[4 * p + 3], 0);
   }
+  // The speed knobs reach the renderer through the C API: defaults leave the scene's process,
+  // values out of range are refused with a message.
+  EXPECT_EQ(ro.step_scale, 1.f);
+  EXPECT_LT(ro.weight_threshold, 0.f);
+  ro.step_scale = 2.f;
+  ro.weight_threshold = 0.5f;
+  EXPECT_EQ(ecrf_scene_render(scene, &cam, &ro, rgba.data(), nullptr), ECRF_OK);
+  ro.step_scale = 100.f;
+  EXPECT_EQ(ecrf_scene_render(scene, &cam, &ro, rgba.data(), nullptr), ECRF_ERR_INVALID_ARGUMENT);
+  EXPECT_NE(std::string(ecrf_scene_message(scene)).find("step_scale"), std::string::npos);
+  ro.step_scale = 1.f;
   cam.width = 0;
   EXPECT_LT(ecrf_scene_render(scene, &cam, &ro, rgba.data(), nullptr), 0);
   ecrf_scene_destroy(scene);

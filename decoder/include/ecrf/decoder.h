@@ -72,6 +72,9 @@ typedef struct ecrf_render_options {
   int skip_empty_space;           /* 1: skip samples the occupancy mask proves empty */
   float early_stop_transmittance; /* stop a ray once its transmittance is below (0: off) */
   int max_samples;                /* cap on samples per ray (0: the scene's) */
+  float step_scale;               /* sample spacing x this, sample count / this (1: the scene's;
+                                     range [1/16, 64]); fewer samples, faster, less exact */
+  float weight_threshold;         /* colour only samples of larger weight (< 0: the scene's) */
 } ecrf_render_options;
 
 void ecrf_render_options_default(ecrf_render_options* options);

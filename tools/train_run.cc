@@ -1,0 +1,223 @@
+#include "tools/train_run.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+
+#include "tools/cli_args.h"
+#include "tools/decoded_scene.h"
+#include "tools/encode_report.h"
+#include "trainer/checkpoint.h"
+#include "trainer/image_io.h"
+#include "trainer/scene_encoder.h"
+#include "trainer/trainer.h"
+
+namespace ecrf {
+namespace tools {
+
+const char kTrainFlagsUsage[] =
+    "  --preset fast|paper|tiny   schedule and grid sizes (default fast; tiny for the built-in scene)\n"
+    "  --iters N                  iterations (milestones scale with it)\n"
+    "  --downscale N              shrink the images by N (area filter)\n"
+    "  --batch N                  rays per iteration (default 4096)\n"
+    "  --seed N                   random seed\n"
+    "  --checkpoint-every N       write RUN_DIR/checkpoint.ckpt every N iterations\n"
+    "  --resume                   continue from RUN_DIR/checkpoint.ckpt\n"
+    "  --eval-every N             test PSNR every N iterations (a PSNR-vs-minutes curve)\n"
+    "  --test-stride K            evaluate every K-th test view\n"
+    "  --max-test-views N         evaluate at most N test views\n"
+    "  --save-renders             write the test renders as PNG into RUN_DIR/renders\n"
+    "  --threads N                worker threads (default: all cores)\n"
+    "ECRF objective:\n"
+    "  --lambda-e X               weight of the estimated size in bits (0 = plain TensoRF)\n"
+    "  --alpha A                  lambda_r = A * lambda_e for the DCT-coefficient L2 term (default 1)\n"
+    "  --dct-block CxHxW          plane block shape (default 16x16x16)\n"
+    "  --line-block CxL           line block shape (default 8x8)\n"
+    "  --rate-fraction F          share of blocks in each step's rate estimate (default 0.1)\n";
+
+namespace {
+
+// Consumes argv[*i] (and its value) when it is a training flag; false otherwise.
+bool ParseTrainFlag(int argc, char** argv, int* i, trainer::TrainOptions* o) {
+  const std::string a = argv[*i];
+  auto value = [&] { return FlagValue(argc, argv, i); };
+  if (a == "--preset") {
+    value();  // read before the loop
+  } else if (a == "--scene") {
+    const std::string s = value();
+    if (s != "builtin") throw std::invalid_argument("--scene: only 'builtin' is known (use --data DIR)");
+    o->builtin_scene = true;
+  } else if (a == "--data") {
+    o->data_dir = value();
+  } else if (a == "--iters") {
+    o->iters = ParseInt("--iters", value());
+  } else if (a == "--downscale") {
+    o->downscale = std::max(1, ParseInt("--downscale", value()));
+  } else if (a == "--batch") {
+    o->batch_rays = std::max(1, ParseInt("--batch", value()));
+  } else if (a == "--seed") {
+    o->seed = uint32_t(ParseInt("--seed", value()));
+  } else if (a == "--checkpoint-every") {
+    o->checkpoint_every = ParseInt("--checkpoint-every", value());
+  } else if (a == "--resume") {
+    o->resume = true;
+  } else if (a == "--eval-every") {
+    o->eval_every = ParseInt("--eval-every", value());
+  } else if (a == "--test-stride") {
+    o->test_view_stride = std::max(1, ParseInt("--test-stride", value()));
+  } else if (a == "--max-test-views") {
+    o->max_test_views = ParseInt("--max-test-views", value());
+  } else if (a == "--lambda-e") {
+    o->lambda_e = ParseFloat("--lambda-e", value());
+  } else if (a == "--alpha") {
+    o->alpha = ParseFloat("--alpha", value());
+  } else if (a == "--dct-block") {
+    ParseShape("--dct-block", value(), 3, o->plane_block);
+  } else if (a == "--line-block") {
+    int shape[2];
+    ParseShape("--line-block", value(), 2, shape);
+    o->line_block[0] = 1;
+    o->line_block[1] = shape[0];
+    o->line_block[2] = shape[1];
+  } else if (a == "--rate-fraction") {
+    o->rate_fraction = std::min(1.0f, ParseFloat("--rate-fraction", value()));
+  } else if (a == "--threads") {
+    omp_set_num_threads(std::max(1, ParseInt("--threads", value())));
+  } else if (a == "--save-renders") {
+    o->save_renders = true;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+trainer::TrainOptions TrainOptionsFromArgs(int argc, char** argv, std::vector<int>* rest) {
+  std::string preset = "fast";
+  bool builtin = false, preset_given = false;
+  for (int i = 1; i + 1 < argc; ++i) {
+    if (!std::strcmp(argv[i], "--preset")) {
+      preset = argv[i + 1];
+      preset_given = true;
+    }
+    if (!std::strcmp(argv[i], "--scene") && !std::strcmp(argv[i + 1], "builtin")) builtin = true;
+  }
+  if (builtin && !preset_given) preset = "tiny";
+  trainer::TrainOptions o = trainer::PresetOptions(preset);
+  for (int i = 1; i < argc; ++i) {
+    const int at = i;
+    if (!ParseTrainFlag(argc, argv, &i, &o)) rest->push_back(at);
+  }
+  if (o.iters < 1) throw std::invalid_argument("--iters must be at least 1");
+  return o;
+}
+
+nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& o) {
+  if (o.out_dir.empty()) throw std::invalid_argument("no output directory (-o RUN_DIR)");
+  if (!o.builtin_scene && o.data_dir.empty()) throw std::invalid_argument("no data: --data DIR or --scene builtin");
+  MakeDirectory(o.out_dir);
+
+  const trainer::Dataset train = trainer::LoadTrainingViews(o, "train");
+  const trainer::Dataset test = trainer::LoadTrainingViews(o, "test");
+  std::fprintf(stderr, "data: %zu train views, %zu test views (%dx%d)\n", train.views.size(),
+               test.views.size(), train.views[0].rgb.width, train.views[0].rgb.height);
+  trainer::TensorfModel model(trainer::ConfigFor(o, train));
+  trainer::RateState rate;
+  const trainer::TrainResult r = trainer::Train(o, train, test, &model, &rate);
+
+  size_t float_bytes = 0;
+  for (const auto& a : model.NamedParameters()) float_bytes += a.size * sizeof(float);
+  // Close the loop: encode, decode with the embeddable decoder, and score the decoded stream.
+  trainer::EncodeOptions eo;
+  eo.blocks = rate.config;
+  eo.steps = rate.steps;
+  eo.coef_bits = o.coef_bits;
+  eo.metadata_json = nlohmann::json{{"encoder", "ecrf"},
+                                    {"data", o.builtin_scene ? std::string("builtin") : o.data_dir},
+                                    {"preset", o.preset},
+                                    {"iterations", r.iterations},
+                                    {"lambda_e", o.lambda_e},
+                                    {"alpha", o.alpha}}.dump();
+  trainer::EncodeReport report;
+  const auto encode_start = std::chrono::steady_clock::now();
+  std::vector<uint8_t> bytes = trainer::EncodeScene(model, eo, &report);
+  const double encode_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - encode_start).count();
+  trainer::WriteFileAtomically(o.out_dir + "/scene.ecrf", bytes.data(), bytes.size());
+  const LoadedScene decoded = DecodeSceneBytes(std::move(bytes), o.out_dir + "/scene.ecrf");
+  dec::RenderOptions ro;
+  ro.num_threads = 0;
+  const trainer::EvalResult d =
+      EvaluateDecoded(*decoded.field, test, o.test_view_stride, o.max_test_views, ro, false);
+
+  std::printf("trained %d iterations in %.1f s (%.3f s/it); test PSNR %.2f dB, SSIM %.4f over %d views; "
+              "float32 model %.2f MB; estimated coded grids %.3f MB\n",
+              r.iterations, r.train_seconds, r.train_seconds / std::max(1, r.iterations), r.test.psnr,
+              r.test.ssim, r.test.views, float_bytes / 1e6, r.rate.total_bits / 8e6);
+  std::printf("encoded %s/scene.ecrf: %zu bytes (%.1fx smaller than float32); decoded stream: test PSNR %.2f dB "
+              "(%+.2f dB), SSIM %.4f; decode %.0f ms, render %.0f ms/view\n",
+              o.out_dir.c_str(), decoded.bytes.size(), double(float_bytes) / decoded.bytes.size(), d.psnr,
+              d.psnr - r.test.psnr, d.ssim, 1e3 * decoded.decode_seconds, 1e3 * d.seconds_per_view);
+
+  nlohmann::json m;
+  m["preset"] = o.preset;
+  m["data"] = o.builtin_scene ? std::string("builtin") : o.data_dir;
+  m["iterations"] = r.iterations;
+  m["seed"] = o.seed;
+  m["test_view_stride"] = o.test_view_stride;
+  m["max_test_views"] = o.max_test_views;
+  m["train_seconds"] = r.train_seconds;
+  m["train_psnr"] = r.final_train_psnr;
+  m["test_psnr"] = r.test.psnr;
+  m["test_ssim"] = r.test.ssim;
+  m["test_views"] = r.test.views;
+  m["render_seconds_per_view"] = r.test.seconds_per_view;
+  m["grid_res"] = model.res();
+  m["aabb_min"] = model.aabb().min;
+  m["aabb_max"] = model.aabb().max;
+  m["float32_model_bytes"] = float_bytes;
+  m["lambda_e"] = o.lambda_e;
+  m["alpha"] = o.alpha;
+  m["plane_block"] = o.plane_block;
+  m["line_block"] = o.line_block;
+  m["file_bytes"] = decoded.bytes.size();
+  m["decoded_test_psnr"] = d.psnr;
+  m["decoded_test_ssim"] = d.ssim;
+  m["decode_seconds"] = decoded.decode_seconds;
+  m["decoded_render_seconds_per_view"] = d.seconds_per_view;
+  m["encode_seconds"] = encode_seconds;
+  m["encode"] = EncodeReportJson(report);
+  m["coded_to_estimated_grid_bytes"] = r.rate.total_bits > 0 ? report.coefficient_bytes() * 8.0 / r.rate.total_bits : 0.0;
+  m["estimated_grid_bits"] = r.rate.total_bits;
+  m["estimated_grid_bytes"] = r.rate.total_bits / 8.0;
+  nlohmann::json per_tensor = nlohmann::json::object();
+  for (size_t t = 0; t < r.rate.bits.size(); ++t) {
+    per_tensor[trainer::RateTensorName(int(t))] = {{"bits", r.rate.bits[t]}, {"coefficients", r.rate.coeffs[t]}};
+  }
+  m["estimated_bits_per_tensor"] = per_tensor;
+  if (!r.psnr_curve.empty()) {
+    nlohmann::json curve = nlohmann::json::array();
+    for (const auto& p : r.psnr_curve) curve.push_back({{"minutes", p.first}, {"test_psnr", p.second}});
+    m["psnr_curve"] = curve;
+  }
+  const std::string text = m.dump(2) + "\n";
+  trainer::WriteFileAtomically(o.out_dir + "/metrics.json", text.data(), text.size());
+  if (o.save_renders) {
+    MakeDirectory(o.out_dir + "/renders");
+    for (size_t i = 0; i < r.test.renders.size(); ++i) {
+      char name[64];
+      std::snprintf(name, sizeof(name), "/renders/test_%03zu.png", i * size_t(o.test_view_stride));
+      trainer::SavePng(o.out_dir + name, r.test.renders[i]);
+    }
+  }
+  return m;
+}
+
+}  // namespace tools
+}  // namespace ecrf

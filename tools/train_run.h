@@ -1,0 +1,31 @@
+// One training run as `ecrf train` does it: train, encode RUN/scene.ecrf, decode that file with
+// the embeddable decoder, score it, and write RUN/metrics.json. Shared by `ecrf train` and the
+// rate-distortion sweep of `ecrf report`.
+#ifndef ECRF_TOOLS_TRAIN_RUN_H_
+#define ECRF_TOOLS_TRAIN_RUN_H_
+
+#include <nlohmann/json.hpp>
+
+#include "trainer/train_options.h"
+
+namespace ecrf {
+namespace tools {
+
+// Options for a command line: the preset (named anywhere on the line, so later flags override
+// it whatever their order; "tiny" when --scene builtin has no --preset), then every training
+// flag of argv that ParseTrainFlag knows. Flags it does not know are left for the caller: their
+// indices go to *rest.
+trainer::TrainOptions TrainOptionsFromArgs(int argc, char** argv, std::vector<int>* rest);
+
+// The training flags' usage lines (data, schedule, ECRF objective, bookkeeping).
+extern const char kTrainFlagsUsage[];
+
+// Checks that options name data and an output directory it can create, creates it (with
+// parents), then trains, encodes, decodes and evaluates. Prints the summary lines to stdout.
+// Returns what it writes to RUN/metrics.json. Throws std::exception with a message on failure.
+nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options);
+
+}  // namespace tools
+}  // namespace ecrf
+
+#endif  // ECRF_TOOLS_TRAIN_RUN_H_
