@@ -9,6 +9,7 @@
 #include "format/coef_coder.h"
 #include "format/container.h"
 #include "format/half_float.h"
+#include "format/mlp_coder.h"
 #include "format/int_idct.h"
 #include "format/occupancy_coder.h"
 #include "decoder/field_sampler.h"
@@ -178,8 +179,8 @@ Status DecodeMlpChunk(const ChunkView& chunk, const SceneHeader& h, SceneField* 
   for (uint8_t& b : reserved) ECRF_RETURN_IF_ERROR(r.ReadU8(&b, "MLPW reserved"));
   ECRF_CHECK_OR_RETURN(reserved[0] == 0 && reserved[1] == 0 && reserved[2] == 0, kErrCorrupt,
                        "MLPW: reserved bytes must be 0");
-  ECRF_CHECK_OR_RETURN(precision <= 1, kErrUnsupported,
-                       "MLPW: precision %u (0 = float16, 1 = float32)", precision);
+  ECRF_CHECK_OR_RETURN(precision <= kMlpPrecisionQuantized, kErrUnsupported,
+                       "MLPW: precision %u (0 = float16, 1 = float32, 2 = quantized)", precision);
   MlpConfig config;
   config.num_products = h.total_rank(1);
   config.feature_dim = h.feature_dim;
@@ -188,26 +189,38 @@ Status DecodeMlpChunk(const ChunkView& chunk, const SceneHeader& h, SceneField* 
   config.hidden = h.hidden;
   ECRF_RETURN_IF_ERROR(scene->mlp.Init(config));
   const size_t count = scene->mlp.num_params();
-  const size_t value_bytes = precision == 0 ? 2 : 4;
-  ECRF_CHECK_OR_RETURN(r.remaining() / value_bytes == count && r.remaining() % value_bytes == 0,
-                       kErrCorrupt, "MLPW: %zu bytes of weights, expected %zu values of %zu bytes",
-                       r.remaining(), count, value_bytes);
   HeapArray<float> params;
   ECRF_RETURN_IF_ERROR(params.Allocate(count));
-  const uint8_t* p = r.current();
-  for (size_t i = 0; i < count; ++i, p += value_bytes) {
-    if (precision == 0) {
-      params[i] = HalfToFloat(static_cast<uint16_t>(p[0] | (p[1] << 8)));
-    } else {
-      const uint32_t u = uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 |
-                         uint32_t(p[3]) << 24;
-      std::memcpy(&params[i], &u, 4);
+  if (precision == kMlpPrecisionQuantized) {
+    MlpLayout layout;
+    layout.feature_dim = h.feature_dim;
+    layout.num_products = config.num_products;
+    layout.hidden = h.hidden;
+    layout.input_dim = config.input_dim();
+    layout.feature_pe_width = 2 * h.feature_dim * h.feature_pe_freqs;
+    const Status q = DecodeQuantizedMlp(layout, r.current(), r.remaining(), params.data());
+    if (!q.ok()) return Status::Error(q.code(), "MLPW: %s", q.message());
+  } else {
+    const size_t value_bytes = precision == kMlpPrecisionFloat16 ? 2 : 4;
+    ECRF_CHECK_OR_RETURN(r.remaining() / value_bytes == count && r.remaining() % value_bytes == 0,
+                         kErrCorrupt, "MLPW: %zu bytes of weights, expected %zu values of %zu bytes",
+                         r.remaining(), count, value_bytes);
+    const uint8_t* p = r.current();
+    for (size_t i = 0; i < count; ++i, p += value_bytes) {
+      if (precision == kMlpPrecisionFloat16) {
+        params[i] = HalfToFloat(static_cast<uint16_t>(p[0] | (p[1] << 8)));
+      } else {
+        const uint32_t u = uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 |
+                           uint32_t(p[3]) << 24;
+        std::memcpy(&params[i], &u, 4);
+      }
     }
   }
   const Status s = scene->mlp.SetParams(params.data(), count);
   if (!s.ok()) return Status::Error(kErrCorrupt, "MLPW: %s", s.message());
   info->mlp_bytes = chunk.size;
-  info->mlp_precision_bits = precision == 0 ? 16 : 32;
+  info->mlp_precision = precision;
+  info->mlp_precision_bits = precision == kMlpPrecisionFloat16 ? 16 : precision == kMlpPrecisionFloat32 ? 32 : 0;
   return Status::Ok();
 }
 

@@ -104,10 +104,10 @@ Status ContainerReader::Next(ChunkView* chunk, bool* done) {
   return Status::Ok();
 }
 
-ContainerWriter::ContainerWriter() {
+ContainerWriter::ContainerWriter(uint8_t version_minor) {
   bytes_.assign(kSignature, kSignature + 4);
   bytes_.push_back(kVersionMajor);
-  bytes_.push_back(kVersionMinor);
+  bytes_.push_back(version_minor);
   bytes_.push_back(0);
   bytes_.push_back(0);
 }

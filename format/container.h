@@ -17,7 +17,10 @@ namespace ecrf {
 
 constexpr uint8_t kSignature[4] = {'E', 'C', 'R', 'F'};
 constexpr uint8_t kVersionMajor = 1;
-constexpr uint8_t kVersionMinor = 0;
+// The newest minor version this implementation knows. A stream carries the lowest minor version
+// whose features it uses (1.1: MLPW precision 2, the quantized MLP), so streams without them stay
+// byte-identical to 1.0 streams.
+constexpr uint8_t kVersionMinor = 1;
 constexpr size_t kFileHeaderBytes = 8;   // signature, major, minor, reserved u16
 constexpr size_t kChunkOverheadBytes = 12;  // type, length, crc
 constexpr uint32_t kMaxChunkPayloadBytes = 1u << 28;  // 256 MiB
@@ -65,7 +68,7 @@ class ContainerReader {
 
 class ContainerWriter {
  public:
-  ContainerWriter();
+  explicit ContainerWriter(uint8_t version_minor = 0);
   void AddChunk(uint32_t type, const uint8_t* payload, size_t size);
   void AddChunk(uint32_t type, const std::vector<uint8_t>& payload) {
     AddChunk(type, payload.data(), payload.size());

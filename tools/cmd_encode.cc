@@ -20,6 +20,8 @@ const char kEncodeUsage[] =
     "usage: ecrf encode RUN_DIR|CHECKPOINT -o SCENE.ecrf [options]\n"
     "  --coef-bits 8|16     coefficient depth (default 8)\n"
     "  --mlp-f32            store the basis and MLP as float32 (default float16)\n"
+    "  --mlp-levels L       store them as integer levels, at most L per row, range-coded (MLPW\n"
+    "                       precision 2, bitstream 1.1; e.g. 31)\n"
     "  --no-drop            keep rank components that decode to zero\n"
     "  --no-occupancy       leave the alpha mask out\n"
     "  --dct-block CxHxW    plane blocks when the checkpoint has no trained rate (default 16x16x16)\n"
@@ -41,6 +43,8 @@ int RunEncode(int argc, char** argv) {
       output = value();
     } else if (a == "--coef-bits") {
       o.coef_bits = ParseInt("--coef-bits", value());
+    } else if (a == "--mlp-levels") {
+      o.mlp_max_level = std::max(1, ParseInt("--mlp-levels", value()));
     } else if (a == "--mlp-f32") {
       o.mlp_float32 = true;
     } else if (a == "--no-drop") {

@@ -45,8 +45,10 @@ int RunInfo(int argc, char** argv) {
   std::printf("render   %u samples/ray, step %g, near %g, far %g, background %g %g %g\n", h.num_samples,
               h.step_size, h.near_far[0], h.near_far[1], h.background[0], h.background[1],
               h.background[2]);
-  std::printf("mlp      features %u, PE %u/%u, hidden %u, float%d\n", h.feature_dim, h.feature_pe_freqs,
-              h.viewdir_pe_freqs, h.hidden, in.mlp_precision_bits);
+  std::printf("mlp      features %u, PE %u/%u, hidden %u, %s\n", h.feature_dim, h.feature_pe_freqs,
+              h.viewdir_pe_freqs, h.hidden,
+              in.mlp_precision_bits == 16 ? "float16" : in.mlp_precision_bits == 32 ? "float32"
+                                                                                   : "quantized (levels x row steps)");
   std::printf("\n%-20s %10s %8s %10s %10s %12s%s\n", "chunk", "bytes", "bits", "block", "step",
               "coded blocks", md5 ? "  md5 of decoded float32 values" : "");
   std::printf("%-20s %10u\n", "HEAD", in.head_bytes);

@@ -140,10 +140,15 @@ bool RunPlotScript(const std::string& args, const std::string& dir) {
   }
   const std::string command = Quote(Python()) + " " + Quote(script) + " " + args + " 1>&2";
   const int status = std::system(command.c_str());
-  if (status == 0) return true;
-  std::fprintf(stderr, "report: plots skipped (%s exited with status %d); the tables and CSV files are complete. "
-               "For plots: apt-get install python3-matplotlib, then `ecrf report plot %s`\n",
-               script.c_str(), WIFEXITED(status) ? WEXITSTATUS(status) : status, dir.c_str());
+  const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  if (code == 0) return true;
+  if (code == 3) {  // the script's "matplotlib is not installed"
+    std::fprintf(stderr, "report: plots skipped; for plots: apt-get install python3-matplotlib, then "
+                 "`ecrf report plot %s`\n", dir.c_str());
+  } else {
+    std::fprintf(stderr, "report: %s failed (exit status %d, its message is above); the tables and CSV files "
+                 "are complete\n", script.c_str(), code);
+  }
   return false;
 }
 
@@ -283,7 +288,8 @@ void WriteTextFile(const std::string& path, const std::string& text) {
 }
 
 bool DrawComparePlot(const std::string& png, const std::string& csv) {
-  return RunPlotScript("--compare " + Quote(png) + " " + Quote(csv), png);
+  std::remove(png.c_str());
+  return RunPlotScript("--compare " + Quote(png) + " " + Quote(csv), png) && Exists(png);
 }
 
 bool WriteReport(const std::string& dir, const nlohmann::json& written) {

@@ -10,6 +10,7 @@
 #include "format/coef_coder.h"
 #include "format/container.h"
 #include "format/half_float.h"
+#include "format/mlp_coder.h"
 #include "format/occupancy_coder.h"
 #include "format/scene_header.h"
 #include "trainer/grid_dct.h"
@@ -165,12 +166,23 @@ std::vector<uint8_t> EncodeOccupancyChunk(const AlphaMask& mask) {
   return std::move(w.bytes());
 }
 
-std::vector<uint8_t> EncodeMlpChunk(const std::vector<float>& params, bool float32) {
+std::vector<uint8_t> EncodeMlpChunk(const SceneHeader& h, const std::vector<float>& params, bool float32,
+                                    int max_level) {
   ByteWriter w;
-  w.U8(float32 ? 1 : 0);
+  w.U8(max_level > 0 ? kMlpPrecisionQuantized : float32 ? kMlpPrecisionFloat32 : kMlpPrecisionFloat16);
   w.U8(0);
   w.U8(0);
   w.U8(0);
+  if (max_level > 0) {
+    MlpLayout layout;
+    layout.feature_dim = h.feature_dim;
+    layout.num_products = h.total_rank(1);
+    layout.hidden = h.hidden;
+    layout.feature_pe_width = 2 * h.feature_dim * h.feature_pe_freqs;
+    layout.input_dim = h.feature_dim + 3 + layout.feature_pe_width + 2 * 3 * h.viewdir_pe_freqs;
+    w.Bytes(EncodeQuantizedMlp(layout, params.data(), max_level, nullptr));
+    return std::move(w.bytes());
+  }
   for (float v : params) {
     if (float32) {
       w.F32(v);
@@ -184,7 +196,7 @@ std::vector<uint8_t> EncodeMlpChunk(const std::vector<float>& params, bool float
 std::vector<uint8_t> Assemble(const SceneTensors& s, const std::vector<float>& steps,
                               const EncodeOptions& o, EncodeReport* report) {
   *report = EncodeReport{};
-  ContainerWriter writer;
+  ContainerWriter writer(o.mlp_max_level > 0 ? 1 : 0);  // 1.1 for the quantized MLP
   SceneHeader h = s.header;
   h.has_occupancy = (o.include_occupancy && s.mask) ? 1 : 0;
   ByteWriter head;
@@ -207,7 +219,7 @@ std::vector<uint8_t> Assemble(const SceneTensors& s, const std::vector<float>& s
       ++chunks;
     }
   }
-  const std::vector<uint8_t> mlp = EncodeMlpChunk(s.head_params, o.mlp_float32);
+  const std::vector<uint8_t> mlp = EncodeMlpChunk(h, s.head_params, o.mlp_float32, o.mlp_max_level);
   writer.AddChunk(kChunkMlpWeights, mlp);
   report->mlp_bytes = mlp.size();
   ++chunks;

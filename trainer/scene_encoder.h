@@ -27,6 +27,9 @@ namespace trainer {
 struct EncodeOptions {
   int coef_bits = 8;              // 8 or 16
   bool mlp_float32 = false;       // false: float16 weights
+  // > 0: the MLP and basis as integer levels with one binary16 step per output row, the largest
+  // level of a row being this (MLPW precision 2, bitstream 1.1); overrides mlp_float32.
+  int mlp_max_level = 0;
   bool drop_zero_components = true;
   bool include_occupancy = true;  // the alpha mask, when the model has one
   RateConfig blocks;              // plane and line block shapes

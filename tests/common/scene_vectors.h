@@ -3,7 +3,9 @@
 // and the tests rebuild them and compare with the checked-in files to detect format changes.
 //
 // Each exercises an edge of the syntax: rank-0 modes, 2D-only plane blocks, 16-bit
-// coefficients with escapes, an occupancy mask, an empty occupancy mask, float16/float32 MLPs.
+// coefficients with escapes, an occupancy mask, an empty occupancy mask, float16/float32 MLPs,
+// a quantized MLP (bitstream 1.1) whose rows span 2^-3..2^3 in scale and whose largest levels
+// take the class escape.
 #ifndef ECRF_TESTS_COMMON_SCENE_VECTORS_H_
 #define ECRF_TESTS_COMMON_SCENE_VECTORS_H_
 
@@ -16,6 +18,7 @@
 #include "format/coef_coder.h"
 #include "format/container.h"
 #include "format/half_float.h"
+#include "format/mlp_coder.h"
 #include "format/occupancy_coder.h"
 #include "format/scene_header.h"
 #include "tests/common/coef_vectors.h"
@@ -32,7 +35,7 @@ struct SceneVector {
   int plane_block[3];
   int line_block[3];
   int coef_bits;
-  int mlp_precision;  // 0 float16, 1 float32
+  int mlp_precision;  // 0 float16, 1 float32, 2 quantized
   OccupancyKind occupancy;
   uint32_t seed;
 };
@@ -47,6 +50,8 @@ inline const std::vector<SceneVector>& SceneVectors() {
        OccupancyKind::kSphere, 13},
       {"scene_empty_occupancy", {8, 8, 8}, {{1, 1, 1}, {1, 1, 1}}, {1, 4, 4}, {1, 1, 8}, 8, 0,
        OccupancyKind::kEmpty, 14},
+      {"scene_quantized_mlp", {10, 12, 8}, {{2, 2, 2}, {2, 3, 2}}, {2, 4, 4}, {1, 2, 8}, 8, 2,
+       OccupancyKind::kSphere, 15},
   };
   return v;
 }
@@ -102,7 +107,7 @@ inline void MakeSceneBlock(Lcg& rng, const int dims[3], int32_t max_abs, bool de
 inline std::vector<uint8_t> BuildSceneVector(const SceneVector& v) {
   const SceneHeader h = SceneVectorHeader(v);
   Lcg rng(v.seed);
-  ContainerWriter writer;
+  ContainerWriter writer(v.mlp_precision == kMlpPrecisionQuantized ? 1 : 0);  // 1.1: quantized MLP
   ByteWriter head;
   WriteSceneHeader(h, &head);
   writer.AddChunk(kChunkHead, head.bytes());
@@ -163,7 +168,21 @@ inline std::vector<uint8_t> BuildSceneVector(const SceneVector& v) {
   mlp.U8(0);
   mlp.U8(0);
   mlp.U8(0);
-  for (size_t i = 0; i < count; ++i) {
+  if (v.mlp_precision == kMlpPrecisionQuantized) {
+    // Rows of very different scale (one step each); 20000 levels per row reach class 15.
+    std::vector<float> w(count);
+    for (size_t i = 0; i < count; ++i) {
+      w[i] = std::ldexp(float(int(rng.Below(257)) - 128) / 256.f, int(i / 7 % 7) - 3);
+    }
+    MlpLayout layout;
+    layout.feature_dim = F;
+    layout.num_products = P;
+    layout.hidden = H;
+    layout.feature_pe_width = 2 * F * h.feature_pe_freqs;
+    layout.input_dim = in;
+    mlp.Bytes(EncodeQuantizedMlp(layout, w.data(), 20000, nullptr));
+  }
+  for (size_t i = 0; i < count && v.mlp_precision != kMlpPrecisionQuantized; ++i) {
     const float w = float(int(rng.Below(257)) - 128) / 256.f;
     if (v.mlp_precision == 1) {
       mlp.F32(w);

@@ -77,7 +77,8 @@ TEST(SceneDecoder, ReportsWhatTheStreamHolds) {
       for (int m = 0; m < 3; ++m) EXPECT_EQ((g ? field.appearance : field.density).ranks[m], v.ranks[g][m]);
     }
     EXPECT_EQ(field.has_mask, v.occupancy != conformance::OccupancyKind::kNone);
-    EXPECT_EQ(info.mlp_precision_bits, v.mlp_precision ? 32 : 16);
+    EXPECT_EQ(info.mlp_precision, v.mlp_precision);
+    EXPECT_EQ(info.mlp_precision_bits, v.mlp_precision == 2 ? 0 : v.mlp_precision ? 32 : 16);
     ASSERT_NE(info.metadata, nullptr);
     EXPECT_EQ(std::string(reinterpret_cast<const char*>(info.metadata), info.metadata_size),
               std::string("{\"vector\":\"") + v.name + "\"}");

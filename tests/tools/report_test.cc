@@ -47,26 +47,10 @@ std::vector<std::vector<std::string>> ReadCsv(const std::string& path) {
   return rows;
 }
 
-class ReportTest : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    char tmpl[] = "/tmp/ecrf_report_test_XXXXXX";
-    ASSERT_NE(mkdtemp(tmpl), nullptr);
-    root_ = tmpl;
-    dir_ = root_ + "/nested/report";  // parents do not exist yet
-    // Plots are drawn when matplotlib is installed; the test checks the tables either way.
-    ASSERT_EQ(Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "--lambdas", "0,1e-8", "--iters", "150",
-                              "--max-test-views", "4", "--seed", "7", "--threads", "2", "-o", dir_}),
-              0);
-    ASSERT_EQ(Invoke(RunReport, {"report", "render", dir_, "--stride", "1"}), 0);
-  }
-  static void TearDownTestSuite() { std::system(("rm -rf '" + root_ + "'").c_str()); }
+// One sweep (two trainings) serves every check: ctest runs each TEST in its own process.
+std::string root_, dir_;
 
-  static std::string root_, dir_;
-};
-std::string ReportTest::root_, ReportTest::dir_;
-
-TEST_F(ReportTest, WritesEveryFile) {
+void WritesEveryFile() {
   for (const char* f : {"report.json", "rd.csv", "chunks.csv", "curve.csv", "speed.csv", "index.html",
                         "runs/lambda_0/scene.ecrf", "runs/lambda_1e-08/scene.ecrf"}) {
     EXPECT_FALSE(ReadText(dir_ + "/" + f).empty()) << f;
@@ -77,7 +61,7 @@ TEST_F(ReportTest, WritesEveryFile) {
   EXPECT_NE(html.find("</html>"), std::string::npos);
 }
 
-TEST_F(ReportTest, RatePointsAreWhatEvalMeasuresOnTheSameFiles) {
+void RatePointsAreWhatEvalMeasuresOnTheSameFiles() {
   const nlohmann::json r = ReadJson(dir_ + "/report.json");
   ASSERT_EQ(r["points"].size(), 2u);
   const auto rd = ReadCsv(dir_ + "/rd.csv");
@@ -111,7 +95,7 @@ TEST_F(ReportTest, RatePointsAreWhatEvalMeasuresOnTheSameFiles) {
   EXPECT_EQ(ReadCsv(dir_ + "/chunks.csv").size(), 1 + 2 * r["points"][0]["chunks"].size());
 }
 
-TEST_F(ReportTest, SpeedRowsObeyWhatTheSpecPromises) {
+void SpeedRowsObeyWhatTheSpecPromises() {
   const nlohmann::json r = ReadJson(dir_ + "/report.json");
   const nlohmann::json& speed = r["speed"];
   ASSERT_TRUE(speed.is_object());
@@ -144,7 +128,7 @@ TEST_F(ReportTest, SpeedRowsObeyWhatTheSpecPromises) {
   EXPECT_EQ(ReadCsv(dir_ + "/speed.csv").size(), 1 + speed["rows"].size());
 }
 
-TEST_F(ReportTest, SweepResumesFromFinishedRunsAndRefusesIncompatibleOnes) {
+void SweepResumesFromFinishedRunsAndRefusesIncompatibleOnes() {
   const nlohmann::json before = ReadJson(dir_ + "/report.json");
   // Same sweep again: nothing is trained (the runs' metrics are reused), the points are the same.
   ASSERT_EQ(Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "--lambdas", "0,1e-8", "--iters", "150",
@@ -163,12 +147,45 @@ TEST_F(ReportTest, SweepResumesFromFinishedRunsAndRefusesIncompatibleOnes) {
   }
 }
 
-TEST_F(ReportTest, CompareAgainstItselfIsZero) {
+void CompareAgainstItselfIsZero() {
   const std::string json = root_ + "/compare.json";
   ASSERT_EQ(Invoke(RunReport, {"report", "compare", dir_, dir_ + "/report.json", "--json", json}), 0);
   const nlohmann::json c = ReadJson(json);
   EXPECT_NEAR(c["bd_rate_percent"].get<double>(), 0.0, 1e-9);
   EXPECT_NEAR(c["bd_psnr_db"].get<double>(), 0.0, 1e-9);
+}
+
+TEST(Report, BuiltinSweepMatchesEvalResumesAndCompares) {
+  char tmpl[] = "/tmp/ecrf_report_test_XXXXXX";
+  ASSERT_NE(mkdtemp(tmpl), nullptr);
+  root_ = tmpl;
+  dir_ = root_ + "/nested/report";  // parents do not exist yet
+  // Plots are drawn when matplotlib is installed; the checks below read the tables either way.
+  ASSERT_EQ(Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "--lambdas", "0,1e-8", "--iters", "150",
+                               "--max-test-views", "4", "--seed", "7", "--threads", "2", "-o", dir_}),
+            0);
+  ASSERT_EQ(Invoke(RunReport, {"report", "render", dir_, "--stride", "1"}), 0);
+  {
+    SCOPED_TRACE("files");
+    WritesEveryFile();
+  }
+  {
+    SCOPED_TRACE("rate points vs ecrf eval");
+    RatePointsAreWhatEvalMeasuresOnTheSameFiles();
+  }
+  {
+    SCOPED_TRACE("speed rows");
+    SpeedRowsObeyWhatTheSpecPromises();
+  }
+  {
+    SCOPED_TRACE("compare");
+    CompareAgainstItselfIsZero();
+  }
+  {
+    SCOPED_TRACE("resume");
+    SweepResumesFromFinishedRunsAndRefusesIncompatibleOnes();
+  }
+  std::system(("rm -rf '" + root_ + "'").c_str());
 }
 
 TEST(ReportCli, HelpExitsZeroAndBadUsageTwo) {

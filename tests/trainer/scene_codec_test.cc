@@ -130,6 +130,20 @@ float MaxRenderDifference(const dec::SceneField& a, const dec::SceneField& b) {
   return worst;
 }
 
+TEST(SceneCodec, QuantizedMlpIsVersion11SmallerAndRendersAlike) {
+  const TensorfModel model = SmallModel(8);
+  EncodeOptions o;
+  const std::vector<uint8_t> f16 = EncodeScene(model, o);
+  o.mlp_max_level = 127;
+  const std::vector<uint8_t> q = EncodeScene(model, o);
+  EXPECT_EQ(f16[5], 0);  // version_minor: streams without the 1.1 feature stay 1.0
+  EXPECT_EQ(q[5], 1);
+  EXPECT_LT(q.size(), f16.size());
+  const dec::SceneField a = DecodeOrDie(f16), b = DecodeOrDie(q);
+  // 127 levels per row: each weight within half a step of max|row| / 127 of float16's.
+  EXPECT_LT(MaxRenderDifference(a, b), 2e-2f);
+}
+
 TEST(SceneCodec, DeadComponentsAreDroppedWithoutChangingTheField) {
   TensorfModel model = SmallModel(9);
   // Density component 1 of mode 0: plane zero. Appearance component 2 of mode 1: line zero.
@@ -201,7 +215,7 @@ TEST(SceneCodec, ConformanceScenesRenderLikeTheirReferences) {
     EXPECT_GE(psnr, 40.0) << name;
     ++checked;
   }
-  EXPECT_EQ(checked, 5);
+  EXPECT_EQ(checked, 6);  // five hand-made scenes and the trained one
 }
 
 }  // namespace

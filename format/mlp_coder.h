@@ -1,0 +1,86 @@
+// Coding of the appearance MLP and basis matrix (the MLPW chunk, SPEC.md 6.6).
+//
+// Precision 2 ("quantized", bitstream 1.1) stores each weight matrix as integer levels with one
+// binary16 step per output row: the rows of a layer differ in scale by orders of magnitude, one
+// step per tensor would waste bits on the small rows. A level is coded as its magnitude class
+// (bit length, adaptive: the class carries almost all of the information in a bell-shaped weight
+// distribution), then the bits below the leading one and the sign in bypass. Contexts: the
+// matrix (W1 split by input kind: features, view direction, their positional encodings, whose
+// weights differ in size) and the previous class in the row. The three bias vectors stay binary16
+// (259 values). The encoder (mlp_encoder.cc) and the decoder (mlp_decoder.cc) share the layout and
+// contexts defined here.
+#ifndef ECRF_FORMAT_MLP_CODER_H_
+#define ECRF_FORMAT_MLP_CODER_H_
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "format/range_coder.h"
+#include "format/status.h"
+
+namespace ecrf {
+
+constexpr uint8_t kMlpPrecisionFloat16 = 0;
+constexpr uint8_t kMlpPrecisionFloat32 = 1;
+constexpr uint8_t kMlpPrecisionQuantized = 2;
+
+// Magnitude classes: 0 for level 0, else the bit length of |level| (1 for 1, 2 for 2..3, 3 for
+// 4..7, ...). Classes 0..14 are symbols of a 16-symbol alphabet; symbol 15 escapes to
+// 15 + an Exp-Golomb value of order 0.
+constexpr int kMlpClassEscape = 15;
+// Largest level magnitude a stream may carry (class 24): every level converts exactly to binary32.
+constexpr int kMlpMaxClass = 24;
+constexpr int32_t kMlpMaxLevel = (1 << 24) - 1;
+constexpr int kMlpContextGroups = 7;  // B, W1 x 4 input kinds, W2, W3
+
+// The flat parameter array of 6.6: B [F][P], W1 [H][In], b1 [H], W2 [H][H], b2 [H], W3 [3][H], b3 [3].
+struct MlpLayout {
+  int feature_dim = 0;   // F
+  int num_products = 0;  // P
+  int hidden = 0;        // H
+  int input_dim = 0;     // In = F + 3 + feature_pe_width + 2 * 3 * Fv
+  int feature_pe_width = 0;  // 2 * F * Ff
+};
+
+struct MlpMatrixSpan {
+  size_t offset;  // first value in the flat array
+  int rows;       // output channels (one step each)
+  int cols;
+};
+
+// The four matrices (B, W1, W2, W3) and the three bias vectors (b1, b2, b3), in stream order.
+void MlpMatrices(const MlpLayout& layout, MlpMatrixSpan matrices[4], MlpMatrixSpan biases[3]);
+size_t MlpParamCount(const MlpLayout& layout);
+
+// Adaptive class alphabets: [group][previous class bucket].
+struct MlpLevelContexts {
+  uint16_t level_class[kMlpContextGroups][3][kMlpClassEscape + 2];
+  MlpLevelContexts();
+};
+
+// Context group of column `col` of matrix `matrix` (0 B, 1 W1, 2 W2, 3 W3): W1's columns are
+// [features F | view direction 3 | feature PE 2*F*Ff | view PE], groups 1..4.
+int MlpContextGroup(const MlpLayout& layout, int matrix, int col);
+// Bucket of the previous class in the row (class 0 before the first level of a row).
+inline int MlpClassBucket(int level_class) { return level_class < 3 ? 0 : level_class < 6 ? 1 : 2; }
+// Bit length of a magnitude (0 for 0).
+inline int MlpLevelClass(uint32_t magnitude) {
+  int c = 0;
+  while (magnitude >> c) ++c;
+  return c;
+}
+
+// Quantizes `params` (MlpParamCount values) with max_level as the largest level of each row
+// and returns the payload after the 4-byte precision/reserved header. The values the decoder
+// will reconstruct are written to `reconstructed` when it is not null.
+std::vector<uint8_t> EncodeQuantizedMlp(const MlpLayout& layout, const float* params, int max_level,
+                                        std::vector<float>* reconstructed);
+
+// Decodes that payload into params_out (MlpParamCount values). Every step and bias must be a
+// finite binary16; the level stream must end exactly where the payload ends.
+Status DecodeQuantizedMlp(const MlpLayout& layout, const uint8_t* data, size_t size, float* params_out);
+
+}  // namespace ecrf
+
+#endif  // ECRF_FORMAT_MLP_CODER_H_
