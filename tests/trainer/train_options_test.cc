@@ -66,9 +66,14 @@ TEST(RaySet, BatchesCoverEveryRayOncePerEpochAndFilterKeepsMatches) {
   EXPECT_LT(rays.size(), 144u);
   rays.NextBatch(16, rng, o.data(), dir.data(), rgb.data());
   for (int i = 0; i < 16; ++i) EXPECT_GT(dir[3 * i], 0.f);
-  rays.FilterChunked([](int n, const float*, const float*, uint8_t* keep) {
+  auto none = [](int n, const float*, const float*, uint8_t* keep) {
     for (int i = 0; i < n; ++i) keep[i] = 0;
-  });
+  };
+  // A filter that would leave fewer rays than asked for changes nothing.
+  const size_t before = rays.size();
+  EXPECT_FALSE(rays.FilterChunked(none, 1));
+  EXPECT_EQ(rays.size(), before);
+  EXPECT_TRUE(rays.FilterChunked(none, 0));
   EXPECT_EQ(rays.size(), 0u);
   EXPECT_THROW(rays.NextBatch(1, rng, o.data(), dir.data(), rgb.data()), std::runtime_error);
 }
