@@ -158,13 +158,14 @@ void Row(std::ostringstream& o, std::initializer_list<std::string> cells, const 
   o << "</tr>\n";
 }
 
-void Figure(std::ostringstream& o, const std::string& dir, const std::string& png, const std::string& alt) {
+void Figure(std::ostringstream& o, const std::string& dir, const std::string& png, const std::string& csv,
+            const std::string& alt) {
   if (Exists(dir + "/" + png)) {
     o << "<figure><img src=\"" << png << "\" alt=\"" << Html(alt) << "\"><figcaption>" << Html(alt)
-      << " (data: " << png.substr(0, png.size() - 4) << ".csv)</figcaption></figure>\n";
+      << " (data: <a href=\"" << csv << "\">" << csv << "</a>)</figcaption></figure>\n";
   } else {
-    o << "<p class=note>Plot " << png << " not drawn (needs python3-matplotlib; data in "
-      << png.substr(0, png.size() - 4) << ".csv).</p>\n";
+    o << "<p class=note>Plot " << png << " not drawn (needs python3-matplotlib); data in <a href=\"" << csv
+      << "\">" << csv << "</a>.</p>\n";
   }
 }
 
@@ -181,10 +182,10 @@ std::string IndexHtml(const std::string& dir, nlohmann::json& r) {
   o << "<h1>ecrf report: " << scene << "</h1>\n";
   nlohmann::json& s = r["sweep"];
   o << "<p>Data <code>" << Html(Str(r, "data")) << "</code>, preset <code>" << Html(Str(s, "preset")) << "</code>, "
-    << Num(s["iterations"]) << " iterations per run, test PSNR over every " << Num(s["test_view_stride"])
-    << "-th test view. ecrf " << Html(Str(r, "ecrf_version")) << " (bitstream " << Num(r["bitstream_version"])
+    << Num(s["iterations"]) << " iterations per run, test PSNR over the test views with stride " << Num(s["test_view_stride"])
+    << ". ecrf " << Html(Str(r, "ecrf_version")) << " (bitstream " << Num(r["bitstream_version"])
     << "), " << Html(Str(r, "date")) << ", " << Html(Str(r["machine"], "cpu")) << ", "
-    << Num(s["threads"]) << " training threads. All numbers in <a href=\"report.json\">report.json</a>.</p>\n";
+    << "training threads: " << Num(s["threads"]) << ". All numbers in <a href=\"report.json\">report.json</a>.</p>\n";
 
   o << "<h2>Rate–distortion</h2>\n<p>Each point is one training run at rate weight lambda_e, encoded to a "
        ".ecrf file and scored after decoding it with the embeddable decoder. Ratio and loss are against the "
@@ -194,8 +195,8 @@ std::string IndexHtml(const std::string& dir, nlohmann::json& r) {
       << Num(r["reference"]["float_psnr"], "%.2f") << " dB)";
   }
   o << "; the quantization loss is the decoded file against its own float model.</p>\n";
-  Figure(o, dir, "rd.png", "file size vs PSNR of the decoded file");
-  Figure(o, dir, "ratio.png", "compression ratio vs PSNR loss");
+  Figure(o, dir, "rd.png", "rd.csv", "file size vs PSNR of the decoded file");
+  Figure(o, dir, "ratio.png", "rd.csv", "compression ratio vs PSNR loss");
   o << "<table>\n";
   Row(o, {"point", "file bytes", "ratio", "decoded PSNR", "SSIM", "float PSNR", "quantization loss", "loss vs lambda=0",
           "train min"}, "th");
@@ -218,7 +219,7 @@ std::string IndexHtml(const std::string& dir, nlohmann::json& r) {
   }
 
   o << "<h2>Where the bytes go</h2>\n";
-  Figure(o, dir, "chunks.png", "bytes per chunk");
+  Figure(o, dir, "chunks.png", "chunks.csv", "bytes per chunk");
   o << "<table>\n";
   Row(o, {"point", "density COEF", "appearance COEF", "MLPW", "OCCU", "HEAD + meta + container"}, "th");
   for (nlohmann::json& p : r["points"]) {
@@ -236,15 +237,15 @@ std::string IndexHtml(const std::string& dir, nlohmann::json& r) {
 
   o << "<h2>Training curve</h2>\n<p>Test PSNR of the float model against wall-clock training minutes "
        "(evaluation time excluded).</p>\n";
-  Figure(o, dir, "curve.png", "test PSNR vs training minutes");
+  Figure(o, dir, "curve.png", "curve.csv", "test PSNR vs training minutes");
 
   if (r.contains("speed")) {
     nlohmann::json& sp = r["speed"];
     nlohmann::json& d = sp["decode"];
     o << "<h2>Speed against error</h2>\n<p>Renderer knobs of SPEC.md 7.8, one at a time from the defaults, on "
       << Html(Str(sp, "file")) << " (" << Html(Str(sp, "point")) << ", " << Num(sp["file_bytes"], "%.0f")
-      << " bytes), " << Num(sp["views"]) << " test views (every " << Num(sp["test_view_stride"])
-      << "-th). Image scale 1/k renders at 1/k of the size and scores the bilinear upsampling.</p>\n";
+      << " bytes), " << Num(sp["views"]) << " test views (stride " << Num(sp["test_view_stride"])
+      << "). Image scale 1/k renders at 1/k of the size and scores the bilinear upsampling.</p>\n";
     o << "<p>Decoding (entropy decoding + integer IDCT + grid layout, one thread, fastest of 3): "
       << Num(d["float32_seconds"], "%.3f") << " s to float32 grids (" << Num(d["float32_ms_per_mb"], "%.0f")
       << " ms per MB of stream, " << Num(nlohmann::json(d["float32_grid_bytes"].get<double>() / 1e6), "%.1f")
@@ -256,7 +257,7 @@ std::string IndexHtml(const std::string& dir, nlohmann::json& r) {
         << " MB while decoding to float32 (stream and grids)";
     }
     o << ".</p>\n";
-    Figure(o, dir, "speed.png", "render time per view vs PSNR");
+    Figure(o, dir, "speed.png", "speed.csv", "render time per view vs PSNR");
     o << "<table>\n";
     Row(o, {"knob", "setting", "ms/view", "PSNR", "SSIM", "threads", "size", "samples/ray", "MLP samples/ray"}, "th");
     for (nlohmann::json& row : sp["rows"]) {
