@@ -9,6 +9,7 @@
 #include "tools/commands.h"
 #include "tools/encode_report.h"
 #include "trainer/checkpoint.h"
+#include "trainer/encode_rate_control.h"
 #include "trainer/scene_encoder.h"
 #include "trainer/trainer.h"
 
@@ -20,6 +21,8 @@ const char kEncodeUsage[] =
     "usage: ecrf encode RUN_DIR|CHECKPOINT -o SCENE.ecrf [options]\n"
     "  --coef-bits 8|16     coefficient depth (default 8)\n"
     "  --mlp-f32            store the basis and MLP as float32 (default float16)\n"
+    "  --target-size SIZE   the largest file of at most SIZE (e.g. 500KB, 1.2MB) by scaling every\n"
+    "                       quantization step by one factor (searched)\n"
     "  --mlp-levels L       store them as integer levels, at most L per row, range-coded (MLPW\n"
     "                       precision 2, bitstream 1.1; e.g. 31)\n"
     "  --no-drop            keep rank components that decode to zero\n"
@@ -33,6 +36,7 @@ int RunEncode(int argc, char** argv) {
   std::string input, output;
   trainer::EncodeOptions o;
   bool blocks_given = false;
+  size_t target_bytes = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&] { return FlagValue(argc, argv, &i); };
@@ -43,6 +47,8 @@ int RunEncode(int argc, char** argv) {
       output = value();
     } else if (a == "--coef-bits") {
       o.coef_bits = ParseInt("--coef-bits", value());
+    } else if (a == "--target-size") {
+      target_bytes = trainer::ParseByteSize(value());
     } else if (a == "--mlp-levels") {
       o.mlp_max_level = std::max(1, ParseInt("--mlp-levels", value()));
     } else if (a == "--mlp-f32") {
@@ -90,7 +96,16 @@ int RunEncode(int argc, char** argv) {
   meta["source"] = ckpt;
   o.metadata_json = meta.dump();
   trainer::EncodeReport report;
-  const std::vector<uint8_t> bytes = trainer::EncodeScene(model, o, &report);
+  std::vector<uint8_t> bytes;
+  if (target_bytes > 0) {
+    trainer::TargetSizeResult t = trainer::EncodeToTargetSize(model, o, target_bytes);
+    bytes = std::move(t.bytes);
+    report = t.report;
+    std::printf("target %zu bytes: steps x%.4g after %d encodes, %zu bytes (%+.2f%%)\n", target_bytes, t.step_scale,
+                t.encodes, bytes.size(), 100.0 * (double(bytes.size()) / double(target_bytes) - 1.0));
+  } else {
+    bytes = trainer::EncodeScene(model, o, &report);
+  }
   trainer::WriteFileAtomically(output, bytes.data(), bytes.size());
   PrintEncodeReport(stdout, report);
   std::printf("wrote %s (%zu bytes)\n", output.c_str(), bytes.size());

@@ -1,0 +1,43 @@
+// Rate control at encode time: the file for a size budget, from a trained model alone.
+//
+// Every quantization step is scaled by one factor s >= 1 (coarser coefficients, fewer bytes;
+// the relative step sizes the training chose are kept), and s is searched by bisection in log
+// space for the finest quantization whose file fits the budget. Training with --lambda-e
+// reaches a given size at a higher PSNR; this is what an encoder can do when the model is given.
+#ifndef ECRF_TRAINER_ENCODE_RATE_CONTROL_H_
+#define ECRF_TRAINER_ENCODE_RATE_CONTROL_H_
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "trainer/scene_encoder.h"
+
+namespace ecrf {
+namespace trainer {
+
+inline constexpr double kMaxStepScale = 64.0;
+
+struct TargetSizeResult {
+  std::vector<uint8_t> bytes;
+  EncodeReport report;
+  double step_scale = 1.0;  // the factor applied to every step
+  int encodes = 0;          // files encoded during the search
+};
+
+// The largest file of at most target_bytes that scaling the steps reaches (within 1% of the
+// target unless the steps hit a limit: at s = 1 the file is already smaller, which is returned
+// as it is). Throws std::runtime_error naming the smallest reachable size when even
+// s = kMaxStepScale does not fit.
+TargetSizeResult EncodeToTargetSize(const TensorfModel& model, const EncodeOptions& options,
+                                    size_t target_bytes);
+
+// "500KB", "1.2MB", "300000" (bytes; KB = 1000 bytes, MB = 10^6, also KiB / MiB). Throws
+// std::invalid_argument naming the text.
+size_t ParseByteSize(const std::string& text);
+
+}  // namespace trainer
+}  // namespace ecrf
+
+#endif  // ECRF_TRAINER_ENCODE_RATE_CONTROL_H_
