@@ -32,6 +32,7 @@ const char kEvalUsage[] =
     "  --split NAME        split to score (default test)\n"
     "  --seed N            the built-in scene's seed (as given to train)\n"
     "  --downscale N       shrink the images by N\n"
+    "  --image-scale K     render at 1/K of the size, score the bilinear upsampling to full size\n"
     "  --stride K          every K-th view\n"
     "  --max-views N       at most N views\n"
     "  --threads N         render threads (default 1; 0 = all cores)\n"
@@ -206,7 +207,7 @@ int RunRender(int argc, char** argv) {
 int RunEval(int argc, char** argv) {
   CommonArgs c;
   std::string data, split = "test", json_path;
-  int stride = 1, downscale = 1;
+  int stride = 1, downscale = 1, image_scale = 1;
   bool builtin = false;
   uint32_t seed = trainer::TrainOptions().seed;
   for (int i = 1; i < argc; ++i) {
@@ -228,6 +229,8 @@ int RunEval(int argc, char** argv) {
       stride = std::max(1, ParseInt("--stride", value()));
     } else if (a == "--downscale") {
       downscale = std::max(1, ParseInt("--downscale", value()));
+    } else if (a == "--image-scale") {
+      image_scale = std::max(1, ParseInt("--image-scale", value()));
     } else if (a == "--json") {
       json_path = value();
     } else if (!ParseCommon(argc, argv, &i, &c)) {
@@ -243,7 +246,7 @@ int RunEval(int argc, char** argv) {
   }
   const LoadedScene s = LoadSceneFile(c.scene, c.int16 ? dec::GridStorage::kInt16 : dec::GridStorage::kFloat32);
   const trainer::Dataset test = builtin ? BuiltinDataset(split, seed) : trainer::LoadDataset(data, split, downscale);
-  const trainer::EvalResult r = EvaluateDecoded(*s.field, test, stride, c.max_views, RenderOptionsFor(c), false);
+  const trainer::EvalResult r = EvaluateDecoded(*s.field, test, stride, c.max_views, RenderOptionsFor(c), false, image_scale);
   std::printf("%s: %zu bytes, PSNR %.2f dB, SSIM %.4f over %d %s views; decode %.1f ms, render %.1f ms/view "
               "(%d thread%s, %s grids)\n",
               c.scene.c_str(), s.bytes.size(), r.psnr, r.ssim, r.views, split.c_str(), 1e3 * s.decode_seconds,
@@ -253,7 +256,14 @@ int RunEval(int argc, char** argv) {
                         {"psnr", r.psnr},            {"ssim", r.ssim},
                         {"views", r.views},          {"decode_seconds", s.decode_seconds},
                         {"render_seconds_per_view", r.seconds_per_view},
-                        {"threads", c.threads},      {"grid_storage", c.int16 ? "int16" : "float32"}};
+                        {"threads", c.threads},      {"grid_storage", c.int16 ? "int16" : "float32"},
+                        {"image_scale", image_scale},
+                        {"render_options",
+                         {{"skip_empty_space", c.render.skip_empty_space},
+                          {"early_stop_transmittance", c.render.early_stop_transmittance},
+                          {"max_samples", c.render.max_samples},
+                          {"step_scale", c.render.step_scale},
+                          {"weight_threshold", c.render.weight_threshold}}}};
     const std::string text = j.dump(2) + "\n";
     trainer::WriteFileAtomically(json_path, text.data(), text.size());
   }
