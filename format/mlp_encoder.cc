@@ -23,7 +23,7 @@ std::vector<uint8_t> EncodeQuantizedMlp(const MlpLayout& layout, const float* pa
       float peak = 0.f;
       for (int c = 0; c < m.cols; ++c) peak = std::fmax(peak, std::fabs(params[m.offset + size_t(r) * m.cols + c]));
       uint16_t half = FloatToHalf(peak / static_cast<float>(max_level));
-      if ((half & 0x7C00u) == 0x7C00u) half = 0x7BFF;  // beyond binary16: the largest finite step
+      if (!HalfIsFinite(half)) half = 0x7BFF;  // beyond binary16: the largest finite step
       head.U16(half);
       steps.push_back(HalfToFloat(half));
     }

@@ -15,6 +15,7 @@ void ParseShape(const char* flag, const std::string& text, int n, int* out);
 // The value after flag argv[*i] (advancing *i); throws if the command line ends there.
 const char* FlagValue(int argc, char** argv, int* i);
 bool IsDirectory(const std::string& path);
+bool FileExists(const std::string& path);  // any kind of file
 // Creates a directory and its missing parents (an existing directory is fine).
 void MakeDirectory(const std::string& dir);
 

@@ -2,7 +2,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -84,19 +83,10 @@ int RunReportCompare(int argc, char** argv) {
     WriteTextFile(json_path, j.dump(2) + "\n");
   }
   if (!plot_path.empty()) {
-    std::ostringstream csv;
-    csv << "series,file_bytes,psnr\n";
-    for (int k = 0; k < 2; ++k) {
-      const nlohmann::json& rep = k == 0 ? a : b;
-      const std::string name = (k == 0 ? "A: " : "B: ") + paths[k];
-      for (const RdPoint& p : RateDistortionCurve(rep)) {
-        char line[64];
-        std::snprintf(line, sizeof(line), ",%.0f,%.6f\n", p.rate, p.psnr);
-        csv << '"' << name << '"' << line;
-      }
-    }
+    const std::string csv = CompareCsv({{"A: " + paths[0], RateDistortionCurve(a)},
+                                        {"B: " + paths[1], RateDistortionCurve(b)}});
     const std::string csv_path = plot_path.substr(0, plot_path.rfind('.')) + ".csv";
-    WriteTextFile(csv_path, csv.str());
+    WriteTextFile(csv_path, csv);
     if (!DrawComparePlot(plot_path, csv_path)) return 1;
   }
   return 0;

@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "tools/bd_rate.h"
@@ -34,12 +35,18 @@ void AddReferenceColumns(nlohmann::json* report);
 // The decoded-file curve of a report: (file bytes, decoded PSNR) per point.
 std::vector<RdPoint> RateDistortionCurve(const nlohmann::json& report);
 
+// Parses a JSON file (throws naming the file).
+nlohmann::json ReadJsonFile(const std::string& path);
+
 // Reads REPORT/report.json (throws naming the file when it is missing or not a report).
 nlohmann::json ReadReport(const std::string& dir);
 
 // Writes report.json, the CSVs, the plots (when it can) and index.html into dir, each file
 // atomically. Returns false when the plots could not be drawn (and says why on stderr).
 bool WriteReport(const std::string& dir, const nlohmann::json& report);
+
+// compare.csv: series,file_bytes,psnr for each named curve.
+std::string CompareCsv(const std::vector<std::pair<std::string, std::vector<RdPoint>>>& curves);
 
 // Draws compare.csv (series,file_bytes,psnr) into png; false when it could not.
 bool DrawComparePlot(const std::string& png, const std::string& csv);

@@ -1,7 +1,7 @@
 // Everything a report directory holds besides its runs, written from report.json alone: the
 // CSV behind each plot, the plots (tools/plot_report.py, when matplotlib is installed) and
 // index.html.
-#include <sys/stat.h>
+#include <sys/wait.h>
 
 #include <cmath>
 #include <cstdio>
@@ -9,17 +9,13 @@
 #include <sstream>
 #include <string>
 
+#include "tools/cli_args.h"
 #include "tools/report.h"
 #include "trainer/checkpoint.h"
 
 namespace ecrf {
 namespace tools {
 namespace {
-
-bool Exists(const std::string& path) {
-  struct stat st;
-  return stat(path.c_str(), &st) == 0;
-}
 
 // A JSON number as CSV/HTML text; null and missing values become empty cells.
 std::string Num(const nlohmann::json& v, const char* format = "%.10g") {
@@ -128,13 +124,13 @@ std::string Python() {
   if (const char* env = std::getenv("ECRF_PYTHON")) return env;
   // Debian's interpreter first: its python3-matplotlib is what the README installs, and a python3
   // earlier on PATH (pyenv, a virtualenv) may not have it.
-  return Exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+  return FileExists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
 }
 
 // Runs the plotting script with `args`; false (and the reason on stderr) when it failed.
 bool RunPlotScript(const std::string& args, const std::string& dir) {
   const std::string script = PlotScript();
-  if (!Exists(script)) {
+  if (!FileExists(script)) {
     std::fprintf(stderr, "report: plots skipped: %s not found (set ECRF_PLOT_SCRIPT)\n", script.c_str());
     return false;
   }
@@ -160,7 +156,7 @@ void Row(std::ostringstream& o, std::initializer_list<std::string> cells, const 
 
 void Figure(std::ostringstream& o, const std::string& dir, const std::string& png, const std::string& csv,
             const std::string& alt) {
-  if (Exists(dir + "/" + png)) {
+  if (FileExists(dir + "/" + png)) {
     o << "<figure><img src=\"" << png << "\" alt=\"" << Html(alt) << "\"><figcaption>" << Html(alt)
       << " (data: <a href=\"" << csv << "\">" << csv << "</a>)</figcaption></figure>\n";
   } else {
@@ -284,13 +280,25 @@ bool DrawPlots(const std::string& dir) { return RunPlotScript(Quote(dir), dir); 
 
 }  // namespace
 
+std::string CompareCsv(const std::vector<std::pair<std::string, std::vector<RdPoint>>>& curves) {
+  std::ostringstream o;
+  o << "series,file_bytes,psnr\n";
+  for (const auto& [name, points] : curves) {
+    for (const RdPoint& p : points) {
+      o << Csv(name) << ',' << Num(nlohmann::json(p.rate), "%.0f") << ',' << Num(nlohmann::json(p.psnr), "%.6f")
+        << '\n';
+    }
+  }
+  return o.str();
+}
+
 void WriteTextFile(const std::string& path, const std::string& text) {
   trainer::WriteFileAtomically(path, text.data(), text.size());
 }
 
 bool DrawComparePlot(const std::string& png, const std::string& csv) {
   std::remove(png.c_str());
-  return RunPlotScript("--compare " + Quote(png) + " " + Quote(csv), png) && Exists(png);
+  return RunPlotScript("--compare " + Quote(png) + " " + Quote(csv), png) && FileExists(png);
 }
 
 bool WriteReport(const std::string& dir, const nlohmann::json& written) {

@@ -97,12 +97,18 @@ std::vector<RdPoint> RateDistortionCurve(const nlohmann::json& report) {
   return curve;
 }
 
+nlohmann::json ReadJsonFile(const std::string& path) {
+  const std::vector<uint8_t> bytes = trainer::ReadWholeFile(path);
+  nlohmann::json j = nlohmann::json::parse(bytes.begin(), bytes.end(), nullptr, false);
+  if (j.is_discarded()) throw std::runtime_error(path + ": not valid JSON");
+  return j;
+}
+
 nlohmann::json ReadReport(const std::string& path) {
   const bool is_file = path.size() > 5 && path.compare(path.size() - 5, 5, ".json") == 0;
   const std::string file = is_file ? path : path + "/report.json";
-  const std::vector<uint8_t> bytes = trainer::ReadWholeFile(file);
-  nlohmann::json j = nlohmann::json::parse(bytes.begin(), bytes.end(), nullptr, false);
-  if (j.is_discarded() || !j.is_object() || !j.contains("points") || !j["points"].is_array()) {
+  nlohmann::json j = ReadJsonFile(file);
+  if (!j.is_object() || !j.contains("points") || !j["points"].is_array()) {
     throw std::runtime_error(file + ": not an ecrf report (no \"points\" array)");
   }
   return j;

@@ -75,15 +75,6 @@ std::string Today() {
   return text;
 }
 
-nlohmann::json ReadJsonFile(const std::string& path) {
-  const std::vector<uint8_t> bytes = trainer::ReadWholeFile(path);
-  nlohmann::json j = nlohmann::json::parse(bytes.begin(), bytes.end(), nullptr, false);
-  if (j.is_discarded()) throw std::runtime_error(path + ": not valid JSON");
-  return j;
-}
-
-bool FileExists(const std::string& path) { return std::ifstream(path).good(); }
-
 // A finished run is reused only when it was trained as this sweep would train it.
 void CheckReusable(const nlohmann::json& m, const trainer::TrainOptions& o, const std::string& path) {
   auto mismatch = [&](const std::string& what, const std::string& had, const std::string& want) {
