@@ -91,6 +91,16 @@ void CheckReusable(const nlohmann::json& m, const trainer::TrainOptions& o, cons
     mismatch("test stride", m["test_view_stride"].dump(), std::to_string(o.test_view_stride));
   }
   if (m.contains("seed") && m["seed"] != o.seed) mismatch("seed", m["seed"].dump(), std::to_string(o.seed));
+  // Runs from before these options existed were trained with their defaults (1 and off).
+  auto check_float = [&](const char* key, const char* what, float want) {
+    const double had = m.value(key, 1.0);
+    if (std::fabs(had - want) > 1e-6 * std::fabs(want)) mismatch(what, std::to_string(had), std::to_string(want));
+  };
+  check_float("quant_step_scale", "quantization step scale", o.quant_step_scale);
+  check_float("qat_start", "quantization-aware start", o.qat_start);
+  if (m.value("mlp_levels", 0) != o.mlp_levels) {
+    mismatch("MLP levels", std::to_string(m.value("mlp_levels", 0)), std::to_string(o.mlp_levels));
+  }
 }
 
 std::string Minutes(double seconds) {

@@ -38,7 +38,13 @@ const char kTrainFlagsUsage[] =
     "  --alpha A                  lambda_r = A * lambda_e for the DCT-coefficient L2 term (default 1)\n"
     "  --dct-block CxHxW          plane block shape (default 16x16x16)\n"
     "  --line-block CxL           line block shape (default 8x8)\n"
-    "  --rate-fraction F          share of blocks in each step's rate estimate (default 0.1)\n";
+    "  --rate-fraction F          share of blocks in each step's rate estimate (default 0.1)\n"
+    "  --quant-step-scale S       quantization steps S times the 8-bit peak step (default 1)\n"
+    "  --qat-start F              quantization-aware training from this share of the run on\n"
+    "                             (never before the rate phase; 1 = off)\n"
+    "  --qat-refresh N            recompute the decoded grids every N iterations (default 1)\n"
+    "  --mlp-levels L             code the basis and MLP as integer levels, at most L per row\n"
+    "                             (default 127; 0 = binary16)\n";
 
 namespace {
 
@@ -86,6 +92,15 @@ bool ParseTrainFlag(int argc, char** argv, int* i, trainer::TrainOptions* o) {
     o->line_block[2] = shape[1];
   } else if (a == "--rate-fraction") {
     o->rate_fraction = std::min(1.0f, ParseFloat("--rate-fraction", value()));
+  } else if (a == "--quant-step-scale") {
+    o->quant_step_scale = ParseFloat("--quant-step-scale", value());
+    if (!(o->quant_step_scale > 0.f)) throw std::invalid_argument("--quant-step-scale must be > 0");
+  } else if (a == "--qat-start") {
+    o->qat_start = ParseFloat("--qat-start", value());
+  } else if (a == "--qat-refresh") {
+    o->qat_refresh = std::max(1, ParseInt("--qat-refresh", value()));
+  } else if (a == "--mlp-levels") {
+    o->mlp_levels = ParseInt("--mlp-levels", value());
   } else if (a == "--threads") {
     omp_set_num_threads(std::max(1, ParseInt("--threads", value())));
   } else if (a == "--save-renders") {
@@ -138,6 +153,7 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& o) {
   eo.blocks = rate.config;
   eo.steps = rate.steps;
   eo.coef_bits = o.coef_bits;
+  eo.mlp_max_level = o.mlp_levels;
   eo.metadata_json = nlohmann::json{{"encoder", "ecrf"},
                                     {"data", o.builtin_scene ? std::string("builtin") : o.data_dir},
                                     {"preset", o.preset},
@@ -184,6 +200,10 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& o) {
   m["float32_model_bytes"] = float_bytes;
   m["lambda_e"] = o.lambda_e;
   m["alpha"] = o.alpha;
+  m["quant_step_scale"] = o.quant_step_scale;
+  m["qat_start"] = o.qat_start;
+  m["qat_refresh"] = o.qat_refresh;
+  m["mlp_levels"] = o.mlp_levels;
   m["plane_block"] = o.plane_block;
   m["line_block"] = o.line_block;
   m["file_bytes"] = decoded.bytes.size();

@@ -43,6 +43,9 @@ void RateState::Configure(const TrainOptions& o) {
 void RateState::Activate(const TensorfModel& model, const TrainOptions& o) {
   Configure(o);
   steps = ChooseQuantSteps(model, config, o.coef_bits);
+  if (o.quant_step_scale > 0.f) {
+    for (float& s : steps) s *= o.quant_step_scale;
+  }
   entropy.Init(NumRateModels(2), o.seed ^ 0x5eedULL);
   adam.Reset(entropy.params().size());
   active = true;

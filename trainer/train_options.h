@@ -52,6 +52,17 @@ struct TrainOptions {
   float rate_start = 16000.0f / 30000.0f;  // share of the run after which the rate terms switch on
   float entropy_lr = 5e-3f;           // Adam rate of the entropy-model parameters
   int coef_bits = 8;                  // quantization depth the steps are chosen for
+  // Each tensor's step is its largest block-DCT coefficient / the largest level (127 for 8
+  // bits), times this factor, frozen when the rate terms switch on.
+  float quant_step_scale = 1.0f;
+  // Quantization-aware training (trainer/quant_aware.h) from this share of the run on (>= 1:
+  // never), the quantization error refreshed every qat_refresh iterations. The steps are frozen
+  // when it starts (with lambda_e = 0 too).
+  float qat_start = 1.0f;
+  int qat_refresh = 1;
+  // How `ecrf train` codes the basis and MLP: > 0 integer levels (at most this many per row,
+  // MLPW precision 2); 0 binary16. 127 cost no measurable PSNR on chair (README) and halves MLPW.
+  int mlp_levels = 127;
 
   // Bookkeeping.
   uint32_t seed = 20211202;

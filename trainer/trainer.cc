@@ -16,6 +16,7 @@
 #include "trainer/camera.h"
 #include "trainer/checkpoint.h"
 #include "trainer/image_metrics.h"
+#include "trainer/quant_aware.h"
 #include "trainer/ray_set.h"
 #include "trainer/volume_render.h"
 
@@ -285,6 +286,15 @@ TensorfModel LoadModelFromCheckpoint(const std::string& path, RateState* rate) {
   return model;
 }
 
+int QatStartIteration(const TrainOptions& o) {
+  if (!(o.qat_start < 1.0f)) return o.iters;
+  int start = int(std::lround(double(std::max(0.0f, o.qat_start)) * o.iters));
+  // The steps freeze when quantization-aware training starts, so it waits for the final grid
+  // shape and the rate phase (whose steps it shares).
+  start = std::max(start, RateStartIteration(o));
+  return std::min(start, o.iters);
+}
+
 int RateStartIteration(const TrainOptions& o) {
   int start = int(std::lround(double(o.rate_start) * o.iters));
   for (int m : o.upsample_iters) start = std::max(start, ScaleMilestone(m, o.iters, o.reference_iters) + 1);
@@ -300,6 +310,8 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   rate.Configure(o);
   const bool use_rate = o.lambda_e > 0.0f;
   const int rate_start = RateStartIteration(o);
+  const int qat_start = QatStartIteration(o);
+  QuantAwareModel qat;
   if (train.views.empty()) throw std::invalid_argument("the training split has no views");
   const auto start = Clock::now();
 
@@ -361,7 +373,19 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
       std::fprintf(stderr, "%srate objective on at iteration %d (lambda_e %g, alpha %g)\n",
                    isatty(2) ? "\n" : "", it, o.lambda_e, o.alpha);
     }
+    const bool quant_aware = it >= qat_start;
+    if (quant_aware) {
+      if (!rate.active) rate.Activate(*model, o);  // freezes the steps (lambda_e = 0 runs)
+      if ((it - qat_start) % std::max(1, o.qat_refresh) == 0 || !qat.fresh_for(*model)) {
+        if (it == qat_start) {
+          std::fprintf(stderr, "%squantization-aware training from iteration %d\n", isatty(2) ? "\n" : "", it);
+        }
+        qat.Refresh(*model, rate.steps, rate.config, o.mlp_levels);
+      }
+      qat.Apply(model);
+    }
     stats = TrainStep(*model, n, origins.data(), dirs.data(), rgb.data(), rng());
+    qat.Restore(model);  // the gradients of Q(G) go to G unchanged (straight-through)
     if (l1_weight > 0) model->DensityL1(l1_weight);
     if (rate.active && use_rate) rate.Step(*model, o, rng());
     opt.Step(*model, o);
@@ -432,10 +456,10 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   result.train_seconds = Seconds(start) - eval_seconds;
   (void)resumed;
   if (!ckpt_path.empty()) SaveModelCheckpoint(ckpt_path, *model, o.iters, o, &rate);
-  if (!rate.active) {
+  if (!use_rate) {
     // Without the rate objective, fit an entropy model to the final grids anyway so every run
     // reports the size its coefficients would cost (the lambda_e = 0 point of a sweep).
-    rate.Activate(*model, o);
+    if (!rate.active) rate.Activate(*model, o);
     TrainOptions fit = o;
     fit.lambda_e = 0.0f;
     for (int k = 0; k < 300; ++k) rate.Step(*model, fit, rng());

@@ -49,6 +49,9 @@ TrainResult Train(const TrainOptions& options, const Dataset& train, const Datas
 // The iteration at which the rate terms switch on: options.rate_start of the run, but never
 // before the grid is final (after the last upsample and alpha-mask update).
 int RateStartIteration(const TrainOptions& options);
+// The iteration quantization-aware training starts at (options.iters: never); never before the
+// rate phase.
+int QatStartIteration(const TrainOptions& options);
 
 // Renders every options.test_view_stride-th view and compares it with the ground truth.
 EvalResult Evaluate(const TensorfModel& model, const Dataset& test, int stride, int max_views,
