@@ -18,7 +18,7 @@ int RunTrain(int argc, char** argv) {
     }
   }
   std::vector<int> rest;
-  trainer::TrainOptions o = TrainOptionsFromArgs(argc, argv, &rest);
+  trainer::TrainOptions o = TrainOptionsFromArgs(argc, argv, &rest, /*rate_point_by_default=*/true);
   for (size_t k = 0; k < rest.size(); ++k) {
     const std::string a = argv[rest[k]];
     if ((a == "-o" || a == "--out") && k + 1 < rest.size() && rest[k + 1] == rest[k] + 1) {

@@ -13,6 +13,7 @@
 #include "tools/decoded_scene.h"
 #include "tools/encode_report.h"
 #include "trainer/checkpoint.h"
+#include "trainer/encode_rate_control.h"
 #include "trainer/image_io.h"
 #include "trainer/scene_encoder.h"
 #include "trainer/trainer.h"
@@ -35,13 +36,17 @@ const char kTrainFlagsUsage[] =
     "  --threads N                worker threads (default: all cores)\n"
     "ECRF objective:\n"
     "  --lambda-e X               weight of the estimated size in bits (0 = plain TensoRF)\n"
+    "  --rate low|medium|high     named rate points (default medium): lambda_e 5e-10, 2e-11, 2e-11\n"
+    "                             with steps x1, x3, x1\n"
+    "  --target-size SIZE         adapt lambda_e during training, then the steps at encode time, for\n"
+    "                             a file of at most SIZE (e.g. 500KB, 1.2MB)\n"
     "  --alpha A                  lambda_r = A * lambda_e for the DCT-coefficient L2 term (default 1)\n"
     "  --dct-block CxHxW          plane block shape (default 16x16x16)\n"
     "  --line-block CxL           line block shape (default 8x8)\n"
     "  --rate-fraction F          share of blocks in each step's rate estimate (default 0.1)\n"
     "  --quant-step-scale S       quantization steps S times the 8-bit peak step (default 1)\n"
     "  --qat-start F              quantization-aware training from this share of the run on\n"
-    "                             (never before the rate phase; 1 = off)\n"
+    "                             (never before the rate phase; 1 = off; default: the rate phase)\n"
     "  --qat-refresh N            recompute the decoded grids every N iterations (default 1)\n"
     "  --mlp-levels L             code the basis and MLP as integer levels, at most L per row\n"
     "                             (default 127; 0 = binary16)\n";
@@ -80,6 +85,10 @@ bool ParseTrainFlag(int argc, char** argv, int* i, trainer::TrainOptions* o) {
     o->max_test_views = ParseInt("--max-test-views", value());
   } else if (a == "--lambda-e") {
     o->lambda_e = ParseFloat("--lambda-e", value());
+  } else if (a == "--rate") {
+    trainer::ApplyRatePoint(value(), o);
+  } else if (a == "--target-size") {
+    o->target_bytes = trainer::ParseByteSize(value());
   } else if (a == "--alpha") {
     o->alpha = ParseFloat("--alpha", value());
   } else if (a == "--dct-block") {
@@ -113,7 +122,8 @@ bool ParseTrainFlag(int argc, char** argv, int* i, trainer::TrainOptions* o) {
 
 }  // namespace
 
-trainer::TrainOptions TrainOptionsFromArgs(int argc, char** argv, std::vector<int>* rest) {
+trainer::TrainOptions TrainOptionsFromArgs(int argc, char** argv, std::vector<int>* rest,
+                                           bool rate_point_by_default) {
   std::string preset = "fast";
   bool builtin = false, preset_given = false;
   for (int i = 1; i + 1 < argc; ++i) {
@@ -125,6 +135,15 @@ trainer::TrainOptions TrainOptionsFromArgs(int argc, char** argv, std::vector<in
   }
   if (builtin && !preset_given) preset = "tiny";
   trainer::TrainOptions o = trainer::PresetOptions(preset);
+  if (rate_point_by_default) {
+    // A compressor by default: the medium rate point unless a rate flag says otherwise
+    // (--lambda-e 0 trains plain TensoRF, with the 8-bit peak steps).
+    bool rate_flag = false;
+    for (int i = 1; i < argc; ++i) {
+      for (const char* f : {"--lambda-e", "--rate", "--target-size"}) rate_flag |= !std::strcmp(argv[i], f);
+    }
+    if (!rate_flag) trainer::ApplyRatePoint("medium", &o);
+  }
   for (int i = 1; i < argc; ++i) {
     const int at = i;
     if (!ParseTrainFlag(argc, argv, &i, &o)) rest->push_back(at);
@@ -149,20 +168,28 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& o) {
   size_t float_bytes = 0;
   for (const auto& a : model.NamedParameters()) float_bytes += a.size * sizeof(float);
   // Close the loop: encode, decode with the embeddable decoder, and score the decoded stream.
-  trainer::EncodeOptions eo;
-  eo.blocks = rate.config;
-  eo.steps = rate.steps;
-  eo.coef_bits = o.coef_bits;
-  eo.mlp_max_level = o.mlp_levels;
+  trainer::EncodeOptions eo = trainer::RunEncodeOptions(o, rate);
   eo.metadata_json = nlohmann::json{{"encoder", "ecrf"},
                                     {"data", o.builtin_scene ? std::string("builtin") : o.data_dir},
                                     {"preset", o.preset},
                                     {"iterations", r.iterations},
-                                    {"lambda_e", o.lambda_e},
+                                    {"lambda_e", r.final_lambda_e},
                                     {"alpha", o.alpha}}.dump();
   trainer::EncodeReport report;
   const auto encode_start = std::chrono::steady_clock::now();
-  std::vector<uint8_t> bytes = trainer::EncodeScene(model, eo, &report);
+  std::vector<uint8_t> bytes;
+  double step_scale = 1.0;
+  if (o.target_bytes > 0) {
+    trainer::TargetSizeResult t = trainer::EncodeToTargetSize(model, eo, o.target_bytes);
+    bytes = std::move(t.bytes);
+    report = t.report;
+    step_scale = t.step_scale;
+    std::printf("target %zu bytes: lambda_e ended at %g, steps x%.4g at encode time, %zu bytes (%+.2f%%)\n",
+                o.target_bytes, r.final_lambda_e, t.step_scale, bytes.size(),
+                100.0 * (double(bytes.size()) / double(o.target_bytes) - 1.0));
+  } else {
+    bytes = trainer::EncodeScene(model, eo, &report);
+  }
   const double encode_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - encode_start).count();
   trainer::WriteFileAtomically(o.out_dir + "/scene.ecrf", bytes.data(), bytes.size());
@@ -199,6 +226,9 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& o) {
   m["aabb_max"] = model.aabb().max;
   m["float32_model_bytes"] = float_bytes;
   m["lambda_e"] = o.lambda_e;
+  m["final_lambda_e"] = r.final_lambda_e;
+  m["target_bytes"] = o.target_bytes;
+  m["encode_step_scale"] = step_scale;
   m["alpha"] = o.alpha;
   m["quant_step_scale"] = o.quant_step_scale;
   m["qat_start"] = o.qat_start;

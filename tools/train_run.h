@@ -14,8 +14,10 @@ namespace tools {
 // Options for a command line: the preset (named anywhere on the line, so later flags override
 // it whatever their order; "tiny" when --scene builtin has no --preset), then every training
 // flag of argv that ParseTrainFlag knows. Flags it does not know are left for the caller: their
-// indices go to *rest.
-trainer::TrainOptions TrainOptionsFromArgs(int argc, char** argv, std::vector<int>* rest);
+// indices go to *rest. rate_point_by_default (`ecrf train`): without --lambda-e, --rate or
+// --target-size the run trains at the "medium" rate point.
+trainer::TrainOptions TrainOptionsFromArgs(int argc, char** argv, std::vector<int>* rest,
+                                           bool rate_point_by_default = false);
 
 // The training flags' usage lines (data, schedule, ECRF objective, bookkeeping).
 extern const char kTrainFlagsUsage[];

@@ -42,6 +42,21 @@ TrainOptions PresetOptions(const std::string& name) {
   throw std::invalid_argument("unknown preset '" + name + "' (expected paper, fast or tiny)");
 }
 
+void ApplyRatePoint(const std::string& name, TrainOptions* o) {
+  if (name == "low") {
+    o->lambda_e = 5e-10f;
+    o->quant_step_scale = 1.0f;
+  } else if (name == "medium") {
+    o->lambda_e = 2e-11f;
+    o->quant_step_scale = 3.0f;
+  } else if (name == "high") {
+    o->lambda_e = 2e-11f;
+    o->quant_step_scale = 1.0f;
+  } else {
+    throw std::invalid_argument("unknown rate point '" + name + "' (expected low, medium or high)");
+  }
+}
+
 int ScaleMilestone(int milestone, int iters, int reference_iters) {
   if (reference_iters <= 0 || iters == reference_iters) return milestone;
   return int(std::lround(double(milestone) * iters / reference_iters));

@@ -7,6 +7,7 @@
 #ifndef ECRF_TRAINER_TRAIN_OPTIONS_H_
 #define ECRF_TRAINER_TRAIN_OPTIONS_H_
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -56,13 +57,20 @@ struct TrainOptions {
   // bits), times this factor, frozen when the rate terms switch on.
   float quant_step_scale = 1.0f;
   // Quantization-aware training (trainer/quant_aware.h) from this share of the run on (>= 1:
-  // never), the quantization error refreshed every qat_refresh iterations. The steps are frozen
-  // when it starts (with lambda_e = 0 too).
-  float qat_start = 1.0f;
+  // never; < 0: from the start of the rate phase when the rate objective is on, else never),
+  // the quantization error refreshed every qat_refresh iterations. The steps are frozen when it
+  // starts (with lambda_e = 0 too). On by default: on chair it lifted the decoded file by
+  // 0.12 dB at lambda_e 1e-10 and 0.37 dB at 5e-10 for the same size (README).
+  float qat_start = -1.0f;
   int qat_refresh = 1;
   // How `ecrf train` codes the basis and MLP: > 0 integer levels (at most this many per row,
   // MLPW precision 2); 0 binary16. 127 cost no measurable PSNR on chair (README) and halves MLPW.
   int mlp_levels = 127;
+  // > 0: lambda_e adapts during the rate phase so that the file lands at this size
+  // (trainer/train_rate_control.h), re-measured by encoding every rate_control_every iterations;
+  // lambda_e, when given, is the starting value.
+  size_t target_bytes = 0;
+  int rate_control_every = 100;
 
   // Bookkeeping.
   uint32_t seed = 20211202;
@@ -82,6 +90,13 @@ struct TrainOptions {
 // "paper": the reference TensoRF VM-192 schedule. "fast": what a CPU user should run.
 // "tiny": the built-in scene in CI. Throws std::invalid_argument for unknown names.
 TrainOptions PresetOptions(const std::string& name);
+
+// The named rate points set lambda_e and the step scale (with quantization-aware training on):
+//   "low"    lambda_e 5e-10, steps x1: chair-400 `fast` 266,445 B, 33.79 dB decoded (95x)
+//   "medium" lambda_e 2e-11, steps x3: chair-400 `fast` 550,181 B, 34.94 dB decoded (46x)
+//   "high"   lambda_e 2e-11, steps x1 (1,044,897 B, 35.19 dB before quantization-aware training)
+// (README "Training" gives the commands.) Throws std::invalid_argument for other names.
+void ApplyRatePoint(const std::string& name, TrainOptions* options);
 
 // The iteration at which a reference milestone happens in a run of `iters` iterations.
 int ScaleMilestone(int milestone, int iters, int reference_iters);

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <stdexcept>
@@ -18,6 +19,7 @@
 #include "trainer/image_metrics.h"
 #include "trainer/quant_aware.h"
 #include "trainer/ray_set.h"
+#include "trainer/train_rate_control.h"
 #include "trainer/volume_render.h"
 
 namespace ecrf {
@@ -162,6 +164,7 @@ void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int itera
   j["iteration"] = iteration;
   j["preset"] = o.preset;
   j["iters"] = o.iters;
+  j["lambda_e"] = o.lambda_e;  // the live value under rate control
   j["res"] = model.res();
   j["aabb_min"] = model.aabb().min;
   j["aabb_max"] = model.aabb().max;
@@ -287,6 +290,9 @@ TensorfModel LoadModelFromCheckpoint(const std::string& path, RateState* rate) {
 }
 
 int QatStartIteration(const TrainOptions& o) {
+  if (o.qat_start < 0.0f) {
+    return o.lambda_e > 0.0f || o.target_bytes > 0 ? std::min(RateStartIteration(o), o.iters) : o.iters;
+  }
   if (!(o.qat_start < 1.0f)) return o.iters;
   int start = int(std::lround(double(std::max(0.0f, o.qat_start)) * o.iters));
   // The steps freeze when quantization-aware training starts, so it waits for the final grid
@@ -302,13 +308,24 @@ int RateStartIteration(const TrainOptions& o) {
   return start;
 }
 
+EncodeOptions RunEncodeOptions(const TrainOptions& o, const RateState& rate) {
+  EncodeOptions eo;
+  eo.blocks = rate.config;
+  eo.steps = rate.steps;
+  eo.coef_bits = o.coef_bits;
+  eo.mlp_max_level = o.mlp_levels;
+  return eo;
+}
+
 TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& test, TensorfModel* model,
                   RateState* rate_out) {
   TrainResult result;
   RateState local_rate;
   RateState& rate = rate_out ? *rate_out : local_rate;
   rate.Configure(o);
-  const bool use_rate = o.lambda_e > 0.0f;
+  const bool use_rate = o.lambda_e > 0.0f || o.target_bytes > 0;
+  TrainOptions live = o;  // lambda_e moves under rate control
+  std::unique_ptr<LambdaController> controller;
   const int rate_start = RateStartIteration(o);
   const int qat_start = QatStartIteration(o);
   QuantAwareModel qat;
@@ -327,6 +344,14 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   if (o.resume && !ckpt_path.empty() && access(ckpt_path.c_str(), R_OK) == 0) {
     first_iter = LoadModelCheckpoint(ckpt_path, model, &rate);
     resumed = true;
+    if (o.target_bytes > 0 && rate.active) {
+      // Rate control continues from the lambda_e it had reached.
+      const float saved = nlohmann::json::parse(ReadCheckpoint(ckpt_path).json).value("lambda_e", 0.0f);
+      if (saved > 0.f) {
+        live.lambda_e = saved;
+        controller = std::make_unique<LambdaController>(o.target_bytes, saved);
+      }
+    }
     std::fprintf(stderr, "resumed from %s at iteration %d\n", ckpt_path.c_str(), first_iter);
   } else {
     model->Initialize(ResolutionFor(o.voxels_init, model->config().aabb), o.seed);
@@ -368,10 +393,23 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   for (int it = first_iter; it < o.iters; ++it) {
     rays.NextBatch(n, rng, origins.data(), dirs.data(), rgb.data());
     model->ZeroGrads();
+    if (use_rate && it >= rate_start && !controller && o.target_bytes > 0) {
+      const size_t float_bytes = sizeof(float) * (model->density().params().size() +
+                                                  model->appearance().params().size() + model->head().params().size());
+      live.lambda_e = o.lambda_e > 0.f ? o.lambda_e : InitialLambdaForSize(o.target_bytes, float_bytes);
+      controller = std::make_unique<LambdaController>(o.target_bytes, live.lambda_e);
+    }
     if (use_rate && it >= rate_start && !rate.active) {
       rate.Activate(*model, o);
       std::fprintf(stderr, "%srate objective on at iteration %d (lambda_e %g, alpha %g)\n",
-                   isatty(2) ? "\n" : "", it, o.lambda_e, o.alpha);
+                   isatty(2) ? "\n" : "", it, live.lambda_e, o.alpha);
+    }
+    if (controller && rate.active && it > rate_start && (it - rate_start) % std::max(1, o.rate_control_every) == 0) {
+      const size_t bytes = EncodeScene(*model, RunEncodeOptions(o, rate)).size();
+      const float before = live.lambda_e;
+      live.lambda_e = controller->Update(bytes);
+      std::fprintf(stderr, "%srate control at iteration %d: file %zu bytes for a target of %zu, lambda_e %g -> %g\n",
+                   isatty(2) ? "\n" : "", it, bytes, o.target_bytes, before, live.lambda_e);
     }
     const bool quant_aware = it >= qat_start;
     if (quant_aware) {
@@ -387,7 +425,7 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
     stats = TrainStep(*model, n, origins.data(), dirs.data(), rgb.data(), rng());
     qat.Restore(model);  // the gradients of Q(G) go to G unchanged (straight-through)
     if (l1_weight > 0) model->DensityL1(l1_weight);
-    if (rate.active && use_rate) rate.Step(*model, o, rng());
+    if (rate.active && use_rate) rate.Step(*model, live, rng());
     opt.Step(*model, o);
     opt.lr_scale *= lr_factor;
     mse_sum += stats.mse;
@@ -440,7 +478,7 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
     }
 
     if (!ckpt_path.empty() && o.checkpoint_every > 0 && done % o.checkpoint_every == 0 && done < o.iters) {
-      SaveModelCheckpoint(ckpt_path, *model, done, o, &rate);
+      SaveModelCheckpoint(ckpt_path, *model, done, live, &rate);
     }
     if (o.eval_every > 0 && done % o.eval_every == 0 && done < o.iters) {
       const auto eval_start = Clock::now();
@@ -453,9 +491,10 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   }
   if (isatty(2)) std::fprintf(stderr, "\n");
   result.iterations = o.iters;
+  result.final_lambda_e = live.lambda_e;
   result.train_seconds = Seconds(start) - eval_seconds;
   (void)resumed;
-  if (!ckpt_path.empty()) SaveModelCheckpoint(ckpt_path, *model, o.iters, o, &rate);
+  if (!ckpt_path.empty()) SaveModelCheckpoint(ckpt_path, *model, o.iters, live, &rate);
   if (!use_rate) {
     // Without the rate objective, fit an entropy model to the final grids anyway so every run
     // reports the size its coefficients would cost (the lambda_e = 0 point of a sweep).

@@ -11,6 +11,7 @@
 #include "trainer/dataset.h"
 #include "trainer/image_io.h"
 #include "trainer/rate_state.h"
+#include "trainer/scene_encoder.h"
 #include "trainer/tensorf_model.h"
 #include "trainer/train_options.h"
 
@@ -32,7 +33,12 @@ struct TrainResult {
   EvalResult test;
   std::vector<std::pair<double, double>> psnr_curve;  // (minutes, test PSNR) when --eval-every
   RateReport rate;  // bits per tensor of the rounded coefficients (when lambda_e > 0)
+  float final_lambda_e = 0.f;  // options.lambda_e, or where rate control left it
 };
+
+// How a trained run is encoded: its block shapes and frozen steps, coefficient depth and MLP
+// precision (metadata left empty).
+EncodeOptions RunEncodeOptions(const TrainOptions& options, const RateState& rate);
 
 // The datasets a run uses: the built-in procedural scene or a directory on disk.
 Dataset LoadTrainingViews(const TrainOptions& options, const std::string& split);

@@ -11,6 +11,7 @@
 #include "decoder/ray_marcher.h"
 #include "decoder/scene_decoder.h"
 #include "trainer/camera.h"
+#include "trainer/encode_rate_control.h"
 #include "trainer/image_metrics.h"
 #include "trainer/scene_encoder.h"
 #include "trainer/trainer.h"
@@ -28,6 +29,29 @@ TrainOptions SmallRun() {
   o.batch_rays = 1024;
   o.progress_every = 100;
   return o;
+}
+
+// Mean PSNR over the test views of the stream decoded and rendered by the embeddable decoder.
+double DecodedPsnr(const std::vector<uint8_t>& bytes, const Dataset& test) {
+  dec::SceneField field;
+  const Status st = dec::DecodeScene(bytes.data(), bytes.size(), dec::DecodeOptions(), &field, nullptr);
+  EXPECT_TRUE(st.ok()) << st.message();
+  dec::RayMarcher marcher;
+  EXPECT_TRUE(marcher.Init(&field, dec::RenderOptions()).ok());
+  double psnr = 0.0;
+  for (const View& v : test.views) {
+    const int n = v.camera.width * v.camera.height;
+    std::vector<float> origins, dirs;
+    GenerateRowRays(v.camera, 0, v.camera.height, &origins, &dirs);
+    Image img;
+    img.width = v.camera.width;
+    img.height = v.camera.height;
+    img.channels = 3;
+    img.pixels.resize(size_t(n) * 3);
+    EXPECT_TRUE(marcher.RenderRays(size_t(n), origins.data(), dirs.data(), img.pixels.data(), nullptr).ok());
+    psnr += Psnr(img, v.rgb) / double(test.views.size());
+  }
+  return psnr;
 }
 
 TEST(TrainBuiltin, ReachesHeldOutPsnrAndCheckpointsRestore) {
@@ -67,24 +91,7 @@ TEST(TrainBuiltin, ReachesHeldOutPsnrAndCheckpointsRestore) {
   eo.steps = rate.steps;
   EncodeReport report;
   const std::vector<uint8_t> bytes = EncodeScene(model, eo, &report);
-  dec::SceneField field;
-  const Status st = dec::DecodeScene(bytes.data(), bytes.size(), dec::DecodeOptions(), &field, nullptr);
-  ASSERT_TRUE(st.ok()) << st.message();
-  dec::RayMarcher marcher;
-  ASSERT_TRUE(marcher.Init(&field, dec::RenderOptions()).ok());
-  double decoded_psnr = 0.0;
-  for (const View& v : test.views) {
-    const int n = v.camera.width * v.camera.height;
-    std::vector<float> origins, dirs;
-    GenerateRowRays(v.camera, 0, v.camera.height, &origins, &dirs);
-    Image img;
-    img.width = v.camera.width;
-    img.height = v.camera.height;
-    img.channels = 3;
-    img.pixels.resize(size_t(n) * 3);
-    ASSERT_TRUE(marcher.RenderRays(size_t(n), origins.data(), dirs.data(), img.pixels.data(), nullptr).ok());
-    decoded_psnr += Psnr(img, v.rgb) / double(test.views.size());
-  }
+  const double decoded_psnr = DecodedPsnr(bytes, test);
   size_t float_bytes = 0;
   for (const auto& p : model.NamedParameters()) float_bytes += p.size * sizeof(float);
   std::printf("  encoded %zu bytes (float32 %zu): decoded PSNR %.2f dB vs float %.2f dB\n", bytes.size(),
@@ -102,6 +109,7 @@ TEST(TrainBuiltin, SameModelWithOneAndTwoThreads) {
   o.batch_rays = 512;
   o.max_test_views = 1;
   o.lambda_e = 1e-9f;  // the rate objective switches on at 16/30 of the run
+  o.qat_start = 0.8f;  // and quantization-aware steps at 96
   const Dataset train = LoadTrainingViews(o, "train");
   const Dataset test = LoadTrainingViews(o, "test");
   auto run = [&](int threads) {
@@ -121,6 +129,44 @@ TEST(TrainBuiltin, SameModelWithOneAndTwoThreads) {
     ASSERT_EQ(a[t].size, b[t].size) << a[t].name;
     EXPECT_EQ(0, std::memcmp(a[t].data, b[t].data, a[t].size * sizeof(float))) << a[t].name;
   }
+}
+
+// --target-size: lambda_e adapts during the rate phase (with quantization-aware steps) and
+// encode-time rate control finishes.
+TEST(TrainBuiltin, TargetSizeLands) {
+  TrainOptions o = SmallRun();
+  o.iters = 600;  // rate phase from 321 (after the last upsample at 320)
+  const Dataset train = LoadTrainingViews(o, "train");
+  const Dataset test = LoadTrainingViews(o, "test");
+  TensorfModel plain(ConfigFor(o, train));
+  RateState plain_rate;
+  Train(o, train, test, &plain, &plain_rate);
+  const size_t plain_bytes = EncodeScene(plain, RunEncodeOptions(o, plain_rate)).size();
+
+  TrainOptions t = o;
+  t.target_bytes = plain_bytes / 3;
+  t.rate_control_every = 25;
+  t.qat_start = 0.7f;
+  TensorfModel model(ConfigFor(t, train));
+  RateState rate;
+  const TrainResult r = Train(t, train, test, &model, &rate);
+  const std::vector<uint8_t> trained = EncodeScene(model, RunEncodeOptions(t, rate));
+  const TargetSizeResult fit = EncodeToTargetSize(model, RunEncodeOptions(t, rate), t.target_bytes);
+  const double trained_psnr = DecodedPsnr(trained, test);
+  const double fit_psnr = DecodedPsnr(fit.bytes, test);
+  std::printf("  plain file %zu bytes; target %zu: trained to %zu bytes (lambda_e %g, %.2f dB decoded), encoded "
+              "%zu bytes (steps x%.3f, %.2f dB decoded); float model %.2f dB\n",
+              plain_bytes, t.target_bytes, trained.size(), r.final_lambda_e, trained_psnr, fit.bytes.size(),
+              fit.step_scale, fit_psnr, r.test.psnr);
+  EXPECT_LE(fit.bytes.size(), t.target_bytes);
+  EXPECT_GE(double(fit.bytes.size()), 0.95 * double(t.target_bytes));
+  // The training controller did most of the work (here from a starting lambda_e 2000x too
+  // small: the chair fit does not carry over to this scene); the encoder only trims.
+  EXPECT_NEAR(double(trained.size()) / double(t.target_bytes), 1.0, 0.25);
+  // Both files decode close to the float model. (Here lambda_e still climbs steeply at the end
+  // of this short run; the chair runs in README measure what quantization-aware training gains.)
+  EXPECT_GT(trained_psnr, r.test.psnr - 0.3);
+  EXPECT_GT(fit_psnr, r.test.psnr - 0.3);
 }
 
 }  // namespace
