@@ -4,7 +4,6 @@
 #include <stdexcept>
 #include <utility>
 
-#include "format/mlp_coder.h"
 #include "trainer/grid_dct.h"
 
 namespace ecrf {
@@ -30,14 +29,18 @@ void ReconstructQuantizedGrid(const VmGrid& grid, const float* steps, const Rate
   }
 }
 
-void ReconstructQuantizedHead(const TensorfModel& model, int max_level, std::vector<float>* out) {
-  const AppearanceHeadConfig& h = model.config().head;
+MlpLayout HeadMlpLayout(const AppearanceHeadConfig& h) {
   MlpLayout layout;
   layout.feature_dim = h.feature_dim;
   layout.num_products = h.num_products;
   layout.hidden = h.hidden;
   layout.feature_pe_width = 2 * h.feature_dim * h.feature_pe_freqs;
   layout.input_dim = h.feature_dim + 3 + layout.feature_pe_width + 2 * 3 * h.viewdir_pe_freqs;
+  return layout;
+}
+
+void ReconstructQuantizedHead(const TensorfModel& model, int max_level, std::vector<float>* out) {
+  const MlpLayout layout = HeadMlpLayout(model.config().head);
   if (MlpParamCount(layout) != model.head().params().size()) {
     throw std::logic_error("ReconstructQuantizedHead: the head's layout is not the stream's");
   }

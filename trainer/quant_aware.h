@@ -18,6 +18,7 @@
 
 #include <vector>
 
+#include "format/mlp_coder.h"
 #include "trainer/rate_objective.h"
 #include "trainer/tensorf_model.h"
 
@@ -28,6 +29,10 @@ namespace trainer {
 // out has grid.params().size() values.
 void ReconstructQuantizedGrid(const VmGrid& grid, const float* steps, const RateConfig& config,
                               std::vector<float>* out);
+
+// The MLPW layout (format/mlp_coder.h) of a head: the trainer's flat parameter order is the
+// stream's.
+MlpLayout HeadMlpLayout(const AppearanceHeadConfig& head);
 
 // out = the head parameters as MLPW precision 2 with at most max_level per row reconstructs them.
 void ReconstructQuantizedHead(const TensorfModel& model, int max_level, std::vector<float>* out);

@@ -182,13 +182,7 @@ TEST(QuantAware, HeadReconstructionIsWhatTheDecoderDecodes) {
   while (!done) {
     ASSERT_TRUE(reader.Next(&chunk, &done).ok());
     if (chunk.type != FourCC("MLPW")) continue;
-    const AppearanceHeadConfig& h = model.config().head;
-    MlpLayout layout;
-    layout.feature_dim = h.feature_dim;
-    layout.num_products = h.num_products;
-    layout.hidden = h.hidden;
-    layout.feature_pe_width = 2 * h.feature_dim * h.feature_pe_freqs;
-    layout.input_dim = h.feature_dim + 3 + layout.feature_pe_width + 2 * 3 * h.viewdir_pe_freqs;
+    const MlpLayout layout = HeadMlpLayout(model.config().head);
     decoded.resize(MlpParamCount(layout));
     ASSERT_EQ(chunk.data[0], kMlpPrecisionQuantized);
     ASSERT_TRUE(DecodeQuantizedMlp(layout, chunk.data + 4, chunk.size - 4, decoded.data()).ok());
