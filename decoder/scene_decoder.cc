@@ -192,12 +192,8 @@ Status DecodeMlpChunk(const ChunkView& chunk, const SceneHeader& h, SceneField* 
   HeapArray<float> params;
   ECRF_RETURN_IF_ERROR(params.Allocate(count));
   if (precision == kMlpPrecisionQuantized) {
-    MlpLayout layout;
-    layout.feature_dim = h.feature_dim;
-    layout.num_products = config.num_products;
-    layout.hidden = h.hidden;
-    layout.input_dim = config.input_dim();
-    layout.feature_pe_width = 2 * h.feature_dim * h.feature_pe_freqs;
+    const MlpLayout layout = MakeMlpLayout(h.feature_dim, config.num_products, h.hidden, h.feature_pe_freqs,
+                                          h.viewdir_pe_freqs);
     const Status q = DecodeQuantizedMlp(layout, r.current(), r.remaining(), params.data());
     if (!q.ok()) return Status::Error(q.code(), "MLPW: %s", q.message());
   } else {

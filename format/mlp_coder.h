@@ -49,6 +49,11 @@ struct MlpMatrixSpan {
   int cols;
 };
 
+// The layout of a head with these widths and positional-encoding frequencies (feature PE width
+// 2*F*Ff, input width F + 3 + 2*F*Ff + 2*3*Fv).
+MlpLayout MakeMlpLayout(int feature_dim, int num_products, int hidden, int feature_pe_freqs,
+                        int viewdir_pe_freqs);
+
 // The four matrices (B, W1, W2, W3) and the three bias vectors (b1, b2, b3), in stream order.
 void MlpMatrices(const MlpLayout& layout, MlpMatrixSpan matrices[4], MlpMatrixSpan biases[3]);
 size_t MlpParamCount(const MlpLayout& layout);

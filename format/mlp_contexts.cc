@@ -21,6 +21,17 @@ void MlpMatrices(const MlpLayout& l, MlpMatrixSpan matrices[4], MlpMatrixSpan bi
   biases[2] = {at, 1, 3};
 }
 
+MlpLayout MakeMlpLayout(int feature_dim, int num_products, int hidden, int feature_pe_freqs,
+                        int viewdir_pe_freqs) {
+  MlpLayout l;
+  l.feature_dim = feature_dim;
+  l.num_products = num_products;
+  l.hidden = hidden;
+  l.feature_pe_width = 2 * feature_dim * feature_pe_freqs;
+  l.input_dim = feature_dim + 3 + l.feature_pe_width + 2 * 3 * viewdir_pe_freqs;
+  return l;
+}
+
 size_t MlpParamCount(const MlpLayout& l) {
   const size_t F = static_cast<size_t>(l.feature_dim), P = static_cast<size_t>(l.num_products);
   const size_t H = static_cast<size_t>(l.hidden), In = static_cast<size_t>(l.input_dim);

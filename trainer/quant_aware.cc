@@ -11,7 +11,8 @@ namespace trainer {
 
 void ReconstructQuantizedGrid(const VmGrid& grid, const float* steps, const RateConfig& config,
                               std::vector<float>* out) {
-  out->assign(grid.params().begin(), grid.params().end());
+  // The six tensors tile params() and InverseBlocks writes every element of each: no copy.
+  out->resize(grid.params().size());
   std::vector<float> coeffs;
   for (int t = 0; t < kTensorsPerGrid; ++t) {
     const GridBlockLayout layout = RateTensorLayout(grid, t, config);
@@ -30,13 +31,7 @@ void ReconstructQuantizedGrid(const VmGrid& grid, const float* steps, const Rate
 }
 
 MlpLayout HeadMlpLayout(const AppearanceHeadConfig& h) {
-  MlpLayout layout;
-  layout.feature_dim = h.feature_dim;
-  layout.num_products = h.num_products;
-  layout.hidden = h.hidden;
-  layout.feature_pe_width = 2 * h.feature_dim * h.feature_pe_freqs;
-  layout.input_dim = h.feature_dim + 3 + layout.feature_pe_width + 2 * 3 * h.viewdir_pe_freqs;
-  return layout;
+  return MakeMlpLayout(h.feature_dim, h.num_products, h.hidden, h.feature_pe_freqs, h.viewdir_pe_freqs);
 }
 
 void ReconstructQuantizedHead(const TensorfModel& model, int max_level, std::vector<float>* out) {

@@ -174,12 +174,8 @@ std::vector<uint8_t> EncodeMlpChunk(const SceneHeader& h, const std::vector<floa
   w.U8(0);
   w.U8(0);
   if (max_level > 0) {
-    MlpLayout layout;
-    layout.feature_dim = h.feature_dim;
-    layout.num_products = h.total_rank(1);
-    layout.hidden = h.hidden;
-    layout.feature_pe_width = 2 * h.feature_dim * h.feature_pe_freqs;
-    layout.input_dim = h.feature_dim + 3 + layout.feature_pe_width + 2 * 3 * h.viewdir_pe_freqs;
+    const MlpLayout layout =
+        MakeMlpLayout(h.feature_dim, h.total_rank(1), h.hidden, h.feature_pe_freqs, h.viewdir_pe_freqs);
     w.Bytes(EncodeQuantizedMlp(layout, params.data(), max_level, nullptr));
     return std::move(w.bytes());
   }

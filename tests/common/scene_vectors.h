@@ -174,12 +174,7 @@ inline std::vector<uint8_t> BuildSceneVector(const SceneVector& v) {
     for (size_t i = 0; i < count; ++i) {
       w[i] = std::ldexp(float(int(rng.Below(257)) - 128) / 256.f, int(i / 7 % 7) - 3);
     }
-    MlpLayout layout;
-    layout.feature_dim = F;
-    layout.num_products = P;
-    layout.hidden = H;
-    layout.feature_pe_width = 2 * F * h.feature_pe_freqs;
-    layout.input_dim = in;
+    const MlpLayout layout = MakeMlpLayout(F, P, H, h.feature_pe_freqs, h.viewdir_pe_freqs);
     mlp.Bytes(EncodeQuantizedMlp(layout, w.data(), 20000, nullptr));
   }
   for (size_t i = 0; i < count && v.mlp_precision != kMlpPrecisionQuantized; ++i) {

@@ -11,15 +11,7 @@
 namespace ecrf {
 namespace {
 
-MlpLayout Layout(int F, int P, int H, int Ff, int Fv) {
-  MlpLayout l;
-  l.feature_dim = F;
-  l.num_products = P;
-  l.hidden = H;
-  l.feature_pe_width = 2 * F * Ff;
-  l.input_dim = F + 3 + l.feature_pe_width + 2 * 3 * Fv;
-  return l;
-}
+MlpLayout Layout(int F, int P, int H, int Ff, int Fv) { return MakeMlpLayout(F, P, H, Ff, Fv); }
 
 // Gaussian weights whose rows differ in scale by up to 2^12, a zero row, and one row whose
 // values are below binary16's smallest step.
