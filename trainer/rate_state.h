@@ -21,6 +21,8 @@ struct RateState {
   std::vector<float> steps;  // one per tensor: density planes 0..2, lines 0..2, then appearance
   FactorizedEntropyModel entropy;
   Adam adam;
+  // The lambda_e a checkpointed run last trained with (rate control moves it); 0 when unknown.
+  float checkpoint_lambda_e = 0.f;
   double last_bits = 0.0;         // latest unbiased estimate (bits)
   double last_regularizer = 0.0;
 

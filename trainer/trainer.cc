@@ -256,6 +256,7 @@ int LoadModelCheckpoint(const std::string& path, TensorfModel* model, RateState*
     rate->entropy.params() = params->data;
     rate->adam.Reset(rate->entropy.params().size());
     rate->active = true;
+    rate->checkpoint_lambda_e = j.value("lambda_e", 0.0f);
   }
   return j.at("iteration").get<int>();
 }
@@ -344,13 +345,10 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   if (o.resume && !ckpt_path.empty() && access(ckpt_path.c_str(), R_OK) == 0) {
     first_iter = LoadModelCheckpoint(ckpt_path, model, &rate);
     resumed = true;
-    if (o.target_bytes > 0 && rate.active) {
+    if (o.target_bytes > 0 && rate.active && rate.checkpoint_lambda_e > 0.f) {
       // Rate control continues from the lambda_e it had reached.
-      const float saved = nlohmann::json::parse(ReadCheckpoint(ckpt_path).json).value("lambda_e", 0.0f);
-      if (saved > 0.f) {
-        live.lambda_e = saved;
-        controller = std::make_unique<LambdaController>(o.target_bytes, saved);
-      }
+      live.lambda_e = rate.checkpoint_lambda_e;
+      controller = std::make_unique<LambdaController>(o.target_bytes, live.lambda_e);
     }
     std::fprintf(stderr, "resumed from %s at iteration %d\n", ckpt_path.c_str(), first_iter);
   } else {
