@@ -204,6 +204,9 @@ def plot_rd(scene, rd, anchors):
         ax.plot([r["file_bytes"] for r in floats], [r["float_psnr"] for r in floats], "o", markerfacecolor="none",
                 color="tab:blue", markersize=8, label="float model (before quantization)")
     reference = [r["float_psnr"] for r in rd if r["lambda_e"] == 0 and r["float_psnr"] is not None]
+    # A sweep without a lambda = 0 point borrows the reference: decoded PSNR minus loss gives it back.
+    reference += [r["decoded_psnr"] - r["psnr_loss_db"] for r in rd
+                  if r["decoded_psnr"] is not None and r["psnr_loss_db"] is not None]
     if reference:
         ax.axhline(reference[0], linestyle="--", color="0.4", lw=1, label=f"λ=0 float model ({reference[0]:.2f} dB)")
     draw_anchors(ax, anchors, "file_bytes", "psnr")
@@ -214,6 +217,8 @@ def plot_rd(scene, rd, anchors):
 
 
 def lambda_text(r):
+    if r.get("label"):
+        return r["label"].replace("lambda=", "λ=")
     return "λ=?" if r["lambda_e"] is None else f"λ={r['lambda_e']:g}"
 
 

@@ -23,8 +23,9 @@ int RunReportSweep(int argc, char** argv);
 int RunReportRender(int argc, char** argv);
 int RunReportCompare(int argc, char** argv);
 
-// "lambda_1e-10" for 1e-10: the run directory's name and the point's label.
-std::string LambdaText(double lambda);
+// "lambda_1e-10" for 1e-10, "lambda_2e-11_steps3" for 2e-11 with steps x3: the run directory's
+// name of a rate point.
+std::string LambdaText(double lambda, double step_scale = 1.0);
 
 // One rate point from a finished run's metrics.json (file size, decoded and float PSNR/SSIM,
 // bytes per chunk, training curve), and the derived columns against the lambda = 0 reference

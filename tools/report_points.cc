@@ -11,19 +11,29 @@
 namespace ecrf {
 namespace tools {
 
-std::string LambdaText(double lambda) {
-  char text[48];
-  std::snprintf(text, sizeof(text), "lambda_%g", lambda);
+std::string LambdaText(double lambda, double step_scale) {
+  char text[64];
+  if (std::fabs(step_scale - 1.0) < 1e-6) {
+    std::snprintf(text, sizeof(text), "lambda_%g", lambda);
+  } else {
+    std::snprintf(text, sizeof(text), "lambda_%g_steps%g", lambda, step_scale);
+  }
   return text;
 }
 
 nlohmann::json RatePointFromMetrics(const nlohmann::json& m, const std::string& run_dir) {
   const double lambda = m.at("lambda_e").get<double>();
+  const double step_scale = m.value("quant_step_scale", 1.0);
   nlohmann::json p;
-  char label[48];
-  std::snprintf(label, sizeof(label), "lambda=%g", lambda);
+  char label[64];
+  if (std::fabs(step_scale - 1.0) < 1e-6) {
+    std::snprintf(label, sizeof(label), "lambda=%g", lambda);
+  } else {
+    std::snprintf(label, sizeof(label), "lambda=%g steps x%g", lambda, step_scale);
+  }
   p["label"] = label;
   p["lambda_e"] = lambda;
+  p["quant_step_scale"] = step_scale;
   p["run_dir"] = run_dir;
   p["iterations"] = m.at("iterations");
   p["train_seconds"] = m.at("train_seconds");
@@ -59,27 +69,31 @@ nlohmann::json RatePointFromMetrics(const nlohmann::json& m, const std::string& 
 void AddReferenceColumns(nlohmann::json* report) {
   nlohmann::json& points = (*report)["points"];
   std::sort(points.begin(), points.end(), [](const nlohmann::json& a, const nlohmann::json& b) {
-    return a.at("lambda_e").get<double>() < b.at("lambda_e").get<double>();
+    const double la = a.at("lambda_e").get<double>(), lb = b.at("lambda_e").get<double>();
+    if (la != lb) return la < lb;
+    return a.value("quant_step_scale", 1.0) < b.value("quant_step_scale", 1.0);
   });
-  const nlohmann::json* ref = nullptr;
+  nlohmann::json ref;
   for (const nlohmann::json& p : points) {
-    if (p.at("lambda_e").get<double>() == 0.0) ref = &p;
+    if (p.at("lambda_e").get<double>() == 0.0) {
+      ref = {{"label", "lambda=0 float32 model"},
+             {"float32_bytes", p.at("float32_bytes")},
+             {"float_psnr", p.at("float_psnr")},
+             {"float_ssim", p.at("float_ssim")}};
+    }
   }
-  if (ref) {
-    (*report)["reference"] = {{"label", "lambda=0 float32 model"},
-                              {"float32_bytes", ref->at("float32_bytes")},
-                              {"float_psnr", ref->at("float_psnr")},
-                              {"float_ssim", ref->at("float_ssim")}};
-  } else {
-    (*report)["reference"] = nullptr;
-  }
+  // A sweep without a lambda = 0 point may borrow that reference from an earlier sweep of the
+  // same scene and preset (`report sweep --reference`): its float model does not depend on
+  // anything the rate points change.
+  if (ref.is_null() && report->contains("borrowed_reference")) ref = (*report)["borrowed_reference"];
+  (*report)["reference"] = ref;
   for (nlohmann::json& p : points) {
     const double bytes = p.at("file_bytes").get<double>();
-    const double float32 = (ref ? *ref : p).at("float32_bytes").get<double>();
+    const double float32 = (ref.is_null() ? p : ref).at("float32_bytes").get<double>();
     p["ratio"] = float32 / bytes;
     p["quantization_loss_db"] = p.at("decoded_psnr").get<double>() - p.at("float_psnr").get<double>();
-    if (ref) {
-      p["psnr_loss_db"] = p.at("decoded_psnr").get<double>() - ref->at("float_psnr").get<double>();
+    if (!ref.is_null()) {
+      p["psnr_loss_db"] = p.at("decoded_psnr").get<double>() - ref.at("float_psnr").get<double>();
     } else {
       p["psnr_loss_db"] = nullptr;
     }

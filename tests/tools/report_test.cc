@@ -52,7 +52,7 @@ std::string root_, dir_;
 
 void WritesEveryFile() {
   for (const char* f : {"report.json", "rd.csv", "chunks.csv", "curve.csv", "speed.csv", "index.html",
-                        "runs/lambda_0/scene.ecrf", "runs/lambda_1e-08/scene.ecrf"}) {
+                        "runs/lambda_0/scene.ecrf", "runs/lambda_1e-08_steps2/scene.ecrf"}) {
     EXPECT_FALSE(ReadText(dir_ + "/" + f).empty()) << f;
   }
   const std::string html = ReadText(dir_ + "/index.html");
@@ -131,11 +131,17 @@ void SpeedRowsObeyWhatTheSpecPromises() {
 void SweepResumesFromFinishedRunsAndRefusesIncompatibleOnes() {
   const nlohmann::json before = ReadJson(dir_ + "/report.json");
   // Same sweep again: nothing is trained (the runs' metrics are reused), the points are the same.
-  ASSERT_EQ(Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "--lambdas", "0,1e-8", "--iters", "150",
+  ASSERT_EQ(Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "--lambdas", "0,1e-8@2", "--iters", "150",
                             "--max-test-views", "4", "--seed", "7", "-o", dir_}),
             0);
   const nlohmann::json after = ReadJson(dir_ + "/report.json");
   EXPECT_EQ(after["points"], before["points"]);
+  // A point's own step scale names its run and labels it.
+  ASSERT_EQ(after["points"].size(), 2u);
+  EXPECT_EQ(after["points"][1]["run_dir"], "runs/lambda_1e-08_steps2");
+  EXPECT_EQ(after["points"][1]["label"], "lambda=1e-08 steps x2");
+  EXPECT_EQ(after["points"][1]["quant_step_scale"], 2.0);
+  EXPECT_EQ(after["points"][0]["quant_step_scale"], 1.0);
   EXPECT_TRUE(after.contains("speed"));
   // Other iterations: the finished runs no longer match, and the sweep says so.
   try {
@@ -161,7 +167,7 @@ TEST(Report, BuiltinSweepMatchesEvalResumesAndCompares) {
   root_ = tmpl;
   dir_ = root_ + "/nested/report";  // parents do not exist yet
   // Plots are drawn when matplotlib is installed; the checks below read the tables either way.
-  ASSERT_EQ(Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "--lambdas", "0,1e-8", "--iters", "150",
+  ASSERT_EQ(Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "--lambdas", "0,1e-8@2", "--iters", "150",
                                "--max-test-views", "4", "--seed", "7", "--threads", "2", "-o", dir_}),
             0);
   ASSERT_EQ(Invoke(RunReport, {"report", "render", dir_, "--stride", "1"}), 0);
@@ -195,6 +201,8 @@ TEST(ReportCli, HelpExitsZeroAndBadUsageTwo) {
   EXPECT_EQ(Invoke(RunReport, {"report", "compare", "--help"}), 0);
   EXPECT_EQ(Invoke(RunReport, {"report", "nonsense"}), 2);
   EXPECT_EQ(Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "-o", "/tmp/x"}), 2);  // no --lambdas
+  EXPECT_THROW(Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "--lambdas", "1e-8@0", "-o", "/tmp/x"}),
+               std::invalid_argument);
   EXPECT_EQ(Invoke(RunInfo, {"info", "--help"}), 0);
   EXPECT_EQ(Invoke(RunConformance, {"conformance", "--help"}), 0);
   EXPECT_EQ(Invoke(RunTrain, {"train", "--help"}), 0);
