@@ -56,7 +56,7 @@ inline void Block4(const float* x0, const float* x1, const float* x2, const floa
     b3 += s3 * wb;
   }
   if (relu) {
-    const V z = a0 - a0;  // zeros of any width
+    const V z = {};  // zeros of any width (a0 - a0 would be NaN where a0 is infinite)
     a0 = a0 > z ? a0 : z;
     b0 = b0 > z ? b0 : z;
     a1 = a1 > z ? a1 : z;

@@ -237,6 +237,10 @@ void MarchRay(const Ctx& c, RayMarcher::Workspace& ws, int slot) {
   ws.ray_acc[slot] = acc;
 }
 
+// Clip3(0, 1, v) of SPEC.md 7.2, with NaN (from a stream whose weights or steps overflow in the
+// arithmetic) mapped to 0 like a negative value: every output is a number in [0, 1].
+inline float ClipUnit(float v) { return v > 0.f ? (v < 1.f ? v : 1.f) : 0.f; }
+
 // Marches ws.ray_o/ray_d[0..nrays) and leaves the final clamped colour in ws.ray_rgb.
 void ProcessRays(const Ctx& c, RayMarcher::Workspace& ws, int nrays) {
   std::memset(ws.ray_rgb.data(), 0, static_cast<size_t>(nrays) * 3 * sizeof(float));
@@ -249,15 +253,14 @@ void ProcessRays(const Ctx& c, RayMarcher::Workspace& ws, int nrays) {
     const float rest = 1.f - ws.ray_acc[r];
     for (int k = 0; k < 3; ++k) {
       const float v = rgb[k] + rest * bg[k];
-      rgb[k] = v < 0.f ? 0.f : (v > 1.f ? 1.f : v);
+      rgb[k] = ClipUnit(v);
     }
   }
   ws.stats.rays += static_cast<uint64_t>(nrays);
 }
 
 uint8_t ToByte(float v) {
-  v = v < 0.f ? 0.f : (v > 1.f ? 1.f : v);
-  return static_cast<uint8_t>(v * 255.f + 0.5f);
+  return static_cast<uint8_t>(ClipUnit(v) * 255.f + 0.5f);
 }
 
 }  // namespace

@@ -1,8 +1,10 @@
 #include "tools/cli_args.h"
 
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <stdexcept>
@@ -56,18 +58,42 @@ bool FileExists(const std::string& path) {
   return stat(path.c_str(), &st) == 0;
 }
 
-void MakeDirectory(const std::string& dir) {
+void MakeDirectory(const std::string& dir, std::vector<std::string>* created) {
   // Parents first, as `mkdir -p` does: "-o run/x" in an empty directory must work.
   for (size_t slash = dir.find('/', 1); slash != std::string::npos; slash = dir.find('/', slash + 1)) {
     const std::string parent = dir.substr(0, slash);
-    if (mkdir(parent.c_str(), 0755) != 0 && errno != EEXIST) {
+    if (mkdir(parent.c_str(), 0755) == 0) {
+      if (created) created->push_back(parent);
+    } else if (errno != EEXIST) {
       throw std::runtime_error(dir + ": cannot create directory " + parent + ": " + std::strerror(errno));
     }
   }
-  if (mkdir(dir.c_str(), 0755) != 0 && errno != EEXIST) {
+  if (mkdir(dir.c_str(), 0755) == 0) {
+    if (created) created->push_back(dir);
+  } else if (errno != EEXIST) {
     throw std::runtime_error(dir + ": cannot create directory: " + std::strerror(errno));
   }
   if (!IsDirectory(dir)) throw std::runtime_error(dir + ": exists and is not a directory");
+}
+
+OutputDirectory::OutputDirectory(const std::string& dir) {
+  MakeDirectory(dir, &created_);
+  const std::string probe = dir + "/.ecrf_write_probe";
+  errno = 0;
+  std::FILE* f = std::fopen(probe.c_str(), "wb");
+  bool ok = f && std::fputc('\n', f) != EOF;
+  if (f) ok = std::fclose(f) == 0 && ok;
+  const int error = errno;
+  std::remove(probe.c_str());
+  if (!ok) {
+    for (auto it = created_.rbegin(); it != created_.rend(); ++it) rmdir(it->c_str());
+    throw std::runtime_error(dir + ": cannot write into this directory: " + std::strerror(error ? error : EIO));
+  }
+}
+
+OutputDirectory::~OutputDirectory() {
+  // rmdir removes empty directories only: whatever the job wrote stays, and so do its parents.
+  for (auto it = created_.rbegin(); it != created_.rend(); ++it) rmdir(it->c_str());
 }
 
 const char* FlagValue(int argc, char** argv, int* i) {

@@ -4,6 +4,7 @@
 #define ECRF_TOOLS_CLI_ARGS_H_
 
 #include <string>
+#include <vector>
 
 namespace ecrf {
 namespace tools {
@@ -16,8 +17,24 @@ void ParseShape(const char* flag, const std::string& text, int n, int* out);
 const char* FlagValue(int argc, char** argv, int* i);
 bool IsDirectory(const std::string& path);
 bool FileExists(const std::string& path);  // any kind of file
-// Creates a directory and its missing parents (an existing directory is fine).
-void MakeDirectory(const std::string& dir);
+// Creates a directory and its missing parents (an existing directory is fine); the ones it
+// created, outermost first, go to *created when given.
+void MakeDirectory(const std::string& dir, std::vector<std::string>* created = nullptr);
+
+// An output directory for a long job: created (with its parents) and proved writable by a probe
+// file before the work starts, so that a read-only or misnamed -o fails in the first second, not
+// after the training. Directories it created and that are still empty when it goes out of scope
+// (the job failed before writing anything) are removed again.
+class OutputDirectory {
+ public:
+  explicit OutputDirectory(const std::string& dir);
+  ~OutputDirectory();
+  OutputDirectory(const OutputDirectory&) = delete;
+  OutputDirectory& operator=(const OutputDirectory&) = delete;
+
+ private:
+  std::vector<std::string> created_;
+};
 
 }  // namespace tools
 }  // namespace ecrf

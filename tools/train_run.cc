@@ -155,7 +155,10 @@ trainer::TrainOptions TrainOptionsFromArgs(int argc, char** argv, std::vector<in
 nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& o) {
   if (o.out_dir.empty()) throw std::invalid_argument("no output directory (-o RUN_DIR)");
   if (!o.builtin_scene && o.data_dir.empty()) throw std::invalid_argument("no data: --data DIR or --scene builtin");
-  MakeDirectory(o.out_dir);
+  if (o.resume && !FileExists(o.out_dir + "/checkpoint.ckpt")) {
+    throw std::invalid_argument("--resume: no checkpoint to resume from (" + o.out_dir + "/checkpoint.ckpt does not exist)");
+  }
+  const OutputDirectory out_dir(o.out_dir);  // before the data: a bad -o fails now
 
   const trainer::Dataset train = trainer::LoadTrainingViews(o, "train");
   const trainer::Dataset test = trainer::LoadTrainingViews(o, "test");

@@ -2,6 +2,7 @@
 
 #include <zstd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -12,8 +13,15 @@ namespace ecrf {
 namespace trainer {
 namespace {
 
-constexpr char kMagic[8] = {'E', 'C', 'R', 'F', 'C', 'K', 'P', '1'};
+// Version 2 frames carry zstd's content checksum (XXH64 of the uncompressed bytes), so a damaged
+// checkpoint is refused when read instead of resuming with altered weights; version 1 files
+// (without it) are still read.
+constexpr char kMagic[8] = {'E', 'C', 'R', 'F', 'C', 'K', 'P', '2'};
+constexpr char kMagicV1[8] = {'E', 'C', 'R', 'F', 'C', 'K', 'P', '1'};
 constexpr uint64_t kMaxArrays = 1 << 16;
+// Larger than any model this trainer builds (the paper preset's checkpoint is ~0.3 GB); a size
+// field beyond it is damage, refused before anything is allocated.
+constexpr uint64_t kMaxRawBytes = uint64_t(16) << 30;
 
 void Put(std::vector<uint8_t>& out, const void* p, size_t n) {
   const uint8_t* b = static_cast<const uint8_t*>(p);
@@ -105,30 +113,70 @@ void WriteCheckpoint(const std::string& path, const Checkpoint& checkpoint, int 
   PutU64(out, raw.size());
   const size_t header = out.size();
   out.resize(header + ZSTD_compressBound(raw.size()));
-  const size_t z = ZSTD_compress(out.data() + header, out.size() - header, raw.data(), raw.size(),
-                                 zstd_level);
+  ZSTD_CCtx* cctx = ZSTD_createCCtx();
+  if (!cctx) throw std::runtime_error(path + ": zstd: out of memory");
+  ZSTD_CCtx_setParameter(cctx, ZSTD_c_compressionLevel, zstd_level);
+  ZSTD_CCtx_setParameter(cctx, ZSTD_c_checksumFlag, 1);
+  const size_t z = ZSTD_compress2(cctx, out.data() + header, out.size() - header, raw.data(), raw.size());
+  ZSTD_freeCCtx(cctx);
   if (ZSTD_isError(z)) throw std::runtime_error(path + ": zstd: " + ZSTD_getErrorName(z));
   out.resize(header + z);
   WriteFileAtomically(path, out.data(), out.size());
 }
 
+namespace {
+
+// Decompresses one frame, growing the output with what actually decompresses (a damaged size
+// field cannot make it allocate more than the frame really holds, and never over raw_size).
+std::vector<uint8_t> Decompress(const std::string& path, const uint8_t* data, size_t size, uint64_t raw_size) {
+  std::vector<uint8_t> raw;
+  ZSTD_DCtx* dctx = ZSTD_createDCtx();
+  if (!dctx) throw std::runtime_error(path + ": zstd: out of memory");
+  ZSTD_inBuffer in{data, size, 0};
+  std::string error;
+  for (size_t status = 1; status != 0 && error.empty();) {
+    const size_t chunk = size_t(std::min<uint64_t>(raw_size - raw.size(), uint64_t(64) << 20));
+    const size_t before = raw.size();
+    raw.resize(before + std::max<size_t>(chunk, 1));  // one spare byte finds a frame longer than said
+    ZSTD_outBuffer out{raw.data() + before, raw.size() - before, 0};
+    status = ZSTD_decompressStream(dctx, &out, &in);
+    raw.resize(before + out.pos);
+    if (ZSTD_isError(status)) {
+      error = ZSTD_getErrorName(status);
+    } else if (raw.size() > raw_size) {
+      error = "it holds more than its header says";
+    } else if (status != 0 && in.pos == in.size && out.pos < out.size) {
+      error = "it ends inside its zstd frame";
+    }
+  }
+  ZSTD_freeDCtx(dctx);
+  if (error.empty() && (raw.size() != raw_size || in.pos != size)) {
+    error = "it holds " + std::to_string(raw.size()) + " bytes, its header says " + std::to_string(raw_size);
+  }
+  if (!error.empty()) throw std::runtime_error(path + ": checkpoint is damaged: " + error);
+  return raw;
+}
+
+}  // namespace
+
 Checkpoint ReadCheckpoint(const std::string& path) {
   const std::vector<uint8_t> file = ReadWholeFile(path);
-  if (file.size() < 16 || std::memcmp(file.data(), kMagic, 8) != 0) {
+  const bool v1 = file.size() >= 8 && std::memcmp(file.data(), kMagicV1, 8) == 0;
+  if (file.size() < 16 || (std::memcmp(file.data(), kMagic, 8) != 0 && !v1)) {
     throw std::runtime_error(path + ": not an ecrf checkpoint (bad magic)");
   }
   uint64_t raw_size;
   std::memcpy(&raw_size, file.data() + 8, 8);
   const unsigned long long frame = ZSTD_getFrameContentSize(file.data() + 16, file.size() - 16);
-  if (frame == ZSTD_CONTENTSIZE_ERROR || frame == ZSTD_CONTENTSIZE_UNKNOWN || frame != raw_size) {
+  if (frame == ZSTD_CONTENTSIZE_ERROR || frame == ZSTD_CONTENTSIZE_UNKNOWN || frame != raw_size ||
+      raw_size > kMaxRawBytes) {
     throw std::runtime_error(path + ": checkpoint is damaged (zstd frame size)");
   }
-  std::vector<uint8_t> raw(raw_size);
-  const size_t n = ZSTD_decompress(raw.data(), raw.size(), file.data() + 16, file.size() - 16);
-  if (ZSTD_isError(n) || n != raw_size) {
-    throw std::runtime_error(path + ": checkpoint is damaged: " +
-                             (ZSTD_isError(n) ? ZSTD_getErrorName(n) : "size mismatch"));
+  // RFC 8878 3.1.1.1.1: bit 2 of the frame header descriptor (after the 4-byte frame magic).
+  if (!v1 && (file.size() < 21 || !(file[16 + 4] & 0x04))) {
+    throw std::runtime_error(path + ": checkpoint is damaged (its zstd frame has no checksum)");
   }
+  const std::vector<uint8_t> raw = Decompress(path, file.data() + 16, file.size() - 16, raw_size);
   Cursor c{raw, 0, path};
   Checkpoint ck;
   const uint64_t json_size = c.U64();

@@ -29,6 +29,10 @@ constexpr double kNgpDefaultOffset = 0.5;
 // NeRF/LLFF hold-out convention for captures that ship a single transforms.json.
 constexpr int kNgpTestEvery = 8;
 
+// Largest |R^T R - I| entry accepted for a camera rotation: poses written with 6 or more
+// significant digits (COLMAP, Blender, nerfstudio) are orthonormal far within it.
+constexpr double kRotationTolerance = 1e-3;
+
 // Keeps samples off the lens when a camera sits inside the box (as a fraction of its diagonal).
 constexpr double kMinNearFraction = 0.01;
 
@@ -38,13 +42,21 @@ class JsonContext {
   explicit JsonContext(std::string file) : file_(std::move(file)) {}
 
   [[noreturn]] void Fail(const std::string& problem) const { throw std::runtime_error(file_ + ": " + problem); }
+  // Names the frame by its index and, when it has one, its file_path.
   [[noreturn]] void FailFrame(size_t frame, const std::string& problem) const {
-    Fail("frame " + std::to_string(frame) + ": " + problem);
+    std::string where = "frame " + std::to_string(frame);
+    if (frames_ && frame < frames_->size() && (*frames_)[frame].is_object()) {
+      auto it = (*frames_)[frame].find("file_path");
+      if (it != (*frames_)[frame].end() && it->is_string()) where += " ('" + it->get<std::string>() + "')";
+    }
+    Fail(where + ": " + problem);
   }
+  void set_frames(const json* frames) { frames_ = frames; }
   const std::string& file() const { return file_; }
 
  private:
   std::string file_;
+  const json* frames_ = nullptr;
 };
 
 std::optional<double> OptionalNumber(const json& object, const char* key, const std::string& where,
@@ -109,6 +121,27 @@ void ReadTransform(const json& frame, size_t index, const JsonContext& context, 
       if (!std::isfinite(camera->c2w[r][c])) context.FailFrame(index, "'transform_matrix' has a non-finite entry");
     }
   }
+  // A degenerate rotation gives rays of NaN or zero direction, which train a NaN model.
+  double worst = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b) {
+      double dot = 0.0;
+      for (int r = 0; r < 3; ++r) dot += camera->c2w[r][a] * camera->c2w[r][b];
+      worst = std::max(worst, std::abs(dot - (a == b ? 1.0 : 0.0)));
+    }
+  }
+  if (!(worst <= kRotationTolerance)) {
+    char detail[160];
+    std::snprintf(detail, sizeof(detail),
+                  "the rotation part of 'transform_matrix' is not orthonormal (|R^T R - I| reaches %.3g, "
+                  "tolerance %g)", worst, kRotationTolerance);
+    context.FailFrame(index, detail);
+  }
+  const double (*m)[4] = camera->c2w;
+  const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+                     m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                     m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+  if (!(det > 0.0)) context.FailFrame(index, "the rotation part of 'transform_matrix' is a reflection (det < 0)");
 }
 
 std::string StripDotSlash(std::string path) {
@@ -172,6 +205,9 @@ Camera ResolveIntrinsics(const IntrinsicFields& fields, const std::string& image
   camera.k2 = fields.k2.value_or(0.0);
   camera.p1 = fields.p1.value_or(0.0);
   camera.p2 = fields.p2.value_or(0.0);
+  for (double v : {camera.cx, camera.cy, camera.k1, camera.k2, camera.p1, camera.p2}) {
+    if (!std::isfinite(v)) context.FailFrame(index, "principal point and distortion ('cx' 'cy' 'k1' 'k2' 'p1' 'p2') must be finite");
+  }
   return camera;
 }
 
@@ -180,7 +216,7 @@ json ReadJson(const std::string& path) {
   if (!stream) throw std::runtime_error(path + ": cannot open");
   try {
     return json::parse(stream);
-  } catch (const json::parse_error& error) {
+  } catch (const json::exception& error) {  // parse_error, and out_of_range for numbers like 1e999
     throw std::runtime_error(path + ": invalid JSON: " + error.what());
   }
 }
@@ -240,7 +276,7 @@ std::string FilePathOf(const json& frame, size_t index, const JsonContext& conte
 
 DatasetManifest ParseTransforms(const fs::path& dir, const std::string& json_path, Layout layout,
                                 const std::string& split) {
-  const JsonContext context(json_path);
+  JsonContext context(json_path);
   const json root = ReadJson(json_path);
   if (!root.is_object()) context.Fail("top level must be a JSON object");
   IntrinsicFields shared;
@@ -250,6 +286,7 @@ DatasetManifest ParseTransforms(const fs::path& dir, const std::string& json_pat
   if (!frames_it->is_array()) context.Fail("'frames' must be an array");
   const json& frames = *frames_it;
   if (frames.empty()) context.Fail("'frames' is empty");
+  context.set_frames(&frames);
 
   DatasetManifest manifest;
   std::vector<size_t> order(frames.size());

@@ -202,7 +202,12 @@ void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int itera
   WriteCheckpoint(path, ck);
 }
 
-int LoadModelCheckpoint(const std::string& path, TensorfModel* model, RateState* rate) {
+namespace {
+
+// Far above any preset (the paper's final grid is 300^3).
+constexpr int kMaxCheckpointRes = 4096;
+
+int LoadModelCheckpointOrThrow(const std::string& path, TensorfModel* model, RateState* rate) {
   const Checkpoint ck = ReadCheckpoint(path);
   nlohmann::json j;
   try {
@@ -210,7 +215,29 @@ int LoadModelCheckpoint(const std::string& path, TensorfModel* model, RateState*
     Aabb box;
     box.min = j.at("aabb_min").get<std::array<float, 3>>();
     box.max = j.at("aabb_max").get<std::array<float, 3>>();
-    model->SetGeometry(box, j.at("res").get<std::array<int, 3>>());
+    const std::array<int, 3> res = j.at("res").get<std::array<int, 3>>();
+    // Checked before the grids are allocated from them (a damaged resolution would ask for GBs).
+    for (int r : res) {
+      if (r < 1 || r > kMaxCheckpointRes) {
+        throw std::runtime_error(path + ": checkpoint grid resolution " + std::to_string(r) + " outside [1, " +
+                                 std::to_string(kMaxCheckpointRes) + "]");
+      }
+    }
+    // Every plane is stored in the file, so its values bound the resolution: a damaged field
+    // cannot make the grids larger than the data that fills them.
+    size_t stored = 0;
+    for (const CheckpointArray& a : ck.arrays) stored += a.data.size();
+    for (int a = 0; a < 3; ++a) {
+      if (size_t(res[a]) * size_t(res[(a + 1) % 3]) > stored) {
+        throw std::runtime_error(path + ": checkpoint grid resolution is larger than the values it stores");
+      }
+    }
+    for (int a = 0; a < 3; ++a) {
+      if (!std::isfinite(box.min[a]) || !std::isfinite(box.max[a]) || !(box.min[a] < box.max[a])) {
+        throw std::runtime_error(path + ": checkpoint bounding box is empty or not finite");
+      }
+    }
+    model->SetGeometry(box, res);
     model->set_n_samples(j.at("n_samples").get<int>());
   } catch (const nlohmann::json::exception& e) {
     throw std::runtime_error(path + ": checkpoint metadata: " + e.what());
@@ -221,6 +248,9 @@ int LoadModelCheckpoint(const std::string& path, TensorfModel* model, RateState*
     if (src->data.size() != a.size) {
       throw std::runtime_error(path + ": array '" + a.name + "' has " + std::to_string(src->data.size()) +
                                " values, the model expects " + std::to_string(a.size));
+    }
+    for (float x : src->data) {
+      if (!std::isfinite(x)) throw std::runtime_error(path + ": array '" + a.name + "' holds a non-finite value");
     }
     std::copy(src->data.begin(), src->data.end(), a.data);
   }
@@ -248,6 +278,12 @@ int LoadModelCheckpoint(const std::string& path, TensorfModel* model, RateState*
     const CheckpointArray* steps = ck.Find("rate.steps");
     const CheckpointArray* params = ck.Find("rate.entropy_model");
     if (!steps || !params) throw std::runtime_error(path + ": checkpoint lacks the rate state");
+    for (float step : steps->data) {
+      if (!(step > 0.f) || !std::isfinite(step)) {
+        throw std::runtime_error(path + ": checkpoint holds a quantization step of " + std::to_string(step) +
+                                 " (steps are positive and finite)");
+      }
+    }
     rate->steps = steps->data;
     rate->entropy.Init(NumRateModels(2), 0);
     if (params->data.size() != rate->entropy.params().size()) {
@@ -259,6 +295,20 @@ int LoadModelCheckpoint(const std::string& path, TensorfModel* model, RateState*
     rate->checkpoint_lambda_e = j.value("lambda_e", 0.0f);
   }
   return j.at("iteration").get<int>();
+}
+
+}  // namespace
+
+int LoadModelCheckpoint(const std::string& path, TensorfModel* model, RateState* rate) {
+  try {
+    return LoadModelCheckpointOrThrow(path, model, rate);
+  } catch (const std::invalid_argument& e) {  // the model's own checks do not know the file
+    throw std::runtime_error(path + ": checkpoint does not describe a valid model: " + e.what());
+  } catch (const std::length_error& e) {
+    throw std::runtime_error(path + ": checkpoint does not describe a valid model: " + e.what());
+  } catch (const std::bad_alloc&) {
+    throw std::runtime_error(path + ": checkpoint describes a model too large for this machine's memory");
+  }
 }
 
 TensorfModel LoadModelFromCheckpoint(const std::string& path, RateState* rate) {
@@ -289,6 +339,36 @@ TensorfModel LoadModelFromCheckpoint(const std::string& path, RateState* rate) {
   LoadModelCheckpoint(path, &model, rate);
   return model;
 }
+
+namespace {
+
+bool AllFinite(const std::vector<float>& v) {
+  // Summing is vectorised and branch-free; any NaN or infinity makes the sum non-finite (a
+  // finite overflow to infinity is a divergence too).
+  float sum = 0.0f;
+  for (float x : v) sum += x * 0.0f;
+  return sum == 0.0f;
+}
+
+[[noreturn]] void FailDiverged(int iteration, const std::string& what, const std::string& ckpt_path) {
+  std::string keep = ckpt_path.empty() ? std::string("no checkpoint was asked for")
+                                       : (access(ckpt_path.c_str(), R_OK) == 0
+                                              ? "the last good checkpoint stays in " + ckpt_path
+                                              : "no checkpoint had been written yet");
+  throw std::runtime_error("training diverged at iteration " + std::to_string(iteration) + ": " + what +
+                           " (non-finite input pixels or poses, or a learning rate too high); " + keep +
+                           " and nothing else was written");
+}
+
+void CheckModelFinite(const TensorfModel& model, int iteration, const std::string& ckpt_path) {
+  if (!AllFinite(model.density().params())) FailDiverged(iteration, "a density parameter is not finite", ckpt_path);
+  if (!AllFinite(model.appearance().params())) {
+    FailDiverged(iteration, "an appearance parameter is not finite", ckpt_path);
+  }
+  if (!AllFinite(model.head().params())) FailDiverged(iteration, "an MLP parameter is not finite", ckpt_path);
+}
+
+}  // namespace
 
 int QatStartIteration(const TrainOptions& o) {
   if (o.qat_start < 0.0f) {
@@ -342,7 +422,11 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   const std::string ckpt_path = o.out_dir.empty() ? std::string() : o.out_dir + "/checkpoint.ckpt";
   int first_iter = 0;
   bool resumed = false;
-  if (o.resume && !ckpt_path.empty() && access(ckpt_path.c_str(), R_OK) == 0) {
+  if (o.resume && (ckpt_path.empty() || access(ckpt_path.c_str(), R_OK) != 0)) {
+    throw std::runtime_error("resume: no checkpoint to resume from" +
+                             (ckpt_path.empty() ? std::string(" (no output directory)") : " at " + ckpt_path));
+  }
+  if (o.resume) {
     first_iter = LoadModelCheckpoint(ckpt_path, model, &rate);
     resumed = true;
     if (o.target_bytes > 0 && rate.active && rate.checkpoint_lambda_e > 0.f) {
@@ -422,6 +506,10 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
     }
     stats = TrainStep(*model, n, origins.data(), dirs.data(), rgb.data(), rng());
     qat.Restore(model);  // the gradients of Q(G) go to G unchanged (straight-through)
+    // One NaN reaches every parameter within a few steps, and Adam never washes it out: stop
+    // before it is applied. The head's gradient is small and sees every ray.
+    if (!std::isfinite(stats.mse)) FailDiverged(it, "the loss is not finite", ckpt_path);
+    if (!AllFinite(model->head().grads())) FailDiverged(it, "a gradient of the appearance MLP is not finite", ckpt_path);
     if (l1_weight > 0) model->DensityL1(l1_weight);
     if (rate.active && use_rate) rate.Step(*model, live, rng());
     opt.Step(*model, o);
@@ -476,6 +564,7 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
     }
 
     if (!ckpt_path.empty() && o.checkpoint_every > 0 && done % o.checkpoint_every == 0 && done < o.iters) {
+      CheckModelFinite(*model, it, ckpt_path);
       SaveModelCheckpoint(ckpt_path, *model, done, live, &rate);
     }
     if (o.eval_every > 0 && done % o.eval_every == 0 && done < o.iters) {
@@ -492,6 +581,7 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   result.final_lambda_e = live.lambda_e;
   result.train_seconds = Seconds(start) - eval_seconds;
   (void)resumed;
+  CheckModelFinite(*model, o.iters - 1, ckpt_path);
   if (!ckpt_path.empty()) SaveModelCheckpoint(ckpt_path, *model, o.iters, live, &rate);
   if (!use_rate) {
     // Without the rate objective, fit an entropy model to the final grids anyway so every run

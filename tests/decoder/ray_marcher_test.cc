@@ -690,6 +690,43 @@ TEST(RayMarcherTest, EmptyDensityRendersBackground) {
   }
 }
 
+// Streams that pass every decoder check can still overflow the rendering arithmetic (binary32
+// MLP weights of +-3e38, grid values near the float range from steps of 2^64): the infinities
+// become NaN inside, and every pixel must still come out as a number in [0, 1] (SPEC.md 1.3).
+TEST(RayMarcherTest, OverflowingStreamsStillRenderDefinedPixels) {
+  for (int kind = 0; kind < 2; ++kind) {
+    SCOPED_TRACE(kind == 0 ? "MLP weights of +-3e38" : "grid values of +-3e38");
+    TestScene ts;
+    BuildScene(SceneSpec(), &ts);
+    if (kind == 0) {
+      for (size_t i = 0; i < ts.mlp_params.size(); ++i) ts.mlp_params[i] = (i % 3 == 0 ? -3e38f : 3e38f);
+      ASSERT_TRUE(ts.field.mlp.SetParams(ts.mlp_params.data(), ts.mlp_params.size()).ok());
+    } else {
+      for (VmGrid* g : {&ts.field.density, &ts.field.appearance}) {
+        for (int m = 0; m < 3; ++m) {
+          for (size_t i = 0; i < g->plane_count(m); ++i) g->plane_f32[m][i] = (i % 2 ? 3e38f : -3e38f);
+          for (size_t i = 0; i < g->line_count(m); ++i) g->line_f32[m][i] = (i % 3 ? 3e38f : -3e38f);
+        }
+      }
+    }
+    const Camera cam = TestCamera(24, 20);
+    std::vector<uint8_t> img(24 * 20 * 4);
+    std::vector<float> rgb(24 * 20 * 3);
+    RayMarcher rm;
+    ASSERT_TRUE(rm.Init(&ts.field, RenderOptions()).ok());
+    RenderStats st;
+    ASSERT_TRUE(rm.RenderImage(cam, img.data(), rgb.data(), &st).ok());
+    ASSERT_GT(st.samples, 0u);
+    ASSERT_GT(st.color_samples, 0u);
+    for (size_t p = 0; p < 24 * 20; ++p) {
+      for (int k = 0; k < 3; ++k) {
+        const float v = rgb[3 * p + k];
+        ASSERT_TRUE(v >= 0.f && v <= 1.f) << "pixel " << p << " channel " << k << " is " << v;
+      }
+    }
+  }
+}
+
 TEST(RayMarcherTest, BlackBackground) {
   TestScene ts;
   BuildScene(SceneSpec(), &ts);

@@ -187,6 +187,43 @@ TEST_F(DatasetTest, BlenderErrorsNameFileFrameAndField) {
   std::ofstream(file) << "{\"frames\": [";
   error = ErrorOf([&] { LoadDataset(Dir(), "train", 1); });
   EXPECT_TRUE(Contains(error, file) && Contains(error, "invalid JSON")) << error;
+
+  // A number beyond binary64 is a JSON error of that file, not an anonymous exception.
+  std::ofstream(file) << "{\"camera_angle_x\": 1e999, \"frames\": []}";
+  error = ErrorOf([&] { LoadDataset(Dir(), "train", 1); });
+  EXPECT_TRUE(Contains(error, file) && Contains(error, "invalid JSON")) << error;
+}
+
+// Degenerate poses train NaN models (rays of NaN direction), so the loader refuses them.
+TEST_F(DatasetTest, RefusesDegenerateAndMirroredPoses) {
+  json root = WriteBlender();
+  const std::string file = Path("transforms_train.json");
+  auto error_for = [&](const json& broken) {
+    WriteJson("transforms_train.json", broken);
+    return ErrorOf([&] { LoadDataset(Dir(), "train", 1); });
+  };
+  const json zero = json::array({json::array({0, 0, 0, 0}), json::array({0, 0, 0, 0}), json::array({0, 0, 0, 0}),
+                                 json::array({0, 0, 0, 1})});
+  json zeros = root;
+  zeros["frames"][1]["transform_matrix"] = zero;
+  std::string error = error_for(zeros);
+  EXPECT_TRUE(Contains(error, file) && Contains(error, "frame 1 ('") && Contains(error, "not orthonormal")) << error;
+
+  json scaled = root;  // a rotation scaled by 1.01 is not a rotation
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) scaled["frames"][0]["transform_matrix"][r][c] = (r == c) ? 1.01 : 0.0;
+  }
+  EXPECT_TRUE(Contains(error_for(scaled), "not orthonormal"));
+
+  json mirrored = root;
+  mirrored["frames"][2]["transform_matrix"][0][0] = -1.0;
+  error = error_for(mirrored);
+  EXPECT_TRUE(Contains(error, "frame 2") && Contains(error, "reflection")) << error;
+
+  json slightly_off = root;  // rounding in written poses stays accepted
+  slightly_off["frames"][0]["transform_matrix"][0][0] = 1.0 + 2e-5;
+  WriteJson("transforms_train.json", slightly_off);
+  EXPECT_NO_THROW(LoadDataset(Dir(), "train", 1));
 }
 
 TEST_F(DatasetTest, MissingBlenderImageIsAnError) {

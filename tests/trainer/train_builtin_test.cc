@@ -169,6 +169,50 @@ TEST(TrainBuiltin, TargetSizeLands) {
   EXPECT_GT(fit_psnr, r.test.psnr - 0.3);
 }
 
+// A NaN pixel or a NaN ray direction (inputs the loaders refuse, but a library caller can pass)
+// stops training with an error that names the iteration and keeps the last good checkpoint.
+TEST(TrainBuiltin, NonFiniteInputsStopTrainingAndKeepTheLastGoodCheckpoint) {
+  TrainOptions o = SmallRun();
+  o.iters = 120;
+  o.checkpoint_every = 2;
+  const Dataset test = LoadTrainingViews(o, "test");
+  char tmpl[] = "/tmp/ecrf_diverge_XXXXXX";
+  ASSERT_NE(mkdtemp(tmpl), nullptr);
+  o.out_dir = tmpl;
+  const std::string ckpt = o.out_dir + "/checkpoint.ckpt";
+  for (int kind = 0; kind < 2; ++kind) {
+    SCOPED_TRACE(kind == 0 ? "NaN pixels" : "NaN pose");
+    std::remove(ckpt.c_str());
+    Dataset train = LoadTrainingViews(o, "train");
+    if (kind == 0) {
+      for (View& v : train.views) std::fill(v.rgb.pixels.begin(), v.rgb.pixels.begin() + 3 * v.rgb.width, NAN);
+    } else {
+      train.views[3].camera.c2w[0][0] = NAN;
+    }
+    TensorfModel model(ConfigFor(o, train));
+    try {
+      Train(o, train, test, &model, nullptr);
+      ADD_FAILURE() << "training went on";
+    } catch (const std::runtime_error& e) {
+      const std::string what = e.what();
+      std::printf("  %s\n", what.c_str());
+      EXPECT_NE(what.find("training diverged at iteration "), std::string::npos) << what;
+      EXPECT_NE(what.find("not finite"), std::string::npos) << what;
+      // NaN pixels poison the first batch; a NaN pose only its own rays, a few batches later.
+      if (kind == 1) EXPECT_NE(what.find("the last good checkpoint stays in " + ckpt), std::string::npos) << what;
+    }
+    // Whatever checkpoint exists holds finite parameters only.
+    if (std::FILE* f = std::fopen(ckpt.c_str(), "rb")) {
+      std::fclose(f);
+      TensorfModel restored(ConfigFor(o, train));
+      LoadModelCheckpoint(ckpt, &restored);
+      for (float x : restored.head().params()) ASSERT_TRUE(std::isfinite(x));
+      for (float x : restored.appearance().params()) ASSERT_TRUE(std::isfinite(x));
+    }
+  }
+  std::system(("rm -rf '" + o.out_dir + "'").c_str());
+}
+
 }  // namespace
 }  // namespace trainer
 }  // namespace ecrf

@@ -1,0 +1,100 @@
+// `ecrf train` finds an unusable output before it loads data or trains, and a run that fails
+// early leaves no empty directory behind.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "tools/cli_args.h"
+#include "tools/commands.h"
+
+namespace ecrf {
+namespace tools {
+namespace {
+
+int Invoke(int (*command)(int, char**), std::vector<std::string> args) {
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  return command(int(argv.size()), argv.data());
+}
+
+std::string ErrorOf(std::vector<std::string> args) {
+  try {
+    Invoke(RunTrain, std::move(args));
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+
+class TrainOutputTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    char tmpl[] = "/tmp/ecrf_train_output_XXXXXX";
+    ASSERT_NE(mkdtemp(tmpl), nullptr);
+    root_ = tmpl;
+  }
+  void TearDown() override { std::system(("rm -rf '" + root_ + "'").c_str()); }
+  std::string root_;
+};
+
+TEST_F(TrainOutputTest, FailedRunLeavesNoEmptyDirectories) {
+  const std::string out = root_ + "/new/run";
+  const std::string error = ErrorOf({"train", "--data", root_ + "/no_such_scene", "-o", out});
+  EXPECT_NE(error.find("no_such_scene"), std::string::npos) << error;
+  EXPECT_FALSE(FileExists(root_ + "/new")) << "the failed run left " << root_ << "/new behind";
+}
+
+TEST_F(TrainOutputTest, OutputBelowAFileFailsBeforeLoadingData) {
+  const std::string file = root_ + "/file";
+  std::fclose(std::fopen(file.c_str(), "wb"));
+  // The data directory does not exist either: the output is checked first.
+  const std::string error = ErrorOf({"train", "--data", root_ + "/no_such_scene", "-o", file + "/run"});
+  EXPECT_NE(error.find("cannot create directory"), std::string::npos) << error;
+}
+
+TEST_F(TrainOutputTest, ReadOnlyOutputFailsBeforeLoadingData) {
+  if (geteuid() == 0) GTEST_SKIP() << "root writes into read-only directories";
+  const std::string dir = root_ + "/read_only";
+  ASSERT_EQ(mkdir(dir.c_str(), 0555), 0);
+  const std::string error = ErrorOf({"train", "--data", root_ + "/no_such_scene", "-o", dir});
+  EXPECT_NE(error.find("cannot write into this directory"), std::string::npos) << error;
+  chmod(dir.c_str(), 0755);
+}
+
+TEST_F(TrainOutputTest, ResumeWithoutCheckpointSaysSo) {
+  const std::string error = ErrorOf({"train", "--scene", "builtin", "--resume", "-o", root_ + "/fresh"});
+  EXPECT_NE(error.find("--resume: no checkpoint"), std::string::npos) << error;
+  EXPECT_FALSE(FileExists(root_ + "/fresh"));
+}
+
+TEST(OutputDirectory, ProbesAndRemovesOnlyWhatItCreatedWhileEmpty) {
+  char tmpl[] = "/tmp/ecrf_outdir_XXXXXX";
+  ASSERT_NE(mkdtemp(tmpl), nullptr);
+  const std::string root = tmpl;
+  {
+    OutputDirectory d(root + "/a/b");
+    EXPECT_TRUE(IsDirectory(root + "/a/b"));
+    EXPECT_FALSE(FileExists(root + "/a/b/.ecrf_write_probe"));
+  }
+  EXPECT_FALSE(FileExists(root + "/a")) << "empty directories it created stay";
+  {
+    OutputDirectory d(root + "/a/b");
+    std::fclose(std::fopen((root + "/a/b/result").c_str(), "wb"));
+  }
+  EXPECT_TRUE(FileExists(root + "/a/b/result")) << "a directory with results was removed";
+  {
+    OutputDirectory d(root);  // existed before: never removed
+  }
+  EXPECT_TRUE(IsDirectory(root));
+  std::system(("rm -rf '" + root + "'").c_str());
+}
+
+}  // namespace
+}  // namespace tools
+}  // namespace ecrf
