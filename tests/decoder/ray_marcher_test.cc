@@ -692,7 +692,7 @@ TEST(RayMarcherTest, EmptyDensityRendersBackground) {
 
 // Streams that pass every decoder check can still overflow the rendering arithmetic (binary32
 // MLP weights of +-3e38, grid values near the float range from steps of 2^64): the infinities
-// become NaN inside, and every pixel must still come out as a number in [0, 1] (SPEC.md 1.3).
+// become NaN inside, and every pixel must still come out as a number in [0, 1] (SPEC.md 1.2, Clip3 and Max of NaN).
 TEST(RayMarcherTest, OverflowingStreamsStillRenderDefinedPixels) {
   for (int kind = 0; kind < 2; ++kind) {
     SCOPED_TRACE(kind == 0 ? "MLP weights of +-3e38" : "grid values of +-3e38");
