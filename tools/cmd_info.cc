@@ -12,6 +12,31 @@
 namespace ecrf {
 namespace tools {
 
+namespace {
+
+// The meta chunk is untrusted text: bytes other than printable ASCII (terminal escape sequences)
+// are shown as \xNN and a long one is cut, so `ecrf info` prints a bounded, harmless line
+// whatever the stream holds.
+constexpr size_t kMetadataShown = 400;
+
+std::string PrintableMetadata(const uint8_t* text, size_t size, size_t limit) {
+  std::string out;
+  for (size_t i = 0; i < size && i < limit; ++i) {
+    const uint8_t c = text[i];
+    if (c >= 0x20 && c < 0x7f) {
+      out += char(c);  // printable ASCII; anything else, UTF-8 included (C1 controls), escaped
+    } else {
+      char hex[8];
+      std::snprintf(hex, sizeof(hex), "\\x%02x", c);
+      out += hex;
+    }
+  }
+  if (size > limit) out += " ... (" + std::to_string(size - limit) + " more bytes)";
+  return out;
+}
+
+}  // namespace
+
 int RunInfo(int argc, char** argv) {
   std::string path;
   bool md5 = false;
@@ -76,8 +101,8 @@ int RunInfo(int argc, char** argv) {
   }
   std::printf("%-20s %10u\n", "MLPW", in.mlp_bytes);
   if (in.metadata_bytes) {
-    std::printf("%-20s %10u   %.*s\n", "meta", in.metadata_bytes, int(in.metadata_size),
-                reinterpret_cast<const char*>(in.metadata));
+    std::printf("%-20s %10u   %s\n", "meta", in.metadata_bytes,
+                PrintableMetadata(in.metadata, in.metadata_size, kMetadataShown).c_str());
   }
   if (md5) std::printf("\ngrids md5 %s\n", conformance::SceneGridMd5(*s.field).c_str());
   return 0;

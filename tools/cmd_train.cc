@@ -5,6 +5,7 @@
 
 #include "tools/commands.h"
 #include "tools/train_run.h"
+#include "trainer/trainer.h"
 
 namespace ecrf {
 namespace tools {
@@ -33,7 +34,11 @@ int RunTrain(int argc, char** argv) {
     std::fprintf(stderr, "ecrf train: -o RUN_DIR is required\n");
     return 2;
   }
-  TrainEncodeEvaluate(o);
+  try {
+    TrainEncodeEvaluate(o);
+  } catch (const trainer::TrainingStopped& e) {
+    std::printf("%s; continue with the same command and --resume\n", e.what());
+  }
   return 0;
 }
 

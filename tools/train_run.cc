@@ -28,7 +28,8 @@ const char kTrainFlagsUsage[] =
     "  --batch N                  rays per iteration (default 4096)\n"
     "  --seed N                   random seed\n"
     "  --checkpoint-every N       write RUN_DIR/checkpoint.ckpt every N iterations\n"
-    "  --resume                   continue from RUN_DIR/checkpoint.ckpt\n"
+    "  --resume                   continue from RUN_DIR/checkpoint.ckpt (exactly as if never stopped)\n"
+    "  --stop-after N             leave after N iterations (resume later with --resume)\n"
     "  --eval-every N             test PSNR every N iterations (a PSNR-vs-minutes curve)\n"
     "  --test-stride K            evaluate every K-th test view\n"
     "  --max-test-views N         evaluate at most N test views\n"
@@ -77,6 +78,8 @@ bool ParseTrainFlag(int argc, char** argv, int* i, trainer::TrainOptions* o) {
     o->checkpoint_every = ParseInt("--checkpoint-every", value());
   } else if (a == "--resume") {
     o->resume = true;
+  } else if (a == "--stop-after") {
+    o->stop_after = ParseInt("--stop-after", value());
   } else if (a == "--eval-every") {
     o->eval_every = ParseInt("--eval-every", value());
   } else if (a == "--test-stride") {
@@ -149,6 +152,8 @@ trainer::TrainOptions TrainOptionsFromArgs(int argc, char** argv, std::vector<in
     if (!ParseTrainFlag(argc, argv, &i, &o)) rest->push_back(at);
   }
   if (o.iters < 1) throw std::invalid_argument("--iters must be at least 1");
+  // Stopping on purpose keeps the work: a checkpoint is written at the stop.
+  if (o.stop_after > 0 && o.checkpoint_every == 0) o.checkpoint_every = o.stop_after;
   return o;
 }
 

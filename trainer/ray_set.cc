@@ -1,7 +1,9 @@
 #include "trainer/ray_set.h"
 
 #include <algorithm>
+#include <sstream>
 #include <stdexcept>
+#include <string>
 
 #include "trainer/camera.h"
 
@@ -40,6 +42,7 @@ void RaySet::KeepFlagged(const std::vector<uint8_t>& flags) {
   active_.resize(w);
   active_.shrink_to_fit();
   order_.clear();  // the sampler starts a fresh permutation of the kept rays
+  shuffle_rng_.clear();
   cursor_ = 0;
 }
 
@@ -76,6 +79,9 @@ bool RaySet::FilterChunked(
 }
 
 void RaySet::Shuffle(std::mt19937_64& rng) {
+  std::ostringstream state;
+  state << rng;
+  shuffle_rng_ = state.str();
   order_ = active_;
   std::shuffle(order_.begin(), order_.end(), rng);
   cursor_ = 0;
@@ -86,6 +92,44 @@ void RaySet::NextBatch(int n, std::mt19937_64& rng, float* origins, float* dirs,
   for (int i = 0; i < n; ++i) {
     if (order_.empty() || cursor_ >= order_.size()) Shuffle(rng);
     Ray(order_[cursor_++], origins + 3 * i, dirs + 3 * i, rgb + 3 * i);
+  }
+}
+
+void RaySet::SaveState(std::vector<float>* keep, std::string* shuffle_rng, uint64_t* cursor) const {
+  keep->assign((total() + 15) / 16, 0.f);
+  std::vector<uint32_t> bits(keep->size(), 0);
+  for (uint32_t index : active_) bits[index / 16] |= 1u << (index % 16);
+  for (size_t i = 0; i < bits.size(); ++i) (*keep)[i] = float(bits[i]);  // < 2^16: exact
+  *shuffle_rng = order_.empty() ? std::string() : shuffle_rng_;
+  *cursor = cursor_;
+}
+
+void RaySet::RestoreState(const std::vector<float>& keep, const std::string& shuffle_rng, uint64_t cursor) {
+  if (keep.size() != (total() + 15) / 16) {
+    throw std::runtime_error("training state: the kept-ray set is for " + std::to_string(16 * keep.size()) +
+                             " rays, these views have " + std::to_string(total()));
+  }
+  active_.clear();
+  for (size_t i = 0; i < keep.size(); ++i) {
+    const float v = keep[i];
+    if (!(v >= 0.f && v < 65536.f) || v != float(uint32_t(v))) throw std::runtime_error("training state: damaged ray set");
+    const uint32_t bits = uint32_t(v);
+    for (uint32_t b = 0; b < 16; ++b) {
+      if (bits >> b & 1u) active_.push_back(uint32_t(16 * i + b));
+    }
+  }
+  if (!active_.empty() && active_.back() >= total()) throw std::runtime_error("training state: damaged ray set");
+  order_.clear();
+  shuffle_rng_.clear();
+  cursor_ = 0;
+  if (!shuffle_rng.empty()) {
+    std::mt19937_64 rng;
+    std::istringstream in(shuffle_rng);
+    in >> rng;
+    if (in.fail()) throw std::runtime_error("training state: damaged sampler state");
+    Shuffle(rng);
+    if (cursor > order_.size()) throw std::runtime_error("training state: sampler position past its permutation");
+    cursor_ = size_t(cursor);
   }
 }
 

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "trainer/dataset.h"
@@ -39,6 +40,13 @@ class RaySet {
   // For --resume: the sampler position is part of the training state.
   size_t cursor() const { return cursor_; }
 
+  // An exact --resume: the kept rays as a bit set (16 bits to a float, the values checkpoints
+  // store), the generator state the current permutation was drawn from (empty before the first
+  // draw) and the position in it. Restoring redraws that permutation.
+  void SaveState(std::vector<float>* keep, std::string* shuffle_rng, uint64_t* cursor) const;
+  // Throws std::runtime_error when the state does not fit these views.
+  void RestoreState(const std::vector<float>& keep, const std::string& shuffle_rng, uint64_t cursor);
+
  private:
   void Shuffle(std::mt19937_64& rng);
   void KeepFlagged(const std::vector<uint8_t>& flags);
@@ -48,6 +56,7 @@ class RaySet {
   std::vector<uint32_t> active_;       // global pixel indices of the kept rays
   std::vector<uint32_t> order_;        // permutation of active_
   size_t cursor_ = 0;
+  std::string shuffle_rng_;  // the generator before order_ was drawn
 };
 
 }  // namespace trainer

@@ -76,6 +76,9 @@ struct TrainOptions {
   uint32_t seed = 20211202;
   int checkpoint_every = 0;  // iterations; 0 = only the final checkpoint
   bool resume = false;
+  // Leave after this many iterations as if killed (after the checkpoint due then, if any), by
+  // throwing TrainingStopped: tests of exact resume, and a run split over sessions. 0 = never.
+  int stop_after = 0;
   int test_view_stride = 1;  // evaluate every k-th test view
   int max_test_views = 0;    // 0 = all
   bool save_renders = false;

@@ -20,6 +20,7 @@
 #include "trainer/quant_aware.h"
 #include "trainer/ray_set.h"
 #include "trainer/train_rate_control.h"
+#include "trainer/train_state.h"
 #include "trainer/volume_render.h"
 
 namespace ecrf {
@@ -52,24 +53,6 @@ std::string FormatDuration(double seconds) {
 }
 
 // The three optimizers of a TensoRF run: grids at lr_grid, the head (basis + MLP) at lr_network.
-struct Optimizers {
-  Adam density, appearance, head;
-  float lr_scale = 1.0f;
-  void Reset(TensorfModel& m) {
-    density.Reset(m.density().params().size());
-    appearance.Reset(m.appearance().params().size());
-    head.Reset(m.head().params().size());
-    lr_scale = 1.0f;  // TensoRF's lr_upsample_reset: back to the initial rates
-  }
-  void Step(TensorfModel& m, const TrainOptions& o) {
-    const float lr_grid = o.lr_grid * lr_scale, lr_net = o.lr_network * lr_scale;
-    density.Step(m.density().params().data(), m.density().grads().data(), m.density().params().size(), lr_grid);
-    appearance.Step(m.appearance().params().data(), m.appearance().grads().data(),
-                    m.appearance().params().size(), lr_grid);
-    head.Step(m.head().params().data(), m.head().grads().data(), m.head().params().size(), lr_net);
-  }
-};
-
 void PrintProgress(int it, int iters, double loss, double psnr, const TensorfModel& model,
                    const TrainStepStats& stats, double sec_per_it, double elapsed, double est_mb) {
   const int width = 24;
@@ -156,190 +139,6 @@ EvalResult Evaluate(const TensorfModel& model, const Dataset& test, int stride, 
   return r;
 }
 
-void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int iteration,
-                         const TrainOptions& o, const RateState* rate) {
-  Checkpoint ck;
-  nlohmann::json j;
-  j["format"] = "ecrf-checkpoint-1";
-  j["iteration"] = iteration;
-  j["preset"] = o.preset;
-  j["iters"] = o.iters;
-  j["lambda_e"] = o.lambda_e;  // the live value under rate control
-  j["res"] = model.res();
-  j["aabb_min"] = model.aabb().min;
-  j["aabb_max"] = model.aabb().max;
-  j["n_samples"] = model.n_samples();
-  j["density_rank"] = model.config().density_ranks;
-  j["appearance_rank"] = model.config().app_ranks;
-  const TensorfConfig& c = model.config();
-  j["render"] = {{"near", c.near}, {"far", c.far}, {"white_background", c.white_background},
-                 {"density_shift", c.density_shift}, {"distance_scale", c.distance_scale},
-                 {"step_ratio", c.step_ratio}, {"weight_threshold", c.weight_threshold}};
-  j["head"] = {{"feature_dim", c.head.feature_dim}, {"feature_pe_freqs", c.head.feature_pe_freqs},
-               {"viewdir_pe_freqs", c.head.viewdir_pe_freqs}, {"hidden", c.head.hidden}};
-  if (const AlphaMask* mask = model.alpha_mask()) {
-    j["mask_res"] = mask->res();
-    j["mask_aabb_min"] = mask->aabb().min;
-    j["mask_aabb_max"] = mask->aabb().max;
-    CheckpointArray occ{"alpha_mask", {int64_t(mask->occupancy().size())}, {}};
-    occ.data.assign(mask->occupancy().begin(), mask->occupancy().end());
-    ck.arrays.push_back(std::move(occ));
-  }
-  // The block shapes of the run, so that `ecrf encode` codes with the blocks training used.
-  j["plane_block"] = rate && rate->active ? std::vector<int>(rate->config.plane_block, rate->config.plane_block + 3)
-                                          : std::vector<int>(o.plane_block, o.plane_block + 3);
-  j["line_block"] = rate && rate->active ? std::vector<int>(rate->config.line_block, rate->config.line_block + 3)
-                                         : std::vector<int>(o.line_block, o.line_block + 3);
-  if (rate && rate->active) {
-    j["rate_active"] = true;
-    ck.arrays.push_back({"rate.steps", {int64_t(rate->steps.size())}, rate->steps});
-    ck.arrays.push_back({"rate.entropy_model", {int64_t(rate->entropy.params().size())}, rate->entropy.params()});
-  }
-  ck.json = j.dump();
-  for (const NamedArray& a : model.NamedParameters()) {
-    ck.arrays.push_back({a.name, a.shape, std::vector<float>(a.data, a.data + a.size)});
-  }
-  WriteCheckpoint(path, ck);
-}
-
-namespace {
-
-// Far above any preset (the paper's final grid is 300^3).
-constexpr int kMaxCheckpointRes = 4096;
-
-int LoadModelCheckpointOrThrow(const std::string& path, TensorfModel* model, RateState* rate) {
-  const Checkpoint ck = ReadCheckpoint(path);
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(ck.json);
-    Aabb box;
-    box.min = j.at("aabb_min").get<std::array<float, 3>>();
-    box.max = j.at("aabb_max").get<std::array<float, 3>>();
-    const std::array<int, 3> res = j.at("res").get<std::array<int, 3>>();
-    // Checked before the grids are allocated from them (a damaged resolution would ask for GBs).
-    for (int r : res) {
-      if (r < 1 || r > kMaxCheckpointRes) {
-        throw std::runtime_error(path + ": checkpoint grid resolution " + std::to_string(r) + " outside [1, " +
-                                 std::to_string(kMaxCheckpointRes) + "]");
-      }
-    }
-    // Every plane is stored in the file, so its values bound the resolution: a damaged field
-    // cannot make the grids larger than the data that fills them.
-    size_t stored = 0;
-    for (const CheckpointArray& a : ck.arrays) stored += a.data.size();
-    for (int a = 0; a < 3; ++a) {
-      if (size_t(res[a]) * size_t(res[(a + 1) % 3]) > stored) {
-        throw std::runtime_error(path + ": checkpoint grid resolution is larger than the values it stores");
-      }
-    }
-    for (int a = 0; a < 3; ++a) {
-      if (!std::isfinite(box.min[a]) || !std::isfinite(box.max[a]) || !(box.min[a] < box.max[a])) {
-        throw std::runtime_error(path + ": checkpoint bounding box is empty or not finite");
-      }
-    }
-    model->SetGeometry(box, res);
-    model->set_n_samples(j.at("n_samples").get<int>());
-  } catch (const nlohmann::json::exception& e) {
-    throw std::runtime_error(path + ": checkpoint metadata: " + e.what());
-  }
-  for (const NamedArray& a : model->NamedParameters()) {
-    const CheckpointArray* src = ck.Find(a.name);
-    if (!src) throw std::runtime_error(path + ": checkpoint lacks array '" + a.name + "'");
-    if (src->data.size() != a.size) {
-      throw std::runtime_error(path + ": array '" + a.name + "' has " + std::to_string(src->data.size()) +
-                               " values, the model expects " + std::to_string(a.size));
-    }
-    for (float x : src->data) {
-      if (!std::isfinite(x)) throw std::runtime_error(path + ": array '" + a.name + "' holds a non-finite value");
-    }
-    std::copy(src->data.begin(), src->data.end(), a.data);
-  }
-  if (j.contains("mask_res")) {
-    const CheckpointArray* occ = ck.Find("alpha_mask");
-    if (!occ) throw std::runtime_error(path + ": checkpoint lacks the alpha mask");
-    Aabb box;
-    box.min = j["mask_aabb_min"].get<std::array<float, 3>>();
-    box.max = j["mask_aabb_max"].get<std::array<float, 3>>();
-    const auto res = j["mask_res"].get<std::array<int, 3>>();
-    if (occ->data.size() != size_t(res[0]) * res[1] * res[2]) {
-      throw std::runtime_error(path + ": alpha mask size does not match its resolution");
-    }
-    std::vector<uint8_t> bits(occ->data.size());
-    for (size_t i = 0; i < bits.size(); ++i) bits[i] = occ->data[i] > 0.5f;
-    model->SetAlphaMask(AlphaMask(box, res, std::move(bits)));
-  }
-  if (rate && j.contains("plane_block") && j.contains("line_block")) {
-    for (int a = 0; a < 3; ++a) {
-      rate->config.plane_block[a] = j["plane_block"][a].get<int>();
-      rate->config.line_block[a] = j["line_block"][a].get<int>();
-    }
-  }
-  if (rate && j.value("rate_active", false)) {
-    const CheckpointArray* steps = ck.Find("rate.steps");
-    const CheckpointArray* params = ck.Find("rate.entropy_model");
-    if (!steps || !params) throw std::runtime_error(path + ": checkpoint lacks the rate state");
-    for (float step : steps->data) {
-      if (!(step > 0.f) || !std::isfinite(step)) {
-        throw std::runtime_error(path + ": checkpoint holds a quantization step of " + std::to_string(step) +
-                                 " (steps are positive and finite)");
-      }
-    }
-    rate->steps = steps->data;
-    rate->entropy.Init(NumRateModels(2), 0);
-    if (params->data.size() != rate->entropy.params().size()) {
-      throw std::runtime_error(path + ": entropy model has the wrong number of parameters");
-    }
-    rate->entropy.params() = params->data;
-    rate->adam.Reset(rate->entropy.params().size());
-    rate->active = true;
-    rate->checkpoint_lambda_e = j.value("lambda_e", 0.0f);
-  }
-  return j.at("iteration").get<int>();
-}
-
-}  // namespace
-
-int LoadModelCheckpoint(const std::string& path, TensorfModel* model, RateState* rate) {
-  try {
-    return LoadModelCheckpointOrThrow(path, model, rate);
-  } catch (const std::invalid_argument& e) {  // the model's own checks do not know the file
-    throw std::runtime_error(path + ": checkpoint does not describe a valid model: " + e.what());
-  } catch (const std::length_error& e) {
-    throw std::runtime_error(path + ": checkpoint does not describe a valid model: " + e.what());
-  } catch (const std::bad_alloc&) {
-    throw std::runtime_error(path + ": checkpoint describes a model too large for this machine's memory");
-  }
-}
-
-TensorfModel LoadModelFromCheckpoint(const std::string& path, RateState* rate) {
-  TensorfConfig c;
-  try {
-    const nlohmann::json j = nlohmann::json::parse(ReadCheckpoint(path).json);
-    c.density_ranks = j.at("density_rank").get<std::array<int, 3>>();
-    c.app_ranks = j.at("appearance_rank").get<std::array<int, 3>>();
-    // Checkpoints from before these fields were written hold the Blender defaults.
-    const nlohmann::json render = j.value("render", nlohmann::json::object());
-    c.near = render.value("near", c.near);
-    c.far = render.value("far", c.far);
-    c.white_background = render.value("white_background", c.white_background);
-    c.density_shift = render.value("density_shift", c.density_shift);
-    c.distance_scale = render.value("distance_scale", c.distance_scale);
-    c.step_ratio = render.value("step_ratio", c.step_ratio);
-    c.weight_threshold = render.value("weight_threshold", c.weight_threshold);
-    const nlohmann::json head = j.value("head", nlohmann::json::object());
-    c.head.feature_dim = head.value("feature_dim", c.head.feature_dim);
-    c.head.feature_pe_freqs = head.value("feature_pe_freqs", c.head.feature_pe_freqs);
-    c.head.viewdir_pe_freqs = head.value("viewdir_pe_freqs", c.head.viewdir_pe_freqs);
-    c.head.hidden = head.value("hidden", c.head.hidden);
-    c.head.num_products = c.app_ranks[0] + c.app_ranks[1] + c.app_ranks[2];
-  } catch (const nlohmann::json::exception& e) {
-    throw std::runtime_error(path + ": checkpoint metadata: " + e.what());
-  }
-  TensorfModel model(c);
-  LoadModelCheckpoint(path, &model, rate);
-  return model;
-}
-
 namespace {
 
 bool AllFinite(const std::vector<float>& v) {
@@ -420,15 +219,14 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   const std::vector<long> voxel_counts = UpsampleVoxelCounts(o);
 
   const std::string ckpt_path = o.out_dir.empty() ? std::string() : o.out_dir + "/checkpoint.ckpt";
-  int first_iter = 0;
-  bool resumed = false;
   if (o.resume && (ckpt_path.empty() || access(ckpt_path.c_str(), R_OK) != 0)) {
     throw std::runtime_error("resume: no checkpoint to resume from" +
                              (ckpt_path.empty() ? std::string(" (no output directory)") : " at " + ckpt_path));
   }
+  int first_iter = 0;
+  Checkpoint resumed_from;
   if (o.resume) {
-    first_iter = LoadModelCheckpoint(ckpt_path, model, &rate);
-    resumed = true;
+    first_iter = LoadModelCheckpoint(ckpt_path, model, &rate, &resumed_from);
     if (o.target_bytes > 0 && rate.active && rate.checkpoint_lambda_e > 0.f) {
       // Rate control continues from the lambda_e it had reached.
       live.lambda_e = rate.checkpoint_lambda_e;
@@ -440,7 +238,16 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   }
 
   RaySet rays(train.views);
-  {
+  Optimizers opt;
+  opt.Reset(*model);
+  TrainProgress progress;
+  progress.rng.seed(o.seed);
+  progress.l1_weight = o.l1_weight_initial;
+  const float lr_factor = std::pow(o.lr_decay_ratio, 1.0f / float(o.iters));
+  const bool exact_resume =
+      o.resume && LoadTrainState(resumed_from, ckpt_path, &opt, &rate, &rays, &progress);
+  resumed_from = Checkpoint();  // the arrays are in the model and the optimizers now
+  if (!exact_resume) {
     const Aabb box = model->aabb();
     rays.Filter([&box](const float* org, const float* dir) {
       float tn, tf;
@@ -448,22 +255,24 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
       return tf > tn;
     });
   }
-  float l1_weight = o.l1_weight_initial;
-  for (int m : mask_at) {
-    if (first_iter > m) l1_weight = o.l1_weight_rest;
+  if (o.resume && !exact_resume) {
+    // A checkpoint from before ecrf saved the training state: continue approximately (fresh
+    // optimizer moments and generator, the schedule position recomputed).
+    std::fprintf(stderr, "warning: %s has no training state (an older ecrf wrote it): the resumed run "
+                 "will not equal an uninterrupted one\n", ckpt_path.c_str());
+    for (int m : mask_at) {
+      if (first_iter > m) progress.l1_weight = o.l1_weight_rest;
+    }
+    int last_reset = 0;
+    for (int m : upsample_at) {
+      if (m < first_iter) last_reset = m;
+    }
+    opt.lr_scale = std::pow(lr_factor, float(first_iter - last_reset));
+    progress.rng.seed(o.seed + uint64_t(first_iter));
   }
-
-  Optimizers opt;
-  opt.Reset(*model);
-  const float lr_factor = std::pow(o.lr_decay_ratio, 1.0f / float(o.iters));
-  // Continue the decay where a resumed run left it: since the last reset (upsample) before it.
-  int last_reset = 0;
-  for (int m : upsample_at) {
-    if (m < first_iter) last_reset = m;
-  }
-  opt.lr_scale = std::pow(lr_factor, float(first_iter - last_reset));
-
-  std::mt19937_64 rng(o.seed + uint64_t(first_iter));
+  float& l1_weight = progress.l1_weight;
+  std::mt19937_64& rng = progress.rng;
+  result.psnr_curve = progress.psnr_curve;
   const int n = o.batch_rays;
   std::vector<float> origins(size_t(n) * 3), dirs(size_t(n) * 3), rgb(size_t(n) * 3);
   double mse_sum = 0.0;
@@ -471,6 +280,8 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   auto interval_start = Clock::now();
   TrainStepStats stats;
   double eval_seconds = 0.0;
+  // Training time of this process plus what the checkpoint had accumulated.
+  auto train_seconds = [&] { return progress.train_seconds + Seconds(start) - eval_seconds; };
 
   for (int it = first_iter; it < o.iters; ++it) {
     rays.NextBatch(n, rng, origins.data(), dirs.data(), rgb.data());
@@ -523,7 +334,7 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
       result.final_train_psnr = -10.0 * std::log10(std::max(mse, 1e-12));
       const double spi = Seconds(interval_start) / std::max(1, mse_count);
       PrintProgress(done, o.iters, mse, result.final_train_psnr, *model, stats, spi,
-                    Seconds(start) - eval_seconds, rate.active ? rate.last_bits / 8e6 : -1.0);
+                    train_seconds(), rate.active ? rate.last_bits / 8e6 : -1.0);
       mse_sum = 0.0;
       mse_count = 0;
       interval_start = Clock::now();
@@ -563,26 +374,38 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
       opt.Reset(*model);
     }
 
-    if (!ckpt_path.empty() && o.checkpoint_every > 0 && done % o.checkpoint_every == 0 && done < o.iters) {
-      CheckModelFinite(*model, it, ckpt_path);
-      SaveModelCheckpoint(ckpt_path, *model, done, live, &rate);
-    }
     if (o.eval_every > 0 && done % o.eval_every == 0 && done < o.iters) {
       const auto eval_start = Clock::now();
       const EvalResult e = Evaluate(*model, test, o.test_view_stride, o.max_test_views, false);
       eval_seconds += Seconds(eval_start);
-      result.psnr_curve.emplace_back((Seconds(start) - eval_seconds) / 60.0, e.psnr);
+      result.psnr_curve.emplace_back(train_seconds() / 60.0, e.psnr);
       std::fprintf(stderr, "%s  test psnr %.2f dB at %.1f min (training time)\n", isatty(2) ? "\n" : "",
                    e.psnr, result.psnr_curve.back().first);
+    }
+    if (!ckpt_path.empty() && o.checkpoint_every > 0 && done % o.checkpoint_every == 0 && done < o.iters) {
+      CheckModelFinite(*model, it, ckpt_path);
+      TrainProgress now = progress;
+      now.train_seconds = train_seconds();
+      now.psnr_curve = result.psnr_curve;
+      const Checkpoint state = SaveTrainState(opt, rate, rays, now);
+      SaveModelCheckpoint(ckpt_path, *model, done, live, &rate, &state);
+    }
+    if (o.stop_after > 0 && done == o.stop_after && done < o.iters) {
+      throw TrainingStopped("training stopped after iteration " + std::to_string(done) + " (--stop-after)");
     }
   }
   if (isatty(2)) std::fprintf(stderr, "\n");
   result.iterations = o.iters;
   result.final_lambda_e = live.lambda_e;
-  result.train_seconds = Seconds(start) - eval_seconds;
-  (void)resumed;
+  result.train_seconds = train_seconds();
   CheckModelFinite(*model, o.iters - 1, ckpt_path);
-  if (!ckpt_path.empty()) SaveModelCheckpoint(ckpt_path, *model, o.iters, live, &rate);
+  if (!ckpt_path.empty()) {
+    TrainProgress now = progress;
+    now.train_seconds = result.train_seconds;
+    now.psnr_curve = result.psnr_curve;
+    const Checkpoint state = SaveTrainState(opt, rate, rays, now);
+    SaveModelCheckpoint(ckpt_path, *model, o.iters, live, &rate, &state);
+  }
   if (!use_rate) {
     // Without the rate objective, fit an entropy model to the final grids anyway so every run
     // reports the size its coefficients would cost (the lambda_e = 0 point of a sweep).

@@ -5,9 +5,11 @@
 #define ECRF_TRAINER_TRAINER_H_
 
 #include <functional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "trainer/checkpoint.h"
 #include "trainer/dataset.h"
 #include "trainer/image_io.h"
 #include "trainer/rate_state.h"
@@ -65,14 +67,26 @@ EvalResult Evaluate(const TensorfModel& model, const Dataset& test, int stride, 
 
 Image RenderView(const TensorfModel& model, const Camera& camera);
 
+// Thrown by Train when options.stop_after is reached: the checkpoint written at that
+// iteration (if it is a checkpoint iteration) is the run's state.
+class TrainingStopped : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 // Checkpoint <-> model (+ training progress).
+// `train_state` (optional, from SaveTrainState) goes into the same file: its arrays beside the
+// model's, its JSON object under "train_state".
 void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int iteration,
-                         const TrainOptions& options, const RateState* rate = nullptr);
+                         const TrainOptions& options, const RateState* rate = nullptr,
+                         const Checkpoint* train_state = nullptr);
 // A model of the checkpoint's own configuration (ranks, render parameters, head), loaded from it:
 // what the encoder starts from. `rate` (optional) receives the rate state.
 TensorfModel LoadModelFromCheckpoint(const std::string& path, RateState* rate = nullptr);
-// Returns the iteration stored in the checkpoint. `rate` (optional) receives the rate state.
-int LoadModelCheckpoint(const std::string& path, TensorfModel* model, RateState* rate = nullptr);
+// Returns the iteration stored in the checkpoint. `rate` (optional) receives the rate state,
+// `whole` (optional) the checkpoint as read (for LoadTrainState, without reading it twice).
+int LoadModelCheckpoint(const std::string& path, TensorfModel* model, RateState* rate = nullptr,
+                        Checkpoint* whole = nullptr);
 
 }  // namespace trainer
 }  // namespace ecrf
