@@ -38,7 +38,7 @@ const char kTrainFlagsUsage[] =
     "ECRF objective:\n"
     "  --lambda-e X               weight of the estimated size in bits (0 = plain TensoRF)\n"
     "  --rate low|medium|high     named rate points (default medium): lambda_e 5e-10, 2e-11, 2e-11\n"
-    "                             with steps x1, x3, x1\n"
+    "                             with steps x4, x3, x1 (low: 31 MLP levels; give --mlp-levels after it)\n"
     "  --target-size SIZE         adapt lambda_e during training, then the steps at encode time, for\n"
     "                             a file of at most SIZE (e.g. 500KB, 1.2MB)\n"
     "  --alpha A                  lambda_r = A * lambda_e for the DCT-coefficient L2 term (default 1)\n"

@@ -44,8 +44,11 @@ TrainOptions PresetOptions(const std::string& name) {
 
 void ApplyRatePoint(const std::string& name, TrainOptions* o) {
   if (name == "low") {
+    // Coarser steps under QAT beat a larger lambda_e at the same size (chair: 182,217 B at
+    // 33.76 dB against 266,445 B at 33.79 dB with steps x1), and 31 MLP levels save 10 KB.
     o->lambda_e = 5e-10f;
-    o->quant_step_scale = 1.0f;
+    o->quant_step_scale = 4.0f;
+    o->mlp_levels = 31;
   } else if (name == "medium") {
     o->lambda_e = 2e-11f;
     o->quant_step_scale = 3.0f;

@@ -78,6 +78,20 @@ TEST(RaySet, BatchesCoverEveryRayOncePerEpochAndFilterKeepsMatches) {
   EXPECT_THROW(rays.NextBatch(1, rng, o.data(), dir.data(), rgb.data()), std::runtime_error);
 }
 
+TEST(RatePoints, NamedPointsSetLambdaStepsAndMlpLevels) {
+  TrainOptions o = PresetOptions("fast");
+  ApplyRatePoint("low", &o);
+  EXPECT_EQ(o.lambda_e, 5e-10f);
+  EXPECT_EQ(o.quant_step_scale, 4.0f);
+  EXPECT_EQ(o.mlp_levels, 31);
+  ApplyRatePoint("medium", &o);
+  EXPECT_EQ(o.lambda_e, 2e-11f);
+  EXPECT_EQ(o.quant_step_scale, 3.0f);
+  ApplyRatePoint("high", &o);
+  EXPECT_EQ(o.quant_step_scale, 1.0f);
+  EXPECT_THROW(ApplyRatePoint("extreme", &o), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace trainer
 }  // namespace ecrf
