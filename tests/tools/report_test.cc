@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "tests/common/invoke.h"
 #include "tools/commands.h"
 #include "tools/report.h"
 
@@ -17,11 +18,7 @@ namespace ecrf {
 namespace tools {
 namespace {
 
-int Invoke(int (*command)(int, char**), std::vector<std::string> args) {
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  return command(int(argv.size()), argv.data());
-}
+using testing_cli::Invoke;
 
 std::string ReadText(const std::string& path) {
   std::ifstream in(path);
@@ -100,7 +97,7 @@ void SpeedRowsObeyWhatTheSpecPromises() {
   const nlohmann::json& speed = r["speed"];
   ASSERT_TRUE(speed.is_object());
   // The middle point of a two-point sweep is the second.
-  EXPECT_EQ(speed["point"], "lambda=1e-08");
+  EXPECT_EQ(speed["point"], "lambda=1e-08 steps x2");
   const double default_psnr = r["points"][1]["decoded_psnr"].get<double>();
   auto row = [&](const std::string& knob, const std::string& setting) {
     for (const nlohmann::json& x : speed["rows"]) {

@@ -11,17 +11,14 @@
 #include <vector>
 
 #include "tools/cli_args.h"
+#include "tests/common/invoke.h"
 #include "tools/commands.h"
 
 namespace ecrf {
 namespace tools {
 namespace {
 
-int Invoke(int (*command)(int, char**), std::vector<std::string> args) {
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  return command(int(argv.size()), argv.data());
-}
+using testing_cli::Invoke;
 
 std::string ErrorOf(std::vector<std::string> args) {
   try {
