@@ -217,9 +217,7 @@ int RunReportSweep(int argc, char** argv) {
     anchors = a["anchors"];
   }
   // Find an unusable output directory now, not after the first hour of training.
-  MakeDirectory(out + "/runs");
-  WriteTextFile(out + "/.write_probe", "");
-  std::remove((out + "/.write_probe").c_str());
+  const OutputDirectory runs_dir(out + "/runs");
 
   nlohmann::json report;
   if (FileExists(out + "/report.json")) {

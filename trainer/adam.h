@@ -28,6 +28,8 @@ class Adam {
   // For checkpoints.
   std::vector<float>& first_moment() { return m_; }
   std::vector<float>& second_moment() { return v_; }
+  const std::vector<float>& first_moment() const { return m_; }
+  const std::vector<float>& second_moment() const { return v_; }
   void set_step_count(long step) { step_ = step; }
 
  private:

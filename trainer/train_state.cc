@@ -9,10 +9,9 @@ namespace trainer {
 namespace {
 
 void SaveAdam(const std::string& name, const Adam& adam, Checkpoint* ck, nlohmann::json* j) {
-  Adam& a = const_cast<Adam&>(adam);  // the moment accessors are not const; nothing is changed
-  ck->arrays.push_back({"adam." + name + ".m", {int64_t(a.first_moment().size())}, a.first_moment()});
-  ck->arrays.push_back({"adam." + name + ".v", {int64_t(a.second_moment().size())}, a.second_moment()});
-  (*j)["adam_steps"][name] = a.step_count();
+  ck->arrays.push_back({"adam." + name + ".m", {int64_t(adam.first_moment().size())}, adam.first_moment()});
+  ck->arrays.push_back({"adam." + name + ".v", {int64_t(adam.second_moment().size())}, adam.second_moment()});
+  (*j)["adam_steps"][name] = adam.step_count();
 }
 
 void LoadAdam(const std::string& name, const Checkpoint& ck, const nlohmann::json& j, const std::string& path,

@@ -52,7 +52,6 @@ std::string FormatDuration(double seconds) {
   return buf;
 }
 
-// The three optimizers of a TensoRF run: grids at lr_grid, the head (basis + MLP) at lr_network.
 void PrintProgress(int it, int iters, double loss, double psnr, const TensorfModel& model,
                    const TrainStepStats& stats, double sec_per_it, double elapsed, double est_mb) {
   const int width = 24;
@@ -282,6 +281,14 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   double eval_seconds = 0.0;
   // Training time of this process plus what the checkpoint had accumulated.
   auto train_seconds = [&] { return progress.train_seconds + Seconds(start) - eval_seconds; };
+  // The model with everything an exact resume needs (train_state.h).
+  auto save_checkpoint = [&](int done, double seconds) {
+    TrainProgress now = progress;
+    now.train_seconds = seconds;
+    now.psnr_curve = result.psnr_curve;
+    const Checkpoint state = SaveTrainState(opt, rate, rays, now);
+    SaveModelCheckpoint(ckpt_path, *model, done, live, &rate, &state);
+  };
 
   for (int it = first_iter; it < o.iters; ++it) {
     rays.NextBatch(n, rng, origins.data(), dirs.data(), rgb.data());
@@ -384,11 +391,7 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
     }
     if (!ckpt_path.empty() && o.checkpoint_every > 0 && done % o.checkpoint_every == 0 && done < o.iters) {
       CheckModelFinite(*model, it, ckpt_path);
-      TrainProgress now = progress;
-      now.train_seconds = train_seconds();
-      now.psnr_curve = result.psnr_curve;
-      const Checkpoint state = SaveTrainState(opt, rate, rays, now);
-      SaveModelCheckpoint(ckpt_path, *model, done, live, &rate, &state);
+      save_checkpoint(done, train_seconds());
     }
     if (o.stop_after > 0 && done == o.stop_after && done < o.iters) {
       throw TrainingStopped("training stopped after iteration " + std::to_string(done) + " (--stop-after)");
@@ -399,13 +402,7 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   result.final_lambda_e = live.lambda_e;
   result.train_seconds = train_seconds();
   CheckModelFinite(*model, o.iters - 1, ckpt_path);
-  if (!ckpt_path.empty()) {
-    TrainProgress now = progress;
-    now.train_seconds = result.train_seconds;
-    now.psnr_curve = result.psnr_curve;
-    const Checkpoint state = SaveTrainState(opt, rate, rays, now);
-    SaveModelCheckpoint(ckpt_path, *model, o.iters, live, &rate, &state);
-  }
+  if (!ckpt_path.empty()) save_checkpoint(o.iters, result.train_seconds);
   if (!use_rate) {
     // Without the rate objective, fit an entropy model to the final grids anyway so every run
     // reports the size its coefficients would cost (the lambda_e = 0 point of a sweep).
