@@ -12,6 +12,7 @@ struct ecrf_scene {
   ecrf::dec::SceneField field;
   ecrf::dec::SceneInfo info;
   bool decoded = false;
+  uint64_t memory_budget = ecrf::dec::kDefaultDecodeMemoryBudget;
   char message[256] = {0};
 };
 
@@ -40,9 +41,17 @@ void ecrf_render_options_default(ecrf_render_options* o) {
   o->max_samples = d.max_samples;
   o->step_scale = d.step_scale;
   o->weight_threshold = d.weight_threshold;
+  o->sample_budget = d.sample_budget;
 }
 
 ecrf_scene* ecrf_scene_create(void) { return new (std::nothrow) ecrf_scene(); }
+
+int ecrf_scene_set_memory_budget(ecrf_scene* scene, uint64_t bytes) {
+  if (!scene) return ECRF_ERR_INVALID_ARGUMENT;
+  scene->memory_budget = bytes == 0 ? ecrf::dec::kDefaultDecodeMemoryBudget : bytes;
+  scene->message[0] = '\0';
+  return ECRF_OK;
+}
 
 void ecrf_scene_destroy(ecrf_scene* scene) { delete scene; }
 
@@ -56,6 +65,7 @@ int ecrf_scene_decode(ecrf_scene* scene, const void* data, size_t size, int stor
                                              "storage %d is neither FLOAT32 nor INT16", storage));
   }
   ecrf::dec::DecodeOptions options;
+  options.max_memory_bytes = scene->memory_budget;
   options.storage = storage == ECRF_STORAGE_INT16 ? ecrf::dec::GridStorage::kInt16
                                                   : ecrf::dec::GridStorage::kFloat32;
   const ecrf::Status s = ecrf::dec::DecodeScene(static_cast<const uint8_t*>(data), size, options,
@@ -130,6 +140,7 @@ int ecrf_scene_render(ecrf_scene* scene, const ecrf_camera* camera,
     o.max_samples = options->max_samples;
     o.step_scale = options->step_scale;
     o.weight_threshold = options->weight_threshold;
+    o.sample_budget = options->sample_budget;
   }
   ecrf::dec::Camera cam;
   std::memcpy(cam.c2w, camera->c2w, sizeof(cam.c2w));

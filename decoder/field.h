@@ -127,7 +127,8 @@ struct VmGrid {
   }
   size_t line_index(int m, int i, int r) const { return static_cast<size_t>(i) * ranks[m] + r; }
   // Consistent shapes, allocated arrays, finite positive scales (int16).
-  Status Validate(const char* what) const;
+  // Shapes and allocations; with check_values also that every float32 value is finite.
+  Status Validate(const char* what, bool check_values = true) const;
 };
 
 // TensoRF AlphaGridMask: a 0/1 volume over its own aabb (usually the scene's), sampled
@@ -223,6 +224,11 @@ struct SceneField {
   // Shapes agree (grid res == res, mlp num_products == appearance total rank), values finite,
   // mask accelerated. The renderer calls it before every frame batch.
   Status Validate() const;
+
+  // Set by DecodeScene: the grids hold IDCT outputs times finite steps, finite by construction, so
+  // Validate (run before every render) skips scanning every value. Code that writes the grids
+  // itself leaves it false (or resets it) and Validate checks them.
+  bool grids_known_finite = false;
 };
 
 }  // namespace dec

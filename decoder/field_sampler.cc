@@ -184,7 +184,7 @@ Status VmGrid::Allocate(const int res_in[3], const int ranks_in[3], GridStorage 
   return Status::Ok();
 }
 
-Status VmGrid::Validate(const char* what) const {
+Status VmGrid::Validate(const char* what, bool check_values) const {
   for (int m = 0; m < 3; ++m) {
     ECRF_CHECK_OR_RETURN(res[m] >= 2 && res[m] <= kMaxGridRes && ranks[m] >= 0 &&
                              ranks[m] <= kMaxRank,
@@ -195,7 +195,7 @@ Status VmGrid::Validate(const char* what) const {
     if (storage == GridStorage::kFloat32) {
       ECRF_CHECK_OR_RETURN(plane_f32[m].size() == pc && line_f32[m].size() == lc,
                            kErrInvalidArgument, "%s grid: mode %d tensors not allocated", what, m);
-      ECRF_CHECK_OR_RETURN(AllFinite(plane_f32[m].data(), pc) && AllFinite(line_f32[m].data(), lc),
+      ECRF_CHECK_OR_RETURN(!check_values || (AllFinite(plane_f32[m].data(), pc) && AllFinite(line_f32[m].data(), lc)),
                            kErrCorrupt, "%s grid: mode %d has non-finite values", what, m);
     } else if (storage == GridStorage::kInt16) {
       ECRF_CHECK_OR_RETURN(plane_i16[m].size() == pc && line_i16[m].size() == lc,
@@ -341,8 +341,8 @@ Status SceneField::Validate() const {
     ECRF_CHECK_OR_RETURN(density.res[a] == res[a] && appearance.res[a] == res[a],
                          kErrInvalidArgument, "scene: grid resolutions differ on axis %d", a);
   }
-  ECRF_RETURN_IF_ERROR(density.Validate("density"));
-  ECRF_RETURN_IF_ERROR(appearance.Validate("appearance"));
+  ECRF_RETURN_IF_ERROR(density.Validate("density", !grids_known_finite));
+  ECRF_RETURN_IF_ERROR(appearance.Validate("appearance", !grids_known_finite));
   ECRF_CHECK_OR_RETURN(std::isfinite(density_shift) && std::isfinite(distance_scale) &&
                            distance_scale >= 0.f && std::isfinite(weight_threshold) &&
                            std::isfinite(near_far[0]) && std::isfinite(near_far[1]) &&

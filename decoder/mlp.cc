@@ -284,6 +284,30 @@ Status AppearanceMlp::SetParams(const float* params, size_t count) {
   return Status::Ok();
 }
 
+Status AppearanceMlp::GetParams(float* params, size_t count) const {
+  ECRF_CHECK_OR_RETURN(initialized(), kErrInvalidArgument, "mlp: GetParams before Init");
+  ECRF_CHECK_OR_RETURN(params != nullptr && count == num_params(), kErrInvalidArgument,
+                       "mlp: expected room for %zu parameters, got %zu", num_params(), count);
+  const int P = config_.num_products, F = config_.feature_dim, H = config_.hidden;
+  float* p = params;
+  auto untranspose = [&](int out, int k_in, const float* src, int ldw) {
+    for (int o = 0; o < out; ++o) {
+      for (int k = 0; k < k_in; ++k) p[static_cast<size_t>(o) * k_in + k] = src[static_cast<size_t>(k) * ldw + o];
+    }
+    p += static_cast<size_t>(out) * k_in;
+  };
+  untranspose(F, P, weights_ + o_basis_, fd_pad_);
+  untranspose(H, in_dim_, weights_ + o_w1_, hid_pad_);
+  std::memcpy(p, weights_ + o_b1_, H * sizeof(float));
+  p += H;
+  untranspose(H, H, weights_ + o_w2_, hid_pad_);
+  std::memcpy(p, weights_ + o_b2_, H * sizeof(float));
+  p += H;
+  untranspose(3, H, weights_ + o_w3_, kOutPad);
+  std::memcpy(p, weights_ + o_b3_, 3 * sizeof(float));
+  return Status::Ok();
+}
+
 size_t AppearanceMlp::ScratchFloats() const {
   const size_t C = kChunkRows;
   const size_t pe = static_cast<size_t>(config_.feature_dim) * config_.feature_pe_freqs +

@@ -59,6 +59,8 @@ class AppearanceMlp {
   size_t num_params() const;
   // Loads weights from that layout (count must equal num_params()); rejects non-finite values.
   Status SetParams(const float* params, size_t count);
+  // The parameters back in that layout, exactly as loaded (the checksum of SPEC.md 6.5).
+  Status GetParams(float* params, size_t count) const;
 
   // Scratch floats Infer needs (independent of the number of rows).
   size_t ScratchFloats() const;

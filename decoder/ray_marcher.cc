@@ -307,6 +307,16 @@ Status RayMarcher::Init(const SceneField* scene, const RenderOptions& options) {
   ECRF_CHECK_OR_RETURN(!(options.weight_threshold > 1.f) && !std::isnan(options.weight_threshold),
                        kErrInvalidArgument, "render: weight_threshold %g above 1",
                        static_cast<double>(options.weight_threshold));
+  ECRF_CHECK_OR_RETURN(options.sample_budget >= 0, kErrInvalidArgument, "render: negative sample_budget");
+  if (options.sample_budget > 0) {
+    // The count Run will use (same arithmetic as there).
+    double n = std::ceil(static_cast<double>(scene->NumSamples()) / static_cast<double>(options.step_scale));
+    if (options.max_samples > 0) n = std::min(n, static_cast<double>(options.max_samples));
+    ECRF_CHECK_OR_RETURN(n <= options.sample_budget, kErrLimit,
+                         "render: the scene asks %.0f samples per ray, more than the sample budget of %d "
+                         "(RenderOptions::sample_budget; ecrf --sample-budget N, or cap with --samples N)",
+                         n, options.sample_budget);
+  }
   int threads = options.num_threads;
   if (threads == 0) {
     const unsigned hw = std::thread::hardware_concurrency();

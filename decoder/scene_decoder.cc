@@ -18,6 +18,24 @@ namespace ecrf {
 namespace dec {
 namespace {
 
+// DecodeOptions::max_memory_bytes, spent chunk by chunk before each allocation.
+class MemoryBudget {
+ public:
+  explicit MemoryBudget(uint64_t total) : total_(total), left_(total) {}
+  Status Take(uint64_t bytes, const char* what) {
+    ECRF_CHECK_OR_RETURN(bytes <= left_, kErrLimit,
+                         "%s need %llu bytes, more than the %llu left of this decoder's memory budget of "
+                         "%llu bytes (DecodeOptions::max_memory_bytes; ecrf --max-memory-mb)",
+                         what, static_cast<unsigned long long>(bytes), static_cast<unsigned long long>(left_),
+                         static_cast<unsigned long long>(total_));
+    left_ -= bytes;
+    return Status::Ok();
+  }
+
+ private:
+  uint64_t total_, left_;
+};
+
 const char* const kGridNames[kNumSceneGrids] = {"density", "appearance"};
 const char* const kTensorNames[kTensorsPerSceneGrid] = {"plane 0", "plane 1", "plane 2",
                                                         "line 0",  "line 1",  "line 2"};
@@ -136,7 +154,8 @@ Status DecodeCoefficientChunk(const ChunkView& chunk, const SceneHeader& h, int 
   return Status::Ok();
 }
 
-Status DecodeOccupancyChunk(const ChunkView& chunk, SceneField* scene, SceneInfo* info) {
+Status DecodeOccupancyChunk(const ChunkView& chunk, MemoryBudget* budget, SceneField* scene,
+                            SceneInfo* info) {
   ByteReader r(chunk.data, chunk.size);
   float lo[3] = {0.f, 0.f, 0.f}, hi[3] = {0.f, 0.f, 0.f};
   uint16_t res16[3] = {0, 0, 0}, reserved = 0;
@@ -161,6 +180,8 @@ Status DecodeOccupancyChunk(const ChunkView& chunk, SceneField* scene, SceneInfo
                        "OCCU: %llu voxels exceed the limit of %llu",
                        static_cast<unsigned long long>(voxels),
                        static_cast<unsigned long long>(kMaxOccupancyVoxels));
+  // The bits, plus one byte per 4^3 and per 16^3 cells for the acceleration levels.
+  ECRF_RETURN_IF_ERROR(budget->Take((voxels + 7) / 8 + voxels / 64 + voxels / 4096 + 2, "OCCU: the occupancy mask"));
   ECRF_RETURN_IF_ERROR(scene->mask.Init(lo, hi, res));
   ECRF_RETURN_IF_ERROR(DecodeOccupancy(r.current(), r.remaining(), res, scene->mask.bits()));
   ECRF_RETURN_IF_ERROR(scene->mask.BuildAcceleration());
@@ -171,8 +192,8 @@ Status DecodeOccupancyChunk(const ChunkView& chunk, SceneField* scene, SceneInfo
   return Status::Ok();
 }
 
-Status DecodeMlpChunk(const ChunkView& chunk, const SceneHeader& h, SceneField* scene,
-                      SceneInfo* info) {
+Status DecodeMlpChunk(const ChunkView& chunk, const SceneHeader& h, MemoryBudget* budget,
+                      SceneField* scene, SceneInfo* info) {
   ByteReader r(chunk.data, chunk.size);
   uint8_t precision = 0, reserved[3] = {0, 0, 0};
   ECRF_RETURN_IF_ERROR(r.ReadU8(&precision, "MLPW precision"));
@@ -187,6 +208,13 @@ Status DecodeMlpChunk(const ChunkView& chunk, const SceneHeader& h, SceneField* 
   config.feature_pe_freqs = h.feature_pe_freqs;
   config.viewdir_pe_freqs = h.viewdir_pe_freqs;
   config.hidden = h.hidden;
+  {
+    // The decoded parameters and the renderer's padded, transposed copy (at most 2x with padding).
+    const uint64_t F = h.feature_dim, P = config.num_products, H = h.hidden;
+    const uint64_t in = F + 3 + 2 * F * h.feature_pe_freqs + 6 * uint64_t{h.viewdir_pe_freqs};
+    const uint64_t count = F * P + H * in + H * H + 5 * H + 3;
+    ECRF_RETURN_IF_ERROR(budget->Take(count * 4 * 3, "MLPW: the MLP parameters"));
+  }
   ECRF_RETURN_IF_ERROR(scene->mlp.Init(config));
   const size_t count = scene->mlp.num_params();
   HeapArray<float> params;
@@ -252,6 +280,7 @@ Status DecodeScene(const uint8_t* data, size_t size, const DecodeOptions& option
   SceneInfo& info = info_out ? *info_out : local_info;
   info = SceneInfo();
   info.stream_bytes = size;
+  MemoryBudget budget(options.max_memory_bytes);
   ContainerReader reader;
   ECRF_RETURN_IF_ERROR(reader.Open(data, size));
   info.version_major = reader.version_major();
@@ -296,11 +325,9 @@ Status DecodeScene(const uint8_t* data, size_t size, const DecodeOptions& option
     }
     if (chunk.type == kChunkHead && expect == Expect::kHead) {
       ECRF_RETURN_IF_ERROR(ParseSceneHeader(chunk.data, chunk.size, &h));
-      const uint64_t values = SceneGridValues(h);
-      ECRF_CHECK_OR_RETURN(values * 4 <= options.max_grid_bytes, kErrLimit,
-                           "HEAD: the grids need %llu bytes, more than this decoder allows (%llu)",
-                           static_cast<unsigned long long>(values * 4),
-                           static_cast<unsigned long long>(options.max_grid_bytes));
+      // The 16-bit conversion holds both copies for a moment.
+      const uint64_t grid_bytes = SceneGridValues(h) * (options.storage == GridStorage::kInt16 ? 6 : 4);
+      ECRF_RETURN_IF_ERROR(budget.Take(grid_bytes, "HEAD: the grids"));
       info.head_bytes = chunk.size;
       ApplyHeader(h, scene);
       int res[3], ranks[kNumSceneGrids][3];
@@ -316,7 +343,7 @@ Status DecodeScene(const uint8_t* data, size_t size, const DecodeOptions& option
         advance_tensor();
       }
     } else if (chunk.type == kChunkOccupancy && expect == Expect::kOccupancy) {
-      ECRF_RETURN_IF_ERROR(DecodeOccupancyChunk(chunk, scene, &info));
+      ECRF_RETURN_IF_ERROR(DecodeOccupancyChunk(chunk, &budget, scene, &info));
       advance_tensor();
     } else if (chunk.type == kChunkCoefficients && expect == Expect::kCoefficients) {
       const int g = next_tensor / kTensorsPerSceneGrid, t = next_tensor % kTensorsPerSceneGrid;
@@ -325,7 +352,7 @@ Status DecodeScene(const uint8_t* data, size_t size, const DecodeOptions& option
       ++next_tensor;
       advance_tensor();
     } else if (chunk.type == kChunkMlpWeights && expect == Expect::kMlp) {
-      ECRF_RETURN_IF_ERROR(DecodeMlpChunk(chunk, h, scene, &info));
+      ECRF_RETURN_IF_ERROR(DecodeMlpChunk(chunk, h, &budget, scene, &info));
       expect = Expect::kDone;
     } else {
       const bool known = chunk.type == kChunkHead || chunk.type == kChunkOccupancy ||
@@ -344,6 +371,9 @@ Status DecodeScene(const uint8_t* data, size_t size, const DecodeOptions& option
     ECRF_RETURN_IF_ERROR(QuantizeGridInt16(scene->appearance, &converted_app));
     scene->appearance = static_cast<VmGrid&&>(converted_app);
   }
+  // Every grid value is an IDCT output (|y| < 2^31) times step * 2^-Pf <= 2^60: finite by
+  // construction, so the renderer need not scan (and page in) every value again.
+  scene->grids_known_finite = true;
   return scene->Validate();
 }
 

@@ -17,14 +17,19 @@
 namespace ecrf {
 namespace dec {
 
+inline constexpr uint64_t kDefaultDecodeMemoryBudget = uint64_t{256} << 20;
+
 struct DecodeOptions {
   // kInt16 halves the grid memory (values rounded to 16-bit fixed point with one scale per
   // tensor after the normative float32 reconstruction).
   GridStorage storage = GridStorage::kFloat32;
-  // The decoded grids may take at most this many bytes as float32 (checked at HEAD, before
-  // anything is allocated). Small devices lower it: a few hundred bytes of stream can describe
-  // 1 GiB of all-zero grids within the format's own limits.
-  uint64_t max_grid_bytes = uint64_t{1} << 30;
+  // Memory budget of the decoded scene: grids (float32, plus the 16-bit copy while converting),
+  // occupancy mask with its acceleration levels, and MLP. Each chunk's need is checked against
+  // what is left before anything is allocated (kErrLimit). Within the format's own limits a few
+  // hundred bytes of stream can describe 1 GiB of all-zero grids and 2.5 KB of OCCU a 256 MiB
+  // mask, so the default (256 MiB, 10x a 400x400 Synthetic-NeRF scene) keeps hostile files cheap;
+  // applications that decode larger scenes raise it, small devices lower it.
+  uint64_t max_memory_bytes = kDefaultDecodeMemoryBudget;
 };
 
 // What the stream held, for `ecrf info` and reports.

@@ -27,7 +27,7 @@ if [ "${ECRF_WASM_SIMD:-1}" != 0 ]; then SIMD=(-msimd128); fi
 OUT=build-wasm
 mkdir -p "$OUT/obj"
 
-CXXFLAGS=(-std=c++17 "$OPT" "${SIMD[@]}" -fno-exceptions -fno-rtti -Wall -Wextra -I. -Idecoder/include)
+CXXFLAGS=(-std=c++17 "$OPT" "${SIMD[@]}" -fno-exceptions -fno-rtti -ffp-contract=off -Wall -Wextra -I. -Idecoder/include)
 # Objects are reused while the flags and sources are unchanged.
 if [ "$(cat "$OUT/obj/flags" 2>/dev/null)" != "${CXXFLAGS[*]}" ]; then
   rm -f "$OUT"/obj/*.o
@@ -45,7 +45,8 @@ done
 
 EXPORTS='["_ecrf_version","_ecrf_version_string","_ecrf_bitstream_version","_ecrf_error_name",'
 EXPORTS+='"_ecrf_scene_create","_ecrf_scene_destroy","_ecrf_scene_message","_ecrf_scene_decode",'
-EXPORTS+='"_ecrf_scene_get_info","_ecrf_scene_render","_ecrf_render_options_default","_malloc","_free"]'
+EXPORTS+='"_ecrf_scene_get_info","_ecrf_scene_render","_ecrf_render_options_default",'
+EXPORTS+='"_ecrf_scene_set_memory_budget","_malloc","_free"]'
 RUNTIME='["cwrap","ccall","UTF8ToString","HEAPU8","HEAP32","HEAPF32"]'
 
 echo "link $OUT/ecrf_decoder.js"

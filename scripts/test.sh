@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Builds and runs every test suite: an optimised build of everything, then format/ and decoder/
-# again under AddressSanitizer + UndefinedBehaviorSanitizer (they parse untrusted bytes).
+# again under AddressSanitizer + UndefinedBehaviorSanitizer (they parse untrusted bytes), then the
+# conformance vectors decoded by g++, clang++ and WebAssembly builds (identical checksums), then a
+# short run of every fuzz target.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs="$(nproc)"
@@ -20,3 +22,9 @@ cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DECRF_SANIT
       -DECRF_BUILD_TRAINER=OFF >/dev/null
 cmake --build build-asan -j"$jobs"
 ctest --test-dir build-asan -j"$jobs" --output-on-failure
+
+echo "== conformance checksums on every compiler, -O0 / -O3 -march=native, and WebAssembly (node)"
+bash scripts/conformance-matrix.sh
+
+echo "== fuzz targets, 10 s each (ASan + UBSan, every finding aborts; longer: bash scripts/fuzz.sh 600)"
+bash scripts/fuzz.sh 10

@@ -46,7 +46,10 @@ const char kRenderKnobUsage[] =
     "  --early-stop T      stop a ray when its transmittance is below T (default 1e-4; 0 = off)\n"
     "  --samples N         at most N samples per ray (default: the scene's)\n"
     "  --step-scale S      S x the sample spacing, 1/S the samples (default 1)\n"
-    "  --weight-threshold W  run the MLP only for samples of weight > W (default: the scene's)\n";
+    "  --weight-threshold W  run the MLP only for samples of weight > W (default: the scene's)\n"
+    "budgets against hostile files:\n"
+    "  --max-memory-mb N   refuse scenes whose decoded grids, mask and MLP need more (default 256)\n"
+    "  --sample-budget N   refuse scenes whose rays take more samples (default 16384; 0 = no limit)\n";
 
 void PrintUsage(FILE* out, const char* usage) {
   std::fputs(usage, out);
@@ -58,6 +61,7 @@ struct CommonArgs {
   int threads = 1;
   bool int16 = false;
   int max_views = 0;
+  uint64_t max_memory_bytes = dec::kDefaultDecodeMemoryBudget;
   dec::RenderOptions render;
 };
 
@@ -81,6 +85,13 @@ bool ParseCommon(int argc, char** argv, int* i, CommonArgs* c) {
     c->render.step_scale = ParseFloat("--step-scale", value());
   } else if (a == "--weight-threshold") {
     c->render.weight_threshold = ParseFloat("--weight-threshold", value());
+  } else if (a == "--max-memory-mb") {
+    const int mb = ParseInt("--max-memory-mb", value());
+    if (mb < 1) throw std::invalid_argument("--max-memory-mb must be at least 1");
+    c->max_memory_bytes = uint64_t(mb) << 20;
+  } else if (a == "--sample-budget") {
+    c->render.sample_budget = ParseInt("--sample-budget", value());
+    if (c->render.sample_budget < 0) throw std::invalid_argument("--sample-budget must be >= 0 (0: no limit)");
   } else if (a[0] != '-' && c->scene.empty()) {
     c->scene = a;
   } else {
@@ -185,7 +196,8 @@ int RunRender(int argc, char** argv) {
     }
   }
   if (c.max_views > 0 && cameras.size() > size_t(c.max_views)) cameras.resize(size_t(c.max_views));
-  const LoadedScene s = LoadSceneFile(c.scene, c.int16 ? dec::GridStorage::kInt16 : dec::GridStorage::kFloat32);
+  const LoadedScene s = LoadSceneFile(c.scene, c.int16 ? dec::GridStorage::kInt16 : dec::GridStorage::kFloat32,
+                                      c.max_memory_bytes);
   MakeDirectory(out);
   double seconds = 0.0;
   dec::RenderStats stats;
@@ -244,7 +256,8 @@ int RunEval(int argc, char** argv) {
     PrintUsage(stderr, kEvalUsage);
     return 2;
   }
-  const LoadedScene s = LoadSceneFile(c.scene, c.int16 ? dec::GridStorage::kInt16 : dec::GridStorage::kFloat32);
+  const LoadedScene s = LoadSceneFile(c.scene, c.int16 ? dec::GridStorage::kInt16 : dec::GridStorage::kFloat32,
+                                      c.max_memory_bytes);
   const trainer::Dataset test = builtin ? BuiltinDataset(split, seed) : trainer::LoadDataset(data, split, downscale);
   const trainer::EvalResult r = EvaluateDecoded(*s.field, test, stride, c.max_views, RenderOptionsFor(c), false, image_scale);
   std::printf("%s: %zu bytes, PSNR %.2f dB, SSIM %.4f over %d %s views; decode %.1f ms, render %.1f ms/view "

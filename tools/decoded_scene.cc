@@ -19,12 +19,13 @@ double SecondsSince(std::chrono::steady_clock::time_point start) {
 }  // namespace
 
 LoadedScene DecodeSceneBytes(std::vector<uint8_t> bytes, const std::string& name,
-                             dec::GridStorage storage) {
+                             dec::GridStorage storage, uint64_t max_memory_bytes) {
   LoadedScene s;
   s.bytes = std::move(bytes);
   s.field = std::make_unique<dec::SceneField>();
   dec::DecodeOptions options;
   options.storage = storage;
+  options.max_memory_bytes = max_memory_bytes;
   const auto start = std::chrono::steady_clock::now();
   const Status st = dec::DecodeScene(s.bytes.data(), s.bytes.size(), options, s.field.get(), &s.info);
   s.decode_seconds = SecondsSince(start);
@@ -34,8 +35,8 @@ LoadedScene DecodeSceneBytes(std::vector<uint8_t> bytes, const std::string& name
   return s;
 }
 
-LoadedScene LoadSceneFile(const std::string& path, dec::GridStorage storage) {
-  return DecodeSceneBytes(trainer::ReadWholeFile(path), path, storage);
+LoadedScene LoadSceneFile(const std::string& path, dec::GridStorage storage, uint64_t max_memory_bytes) {
+  return DecodeSceneBytes(trainer::ReadWholeFile(path), path, storage, max_memory_bytes);
 }
 
 trainer::Image RenderDecoded(const dec::SceneField& scene, const trainer::Camera& camera,

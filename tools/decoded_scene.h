@@ -25,10 +25,14 @@ struct LoadedScene {
 };
 
 // Throws std::runtime_error naming the file and the decoder's message.
+// max_memory_bytes: DecodeOptions::max_memory_bytes (files from elsewhere keep the default
+// budget; a stream ecrf just wrote itself may pass kUnlimitedMemory).
+inline constexpr uint64_t kUnlimitedMemory = ~uint64_t{0};
 LoadedScene DecodeSceneBytes(std::vector<uint8_t> bytes, const std::string& name,
-                             dec::GridStorage storage = dec::GridStorage::kFloat32);
-LoadedScene LoadSceneFile(const std::string& path,
-                          dec::GridStorage storage = dec::GridStorage::kFloat32);
+                             dec::GridStorage storage = dec::GridStorage::kFloat32,
+                             uint64_t max_memory_bytes = dec::kDefaultDecodeMemoryBudget);
+LoadedScene LoadSceneFile(const std::string& path, dec::GridStorage storage = dec::GridStorage::kFloat32,
+                          uint64_t max_memory_bytes = dec::kDefaultDecodeMemoryBudget);
 
 // RGB render of one camera; stats accumulate when given.
 trainer::Image RenderDecoded(const dec::SceneField& scene, const trainer::Camera& camera,

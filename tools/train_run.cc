@@ -201,7 +201,8 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& o) {
   const double encode_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - encode_start).count();
   trainer::WriteFileAtomically(o.out_dir + "/scene.ecrf", bytes.data(), bytes.size());
-  const LoadedScene decoded = DecodeSceneBytes(std::move(bytes), o.out_dir + "/scene.ecrf");
+  const LoadedScene decoded = DecodeSceneBytes(std::move(bytes), o.out_dir + "/scene.ecrf",
+                                                dec::GridStorage::kFloat32, kUnlimitedMemory);
   dec::RenderOptions ro;
   ro.num_threads = 0;
   const trainer::EvalResult d =

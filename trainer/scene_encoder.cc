@@ -235,7 +235,9 @@ std::vector<uint8_t> Assemble(const SceneTensors& s, const std::vector<float>& s
 }
 
 void Decode(const std::vector<uint8_t>& bytes, dec::SceneField* field) {
-  const Status s = dec::DecodeScene(bytes.data(), bytes.size(), dec::DecodeOptions(), field, nullptr);
+  dec::DecodeOptions options;
+  options.max_memory_bytes = ~uint64_t{0};  // our own stream: no budget
+  const Status s = dec::DecodeScene(bytes.data(), bytes.size(), options, field, nullptr);
   if (!s.ok()) {
     throw std::runtime_error(std::string("encoder self-check: the stream does not decode: ") +
                              s.message());

@@ -1,10 +1,12 @@
-// The checksum of a decoded scene's grids (SPEC.md 6.5): MD5 over each tensor's float32 values,
-// little endian, in storage order; the scene checksum covers all twelve tensors in chunk order.
+// The checksums of a decoded scene (SPEC.md 6.5): the grids (MD5 over each tensor's float32 values,
+// little endian, in storage order; the scene checksum covers all twelve tensors in chunk order),
+// the occupancy mask (its packed bits) and the MLP parameters (float32, the MLPW order).
 #ifndef ECRF_TESTS_COMMON_GRID_MD5_H_
 #define ECRF_TESTS_COMMON_GRID_MD5_H_
 
 #include <cstring>
 #include <string>
+#include <vector>
 
 #include "decoder/field.h"
 #include "tests/common/md5.h"
@@ -41,6 +43,35 @@ inline std::string SceneGridMd5(const dec::SceneField& scene) {
   for (const dec::VmGrid* g : {&scene.density, &scene.appearance}) {
     for (int t = 0; t < 6; ++t) AddTensorToMd5(*g, t, &md5);
   }
+  return md5.HexDigest();
+}
+
+// MD5 of the packed mask bits (x fastest, LSB first, unused high bits 0); of no bytes without a mask.
+inline std::string OccupancyMd5(const dec::SceneField& scene) {
+  testing_md5::Md5 md5;
+  if (scene.has_mask) {
+    const size_t bytes = (scene.mask.voxel_count() + 7) / 8;
+    std::vector<uint8_t> packed(scene.mask.bits(), scene.mask.bits() + bytes);
+    const size_t tail = scene.mask.voxel_count() % 8;
+    if (tail != 0) packed.back() = uint8_t(packed.back() & ((1u << tail) - 1));
+    md5.Update(packed.data(), packed.size());
+  }
+  return md5.HexDigest();
+}
+
+// MD5 of the MLP parameters as float32 little endian in the MLPW order; "" if there is no MLP.
+inline std::string MlpMd5(const dec::SceneField& scene) {
+  if (!scene.mlp.initialized()) return "";
+  std::vector<float> params(scene.mlp.num_params());
+  if (!scene.mlp.GetParams(params.data(), params.size()).ok()) return "";
+  std::vector<uint8_t> bytes(params.size() * 4);
+  for (size_t i = 0; i < params.size(); ++i) {
+    uint32_t u;
+    std::memcpy(&u, &params[i], 4);
+    for (int b = 0; b < 4; ++b) bytes[i * 4 + b] = uint8_t(u >> (8 * b));
+  }
+  testing_md5::Md5 md5;
+  md5.Update(bytes.data(), bytes.size());
   return md5.HexDigest();
 }
 

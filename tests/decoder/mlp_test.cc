@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <cstdint>
 #include <random>
 #include <vector>
@@ -105,6 +106,24 @@ void CheckAgainstNaive(const MlpConfig& cfg, int rows, uint32_t seed) {
     float one[3];
     mlp.Infer(1, prod.data() + r * stride, stride, vd.data() + r * 3, one, scratch.data());
     for (int c = 0; c < 3; ++c) EXPECT_EQ(one[c], rgb[r * 3 + c]) << "row " << r;
+  }
+}
+
+// GetParams gives back the MLPW layout bit for bit (the MLP checksum of SPEC.md 6.5 hashes it).
+TEST(MlpTest, GetParamsReturnsExactlyWhatWasLoaded) {
+  for (const int hidden : {1, 20, 128}) {
+    MlpConfig cfg;
+    cfg.num_products = 7;
+    cfg.feature_dim = 5;
+    cfg.hidden = hidden;
+    AppearanceMlp mlp;
+    ASSERT_TRUE(mlp.Init(cfg).ok());
+    const std::vector<float> params = RandomParams(mlp, 9, 1.f);
+    ASSERT_TRUE(mlp.SetParams(params.data(), params.size()).ok());
+    std::vector<float> back(params.size(), -7.f);
+    ASSERT_TRUE(mlp.GetParams(back.data(), back.size()).ok());
+    EXPECT_EQ(std::memcmp(back.data(), params.data(), params.size() * sizeof(float)), 0) << hidden;
+    EXPECT_EQ(mlp.GetParams(back.data(), back.size() + 1).code(), kErrInvalidArgument);
   }
 }
 

@@ -628,6 +628,41 @@ TEST(RayMarcherTest, WeightThresholdOptionOverridesTheScene) {
   EXPECT_EQ(s1.color_samples, s2.color_samples);
 }
 
+// num_samples may legally be 2^20 (a 32x32 view then takes half a minute): the default sample
+// budget refuses such a scene at Init, a cap or a coarser step brings it within the budget, and
+// 0 lifts the budget.
+TEST(RayMarcherTest, SampleBudgetRefusesScenesWithTooManySamplesPerRay) {
+  TestScene ts;
+  BuildScene(SceneSpec(), &ts);
+  ts.field.n_samples = 1 << 20;
+  RenderOptions o;
+  RayMarcher rm;
+  const Status s = rm.Init(&ts.field, o);
+  EXPECT_EQ(s.code(), kErrLimit);
+  EXPECT_NE(std::string(s.message()).find("1048576 samples per ray"), std::string::npos) << s.message();
+  o.max_samples = kDefaultSampleBudget;
+  EXPECT_TRUE(rm.Init(&ts.field, o).ok());
+  o.max_samples = 0;
+  o.step_scale = 64.f;  // 16384 samples
+  EXPECT_TRUE(rm.Init(&ts.field, o).ok());
+  o.step_scale = 32.f;  // 32768 samples
+  EXPECT_EQ(rm.Init(&ts.field, o).code(), kErrLimit);
+  o.sample_budget = 0;
+  EXPECT_TRUE(rm.Init(&ts.field, o).ok());
+  o.sample_budget = -1;
+  EXPECT_EQ(rm.Init(&ts.field, o).code(), kErrInvalidArgument);
+}
+
+// Decoded grids are finite by construction and not rescanned; grids a program wrote itself are.
+TEST(RayMarcherTest, NonFiniteGridValuesAreRefusedUnlessKnownFinite) {
+  TestScene ts;
+  BuildScene(SceneSpec(), &ts);
+  ASSERT_FALSE(ts.field.grids_known_finite);
+  ts.field.appearance.plane_f32[0][3] = NAN;
+  RayMarcher rm;
+  EXPECT_EQ(rm.Init(&ts.field, RenderOptions()).code(), kErrCorrupt);
+}
+
 TEST(RayMarcherTest, RejectsSpeedKnobsOutOfRange) {
   TestScene ts;
   BuildScene(SceneSpec(), &ts);

@@ -13,7 +13,10 @@
 #include "decoder/ray_marcher.h"
 #include "decoder/scene_decoder.h"
 #include "ecrf/decoder.h"
+#include "format/byte_io.h"
+#include "format/container.h"
 #include "format/crc32.h"
+#include "format/scene_header.h"
 #include "tests/common/grid_md5.h"
 #include "tests/common/scene_vectors.h"
 
@@ -182,16 +185,79 @@ TEST(SceneDecoder, ChunkOrderAndUnknownChunks) {
   EXPECT_EQ(Decode(build(missing_mlp), &field).code(), kErrCorrupt);
 }
 
-TEST(SceneDecoder, GridBudgetIsCheckedBeforeAllocating) {
+// A stream of a few hundred bytes that claims what the format allows but a device cannot afford.
+std::vector<uint8_t> HostileStream(const uint16_t res[3], int rank, const int occ_res[3]) {
+  SceneHeader h;
+  for (int a = 0; a < 3; ++a) {
+    h.res[a] = res[a];
+    h.ranks[0][a] = h.ranks[1][a] = static_cast<uint16_t>(rank);
+  }
+  h.has_occupancy = occ_res != nullptr;
+  h.step_size = 0.01f;
+  h.num_samples = 600;
+  ByteWriter head;
+  WriteSceneHeader(h, &head);
+  ContainerWriter w;
+  w.AddChunk(kChunkHead, head.bytes());
+  if (occ_res != nullptr) {
+    ByteWriter occ;
+    for (int a = 0; a < 3; ++a) occ.F32(-1.5f);
+    for (int a = 0; a < 3; ++a) occ.F32(1.5f);
+    for (int a = 0; a < 3; ++a) occ.U16(static_cast<uint16_t>(occ_res[a]));
+    occ.U16(0);
+    occ.Bytes(std::vector<uint8_t>(64, 0));  // an all-empty mask codes to a few bytes
+    w.AddChunk(kChunkOccupancy, occ.bytes());
+  }
+  return w.Finish();
+}
+
+TEST(SceneDecoder, MemoryBudgetIsCheckedBeforeAllocating) {
   const std::vector<uint8_t> bytes = ReadFile(kDir + "scene_2d_blocks.ecrf");
-  DecodeOptions o;
-  o.max_grid_bytes = 1000;
+  SceneInfo info;
   SceneField field;
-  const Status s = DecodeScene(bytes.data(), bytes.size(), o, &field, nullptr);
+  ASSERT_TRUE(Decode(bytes, &field, &info).ok());
+  const uint64_t grid_bytes = SceneGridValues(info.header) * 4;
+  DecodeOptions o;
+  o.max_memory_bytes = grid_bytes - 1;  // not even the grids
+  SceneField refused;
+  Status s = DecodeScene(bytes.data(), bytes.size(), o, &refused, nullptr);
+  EXPECT_EQ(s.code(), kErrLimit) << s.message();
+  EXPECT_NE(std::string(s.message()).find("HEAD: the grids need"), std::string::npos) << s.message();
+  EXPECT_TRUE(refused.density.plane_f32[0].empty());
+  o.max_memory_bytes = grid_bytes;  // the grids, but not the occupancy mask after them
+  SceneField no_mask;
+  s = DecodeScene(bytes.data(), bytes.size(), o, &no_mask, nullptr);
+  EXPECT_EQ(s.code(), kErrLimit) << s.message();
+  EXPECT_NE(std::string(s.message()).find("OCCU: the occupancy mask need"), std::string::npos) << s.message();
+  EXPECT_FALSE(no_mask.has_mask);
+  o.max_memory_bytes = 1 << 20;
+  SceneField ok;
+  EXPECT_TRUE(DecodeScene(bytes.data(), bytes.size(), o, &ok, nullptr).ok());
+  EXPECT_TRUE(ok.grids_known_finite);
+}
+
+TEST(SceneDecoder, HostileSizesAreRefusedByTheDefaultBudget) {
+  // 4096 x 4096 x 2 at rank 4: 537 MB of grids (within the format's 2^28 values) from a
+  // ~150-byte stream.
+  const uint16_t big[3] = {4096, 4096, 2};
+  const std::vector<uint8_t> grid_bomb = HostileStream(big, 4, nullptr);
+  EXPECT_LT(grid_bomb.size(), 200u);
+  SceneField field;
+  Status s = DecodeScene(grid_bomb.data(), grid_bomb.size(), DecodeOptions(), &field, nullptr);
   EXPECT_EQ(s.code(), kErrLimit) << s.message();
   EXPECT_TRUE(field.density.plane_f32[0].empty());
-  o.max_grid_bytes = 1 << 20;
-  EXPECT_TRUE(DecodeScene(bytes.data(), bytes.size(), o, &field, nullptr).ok());
+  EXPECT_NE(std::string(s.message()).find("memory budget of 268435456 bytes"), std::string::npos) << s.message();
+
+  // A 2^31-voxel mask (288 MiB with its acceleration levels) behind a tiny grid.
+  const uint16_t small[3] = {8, 8, 8};
+  const int occ[3] = {4096, 4096, 128};
+  const std::vector<uint8_t> mask_bomb = HostileStream(small, 1, occ);
+  EXPECT_LT(mask_bomb.size(), 400u);
+  SceneField mask_field;
+  s = DecodeScene(mask_bomb.data(), mask_bomb.size(), DecodeOptions(), &mask_field, nullptr);
+  EXPECT_EQ(s.code(), kErrLimit) << s.message();
+  EXPECT_NE(std::string(s.message()).find("OCCU"), std::string::npos) << s.message();
+  EXPECT_FALSE(mask_field.has_mask);
 }
 
 TEST(SceneDecoder, Int16StorageMatchesFloat) {

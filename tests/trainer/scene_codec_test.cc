@@ -185,39 +185,6 @@ TEST(SceneCodec, RejectsImpossibleOptions) {
   EXPECT_EQ(DecodeOrDie(EncodeScene(model, o)).appearance.total_rank(), 12);
 }
 
-// The reference renders of tests/conformance: this renderer reproduces them within the
-// tolerance SPEC.md section 7 allows (PSNR >= 40 dB).
-TEST(SceneCodec, ConformanceScenesRenderLikeTheirReferences) {
-  const std::string dir = std::string(ECRF_SOURCE_DIR) + "/tests/conformance/";
-  std::ifstream in(dir + "scenes.md5");
-  std::string file, md5;
-  int checked = 0;
-  while (in >> file >> md5) {
-    const std::string name = file.substr(0, file.size() - 5);
-    std::ifstream s(dir + file, std::ios::binary);
-    const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(s)), std::istreambuf_iterator<char>());
-    const dec::SceneField field = DecodeOrDie(bytes);
-    const bool builtin = name == "scene_builtin";
-    const dec::Camera cam = builtin ? dec::OrbitCamera(64, 64, 0.3f, 0.45f, 4.0f)
-                                    : dec::OrbitCamera(48, 48, 0.7f, 0.5f, 3.5f);
-    dec::RenderOptions ro;  // default accelerations: within the tolerance of the exact process
-    ro.num_threads = 2;
-    dec::RayMarcher marcher;
-    ASSERT_TRUE(marcher.Init(&field, ro).ok());
-    Image img;
-    img.width = cam.width;
-    img.height = cam.height;
-    img.channels = 3;
-    img.pixels.resize(size_t(cam.width) * cam.height * 3);
-    ASSERT_TRUE(marcher.RenderImage(cam, nullptr, img.pixels.data()).ok());
-    const Image reference = LoadImage(dir + name + ".png");
-    const double psnr = Psnr(img, reference);
-    EXPECT_GE(psnr, 40.0) << name;
-    ++checked;
-  }
-  EXPECT_EQ(checked, 6);  // five hand-made scenes and the trained one
-}
-
 }  // namespace
 }  // namespace trainer
 }  // namespace ecrf

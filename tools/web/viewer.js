@@ -45,7 +45,7 @@
   }
 
   // Byte layouts of the C structs on wasm32 (int, float, size_t and pointers are 4 bytes).
-  const INFO_BYTES = 112, CAMERA_BYTES = 72, OPTIONS_BYTES = 24;
+  const INFO_BYTES = 112, CAMERA_BYTES = 72, OPTIONS_BYTES = 28;
 
   // One decoded scene over the C API of decoder/include/ecrf/decoder.h. `module` is the
   // instance that createEcrfDecoder() (build-wasm/ecrf_decoder.js) resolves to.

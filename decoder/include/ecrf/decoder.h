@@ -75,6 +75,9 @@ typedef struct ecrf_render_options {
   float step_scale;               /* sample spacing x this, sample count / this (1: the scene's;
                                      range [1/16, 64]); fewer samples, faster, less exact */
   float weight_threshold;         /* colour only samples of larger weight (< 0: the scene's) */
+  int sample_budget;              /* refuse (ECRF_ERR_LIMIT) scenes whose rays take more samples
+                                     than this after step_scale and max_samples (0: no limit;
+                                     default 16384) */
 } ecrf_render_options;
 
 void ecrf_render_options_default(ecrf_render_options* options);
@@ -82,6 +85,9 @@ void ecrf_render_options_default(ecrf_render_options* options);
 /* NULL when out of memory. */
 ecrf_scene* ecrf_scene_create(void);
 void ecrf_scene_destroy(ecrf_scene* scene);
+/* Memory the next decodes may use for grids, occupancy mask and MLP (0: the default, 256 MiB);
+ * a stream that needs more fails with ECRF_ERR_LIMIT before anything is allocated. */
+int ecrf_scene_set_memory_budget(ecrf_scene* scene, uint64_t bytes);
 /* Message of the last failed call on this scene ("" after a success). */
 const char* ecrf_scene_message(const ecrf_scene* scene);
 
