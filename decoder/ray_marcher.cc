@@ -279,6 +279,20 @@ void CameraRay(const Camera& camera, int i, int j, float origin[3], float dir[3]
   }
 }
 
+// Samples per ray after the speed knobs of SPEC.md 7.8: ceil(n / step_scale) in float64, then
+// the max_samples cap. Init checks it against the sample budget; Run marches that many.
+namespace {
+int SamplesPerRay(const SceneField& s, const RenderOptions& options) {
+  int n = s.NumSamples();
+  if (options.step_scale != 1.f) {
+    const double scaled = std::ceil(static_cast<double>(n) / static_cast<double>(options.step_scale));
+    n = scaled >= 1e9 ? 1000000000 : static_cast<int>(scaled);
+  }
+  if (options.max_samples > 0 && options.max_samples < n) n = options.max_samples;
+  return n;
+}
+}  // namespace
+
 RayMarcher::RayMarcher() = default;
 RayMarcher::~RayMarcher() { delete[] workspaces_; }
 
@@ -309,11 +323,9 @@ Status RayMarcher::Init(const SceneField* scene, const RenderOptions& options) {
                        static_cast<double>(options.weight_threshold));
   ECRF_CHECK_OR_RETURN(options.sample_budget >= 0, kErrInvalidArgument, "render: negative sample_budget");
   if (options.sample_budget > 0) {
-    // The count Run will use (same arithmetic as there).
-    double n = std::ceil(static_cast<double>(scene->NumSamples()) / static_cast<double>(options.step_scale));
-    if (options.max_samples > 0) n = std::min(n, static_cast<double>(options.max_samples));
+    const int n = SamplesPerRay(*scene, options);
     ECRF_CHECK_OR_RETURN(n <= options.sample_budget, kErrLimit,
-                         "render: the scene asks %.0f samples per ray, more than the sample budget of %d "
+                         "render: the scene asks %d samples per ray, more than the sample budget of %d "
                          "(RenderOptions::sample_budget; ecrf --sample-budget N, or cap with --samples N)",
                          n, options.sample_budget);
   }
@@ -367,13 +379,8 @@ Status RayMarcher::Run(Job* job, RenderStats* stats) {
     c.inv[a] = 1.0f / (s.aabb_max[a] - s.aabb_min[a]) * 2.f;
   }
   c.step = s.StepSize();
-  c.n = s.NumSamples();
-  if (options_.step_scale != 1.f) {
-    c.step *= options_.step_scale;
-    const double n = std::ceil(static_cast<double>(c.n) / static_cast<double>(options_.step_scale));
-    c.n = n >= 1e9 ? 1000000000 : static_cast<int>(n);
-  }
-  if (options_.max_samples > 0 && options_.max_samples < c.n) c.n = options_.max_samples;
+  if (options_.step_scale != 1.f) c.step *= options_.step_scale;
+  c.n = SamplesPerRay(s, options_);
   c.near = s.near_far[0];
   c.far = s.near_far[1];
   c.shift = s.density_shift;
