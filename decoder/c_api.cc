@@ -125,6 +125,46 @@ int ecrf_scene_tensor(const ecrf_scene* scene, int grid, int tensor, const float
   return ECRF_OK;
 }
 
+int ecrf_scene_get_field(const ecrf_scene* scene, ecrf_scene_field* out) {
+  if (!scene || !out || !scene->decoded) return ECRF_ERR_INVALID_ARGUMENT;
+  const ecrf::dec::SceneField& f = scene->field;
+  std::memset(out, 0, sizeof(*out));
+  out->density_shift = f.density_shift;
+  out->distance_scale = f.distance_scale;
+  out->weight_threshold = f.weight_threshold;
+  if (f.has_mask) {
+    for (int a = 0; a < 3; ++a) {
+      out->occupancy_min[a] = f.mask.aabb_min()[a];
+      out->occupancy_max[a] = f.mask.aabb_max()[a];
+    }
+  }
+  const ecrf::dec::MlpConfig& c = f.mlp.config();
+  out->mlp_features = c.feature_dim;
+  out->mlp_products = c.num_products;
+  out->mlp_hidden = c.hidden;
+  out->mlp_feature_freqs = c.feature_pe_freqs;
+  out->mlp_viewdir_freqs = c.viewdir_pe_freqs;
+  out->mlp_inputs = c.input_dim();
+  out->mlp_params = f.mlp.num_params();
+  return ECRF_OK;
+}
+
+int ecrf_scene_occupancy(const ecrf_scene* scene, const uint8_t** bits, int res[3], size_t* bytes) {
+  if (!scene || !scene->decoded || !bits || !res || !bytes || !scene->field.has_mask) {
+    return ECRF_ERR_INVALID_ARGUMENT;
+  }
+  const ecrf::dec::OccupancyMask& m = scene->field.mask;
+  for (int a = 0; a < 3; ++a) res[a] = m.res()[a];
+  *bits = m.bits();
+  *bytes = m.bits_bytes();
+  return ECRF_OK;
+}
+
+int ecrf_scene_mlp_params(const ecrf_scene* scene, float* params, size_t count) {
+  if (!scene || !scene->decoded || !params) return ECRF_ERR_INVALID_ARGUMENT;
+  return scene->field.mlp.GetParams(params, count).code();
+}
+
 int ecrf_scene_render(ecrf_scene* scene, const ecrf_camera* camera,
                       const ecrf_render_options* options, uint8_t* rgba8, float* rgb) {
   if (!scene) return ECRF_ERR_INVALID_ARGUMENT;

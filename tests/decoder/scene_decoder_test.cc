@@ -342,6 +342,55 @@ TEST(DecoderCApi, DecodeInfoTensorRenderAndErrors) {
   ecrf_scene_destroy(scene);
 }
 
+// What a renderer of its own reads through the C API is what the reference renderer uses: the
+// scene constants, the mask's bits and the MLP parameters, for every conformance scene.
+TEST(SceneDecoder, CApiExposesTheFieldOccupancyAndMlpOfTheReferenceRenderer) {
+  for (const char* name : {"scene_builtin.ecrf", "scene_quantized_mlp.ecrf", "scene_ranks_dropped.ecrf"}) {
+    SCOPED_TRACE(name);
+    const std::vector<uint8_t> bytes = ReadFile(kDir + name);
+    SceneField field;
+    SceneInfo info;
+    ASSERT_TRUE(DecodeScene(bytes.data(), bytes.size(), DecodeOptions(), &field, &info).ok());
+    ecrf_scene* scene = ecrf_scene_create();
+    ecrf_scene_field f;
+    EXPECT_EQ(ecrf_scene_get_field(scene, &f), ECRF_ERR_INVALID_ARGUMENT);  // nothing decoded
+    ASSERT_EQ(ecrf_scene_decode(scene, bytes.data(), bytes.size(), ECRF_STORAGE_FLOAT32), ECRF_OK);
+    ASSERT_EQ(ecrf_scene_get_field(scene, &f), ECRF_OK);
+    EXPECT_EQ(f.density_shift, field.density_shift);
+    EXPECT_EQ(f.distance_scale, field.distance_scale);
+    EXPECT_EQ(f.weight_threshold, field.weight_threshold);
+    const MlpConfig& c = field.mlp.config();
+    EXPECT_EQ(f.mlp_products, field.appearance.total_rank());
+    EXPECT_EQ(f.mlp_inputs, f.mlp_features + 3 + 2 * f.mlp_features * f.mlp_feature_freqs +
+                                6 * f.mlp_viewdir_freqs);
+    EXPECT_EQ(f.mlp_params, size_t(f.mlp_features) * f.mlp_products + size_t(c.hidden) * f.mlp_inputs +
+                                size_t(c.hidden) * c.hidden + 3u * c.hidden + 2u * c.hidden + 3u);
+
+    std::vector<float> params(f.mlp_params), expected(f.mlp_params);
+    EXPECT_EQ(ecrf_scene_mlp_params(scene, params.data(), params.size() - 1), ECRF_ERR_INVALID_ARGUMENT);
+    ASSERT_EQ(ecrf_scene_mlp_params(scene, params.data(), params.size()), ECRF_OK);
+    ASSERT_TRUE(field.mlp.GetParams(expected.data(), expected.size()).ok());
+    EXPECT_EQ(std::memcmp(params.data(), expected.data(), params.size() * sizeof(float)), 0);
+
+    const uint8_t* bits = nullptr;
+    int res[3] = {0, 0, 0};
+    size_t nbytes = 0;
+    if (field.has_mask) {
+      ASSERT_EQ(ecrf_scene_occupancy(scene, &bits, res, &nbytes), ECRF_OK);
+      for (int a = 0; a < 3; ++a) {
+        EXPECT_EQ(res[a], field.mask.res()[a]);
+        EXPECT_EQ(f.occupancy_min[a], field.mask.aabb_min()[a]);
+        EXPECT_EQ(f.occupancy_max[a], field.mask.aabb_max()[a]);
+      }
+      ASSERT_GE(nbytes, (field.mask.voxel_count() + 7) / 8);
+      EXPECT_EQ(std::memcmp(bits, field.mask.bits(), (field.mask.voxel_count() + 7) / 8), 0);
+    } else {
+      EXPECT_EQ(ecrf_scene_occupancy(scene, &bits, res, &nbytes), ECRF_ERR_INVALID_ARGUMENT);
+    }
+    ecrf_scene_destroy(scene);
+  }
+}
+
 }  // namespace
 }  // namespace dec
 }  // namespace ecrf

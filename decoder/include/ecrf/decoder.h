@@ -102,6 +102,31 @@ int ecrf_scene_get_info(const ecrf_scene* scene, ecrf_scene_info* info);
 int ecrf_scene_tensor(const ecrf_scene* scene, int grid, int tensor, const float** data,
                       int shape[3], size_t* count);
 
+/* What a renderer of its own (a GPU shader, SPEC.md section 7) needs besides the tensors. */
+typedef struct ecrf_scene_field {
+  float density_shift;      /* sigma = softplus(density feature + density_shift) */
+  float distance_scale;     /* alpha = 1 - exp(-sigma * (dist * distance_scale)) */
+  float weight_threshold;   /* the colour of a sample counts when its weight is larger */
+  float occupancy_min[3], occupancy_max[3]; /* the mask's own box (has_occupancy) */
+  int mlp_features;         /* F: rows of the basis B */
+  int mlp_products;         /* P: appearance products, the sum of the appearance ranks */
+  int mlp_hidden;           /* H */
+  int mlp_feature_freqs;    /* Ff */
+  int mlp_viewdir_freqs;    /* Fv */
+  int mlp_inputs;           /* In = F + 3 + 2 F Ff + 6 Fv */
+  size_t mlp_params;        /* floats of ecrf_scene_mlp_params */
+} ecrf_scene_field;
+
+int ecrf_scene_get_field(const ecrf_scene* scene, ecrf_scene_field* field);
+
+/* The occupancy mask's bits, packed [z][y][x] with x fastest, LSB first (SPEC.md 6.3);
+ * ECRF_ERR_INVALID_ARGUMENT when the scene has no mask. */
+int ecrf_scene_occupancy(const ecrf_scene* scene, const uint8_t** bits, int res[3], size_t* bytes);
+
+/* Copies the basis and MLP parameters, in MLPW order (SPEC.md 6.6: B, W1, b1, W2, b2, W3, b3),
+ * into params; count must be ecrf_scene_field.mlp_params. */
+int ecrf_scene_mlp_params(const ecrf_scene* scene, float* params, size_t count);
+
 /* Renders one view. rgba8: width*height*4 bytes (alpha = opacity), rgb: width*height*3 floats
  * in [0, 1]; row-major from the top row; either may be NULL (not both). */
 int ecrf_scene_render(ecrf_scene* scene, const ecrf_camera* camera,
