@@ -45,7 +45,7 @@
   }
 
   // Byte layouts of the C structs on wasm32 (int, float, size_t and pointers are 4 bytes).
-  const INFO_BYTES = 112, CAMERA_BYTES = 72, OPTIONS_BYTES = 28;
+  const INFO_BYTES = 112, CAMERA_BYTES = 72, OPTIONS_BYTES = 28, FIELD_BYTES = 64;
 
   // One decoded scene over the C API of decoder/include/ecrf/decoder.h. `module` is the
   // instance that createEcrfDecoder() (build-wasm/ecrf_decoder.js) resolves to.
@@ -125,6 +125,66 @@
       if (rc < 0) throw new Error(`render failed (${rc}): ${this.message()}`);
       // Copy out: HEAPU8 is replaced when memory grows.
       return new Uint8ClampedArray(m.HEAPU8.subarray(this.image, this.image + bytes));
+    }
+
+    // Everything a renderer of its own needs (SPEC.md section 7), copied out of the wasm heap
+    // into fresh typed arrays that can be transferred to another thread:
+    // {info, field: {densityShift, distanceScale, weightThreshold, occupancyMin, occupancyMax,
+    //   mlp: {features, products, hidden, featureFreqs, viewdirFreqs, inputs}},
+    //  density, appearance: {planes: [3], lines: [3]} of {data: Float32Array, shape},
+    //  occupancy: {bits: Uint8Array (packed [z][y][x], x fastest, LSB first), res} or null,
+    //  mlpParams: Float32Array in MLPW order (B, W1, b1, W2, b2, W3, b3)}.
+    // Plane shape [rows (along v), columns (along u), rank]; line shape [length, rank, 1].
+    sceneData() {
+      const m = this.m;
+      const info = this.info();
+      const scratch = m._malloc(FIELD_BYTES + 32);
+      try {
+        if (m._ecrf_scene_get_field(this.scene, scratch) < 0) throw new Error('ecrf_scene_get_field failed');
+        const f = (off, n) => Array.from(m.HEAPF32.subarray((scratch + off) >> 2, ((scratch + off) >> 2) + n));
+        const i = (off) => m.HEAP32[(scratch + off) >> 2];
+        const field = {
+          densityShift: f(0, 1)[0], distanceScale: f(4, 1)[0], weightThreshold: f(8, 1)[0],
+          occupancyMin: f(12, 3), occupancyMax: f(24, 3),
+          mlp: {features: i(36), products: i(40), hidden: i(44), featureFreqs: i(48),
+                viewdirFreqs: i(52), inputs: i(56)},
+        };
+        const mlpCount = m.HEAP32[(scratch + 60) >> 2] >>> 0;
+        const grid = (g) => {
+          const out = {planes: [], lines: []};
+          for (let t = 0; t < 6; ++t) {
+            const dataPtr = scratch + FIELD_BYTES, shapePtr = dataPtr + 4, countPtr = dataPtr + 16;
+            if (m._ecrf_scene_tensor(this.scene, g, t, dataPtr, shapePtr, countPtr) < 0) {
+              throw new Error(`ecrf_scene_tensor(${g}, ${t}) failed: float32 storage only`);
+            }
+            const ptr = m.HEAP32[dataPtr >> 2] >>> 0, count = m.HEAP32[countPtr >> 2] >>> 0;
+            const shape = Array.from(m.HEAP32.subarray(shapePtr >> 2, (shapePtr >> 2) + 3));
+            const data = new Float32Array(m.HEAPF32.subarray(ptr >> 2, (ptr >> 2) + count));
+            (t < 3 ? out.planes : out.lines).push({data, shape});
+          }
+          return out;
+        };
+        const density = grid(0), appearance = grid(1);
+        let occupancy = null;
+        if (info.hasOccupancy) {
+          const bitsPtr = scratch + FIELD_BYTES, resPtr = bitsPtr + 4, bytesPtr = bitsPtr + 16;
+          if (m._ecrf_scene_occupancy(this.scene, bitsPtr, resPtr, bytesPtr) < 0) throw new Error('ecrf_scene_occupancy failed');
+          const ptr = m.HEAP32[bitsPtr >> 2] >>> 0, n = m.HEAP32[bytesPtr >> 2] >>> 0;
+          occupancy = {bits: new Uint8Array(m.HEAPU8.subarray(ptr, ptr + n)),
+                       res: Array.from(m.HEAP32.subarray(resPtr >> 2, (resPtr >> 2) + 3))};
+        }
+        const paramsPtr = m._malloc(Math.max(4, mlpCount * 4));
+        if (!paramsPtr) throw new Error('out of memory copying the MLP');
+        try {
+          if (m._ecrf_scene_mlp_params(this.scene, paramsPtr, mlpCount) < 0) throw new Error('ecrf_scene_mlp_params failed');
+          const mlpParams = new Float32Array(m.HEAPF32.subarray(paramsPtr >> 2, (paramsPtr >> 2) + mlpCount));
+          return {info, field, density, appearance, occupancy, mlpParams};
+        } finally {
+          m._free(paramsPtr);
+        }
+      } finally {
+        m._free(scratch);
+      }
     }
 
     destroy() {
