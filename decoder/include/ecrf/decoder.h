@@ -18,6 +18,24 @@
 #include <stddef.h>
 #include <stdint.h>
 
+/* ECRF_API marks the C API, the only symbols libecrf_decoder.so exports (the library is built
+ * with -fvisibility=hidden). Users of a Windows DLL define ECRF_DLL (the CMake target does). */
+#ifndef ECRF_API
+#if defined(_WIN32) || defined(__CYGWIN__)
+#if defined(ECRF_BUILDING_DLL)
+#define ECRF_API __declspec(dllexport)
+#elif defined(ECRF_DLL)
+#define ECRF_API __declspec(dllimport)
+#else
+#define ECRF_API
+#endif
+#elif defined(__GNUC__) && __GNUC__ >= 4
+#define ECRF_API __attribute__((visibility("default")))
+#else
+#define ECRF_API
+#endif
+#endif
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -32,12 +50,12 @@ extern "C" {
 #define ECRF_ERR_OUT_OF_MEMORY (-7)
 
 /* Library version as (major << 16) | (minor << 8) | patch, and as text. */
-unsigned ecrf_version(void);
-const char* ecrf_version_string(void);
+ECRF_API unsigned ecrf_version(void);
+ECRF_API const char* ecrf_version_string(void);
 /* Highest bitstream major version this decoder reads. */
-int ecrf_bitstream_version(void);
+ECRF_API int ecrf_bitstream_version(void);
 /* Short name of an error code ("truncated", "corrupt", ...). */
-const char* ecrf_error_name(int code);
+ECRF_API const char* ecrf_error_name(int code);
 
 typedef struct ecrf_scene ecrf_scene;
 
@@ -80,27 +98,27 @@ typedef struct ecrf_render_options {
                                      default 16384) */
 } ecrf_render_options;
 
-void ecrf_render_options_default(ecrf_render_options* options);
+ECRF_API void ecrf_render_options_default(ecrf_render_options* options);
 
 /* NULL when out of memory. */
-ecrf_scene* ecrf_scene_create(void);
-void ecrf_scene_destroy(ecrf_scene* scene);
+ECRF_API ecrf_scene* ecrf_scene_create(void);
+ECRF_API void ecrf_scene_destroy(ecrf_scene* scene);
 /* Memory the next decodes may use for grids, occupancy mask and MLP (0: the default, 256 MiB);
  * a stream that needs more fails with ECRF_ERR_LIMIT before anything is allocated. */
-int ecrf_scene_set_memory_budget(ecrf_scene* scene, uint64_t bytes);
+ECRF_API int ecrf_scene_set_memory_budget(ecrf_scene* scene, uint64_t bytes);
 /* Message of the last failed call on this scene ("" after a success). */
-const char* ecrf_scene_message(const ecrf_scene* scene);
+ECRF_API const char* ecrf_scene_message(const ecrf_scene* scene);
 
 /* Decodes an .ecrf stream (the buffer is not kept). storage: ECRF_STORAGE_*. */
-int ecrf_scene_decode(ecrf_scene* scene, const void* data, size_t size, int storage);
-int ecrf_scene_get_info(const ecrf_scene* scene, ecrf_scene_info* info);
+ECRF_API int ecrf_scene_decode(ecrf_scene* scene, const void* data, size_t size, int storage);
+ECRF_API int ecrf_scene_get_info(const ecrf_scene* scene, ecrf_scene_info* info);
 
 /* Read-only view of a decoded float32 tensor: grid 0 = density, 1 = appearance; tensor 0..2 =
  * planes [rows][columns][rank], 3..5 = lines [length][rank] (SPEC.md 6.4). shape receives up to
  * 3 sizes, outermost first; *count the number of floats. ECRF_ERR_INVALID_ARGUMENT for int16
  * storage. */
-int ecrf_scene_tensor(const ecrf_scene* scene, int grid, int tensor, const float** data,
-                      int shape[3], size_t* count);
+ECRF_API int ecrf_scene_tensor(const ecrf_scene* scene, int grid, int tensor, const float** data,
+                               int shape[3], size_t* count);
 
 /* What a renderer of its own (a GPU shader, SPEC.md section 7) needs besides the tensors. */
 typedef struct ecrf_scene_field {
@@ -117,20 +135,20 @@ typedef struct ecrf_scene_field {
   size_t mlp_params;        /* floats of ecrf_scene_mlp_params */
 } ecrf_scene_field;
 
-int ecrf_scene_get_field(const ecrf_scene* scene, ecrf_scene_field* field);
+ECRF_API int ecrf_scene_get_field(const ecrf_scene* scene, ecrf_scene_field* field);
 
 /* The occupancy mask's bits, packed [z][y][x] with x fastest, LSB first (SPEC.md 6.3);
  * ECRF_ERR_INVALID_ARGUMENT when the scene has no mask. */
-int ecrf_scene_occupancy(const ecrf_scene* scene, const uint8_t** bits, int res[3], size_t* bytes);
+ECRF_API int ecrf_scene_occupancy(const ecrf_scene* scene, const uint8_t** bits, int res[3], size_t* bytes);
 
 /* Copies the basis and MLP parameters, in MLPW order (SPEC.md 6.6: B, W1, b1, W2, b2, W3, b3),
  * into params; count must be ecrf_scene_field.mlp_params. */
-int ecrf_scene_mlp_params(const ecrf_scene* scene, float* params, size_t count);
+ECRF_API int ecrf_scene_mlp_params(const ecrf_scene* scene, float* params, size_t count);
 
 /* Renders one view. rgba8: width*height*4 bytes (alpha = opacity), rgb: width*height*3 floats
  * in [0, 1]; row-major from the top row; either may be NULL (not both). */
-int ecrf_scene_render(ecrf_scene* scene, const ecrf_camera* camera,
-                      const ecrf_render_options* options, uint8_t* rgba8, float* rgb);
+ECRF_API int ecrf_scene_render(ecrf_scene* scene, const ecrf_camera* camera,
+                               const ecrf_render_options* options, uint8_t* rgba8, float* rgb);
 
 #ifdef __cplusplus
 }

@@ -1,0 +1,219 @@
+"""Tests of the Python module ecrf against the conformance vectors (python3 -m unittest).
+
+The module is found on PYTHONPATH (scripts/test-install.sh points it at an installed tree);
+ECRF_SOURCE_DIR overrides where tests/conformance is looked for.
+"""
+import json
+import os
+import struct
+import threading
+import time
+import unittest
+import zlib
+
+import numpy as np
+
+import ecrf
+
+SOURCE_DIR = os.environ.get(
+    "ECRF_SOURCE_DIR", os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
+CONFORMANCE = os.path.join(SOURCE_DIR, "tests", "conformance")
+SCENE = os.path.join(CONFORMANCE, "scene_builtin.ecrf")
+
+
+def read_png(path):
+    """8-bit RGB/RGBA PNG -> uint8 [height][width][channels], zlib and the five filters only."""
+    with open(path, "rb") as f:
+        data = f.read()
+    if data[:8] != b"\x89PNG\r\n\x1a\n":
+        raise ValueError(path + ": not a PNG")
+    pos, idat = 8, b""
+    while pos < len(data):
+        length, kind = struct.unpack(">I4s", data[pos:pos + 8])
+        body = data[pos + 8:pos + 8 + length]
+        if kind == b"IHDR":
+            width, height, depth, colour, _, _, interlace = struct.unpack(">IIBBBBB", body)
+            if depth != 8 or colour not in (2, 6) or interlace:
+                raise ValueError(path + ": only 8-bit RGB/RGBA, not interlaced")
+        elif kind == b"IDAT":
+            idat += body
+        pos += 12 + length
+    bpp = 3 if colour == 2 else 4
+    stride = width * bpp
+    raw = zlib.decompress(idat)
+    out = bytearray(height * stride)
+    prev = bytearray(stride)
+    for y in range(height):
+        filt = raw[y * (stride + 1)]
+        line = bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
+        for i in range(stride):
+            a = line[i - bpp] if i >= bpp else 0
+            b = prev[i]
+            c = prev[i - bpp] if i >= bpp else 0
+            if filt == 1:
+                line[i] = (line[i] + a) & 255
+            elif filt == 2:
+                line[i] = (line[i] + b) & 255
+            elif filt == 3:
+                line[i] = (line[i] + (a + b) // 2) & 255
+            elif filt == 4:
+                p = a + b - c
+                pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+                line[i] = (line[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
+        out[y * stride:(y + 1) * stride] = line
+        prev = line
+    return np.frombuffer(bytes(out), dtype=np.uint8).reshape(height, width, bpp)
+
+
+def read_bytes(path):
+    with open(path, "rb") as f:
+        return f.read()
+
+
+def manifest_camera(name):
+    with open(os.path.join(CONFORMANCE, "manifest.json")) as f:
+        manifest = json.load(f)
+    vector = next(v for v in manifest["scene_vectors"] if v["file"] == name)
+    cam = vector["render"]["camera"]
+    c2w = np.array([float.fromhex(v) for v in cam["c2w"]], dtype=np.float32).reshape(3, 4)
+    intrinsics = [float.fromhex(cam[k]) for k in ("fx", "fy", "cx", "cy")]
+    return vector, c2w, intrinsics, cam["width"], cam["height"]
+
+
+class DecodeTest(unittest.TestCase):
+    def test_info_and_tensors(self):
+        vector = manifest_camera("scene_builtin.ecrf")[0]
+        s = ecrf.decode(SCENE)
+        info = s.info
+        self.assertEqual(list(info["grid_res"]), vector["grid"])
+        self.assertEqual(list(info["density_ranks"]), vector["ranks"]["density"])
+        self.assertEqual(list(info["appearance_ranks"]), vector["ranks"]["appearance"])
+        self.assertEqual(info["stream_bytes"], vector["bytes"])
+        self.assertTrue(info["has_occupancy"])
+        nx, ny, nz = info["grid_res"]
+        plane = s.tensor(0, 0)
+        self.assertEqual(plane.dtype, np.float32)
+        self.assertEqual(plane.ndim, 3)
+        self.assertEqual(plane.shape[2], info["density_ranks"][0])
+        self.assertIn(plane.shape[0] * plane.shape[1], (nx * ny, ny * nz, nx * nz))
+        line = s.tensor(1, 3)
+        self.assertEqual(line.ndim, 2)
+        self.assertEqual(line.shape[1], info["appearance_ranks"][0])
+        self.assertFalse(plane.flags.writeable)
+        with self.assertRaises(ValueError):
+            plane[0, 0, 0] = 1.0
+        self.assertTrue(np.isfinite(plane).all())
+
+    def test_views_keep_the_scene_alive(self):
+        plane = ecrf.decode(SCENE).tensor(1, 0)
+        copy = plane.copy()
+        for _ in range(3):
+            ecrf.decode(SCENE)  # reuses freed memory if the first scene were gone
+        np.testing.assert_array_equal(plane, copy)
+
+    def test_field_occupancy_mlp(self):
+        s = ecrf.decode(read_bytes(SCENE))
+        field = s.field
+        self.assertEqual(field["mlp_inputs"], field["mlp_features"] + 3 + 2 * field["mlp_features"] *
+                         field["mlp_feature_freqs"] + 6 * field["mlp_viewdir_freqs"])
+        params = s.mlp_params()
+        self.assertEqual(params.shape, (field["mlp_params"],))
+        self.assertTrue(np.isfinite(params).all())
+        mask = s.occupancy()
+        res = s.info["occupancy_res"]
+        self.assertEqual(mask.shape, (res[2], res[1], res[0]))
+        self.assertEqual(mask.dtype, np.bool_)
+        self.assertTrue(0 < mask.sum() < mask.size)
+        packed = s.occupancy(packed=True)
+        self.assertEqual(packed.dtype, np.uint8)
+        self.assertEqual(mask.sum(), np.unpackbits(packed, bitorder="little")[:mask.size].sum())
+
+    def test_int16_storage(self):
+        s = ecrf.decode(SCENE, storage="int16")
+        self.assertLess(s.info["grid_bytes"], ecrf.decode(SCENE).info["grid_bytes"])
+        with self.assertRaises(ecrf.Error):
+            s.tensor(0, 0)
+
+    def test_bad_bytes_raise_with_the_message(self):
+        with self.assertRaises(ecrf.DecodeError) as cm:
+            ecrf.decode(b"not an ecrf stream at all")
+        self.assertIsInstance(cm.exception, ValueError)
+        self.assertLess(cm.exception.code, 0)
+        self.assertTrue(str(cm.exception).startswith("decode: "))
+        self.assertGreater(len(str(cm.exception)), len("decode: "))
+        data = read_bytes(SCENE)
+        with self.assertRaises(ecrf.DecodeError) as cm:
+            ecrf.decode(data[:len(data) // 2])
+        self.assertEqual(cm.exception.code, ecrf.ERR_TRUNCATED)
+        self.assertEqual(cm.exception.code_name, "truncated")
+        with self.assertRaises(ecrf.DecodeError) as cm:
+            ecrf.decode(data, memory_budget=1024)
+        self.assertEqual(cm.exception.code, ecrf.ERR_LIMIT)
+        with self.assertRaises(ValueError):
+            ecrf.decode(data, storage="float64")
+        with self.assertRaises(OSError):
+            ecrf.decode(os.path.join(CONFORMANCE, "no_such_file.ecrf"))
+
+
+class RenderTest(unittest.TestCase):
+    def test_matches_the_reference_render(self):
+        _, c2w, (fx, fy, cx, cy), width, height = manifest_camera("scene_builtin.ecrf")
+        reference = read_png(os.path.join(CONFORMANCE, "scene_builtin.png"))[:, :, :3].astype(int)
+        rgba = ecrf.decode(SCENE).render(c2w, fx, fy, cx, cy, width, height)
+        self.assertEqual(rgba.shape, (height, width, 4))
+        self.assertEqual(rgba.dtype, np.uint8)
+        diff = np.abs(rgba[:, :, :3].astype(int) - reference)
+        mse = np.mean((diff / 255.0) ** 2)
+        psnr = float("inf") if mse == 0 else -10 * np.log10(mse)
+        within = np.mean(diff.max(axis=2) <= 2)  # SPEC.md 7.7
+        self.assertTrue(psnr >= 40 or within >= 0.99, "PSNR %.2f dB, %.4f within 2" % (psnr, within))
+
+    def test_orbit_camera_is_the_reference_one(self):
+        # The manifest camera of scene_builtin is OrbitCamera(64, 64, az, el, 4): same intrinsics.
+        _, c2w, (fx, fy, cx, cy), width, height = manifest_camera("scene_builtin.ecrf")
+        m, ofx, ofy, ocx, ocy = ecrf.orbit_camera(width, height, 0.3, 0.5, 4.0)
+        self.assertEqual(m.shape, (3, 4))
+        self.assertEqual((ocx, ocy), (cx, cy))
+        self.assertAlmostEqual(ofx, fx, places=3)
+        self.assertAlmostEqual(float(np.linalg.norm(m[:, 3])), 4.0, places=5)
+
+    def test_rgb_and_options(self):
+        s = ecrf.decode(SCENE)
+        cam = ecrf.orbit_camera(32, 24, 0.3, 0.5, 4.0)
+        rgb = s.render(*cam, 32, 24, rgb=True, threads=2)
+        self.assertEqual(rgb.shape, (24, 32, 3))
+        self.assertEqual(rgb.dtype, np.float32)
+        rgba = s.render(*cam, 32, 24)
+        self.assertLessEqual(np.abs(np.round(rgb * 255) - rgba[:, :, :3]).max(), 1)
+        with self.assertRaises(ecrf.Error) as cm:
+            s.render(*cam, 32, 24, sample_budget=1)
+        self.assertEqual(cm.exception.code, ecrf.ERR_LIMIT)
+        with self.assertRaises(ValueError):
+            s.render(np.eye(3), 1, 1, 1, 1, 8, 8)
+
+    def test_render_releases_the_gil(self):
+        s = ecrf.decode(SCENE)
+        cam = ecrf.orbit_camera(128, 128, 0.3, 0.5, 4.0)
+        done = threading.Event()
+        ticks = [0]
+
+        def render():
+            for _ in range(2):
+                s.render(*cam, 128, 128)
+            done.set()
+
+        thread = threading.Thread(target=render)
+        start = time.perf_counter()
+        thread.start()
+        # Python code on this thread keeps running only if the render let go of the GIL.
+        while not done.is_set():
+            ticks[0] += 1
+            time.sleep(0.001)
+        thread.join()
+        elapsed = time.perf_counter() - start
+        self.assertGreater(ticks[0], max(2, int(elapsed / 0.001) // 10),
+                           "%d ticks in %.3f s" % (ticks[0], elapsed))
+
+
+if __name__ == "__main__":
+    unittest.main()
