@@ -1,10 +1,17 @@
 #!/usr/bin/env bash
-# Installs the Debian packages ecrf builds and tests with. Skips apt when all are present.
+# Installs the Debian packages ecrf builds with; `--test` adds those the test suite needs.
+# Skips apt when all are present.
 set -euo pipefail
 # python3-matplotlib draws the plots of `ecrf report` (which works without it: tables and CSV).
-# clang and emscripten (which brings node) build the decoder for scripts/conformance-matrix.sh.
 packages=(build-essential cmake ninja-build pkg-config libgtest-dev libeigen3-dev libpng-dev
-          libjpeg-dev libzstd-dev nlohmann-json3-dev zstd python3-matplotlib clang emscripten)
+          libjpeg-dev libzstd-dev nlohmann-json3-dev zstd python3-matplotlib)
+if [ "${1:-}" = "--test" ]; then
+  # clang and emscripten build the decoder for scripts/conformance-matrix.sh and the web viewer;
+  # chromium runs the viewer's browser tests; pybind11, python3-dev and numpy the Python module.
+  packages+=(clang emscripten chromium pybind11-dev python3-dev python3-numpy)
+  # npm installs the browser tests' driver (playwright-core); a machine may have its own node.
+  command -v npm >/dev/null 2>&1 || packages+=(npm)
+fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")

@@ -1,16 +1,21 @@
 #!/usr/bin/env bash
 # Builds and runs every test suite: an optimised build of everything, then format/ and decoder/
 # again under AddressSanitizer + UndefinedBehaviorSanitizer (they parse untrusted bytes), then the
-# conformance vectors decoded by g++, clang++ and WebAssembly builds (identical checksums), then a
-# short run of every fuzz target.
+# conformance vectors decoded by g++, clang++ and WebAssembly builds (identical checksums), the
+# installed tree (examples, ABI, Python), the web viewer in headless chromium, then a short run of
+# every fuzz target.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs="$(nproc)"
 
 echo "== release build (-O2) and tests"
-cmake -S . -B build-test -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DECRF_NATIVE=ON >/dev/null
+cmake -S . -B build-test -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DECRF_NATIVE=ON \
+      -DECRF_BUILD_PYTHON=ON -DPython_EXECUTABLE=/usr/bin/python3 -DCMAKE_INSTALL_LIBDIR=lib >/dev/null
 cmake --build build-test -j"$jobs"
 ctest --test-dir build-test -j"$jobs" --output-on-failure
+
+echo "== install tree: CMake package, pkg-config, C and C++ examples, ABI, Python module"
+ECRF_INSTALL_BUILD_DIR=build-test ECRF_JOBS="$jobs" bash scripts/test-install.sh
 
 echo "== format/ and decoder/ as the main job builds them (Release -O3, -Werror sees more there)"
 cmake -S . -B build-embedded -G Ninja -DCMAKE_BUILD_TYPE=Release -DECRF_NATIVE=ON \
@@ -25,6 +30,13 @@ ctest --test-dir build-asan -j"$jobs" --output-on-failure
 
 echo "== conformance checksums on every compiler, -O0 / -O3 -march=native, and WebAssembly (node)"
 bash scripts/conformance-matrix.sh
+
+echo "== web viewer: WebAssembly build, node smoke test, headless chromium (GPU and CPU paths, UI)"
+bash scripts/build-wasm.sh
+node tools/web/smoke_test.mjs
+(cd tools/web/test && npm ci --no-audit --no-fund --loglevel=error)
+node tools/web/test/gpu_test.mjs
+node tools/web/test/viewer_test.mjs
 
 echo "== fuzz targets, 10 s each (ASan + UBSan, every finding aborts; longer: bash scripts/fuzz.sh 600)"
 bash scripts/fuzz.sh 10
