@@ -6,9 +6,9 @@
 //   bash scripts/build-wasm.sh && node tools/web/smoke_test.mjs
 import {createRequire} from 'node:module';
 import {readFileSync, statSync} from 'node:fs';
-import {inflateSync} from 'node:zlib';
 import {dirname, join} from 'node:path';
 import {fileURLToPath} from 'node:url';
+import {readPng} from './test/gpu_common.mjs';
 
 const require = createRequire(import.meta.url);
 const root = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
@@ -16,61 +16,6 @@ const wasmPath = join(root, 'build-wasm', 'ecrf_decoder.wasm');
 const createEcrfDecoder = require(join(root, 'build-wasm', 'ecrf_decoder.js'));
 const {orbitCamera, stripCamera, EcrfDecoder} = require(join(root, 'tools', 'web', 'viewer.js'));
 
-// Minimal PNG reader: 8-bit grey / RGB / RGBA, not interlaced. Returns {width, height, channels, data}.
-function readPng(bytes) {
-  const sig = [137, 80, 78, 71, 13, 10, 26, 10];
-  if (!sig.every((b, i) => bytes[i] === b)) throw new Error('not a PNG');
-  const view = new DataView(bytes.buffer, bytes.byteOffset, bytes.byteLength);
-  let pos = 8, width = 0, height = 0, channels = 0;
-  const idat = [];
-  while (pos + 8 <= bytes.length) {
-    const len = view.getUint32(pos);
-    const type = String.fromCharCode(...bytes.subarray(pos + 4, pos + 8));
-    const body = bytes.subarray(pos + 8, pos + 8 + len);
-    if (type === 'IHDR') {
-      width = view.getUint32(pos + 8);
-      height = view.getUint32(pos + 12);
-      const [depth, colour, , , interlace] = body.subarray(8, 13);
-      channels = {0: 1, 2: 3, 6: 4}[colour];
-      if (depth !== 8 || !channels || interlace !== 0) throw new Error('unsupported PNG format');
-    } else if (type === 'IDAT') {
-      idat.push(body);
-    } else if (type === 'IEND') {
-      break;
-    }
-    pos += 12 + len;
-  }
-  const raw = inflateSync(Buffer.concat(idat));
-  const stride = width * channels;
-  const out = new Uint8Array(stride * height);
-  for (let y = 0; y < height; ++y) {
-    const filter = raw[y * (stride + 1)];
-    const src = raw.subarray(y * (stride + 1) + 1, (y + 1) * (stride + 1));
-    const row = out.subarray(y * stride, (y + 1) * stride);
-    const prev = y > 0 ? out.subarray((y - 1) * stride, y * stride) : new Uint8Array(stride);
-    for (let i = 0; i < stride; ++i) {
-      const a = i >= channels ? row[i - channels] : 0, b = prev[i];
-      const c = i >= channels ? prev[i - channels] : 0;
-      let p;
-      switch (filter) {
-        case 0: p = 0; break;
-        case 1: p = a; break;
-        case 2: p = b; break;
-        case 3: p = (a + b) >> 1; break;
-        case 4: {
-          const pa = Math.abs(b - c), pb = Math.abs(a - c), pc = Math.abs(a + b - 2 * c);
-          p = pa <= pb && pa <= pc ? a : pb <= pc ? b : c;
-          break;
-        }
-        default: throw new Error(`bad PNG filter ${filter}`);
-      }
-      row[i] = (src[i] + p) & 255;
-    }
-  }
-  return {width, height, channels, data: out};
-}
-
-// PSNR (dB) and max difference of an RGBA render against an RGB(A) reference, over RGB.
 function compare(rgba, ref) {
   let se = 0, maxDiff = 0, differing = 0;
   const n = ref.width * ref.height;
