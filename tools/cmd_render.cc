@@ -28,9 +28,9 @@ const char kRenderUsage[] =
     "  --int16             keep the grids in 16-bit fixed point (half the memory)\n";
 
 const char kEvalUsage[] =
-    "usage: ecrf eval SCENE.ecrf (--data DIR | --scene builtin) [options]\n"
+    "usage: ecrf eval SCENE.ecrf (--data DIR | --scene builtin|capture) [options]\n"
     "  --split NAME        split to score (default test)\n"
-    "  --seed N            the built-in scene's seed (as given to train)\n"
+    "  --seed N            the procedural scene's seed (as given to train)\n"
     "  --downscale N       shrink the images by N\n"
     "  --image-scale K     render at 1/K of the size, score the bilinear upsampling to full size\n"
     "  --stride K          every K-th view\n"
@@ -220,7 +220,7 @@ int RunEval(int argc, char** argv) {
   CommonArgs c;
   std::string data, split = "test", json_path;
   int stride = 1, downscale = 1, image_scale = 1;
-  bool builtin = false;
+  std::string procedural;  // --scene NAME
   uint32_t seed = trainer::TrainOptions().seed;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -231,8 +231,9 @@ int RunEval(int argc, char** argv) {
     } else if (a == "--data") {
       data = value();
     } else if (a == "--scene") {
-      if (std::string(value()) != "builtin") throw std::invalid_argument("--scene: only 'builtin' is known");
-      builtin = true;
+      procedural = value();
+      trainer::TrainOptions check;
+      trainer::SelectProceduralScene(procedural, &check);  // a bad name fails before the scene loads
     } else if (a == "--seed") {
       seed = uint32_t(ParseInt("--seed", value()));
     } else if (a == "--split") {
@@ -251,14 +252,15 @@ int RunEval(int argc, char** argv) {
       return 2;
     }
   }
-  if (c.scene.empty() || data.empty() == !builtin) {
-    std::fprintf(stderr, "ecrf eval: needs SCENE.ecrf and one of --data DIR / --scene builtin\n\n");
+  if (c.scene.empty() || data.empty() == procedural.empty()) {
+    std::fprintf(stderr, "ecrf eval: needs SCENE.ecrf and one of --data DIR / --scene builtin|capture\n\n");
     PrintUsage(stderr, kEvalUsage);
     return 2;
   }
   const LoadedScene s = LoadSceneFile(c.scene, c.int16 ? dec::GridStorage::kInt16 : dec::GridStorage::kFloat32,
                                       c.max_memory_bytes);
-  const trainer::Dataset test = builtin ? BuiltinDataset(split, seed) : trainer::LoadDataset(data, split, downscale);
+  const trainer::Dataset test = procedural.empty() ? trainer::LoadDataset(data, split, downscale)
+                                                   : ProceduralDataset(procedural, split, seed);
   const trainer::EvalResult r = EvaluateDecoded(*s.field, test, stride, c.max_views, RenderOptionsFor(c), false, image_scale);
   std::printf("%s: %zu bytes, PSNR %.2f dB, SSIM %.4f over %d %s views; decode %.1f ms, render %.1f ms/view "
               "(%d thread%s, %s grids)\n",

@@ -64,9 +64,9 @@ trainer::Image RenderDecoded(const dec::SceneField& scene, const trainer::Camera
   return img;
 }
 
-trainer::Dataset BuiltinDataset(const std::string& split, uint32_t seed) {
+trainer::Dataset ProceduralDataset(const std::string& scene, const std::string& split, uint32_t seed) {
   trainer::TrainOptions o = trainer::PresetOptions("tiny");
-  o.builtin_scene = true;
+  trainer::SelectProceduralScene(scene, &o);
   o.seed = seed;
   return trainer::LoadTrainingViews(o, split);
 }

@@ -46,8 +46,9 @@ trainer::EvalResult EvaluateDecoded(const dec::SceneField& scene, const trainer:
                                     bool keep_renders, int image_scale = 1,
                                     dec::RenderStats* stats = nullptr);
 
-// The built-in scene's split as `ecrf train --scene builtin --seed seed` makes it.
-trainer::Dataset BuiltinDataset(const std::string& split, uint32_t seed);
+// A procedural scene's split as `ecrf train --scene NAME --seed seed` makes it (NAME builtin or
+// capture; throws std::invalid_argument for others).
+trainer::Dataset ProceduralDataset(const std::string& scene, const std::string& split, uint32_t seed);
 
 // Bilinear resampling with pixel centres aligned (as OpenGL's texture filtering).
 trainer::Image ResizeBilinear(const trainer::Image& image, int width, int height);

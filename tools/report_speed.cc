@@ -145,8 +145,9 @@ void RunSpeedSweep(const std::string& dir, const SpeedSweepOptions& so, nlohmann
 
   const std::string data = report->at("data").get<std::string>();
   const trainer::Dataset test =
-      data == "builtin" ? BuiltinDataset("test", report->at("sweep").value("seed", trainer::TrainOptions().seed))
-                        : trainer::LoadDataset(data, "test", report->at("sweep").value("downscale", 1));
+      data == "builtin" || data == "capture"
+          ? ProceduralDataset(data, "test", report->at("sweep").value("seed", trainer::TrainOptions().seed))
+          : trainer::LoadDataset(data, "test", report->at("sweep").value("downscale", 1));
   const unsigned hw = std::thread::hardware_concurrency();
   const int all_threads = hw == 0 ? 1 : int(std::min<unsigned>(hw, dec::kMaxRenderThreads));
   const std::vector<Setting> settings = Settings(all_threads, f32.field->weight_threshold);

@@ -29,7 +29,7 @@ namespace tools {
 namespace {
 
 const char kSweepUsage[] =
-    "usage: ecrf report sweep (--data DIR | --scene builtin) --lambdas L1,L2,... -o REPORT_DIR [options]\n"
+    "usage: ecrf report sweep (--data DIR | --scene builtin|capture) --lambdas L1,L2,... -o REPORT_DIR [options]\n"
     "  --lambdas L1,L2@S,...      one run per lambda_e; L@S trains that point with steps x S\n"
     "                             (S overrides --quant-step-scale for it; e.g. 0,2e-11@3,5e-10)\n"
     "  --anchors FILE.json        reference points drawn on the plots (docs/reports/anchors_paper.json)\n"
@@ -41,7 +41,7 @@ const char kSweepUsage[] =
     "every `ecrf train` option applies to each run:\n";
 
 std::string SceneName(const trainer::TrainOptions& o) {
-  if (o.builtin_scene) return "builtin";
+  if (o.builtin_scene) return o.procedural_scene;
   std::string d = o.data_dir;
   while (d.size() > 1 && d.back() == '/') d.pop_back();
   const size_t slash = d.find_last_of('/');
@@ -107,7 +107,7 @@ void CheckReusable(const nlohmann::json& m, const trainer::TrainOptions& o, cons
     throw std::runtime_error(path + ": finished run has " + what + " " + had + ", this sweep asks for " + want +
                              "; remove that run directory or report into another -o");
   };
-  const std::string data = o.builtin_scene ? "builtin" : o.data_dir;
+  const std::string data = o.builtin_scene ? o.procedural_scene : o.data_dir;
   if (m.value("preset", "") != o.preset) mismatch("preset", m.value("preset", "?"), o.preset);
   if (!SameData(m.value("data", ""), data)) mismatch("data", m.value("data", "?"), data);
   if (m.value("iterations", -1) != o.iters) {
@@ -196,7 +196,7 @@ int RunReportSweep(int argc, char** argv) {
     }
   }
   if (out.empty() || lambdas_text.empty() || (!o.builtin_scene && o.data_dir.empty())) {
-    std::fprintf(stderr, "ecrf report sweep: needs --data DIR or --scene builtin, --lambdas and -o\n\n%s%s",
+    std::fprintf(stderr, "ecrf report sweep: needs --data DIR or --scene builtin|capture, --lambdas and -o\n\n%s%s",
                  kSweepUsage, kTrainFlagsUsage);
     return 2;
   }
@@ -224,7 +224,7 @@ int RunReportSweep(int argc, char** argv) {
     report = ReadReport(out);  // keeps an earlier speed section
   }
   report["scene"] = SceneName(o);
-  report["data"] = o.builtin_scene ? "builtin" : o.data_dir;
+  report["data"] = o.builtin_scene ? o.procedural_scene : o.data_dir;
   report["sweep"] = {{"preset", o.preset},          {"iterations", o.iters},
                      {"lambdas", lambdas},          {"step_scales", step_scales}, {"alpha", o.alpha},
                      {"test_view_stride", o.test_view_stride}, {"max_test_views", o.max_test_views},

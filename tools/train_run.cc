@@ -22,7 +22,7 @@ namespace ecrf {
 namespace tools {
 
 const char kTrainFlagsUsage[] =
-    "  --preset fast|paper|tiny   schedule and grid sizes (default fast; tiny for the built-in scene)\n"
+    "  --preset fast|paper|tiny   schedule and grid sizes (default fast; tiny for --scene)\n"
     "  --iters N                  iterations (milestones scale with it)\n"
     "  --downscale N              shrink the images by N (area filter)\n"
     "  --batch N                  rays per iteration (default 4096)\n"
@@ -61,9 +61,7 @@ bool ParseTrainFlag(int argc, char** argv, int* i, trainer::TrainOptions* o) {
   if (a == "--preset") {
     value();  // read before the loop
   } else if (a == "--scene") {
-    const std::string s = value();
-    if (s != "builtin") throw std::invalid_argument("--scene: only 'builtin' is known (use --data DIR)");
-    o->builtin_scene = true;
+    trainer::SelectProceduralScene(value(), o);
   } else if (a == "--data") {
     o->data_dir = value();
   } else if (a == "--iters") {
@@ -134,7 +132,7 @@ trainer::TrainOptions TrainOptionsFromArgs(int argc, char** argv, std::vector<in
       preset = argv[i + 1];
       preset_given = true;
     }
-    if (!std::strcmp(argv[i], "--scene") && !std::strcmp(argv[i + 1], "builtin")) builtin = true;
+    if (!std::strcmp(argv[i], "--scene")) builtin = true;  // every procedural scene is CI-sized
   }
   if (builtin && !preset_given) preset = "tiny";
   trainer::TrainOptions o = trainer::PresetOptions(preset);
@@ -159,7 +157,7 @@ trainer::TrainOptions TrainOptionsFromArgs(int argc, char** argv, std::vector<in
 
 nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& o) {
   if (o.out_dir.empty()) throw std::invalid_argument("no output directory (-o RUN_DIR)");
-  if (!o.builtin_scene && o.data_dir.empty()) throw std::invalid_argument("no data: --data DIR or --scene builtin");
+  if (!o.builtin_scene && o.data_dir.empty()) throw std::invalid_argument("no data: --data DIR or --scene builtin|capture");
   if (o.resume && !FileExists(o.out_dir + "/checkpoint.ckpt")) {
     throw std::invalid_argument("--resume: no checkpoint to resume from (" + o.out_dir + "/checkpoint.ckpt does not exist)");
   }
@@ -178,7 +176,7 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& o) {
   // Close the loop: encode, decode with the embeddable decoder, and score the decoded stream.
   trainer::EncodeOptions eo = trainer::RunEncodeOptions(o, rate);
   eo.metadata_json = nlohmann::json{{"encoder", "ecrf"},
-                                    {"data", o.builtin_scene ? std::string("builtin") : o.data_dir},
+                                    {"data", o.builtin_scene ? o.procedural_scene : o.data_dir},
                                     {"preset", o.preset},
                                     {"iterations", r.iterations},
                                     {"lambda_e", r.final_lambda_e},
@@ -219,7 +217,7 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& o) {
 
   nlohmann::json m;
   m["preset"] = o.preset;
-  m["data"] = o.builtin_scene ? std::string("builtin") : o.data_dir;
+  m["data"] = o.builtin_scene ? o.procedural_scene : o.data_dir;
   m["iterations"] = r.iterations;
   m["seed"] = o.seed;
   m["test_view_stride"] = o.test_view_stride;

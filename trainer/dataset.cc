@@ -11,6 +11,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "trainer/llff.h"
+
 namespace ecrf::trainer {
 namespace {
 
@@ -18,13 +20,6 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 enum class Layout { kBlender, kNgp };
-
-// Instant-NGP maps the NeRF world into its unit cube as p * scale + offset, defaulting to
-// scale 0.33 and offset 0.5, and its render box is the unit cube grown about (0.5, 0.5, 0.5)
-// by aabb_scale. Mapped back, the box is centred at (0.5 - offset) / scale with half extent
-// 0.5 * aabb_scale / scale: about [-1.5, 1.5]^3 * aabb_scale, the Blender box for aabb_scale 1.
-constexpr double kNgpDefaultScale = 0.33;
-constexpr double kNgpDefaultOffset = 0.5;
 
 // NeRF/LLFF hold-out convention for captures that ship a single transforms.json.
 constexpr int kNgpTestEvery = 8;
@@ -225,7 +220,7 @@ void SetNgpAabb(const json& root, const JsonContext& context, DatasetManifest* m
   const double aabb_scale = OptionalNumber(root, "aabb_scale", "", context).value_or(1.0);
   const double scale = OptionalNumber(root, "scale", "", context).value_or(kNgpDefaultScale);
   if (!(aabb_scale > 0) || !(scale > 0)) context.Fail("'aabb_scale' and 'scale' must be positive");
-  double offset[3] = {kNgpDefaultOffset, kNgpDefaultOffset, kNgpDefaultOffset};
+  double offset[3] = {kNgpDefaultOffset[0], kNgpDefaultOffset[1], kNgpDefaultOffset[2]};
   if (auto it = root.find("offset"); it != root.end()) {
     if (!it->is_array() || it->size() != 3 || !(*it)[0].is_number() || !(*it)[1].is_number() ||
         !(*it)[2].is_number()) {
@@ -233,36 +228,11 @@ void SetNgpAabb(const json& root, const JsonContext& context, DatasetManifest* m
     }
     for (int a = 0; a < 3; ++a) offset[a] = (*it)[a].get<double>();
   }
-  const double half_extent = 0.5 * aabb_scale / scale;
-  for (int a = 0; a < 3; ++a) {
-    const double centre = (0.5 - offset[a]) / scale;
-    manifest->scene_aabb[0][a] = centre - half_extent;
-    manifest->scene_aabb[1][a] = centre + half_extent;
-  }
+  NgpAabb(aabb_scale, scale, offset, manifest->scene_aabb);
 }
 
-// Real captures have no agreed near/far, so derive them from the geometry: near is the
-// smallest camera-to-box distance (the box holds everything modelled), far the largest
-// distance from a camera to a box corner (no ray leaves the box later).
 void SetNearFarFromCameras(const std::vector<Camera>& cameras, DatasetManifest* manifest) {
-  const auto& box = manifest->scene_aabb;
-  double diagonal_sq = 0;
-  for (int a = 0; a < 3; ++a) diagonal_sq += (box[1][a] - box[0][a]) * (box[1][a] - box[0][a]);
-  double near = INFINITY, far = 0;
-  for (const Camera& camera : cameras) {
-    double to_box_sq = 0, to_corner_sq = 0;
-    for (int a = 0; a < 3; ++a) {
-      const double p = camera.c2w[a][3];
-      const double outside = std::max({box[0][a] - p, 0.0, p - box[1][a]});
-      const double corner = std::max(std::abs(p - box[0][a]), std::abs(p - box[1][a]));
-      to_box_sq += outside * outside;
-      to_corner_sq += corner * corner;
-    }
-    near = std::min(near, std::sqrt(to_box_sq));
-    far = std::max(far, std::sqrt(to_corner_sq));
-  }
-  manifest->near = std::max(near, kMinNearFraction * std::sqrt(diagonal_sq));
-  manifest->far = std::max(far, manifest->near * 1.01);
+  NearFarFromCameras(cameras, manifest->scene_aabb, &manifest->near, &manifest->far);
 }
 
 std::string FilePathOf(const json& frame, size_t index, const JsonContext& context) {
@@ -392,7 +362,39 @@ std::vector<View> LoadViewsImpl(const std::vector<ViewSource>& sources, int down
 
 }  // namespace
 
-DatasetManifest ReadDatasetManifest(const std::string& dir, const std::string& split) {
+void NgpAabb(double aabb_scale, double scale, const double offset[3], double aabb[2][3]) {
+  const double half_extent = 0.5 * aabb_scale / scale;
+  for (int a = 0; a < 3; ++a) {
+    const double centre = (0.5 - offset[a]) / scale;
+    aabb[0][a] = centre - half_extent;
+    aabb[1][a] = centre + half_extent;
+  }
+}
+
+// Real captures have no agreed near/far, so derive them from the geometry: near is the
+// smallest camera-to-box distance (the box holds everything modelled), far the largest
+// distance from a camera to a box corner (no ray leaves the box later).
+void NearFarFromCameras(const std::vector<Camera>& cameras, const double box[2][3], double* near_out, double* far_out) {
+  double diagonal_sq = 0;
+  for (int a = 0; a < 3; ++a) diagonal_sq += (box[1][a] - box[0][a]) * (box[1][a] - box[0][a]);
+  double near = INFINITY, far = 0;
+  for (const Camera& camera : cameras) {
+    double to_box_sq = 0, to_corner_sq = 0;
+    for (int a = 0; a < 3; ++a) {
+      const double p = camera.c2w[a][3];
+      const double outside = std::max({box[0][a] - p, 0.0, p - box[1][a]});
+      const double corner = std::max(std::abs(p - box[0][a]), std::abs(p - box[1][a]));
+      to_box_sq += outside * outside;
+      to_corner_sq += corner * corner;
+    }
+    near = std::min(near, std::sqrt(to_box_sq));
+    far = std::max(far, std::sqrt(to_corner_sq));
+  }
+  *near_out = std::max(near, kMinNearFraction * std::sqrt(diagonal_sq));
+  *far_out = std::max(far, *near_out * 1.01);
+}
+
+DatasetManifest ReadDatasetManifest(const std::string& dir, const std::string& split, int downscale) {
   if (split != "train" && split != "val" && split != "test") {
     throw std::runtime_error("unknown split '" + split + "' (expected train, val or test)");
   }
@@ -403,7 +405,14 @@ DatasetManifest ReadDatasetManifest(const std::string& dir, const std::string& s
   if (fs::exists(blender, error)) return ParseTransforms(root, blender.string(), Layout::kBlender, split);
   const fs::path ngp = root / "transforms.json";
   if (fs::exists(ngp, error)) return ParseTransforms(root, ngp.string(), Layout::kNgp, split);
-  throw std::runtime_error(dir + ": neither transforms_" + split + ".json nor transforms.json found");
+  if (fs::exists(root / "poses_bounds.npy", error)) {
+    int prescaled = 1;
+    DatasetManifest manifest = ReadLlffManifest(dir, split, downscale, &prescaled);
+    manifest.prescaled = prescaled;
+    return manifest;
+  }
+  throw std::runtime_error(dir + ": neither transforms_" + split + ".json nor transforms.json found " +
+                           "(Blender, Instant-NGP), nor poses_bounds.npy (LLFF)");
 }
 
 std::vector<View> LoadViews(const std::vector<ViewSource>& sources, int downscale) {
@@ -413,10 +422,10 @@ std::vector<View> LoadViews(const std::vector<ViewSource>& sources, int downscal
 
 Dataset LoadDataset(const std::string& dir, const std::string& split, int downscale) {
   if (downscale < 1) throw std::runtime_error(dir + ": downscale must be >= 1, got " + std::to_string(downscale));
-  DatasetManifest manifest = ReadDatasetManifest(dir, split);
+  DatasetManifest manifest = ReadDatasetManifest(dir, split, downscale);
   Dataset dataset;
   bool any_alpha = false;
-  dataset.views = LoadViewsImpl(manifest.views, downscale, &any_alpha);
+  dataset.views = LoadViewsImpl(manifest.views, downscale / manifest.prescaled, &any_alpha);
   std::copy(&manifest.scene_aabb[0][0], &manifest.scene_aabb[0][0] + 6, &dataset.scene_aabb[0][0]);
   dataset.near = manifest.near;
   dataset.far = manifest.far;

@@ -1,4 +1,5 @@
-// Posed image datasets: NeRF "Blender synthetic" and Instant-NGP / nerfstudio transforms.json.
+// Posed image datasets: NeRF "Blender synthetic", Instant-NGP / nerfstudio transforms.json and
+// LLFF poses_bounds.npy.
 #ifndef ECRF_TRAINER_DATASET_H_
 #define ECRF_TRAINER_DATASET_H_
 
@@ -38,6 +39,7 @@ struct DatasetManifest {
   double near = 2.0;
   double far = 6.0;
   bool white_background = true;
+  int prescaled = 1;  // the images are already this factor smaller (LLFF images_N folders)
 };
 
 // Reads the cameras of `split` ("train", "val" or "test") from `dir`:
@@ -46,13 +48,29 @@ struct DatasetManifest {
 //  * otherwise dir/transforms.json (Instant-NGP / nerfstudio): frames are sorted by file_path
 //    and every 8th (index % 8 == 0) is held out as "test" (and "val"), the rest is "train",
 //    the LLFF convention. Frames whose image is missing are skipped with a warning on stderr.
+//  * otherwise dir/poses_bounds.npy with dir/images (LLFF; see trainer/llff.h), which picks
+//    dir/images_<downscale> when it exists and then sets `prescaled`.
 // Throws std::runtime_error naming the file and the problem for anything malformed.
-DatasetManifest ReadDatasetManifest(const std::string& dir, const std::string& split);
+DatasetManifest ReadDatasetManifest(const std::string& dir, const std::string& split, int downscale = 1);
 
 // Decodes the images in parallel (OpenMP), composites them on white and downscales them with
 // DownscaleArea; the cameras are scaled to match. Throws the first failing view's error
 // (by view order, so the message does not depend on thread timing).
 std::vector<View> LoadViews(const std::vector<ViewSource>& sources, int downscale);
+
+// Instant-NGP maps the NeRF world into its unit cube as p * scale + offset, defaulting to
+// scale 0.33 and offset 0.5, and its render box is the unit cube grown about (0.5, 0.5, 0.5)
+// by aabb_scale. Mapped back, the box is centred at (0.5 - offset) / scale with half extent
+// 0.5 * aabb_scale / scale: about [-1.5, 1.5]^3 * aabb_scale, the Blender box for aabb_scale 1.
+inline constexpr double kNgpDefaultScale = 0.33;
+inline constexpr double kNgpDefaultOffset[3] = {0.5, 0.5, 0.5};
+void NgpAabb(double aabb_scale, double scale, const double offset[3], double aabb[2][3]);
+
+// Real captures have no agreed near/far, so derive them from the geometry: near is the
+// smallest camera-to-box distance (the box holds everything modelled; at least 1% of its
+// diagonal, to keep samples off the lens of a camera inside it), far the largest distance from
+// a camera to a box corner (no ray leaves the box later).
+void NearFarFromCameras(const std::vector<Camera>& cameras, const double aabb[2][3], double* near, double* far);
 
 // ReadDatasetManifest + LoadViews. downscale >= 1.
 Dataset LoadDataset(const std::string& dir, const std::string& split, int downscale);

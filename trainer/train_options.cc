@@ -42,6 +42,14 @@ TrainOptions PresetOptions(const std::string& name) {
   throw std::invalid_argument("unknown preset '" + name + "' (expected paper, fast or tiny)");
 }
 
+void SelectProceduralScene(const std::string& name, TrainOptions* o) {
+  if (name != "builtin" && name != "capture") {
+    throw std::invalid_argument("--scene: unknown scene '" + name + "' (builtin or capture; for files use --data DIR)");
+  }
+  o->builtin_scene = true;
+  o->procedural_scene = name;
+}
+
 void ApplyRatePoint(const std::string& name, TrainOptions* o) {
   if (name == "low") {
     // Coarser steps under QAT beat a larger lambda_e at the same size (chair: 182,217 B at

@@ -19,7 +19,8 @@ struct TrainOptions {
   std::string preset = "fast";
   // Data.
   std::string data_dir;        // NeRF Blender or Instant-NGP/nerfstudio layout
-  bool builtin_scene = false;  // the procedural scene instead of data_dir
+  bool builtin_scene = false;  // a procedural scene instead of data_dir
+  std::string procedural_scene = "builtin";  // which: "builtin" (Blender-like) or "capture"
   int downscale = 1;
   std::string out_dir;
 
@@ -88,6 +89,10 @@ struct TrainOptions {
   // The built-in scene's size (train views; test views are an orbit of 1/4 as many).
   int builtin_size = 64;
   int builtin_views = 60;
+  // The capture scene: frames of one hand-held loop, every 8th held out for test.
+  int capture_width = 120;
+  int capture_height = 90;
+  int capture_frames = 64;
 };
 
 // "paper": the reference TensoRF VM-192 schedule. "fast": what a CPU user should run.
@@ -100,6 +105,10 @@ TrainOptions PresetOptions(const std::string& name);
 //   "high"   lambda_e 2e-11, steps x1 (1,044,897 B, 35.19 dB before quantization-aware training)
 // (README "Training" gives the commands.) Throws std::invalid_argument for other names.
 void ApplyRatePoint(const std::string& name, TrainOptions* options);
+
+// --scene NAME: selects the procedural scene "builtin" or "capture" instead of --data.
+// Throws std::invalid_argument for other names.
+void SelectProceduralScene(const std::string& name, TrainOptions* options);
 
 // The iteration at which a reference milestone happens in a run of `iters` iterations.
 int ScaleMilestone(int milestone, int iters, int reference_iters);

@@ -1,0 +1,142 @@
+#include "trainer/capture_scene.h"
+
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+#include <vector>
+
+#include "trainer/camera.h"
+#include "trainer/capture_room.h"
+#include "trainer/procedural_math.h"
+#include "trainer/still_life.h"
+
+namespace ecrf::trainer {
+namespace {
+
+using procedural::Cross;
+using procedural::kPi;
+using procedural::Normalized;
+using procedural::Random;
+using procedural::Vec3;
+
+constexpr double kDegree = kPi / 180.0;
+
+// Turns the unit vectors a, b of a frame by `angle` in their plane.
+void Rotate(Vec3* a, Vec3* b, double angle) {
+  const Vec3 ra = *a * std::cos(angle) + *b * std::sin(angle);
+  const Vec3 rb = *b * std::cos(angle) - *a * std::sin(angle);
+  *a = ra;
+  *b = rb;
+}
+
+Camera CaptureCamera(Vec3 position, Vec3 target, double roll, double pitch, double yaw, int width, int height) {
+  Camera camera;
+  camera.width = width;
+  camera.height = height;
+  camera.fx = FocalFromFieldOfView(width, kCaptureFieldOfView);
+  camera.fy = camera.fx;
+  camera.cx = width * (0.5 + kCaptureCxOffset);
+  camera.cy = height * (0.5 + kCaptureCyOffset);
+  camera.k1 = kCaptureK1;
+  camera.k2 = kCaptureK2;
+  Vec3 forward = Normalized(target - position);
+  Vec3 right = Normalized(Cross(forward, {0, 0, 1}));
+  Vec3 up = Cross(right, forward);
+  Rotate(&forward, &up, pitch);
+  Rotate(&right, &forward, yaw);
+  Rotate(&right, &up, roll);
+  const Vec3 columns[4] = {right, up, forward * -1.0, position};  // OpenGL: looks down -z
+  for (int c = 0; c < 4; ++c) {
+    camera.c2w[0][c] = columns[c].x;
+    camera.c2w[1][c] = columns[c].y;
+    camera.c2w[2][c] = columns[c].z;
+  }
+  return camera;
+}
+
+// The whole loop, whatever the split, so that train and test frames come from one capture.
+std::vector<Camera> CapturePath(int frames, int width, int height, uint32_t seed) {
+  Random random(0xca97u ^ (uint64_t{seed} << 20));
+  const double phase = 2 * kPi * random.Uniform();
+  const double wobble_phase[2] = {2 * kPi * random.Uniform(), 2 * kPi * random.Uniform()};
+  std::vector<Camera> cameras;
+  for (int i = 0; i < frames; ++i) {
+    // Slow swings in distance and height as a person walks round; small per-frame shake.
+    const double step = 2 * kPi / frames;
+    const double azimuth = phase + step * (i + 0.3 * random.Signed());
+    const double loop = step * i;
+    const double distance = 2.5 + 0.25 * std::sin(2 * loop + wobble_phase[0]) + 0.08 * random.Signed();
+    const double z = 0.9 + 0.35 * std::sin(3 * loop + wobble_phase[1]) + 0.05 * random.Signed();
+    const Vec3 position{distance * std::cos(azimuth), distance * std::sin(azimuth), z};
+    const Vec3 target{0.08 * random.Signed(), 0.08 * random.Signed(), -0.15 + 0.08 * random.Signed()};
+    const double roll = 3 * kDegree * random.Signed();
+    const double pitch = 2 * kDegree * random.Signed();
+    const double yaw = 2 * kDegree * random.Signed();
+    cameras.push_back(CaptureCamera(position, target, roll, pitch, yaw, width, height));
+  }
+  return cameras;
+}
+
+Image Render(const Camera& camera) {
+  Image image = MakeImage(camera.width, camera.height, 3);
+  for (int j = 0; j < camera.height; ++j) {
+    for (int i = 0; i < camera.width; ++i) {
+      float origin[3], dir[3], rgb[3];
+      GenerateRay(camera, i, j, origin, dir);
+      CaptureSceneRadiance(origin, dir, rgb);
+      for (int c = 0; c < 3; ++c) image.at(i, j, c) = rgb[c];
+    }
+  }
+  return image;
+}
+
+}  // namespace
+
+void CaptureSceneRadiance(const float origin[3], const float dir[3], float rgb[3]) {
+  const Vec3 o{origin[0], origin[1], origin[2]};
+  const Vec3 d = Normalized({dir[0], dir[1], dir[2]});
+  Vec3 colour;
+  // The room is convex and holds both camera and still life, so a still-life hit is always nearer.
+  if (!procedural::ShadeStillLife(o, d, &colour)) {
+    colour = procedural::ShadeRoom(kCaptureRoomMin, kCaptureRoomMax, o, d);
+  }
+  rgb[0] = static_cast<float>(colour.x);
+  rgb[1] = static_cast<float>(colour.y);
+  rgb[2] = static_cast<float>(colour.z);
+}
+
+Dataset MakeCaptureScene(const std::string& split, int width, int height, int num_frames, uint32_t seed) {
+  if (split != "train" && split != "val" && split != "test") {
+    throw std::runtime_error("capture scene: unknown split '" + split + "' (expected train, val or test)");
+  }
+  if (width < 1 || height < 1 || width > 4096 || height > 4096) {
+    throw std::runtime_error("capture scene: image size " + std::to_string(width) + "x" + std::to_string(height) +
+                             " must be within 1..4096");
+  }
+  if (num_frames < 2) {
+    throw std::runtime_error("capture scene: num_frames must be >= 2 (frame 0 is the only test frame), got " +
+                             std::to_string(num_frames));
+  }
+  const std::vector<Camera> cameras = CapturePath(num_frames, width, height, seed);
+  std::vector<int> frames;
+  for (int i = 0; i < num_frames; ++i) {
+    if ((i % kCaptureTestEvery == 0) == (split != "train")) frames.push_back(i);
+  }
+  Dataset dataset;
+  dataset.white_background = false;
+  NgpAabb(kCaptureAabbScale, kNgpDefaultScale, kNgpDefaultOffset, dataset.scene_aabb);
+  NearFarFromCameras(cameras, dataset.scene_aabb, &dataset.near, &dataset.far);
+  dataset.views.resize(frames.size());
+#pragma omp parallel for schedule(dynamic)
+  for (int v = 0; v < int(frames.size()); ++v) {
+    View& view = dataset.views[v];
+    view.camera = cameras[frames[v]];
+    view.rgb = Render(view.camera);
+    char name[64];
+    std::snprintf(name, sizeof name, "capture/frame_%03d", frames[v]);
+    view.name = name;
+  }
+  return dataset;
+}
+
+}  // namespace ecrf::trainer

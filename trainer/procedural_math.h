@@ -1,0 +1,44 @@
+// Small vector maths and a portable random generator shared by the procedural scenes.
+#ifndef ECRF_TRAINER_PROCEDURAL_MATH_H_
+#define ECRF_TRAINER_PROCEDURAL_MATH_H_
+
+#include <cmath>
+#include <cstdint>
+
+namespace ecrf::trainer::procedural {
+
+inline constexpr double kPi = 3.14159265358979323846;
+
+struct Vec3 {
+  double x = 0, y = 0, z = 0;
+};
+
+inline Vec3 operator+(Vec3 a, Vec3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+inline Vec3 operator-(Vec3 a, Vec3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+inline Vec3 operator*(Vec3 a, double s) { return {a.x * s, a.y * s, a.z * s}; }
+inline double Dot(Vec3 a, Vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline Vec3 Cross(Vec3 a, Vec3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+inline Vec3 Normalized(Vec3 a) { return a * (1.0 / std::sqrt(Dot(a, a))); }
+inline double Axis(Vec3 v, int axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
+
+// splitmix64: the same numbers on every platform, unlike std:: distributions.
+class Random {
+ public:
+  explicit Random(uint64_t seed) : state_(seed) {}
+  double Uniform() {
+    uint64_t z = (state_ += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    z ^= z >> 31;
+    return static_cast<double>(z >> 11) * (1.0 / 9007199254740992.0);
+  }
+  // Uniform in [-1, 1).
+  double Signed() { return 2.0 * Uniform() - 1.0; }
+
+ private:
+  uint64_t state_;
+};
+
+}  // namespace ecrf::trainer::procedural
+
+#endif  // ECRF_TRAINER_PROCEDURAL_MATH_H_
