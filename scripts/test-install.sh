@@ -38,13 +38,17 @@ echo "== examples with find_package(ecrf CONFIG)"
 cmake -S examples -B "$work/cmake" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$prefix" >/dev/null
 cmake --build "$work/cmake" -j"$jobs"
 "$work/cmake/decode_render" tests/conformance/scene_builtin.ecrf "$work/cmake.ppm"
-ldd "$work/cmake/decode_render" | grep -q "$prefix/lib/libecrf_decoder.so" \
+# ldd's output is read whole first: with pipefail, `ldd | grep -q` fails whenever grep exits
+# before ldd has written everything (SIGPIPE).
+libs="$(ldd "$work/cmake/decode_render")"
+grep -q "$prefix/lib/libecrf_decoder.so" <<<"$libs" \
   || { echo "FAIL: decode_render does not use the installed shared library"; exit 1; }
 cmake -S examples -B "$work/cmake-static" -G Ninja -DCMAKE_BUILD_TYPE=Release \
       -DCMAKE_PREFIX_PATH="$prefix" -DECRF_USE_STATIC_LIBS=ON >/dev/null
 cmake --build "$work/cmake-static" -j"$jobs" --target decode_render
 "$work/cmake-static/decode_render" tests/conformance/scene_builtin.ecrf "$work/static.ppm" >/dev/null
-! ldd "$work/cmake-static/decode_render" | grep -q libecrf_decoder \
+libs="$(ldd "$work/cmake-static/decode_render")"
+! grep -q libecrf_decoder <<<"$libs" \
   || { echo "FAIL: ECRF_USE_STATIC_LIBS still links the shared library"; exit 1; }
 
 echo "== example with pkg-config"
@@ -64,7 +68,8 @@ echo "== trainer example against ecrf::trainer"
 "$work/cmake/train_encode" "${ECRF_TRAIN_ITERS:-30}"
 
 echo "== installed ecrf tool"
-"$prefix/bin/ecrf" info tests/conformance/scene_builtin.ecrf | head -3
+info="$("$prefix/bin/ecrf" info tests/conformance/scene_builtin.ecrf)"
+head -3 <<<"$info"
 
 echo "== ABI"
 bash tests/install/check_abi.sh "$prefix"
