@@ -41,7 +41,7 @@ const char kSweepUsage[] =
     "every `ecrf train` option applies to each run:\n";
 
 std::string SceneName(const trainer::TrainOptions& o) {
-  if (o.builtin_scene) return o.procedural_scene;
+  if (!o.procedural_scene.empty()) return o.procedural_scene;
   std::string d = o.data_dir;
   while (d.size() > 1 && d.back() == '/') d.pop_back();
   const size_t slash = d.find_last_of('/');
@@ -107,7 +107,7 @@ void CheckReusable(const nlohmann::json& m, const trainer::TrainOptions& o, cons
     throw std::runtime_error(path + ": finished run has " + what + " " + had + ", this sweep asks for " + want +
                              "; remove that run directory or report into another -o");
   };
-  const std::string data = o.builtin_scene ? o.procedural_scene : o.data_dir;
+  const std::string& data = trainer::DataSource(o);
   if (m.value("preset", "") != o.preset) mismatch("preset", m.value("preset", "?"), o.preset);
   if (!SameData(m.value("data", ""), data)) mismatch("data", m.value("data", "?"), data);
   if (m.value("iterations", -1) != o.iters) {
@@ -195,7 +195,7 @@ int RunReportSweep(int argc, char** argv) {
       return 2;
     }
   }
-  if (out.empty() || lambdas_text.empty() || (!o.builtin_scene && o.data_dir.empty())) {
+  if (out.empty() || lambdas_text.empty() || trainer::DataSource(o).empty()) {
     std::fprintf(stderr, "ecrf report sweep: needs --data DIR or --scene builtin|capture, --lambdas and -o\n\n%s%s",
                  kSweepUsage, kTrainFlagsUsage);
     return 2;
@@ -206,7 +206,7 @@ int RunReportSweep(int argc, char** argv) {
     lambdas.push_back(p.lambda);
     step_scales.push_back(p.step_scale);
   }
-  if (!stride_given) o.test_view_stride = o.builtin_scene ? 1 : 10;
+  if (!stride_given) o.test_view_stride = o.procedural_scene.empty() ? 10 : 1;
   if (!eval_given) o.eval_every = std::max(1, o.iters / 4);
   nlohmann::json anchors = nlohmann::json::array();
   if (!anchors_path.empty()) {
@@ -224,7 +224,7 @@ int RunReportSweep(int argc, char** argv) {
     report = ReadReport(out);  // keeps an earlier speed section
   }
   report["scene"] = SceneName(o);
-  report["data"] = o.builtin_scene ? o.procedural_scene : o.data_dir;
+  report["data"] = trainer::DataSource(o);
   report["sweep"] = {{"preset", o.preset},          {"iterations", o.iters},
                      {"lambdas", lambdas},          {"step_scales", step_scales}, {"alpha", o.alpha},
                      {"test_view_stride", o.test_view_stride}, {"max_test_views", o.max_test_views},

@@ -157,7 +157,7 @@ trainer::TrainOptions TrainOptionsFromArgs(int argc, char** argv, std::vector<in
 
 nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& o) {
   if (o.out_dir.empty()) throw std::invalid_argument("no output directory (-o RUN_DIR)");
-  if (!o.builtin_scene && o.data_dir.empty()) throw std::invalid_argument("no data: --data DIR or --scene builtin|capture");
+  if (trainer::DataSource(o).empty()) throw std::invalid_argument("no data: --data DIR or --scene builtin|capture");
   if (o.resume && !FileExists(o.out_dir + "/checkpoint.ckpt")) {
     throw std::invalid_argument("--resume: no checkpoint to resume from (" + o.out_dir + "/checkpoint.ckpt does not exist)");
   }
@@ -176,7 +176,7 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& o) {
   // Close the loop: encode, decode with the embeddable decoder, and score the decoded stream.
   trainer::EncodeOptions eo = trainer::RunEncodeOptions(o, rate);
   eo.metadata_json = nlohmann::json{{"encoder", "ecrf"},
-                                    {"data", o.builtin_scene ? o.procedural_scene : o.data_dir},
+                                    {"data", trainer::DataSource(o)},
                                     {"preset", o.preset},
                                     {"iterations", r.iterations},
                                     {"lambda_e", r.final_lambda_e},
@@ -217,7 +217,7 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& o) {
 
   nlohmann::json m;
   m["preset"] = o.preset;
-  m["data"] = o.builtin_scene ? o.procedural_scene : o.data_dir;
+  m["data"] = trainer::DataSource(o);
   m["iterations"] = r.iterations;
   m["seed"] = o.seed;
   m["test_view_stride"] = o.test_view_stride;

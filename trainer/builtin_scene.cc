@@ -90,13 +90,7 @@ Image Render(const Camera& camera) {
 }  // namespace
 
 Dataset MakeBuiltinScene(const std::string& split, int width, int height, int num_views, uint32_t seed) {
-  if (split != "train" && split != "val" && split != "test") {
-    throw std::runtime_error("builtin scene: unknown split '" + split + "' (expected train, val or test)");
-  }
-  if (width < 1 || height < 1 || width > 4096 || height > 4096) {
-    throw std::runtime_error("builtin scene: image size " + std::to_string(width) + "x" + std::to_string(height) +
-                             " must be within 1..4096");
-  }
+  procedural::CheckSceneArguments("builtin", split, width, height);
   if (num_views < 1) {
     throw std::runtime_error("builtin scene: num_views must be >= 1, got " + std::to_string(num_views));
   }

@@ -106,13 +106,7 @@ void CaptureSceneRadiance(const float origin[3], const float dir[3], float rgb[3
 }
 
 Dataset MakeCaptureScene(const std::string& split, int width, int height, int num_frames, uint32_t seed) {
-  if (split != "train" && split != "val" && split != "test") {
-    throw std::runtime_error("capture scene: unknown split '" + split + "' (expected train, val or test)");
-  }
-  if (width < 1 || height < 1 || width > 4096 || height > 4096) {
-    throw std::runtime_error("capture scene: image size " + std::to_string(width) + "x" + std::to_string(height) +
-                             " must be within 1..4096");
-  }
+  procedural::CheckSceneArguments("capture", split, width, height);
   if (num_frames < 2) {
     throw std::runtime_error("capture scene: num_frames must be >= 2 (frame 0 is the only test frame), got " +
                              std::to_string(num_frames));

@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <cstdint>
+#include <stdexcept>
+#include <string>
 
 namespace ecrf::trainer::procedural {
 
@@ -20,6 +22,18 @@ inline double Dot(Vec3 a, Vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 inline Vec3 Cross(Vec3 a, Vec3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
 inline Vec3 Normalized(Vec3 a) { return a * (1.0 / std::sqrt(Dot(a, a))); }
 inline double Axis(Vec3 v, int axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
+
+// The arguments every procedural scene takes, checked alike: "NAME scene: ..." errors.
+inline void CheckSceneArguments(const char* scene, const std::string& split, int width, int height) {
+  const std::string what = std::string(scene) + " scene: ";
+  if (split != "train" && split != "val" && split != "test") {
+    throw std::runtime_error(what + "unknown split '" + split + "' (expected train, val or test)");
+  }
+  if (width < 1 || height < 1 || width > 4096 || height > 4096) {
+    throw std::runtime_error(what + "image size " + std::to_string(width) + "x" + std::to_string(height) +
+                             " must be within 1..4096");
+  }
+}
 
 // splitmix64: the same numbers on every platform, unlike std:: distributions.
 class Random {

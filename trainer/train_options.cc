@@ -46,7 +46,6 @@ void SelectProceduralScene(const std::string& name, TrainOptions* o) {
   if (name != "builtin" && name != "capture") {
     throw std::invalid_argument("--scene: unknown scene '" + name + "' (builtin or capture; for files use --data DIR)");
   }
-  o->builtin_scene = true;
   o->procedural_scene = name;
 }
 

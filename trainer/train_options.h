@@ -19,8 +19,7 @@ struct TrainOptions {
   std::string preset = "fast";
   // Data.
   std::string data_dir;        // NeRF Blender or Instant-NGP/nerfstudio layout
-  bool builtin_scene = false;  // a procedural scene instead of data_dir
-  std::string procedural_scene = "builtin";  // which: "builtin" (Blender-like) or "capture"
+  std::string procedural_scene;  // "builtin" (Blender-like) or "capture" instead of data_dir; "" = data_dir
   int downscale = 1;
   std::string out_dir;
 
@@ -105,6 +104,11 @@ TrainOptions PresetOptions(const std::string& name);
 //   "high"   lambda_e 2e-11, steps x1 (1,044,897 B, 35.19 dB before quantization-aware training)
 // (README "Training" gives the commands.) Throws std::invalid_argument for other names.
 void ApplyRatePoint(const std::string& name, TrainOptions* options);
+
+// What a run's metrics record as its data: the procedural scene's name or the data directory.
+inline const std::string& DataSource(const TrainOptions& o) {
+  return o.procedural_scene.empty() ? o.data_dir : o.procedural_scene;
+}
 
 // --scene NAME: selects the procedural scene "builtin" or "capture" instead of --data.
 // Throws std::invalid_argument for other names.

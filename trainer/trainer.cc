@@ -76,10 +76,10 @@ void PrintProgress(int it, int iters, double loss, double psnr, const TensorfMod
 }  // namespace
 
 Dataset LoadTrainingViews(const TrainOptions& o, const std::string& split) {
-  if (o.builtin_scene && o.procedural_scene == "capture") {
+  if (o.procedural_scene == "capture") {
     return MakeCaptureScene(split, o.capture_width, o.capture_height, o.capture_frames, o.seed);
   }
-  if (o.builtin_scene) {
+  if (!o.procedural_scene.empty()) {
     if (o.procedural_scene != "builtin") throw std::invalid_argument("unknown scene '" + o.procedural_scene + "'");
     const int views = split == "train" ? o.builtin_views : std::max(4, o.builtin_views / 4);
     return MakeBuiltinScene(split, o.builtin_size, o.builtin_size, views, o.seed);

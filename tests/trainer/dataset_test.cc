@@ -13,27 +13,20 @@
 
 #include <nlohmann/json.hpp>
 
+#include "tests/common/error_of.h"
 #include "trainer/camera.h"
 #include "trainer/image_io.h"
 
 namespace ecrf::trainer {
 namespace {
 
+using testing_errors::ErrorOf;
+using testing_errors::Contains;
+
 namespace fs = std::filesystem;
 using nlohmann::json;
 
 constexpr double kAngleX = 0.6911112070083618;  // chair's camera_angle_x
-
-std::string ErrorOf(const std::function<void()>& action) {
-  try {
-    action();
-  } catch (const std::runtime_error& error) {
-    return error.what();
-  }
-  return "";
-}
-
-bool Contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 json Translation(double x, double y, double z) {
   return json::array({json::array({1, 0, 0, x}), json::array({0, 1, 0, y}), json::array({0, 0, 1, z}),

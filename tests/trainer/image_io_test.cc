@@ -21,8 +21,12 @@
 #include <string>
 #include <vector>
 
+#include "tests/common/error_of.h"
+
 namespace ecrf::trainer {
 namespace {
+
+using testing_errors::ErrorOf;
 
 namespace fs = std::filesystem;
 
@@ -59,15 +63,6 @@ Image Ramp(int width, int height, int channels, int levels) {
     image.pixels[i] = static_cast<float>((i * 37) % (levels + 1)) / static_cast<float>(levels);
   }
   return image;
-}
-
-std::string ErrorOf(const std::function<void()>& action) {
-  try {
-    action();
-  } catch (const std::runtime_error& error) {
-    return error.what();
-  }
-  return "";
 }
 
 // Encodes RGB or gray bytes with libjpeg, quality 95.

@@ -1,3 +1,4 @@
+#include "tests/common/error_of.h"
 #include "trainer/llff.h"
 
 #include <gtest/gtest.h>
@@ -20,21 +21,13 @@
 namespace ecrf::trainer {
 namespace {
 
+using testing_errors::ErrorOf;
+using testing_errors::Contains;
+
 namespace fs = std::filesystem;
 
 constexpr int kImages = 10;
 constexpr double kHeight = 48, kWidth = 64, kFocal = 50;  // hwf of the full-size capture
-
-std::string ErrorOf(const std::function<void()>& action) {
-  try {
-    action();
-  } catch (const std::runtime_error& error) {
-    return error.what();
-  }
-  return "";
-}
-
-bool Contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 // np.save's layout: magic, version, header length, a dict literal padded to 64 bytes.
 std::vector<uint8_t> NpyBytes(const std::vector<double>& values, const std::string& shape,

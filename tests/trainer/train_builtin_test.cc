@@ -23,7 +23,7 @@ namespace {
 
 TrainOptions SmallRun() {
   TrainOptions o = PresetOptions("tiny");
-  o.builtin_scene = true;
+  o.procedural_scene = "builtin";
   o.builtin_size = 48;
   o.builtin_views = 40;
   o.iters = 400;

@@ -60,6 +60,18 @@ async function waitError(page, timeout = 30000) {
   return (await state(page)).error;
 }
 
+// Drops the first 100 bytes of the test scene on the page (the whole page is the drop zone) and
+// returns the error the viewer then shows.
+async function dropTruncatedScene(page) {
+  await page.evaluate(async (scene) => {
+    const bytes = new Uint8Array(await (await fetch(scene)).arrayBuffer()).slice(0, 100);
+    const dt = new DataTransfer();
+    dt.items.add(new File([bytes], 'truncated.ecrf'));
+    document.body.dispatchEvent(new DragEvent('drop', {dataTransfer: dt, bubbles: true, cancelable: true}));
+  }, SCENE);
+  return waitError(page);
+}
+
 // PSNR over RGB of the viewer's last full frame (read back through the hook, not a screenshot)
 // against EcrfDecoder.render of the same camera, run in the page by the wasm decoder.
 async function psnrAgainstWasm(page) {
@@ -148,13 +160,7 @@ try {
     await controlsChecks(page, 'cpu');
 
     // A bad file after a good one: error shown, old scene gone.
-    await page.evaluate(async (scene) => {
-      const bytes = new Uint8Array(await (await fetch(scene)).arrayBuffer()).slice(0, 100);
-      const dt = new DataTransfer();
-      dt.items.add(new File([bytes], 'truncated.ecrf'));
-      document.body.dispatchEvent(new DragEvent('drop', {dataTransfer: dt, bubbles: true, cancelable: true}));
-    }, SCENE);
-    const error = await waitError(page);
+    const error = await dropTruncatedScene(page);
     const cleared = await page.evaluate(() => {
       const c = document.getElementById('view');
       const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
@@ -256,13 +262,7 @@ try {
     await waitIdle(page, 120000);
     const big = await state(page);
     check(Math.max(big.last.width, big.last.height) === 32, `gpu: size cap 32 gives a ${big.last.width}x${big.last.height} frame (${big.last.ms.toFixed(0)} ms)`);
-    await page.evaluate(async (scene) => {
-      const bytes = new Uint8Array(await (await fetch(scene)).arrayBuffer()).slice(0, 100);
-      const dt = new DataTransfer();
-      dt.items.add(new File([bytes], 'truncated.ecrf'));
-      document.body.dispatchEvent(new DragEvent('drop', {dataTransfer: dt, bubbles: true, cancelable: true}));
-    }, SCENE);
-    const error = await waitError(page);
+    const error = await dropTruncatedScene(page);
     const cleared = await page.evaluate(() => ({scene: !!ecrfViewer.state.scene, gpu: ecrfViewer.renderer.hasScene,
                                                 pixels: ecrfViewer.readPixels()}));
     check(/truncated/.test(error) && !cleared.scene && !cleared.gpu && !cleared.pixels, `gpu: a bad file shows an error and clears the scene: ${error}`);
