@@ -40,7 +40,8 @@ const char kTrainFlagsUsage[] =
     "  --rate low|medium|high     named rate points (default medium): lambda_e 5e-10, 2e-11, 2e-11\n"
     "                             with steps x4, x3, x1 (low: 31 MLP levels; give --mlp-levels after it)\n"
     "  --target-size SIZE         adapt lambda_e during training, then the steps at encode time, for\n"
-    "                             a file of at most SIZE (e.g. 500KB, 1.2MB)\n"
+    "                             a file of at most SIZE (e.g. 500KB, 1.2MB); the step scale and MLP\n"
+    "                             levels follow the nearest rate point unless given\n"
     "  --alpha A                  lambda_r = A * lambda_e for the DCT-coefficient L2 term (default 1)\n"
     "  --dct-block CxHxW          plane block shape (default 16x16x16)\n"
     "  --line-block CxL           line block shape (default 8x8)\n"
@@ -149,6 +150,12 @@ trainer::TrainOptions TrainOptionsFromArgs(int argc, char** argv, std::vector<in
     const int at = i;
     if (!ParseTrainFlag(argc, argv, &i, &o)) rest->push_back(at);
   }
+  bool step_scale_given = false, mlp_levels_given = false;
+  for (int i = 1; i < argc; ++i) {
+    step_scale_given |= !std::strcmp(argv[i], "--quant-step-scale") || !std::strcmp(argv[i], "--rate");
+    mlp_levels_given |= !std::strcmp(argv[i], "--mlp-levels") || !std::strcmp(argv[i], "--rate");
+  }
+  trainer::ApplyTargetSizeDefaults(&o, step_scale_given, mlp_levels_given);
   if (o.iters < 1) throw std::invalid_argument("--iters must be at least 1");
   // Stopping on purpose keeps the work: a checkpoint is written at the stop.
   if (o.stop_after > 0 && o.checkpoint_every == 0) o.checkpoint_every = o.stop_after;

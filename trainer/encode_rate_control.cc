@@ -1,5 +1,6 @@
 #include "trainer/encode_rate_control.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -27,6 +28,16 @@ Encoded EncodeWithScale(const TensorfModel& model, EncodeOptions o, const std::v
 
 }  // namespace
 
+double FinestStepScale(const TensorfModel& model, const EncodeOptions& options, const std::vector<float>& base) {
+  const double max_level = options.coef_bits == 16 ? 32767.0 : 127.0;
+  const std::vector<float> peaks = PeakCoefficients(model, options.blocks);
+  double finest = 0.0;
+  for (size_t t = 0; t < base.size() && t < peaks.size(); ++t) {
+    if (peaks[t] > 0.f && base[t] > 0.f) finest = std::max(finest, double(peaks[t]) / max_level / double(base[t]));
+  }
+  return std::min(1.0, finest > 0.0 ? finest : 1.0);
+}
+
 TargetSizeResult EncodeToTargetSize(const TensorfModel& model, const EncodeOptions& options,
                                     size_t target_bytes) {
   EncodeOptions o = options;
@@ -34,27 +45,42 @@ TargetSizeResult EncodeToTargetSize(const TensorfModel& model, const EncodeOptio
       o.steps.empty() ? ChooseQuantSteps(model, o.blocks, o.coef_bits) : o.steps;
   o.steps = base;
   TargetSizeResult r;
+  auto close_enough = [&](const Encoded& e) { return e.bytes.size() >= size_t(0.99 * double(target_bytes)); };
+  auto done = [&](Encoded e, double scale) {
+    r.bytes = std::move(e.bytes);
+    r.report = e.report;
+    r.step_scale = scale;
+    return std::move(r);
+  };
   Encoded fit = EncodeWithScale(model, o, base, 1.0, &r.encodes);
+  // Invariant of both searches: lo's file is too large, hi's fits. Sizes fall (almost)
+  // monotonically with the scale; bisection in log space stops once the fitting file is within
+  // 1% of the budget.
+  double lo = 1.0, hi = 1.0;
   if (fit.bytes.size() <= target_bytes) {
-    r.bytes = std::move(fit.bytes);
-    r.report = fit.report;
-    return r;
+    if (close_enough(fit)) return done(std::move(fit), 1.0);
+    // Steps coarser than the 8-bit peak step (trained with --quant-step-scale) may be refined
+    // down to it; nothing finer, or the largest coefficients would clip.
+    const double finest = FinestStepScale(model, o, base);
+    if (!(finest < 1.0)) return done(std::move(fit), 1.0);
+    Encoded fine = EncodeWithScale(model, o, base, finest, &r.encodes);
+    if (fine.bytes.size() <= target_bytes) return done(std::move(fine), finest);
+    lo = finest;
+  } else {
+    Encoded coarsest = EncodeWithScale(model, o, base, kMaxStepScale, &r.encodes);
+    if (coarsest.bytes.size() > target_bytes) {
+      char msg[256];
+      std::snprintf(msg, sizeof(msg),
+                    "cannot reach %zu bytes by coarser quantization: the smallest file is %zu bytes (steps x%g), of "
+                    "which the MLP takes %zu and the occupancy mask %zu",
+                    target_bytes, coarsest.bytes.size(), kMaxStepScale, coarsest.report.mlp_bytes,
+                    coarsest.report.occupancy_bytes);
+      throw std::runtime_error(msg);
+    }
+    hi = kMaxStepScale;
+    fit = std::move(coarsest);
   }
-  Encoded coarsest = EncodeWithScale(model, o, base, kMaxStepScale, &r.encodes);
-  if (coarsest.bytes.size() > target_bytes) {
-    char msg[256];
-    std::snprintf(msg, sizeof(msg),
-                  "cannot reach %zu bytes by coarser quantization: the smallest file is %zu bytes (steps x%g), of "
-                  "which the MLP takes %zu and the occupancy mask %zu",
-                  target_bytes, coarsest.bytes.size(), kMaxStepScale, coarsest.report.mlp_bytes,
-                  coarsest.report.occupancy_bytes);
-    throw std::runtime_error(msg);
-  }
-  // Invariant: lo's file is too large, hi's fits. Sizes fall (almost) monotonically with the
-  // scale; bisection in log space stops once the fitting file is within 1% of the budget.
-  double lo = 1.0, hi = kMaxStepScale;
-  fit = std::move(coarsest);
-  for (int it = 0; it < 24 && fit.bytes.size() < size_t(0.99 * double(target_bytes)); ++it) {
+  for (int it = 0; it < 24 && !close_enough(fit); ++it) {
     const double mid = std::sqrt(lo * hi);
     Encoded e = EncodeWithScale(model, o, base, mid, &r.encodes);
     if (e.bytes.size() <= target_bytes) {
@@ -64,10 +90,7 @@ TargetSizeResult EncodeToTargetSize(const TensorfModel& model, const EncodeOptio
       lo = mid;
     }
   }
-  r.bytes = std::move(fit.bytes);
-  r.report = fit.report;
-  r.step_scale = hi;
-  return r;
+  return done(std::move(fit), hi);
 }
 
 size_t ParseByteSize(const std::string& text) {

@@ -16,9 +16,8 @@ const char* RateTensorName(int t) {
   return t >= 0 && t < 12 ? kNames[t] : "?";
 }
 
-std::vector<float> ChooseQuantSteps(const TensorfModel& model, const RateConfig& config, int coef_bits) {
-  const float max_level = coef_bits == 16 ? 32767.f : 127.f;
-  std::vector<float> steps;
+std::vector<float> PeakCoefficients(const TensorfModel& model, const RateConfig& config) {
+  std::vector<float> peaks;
   for (const VmGrid* grid : {&model.density(), &model.appearance()}) {
     for (int t = 0; t < kTensorsPerGrid; ++t) {
       const GridBlockLayout layout = RateTensorLayout(*grid, t, config);
@@ -26,10 +25,17 @@ std::vector<float> ChooseQuantSteps(const TensorfModel& model, const RateConfig&
       ForwardBlocks(RateTensorData(*grid, t), layout, coeffs.data());
       float peak = 0.f;
       for (float c : coeffs) peak = std::max(peak, std::fabs(c));
-      // An all-zero tensor still needs a positive step; any value codes it as zeros.
-      steps.push_back(peak > 0.f ? peak / max_level : 1.f);
+      peaks.push_back(peak);
     }
   }
+  return peaks;
+}
+
+std::vector<float> ChooseQuantSteps(const TensorfModel& model, const RateConfig& config, int coef_bits) {
+  const float max_level = coef_bits == 16 ? 32767.f : 127.f;
+  std::vector<float> steps = PeakCoefficients(model, config);
+  // An all-zero tensor still needs a positive step; any value codes it as zeros.
+  for (float& s : steps) s = s > 0.f ? s / max_level : 1.f;
   return steps;
 }
 

@@ -41,6 +41,9 @@ struct RateState {
 // block-DCT coefficients maps to the largest level (127 for 8 bits), so nothing clips. The
 // encoder uses the same rule when the rate objective was off.
 std::vector<float> ChooseQuantSteps(const TensorfModel& model, const RateConfig& config, int coef_bits);
+// The largest block-DCT coefficient magnitude of each tensor (0 for an all-zero tensor), in the
+// order of ChooseQuantSteps.
+std::vector<float> PeakCoefficients(const TensorfModel& model, const RateConfig& config);
 
 // Name of tensor index t (0..11) as in checkpoints: "density.plane.0" ... "appearance.line.2".
 const char* RateTensorName(int t);

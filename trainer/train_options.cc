@@ -67,6 +67,19 @@ void ApplyRatePoint(const std::string& name, TrainOptions* o) {
   }
 }
 
+double NominalFloat32GridBytes(const TrainOptions& o) {
+  const double res = std::cbrt(double(o.voxels_final));
+  const double ranks = 3.0 * (o.density_rank + o.appearance_rank);
+  return 4.0 * ranks * (res * res + res);
+}
+
+void ApplyTargetSizeDefaults(TrainOptions* o, bool step_scale_given, bool mlp_levels_given) {
+  if (o->target_bytes == 0) return;
+  const double share = double(o->target_bytes) / NominalFloat32GridBytes(*o);
+  if (!step_scale_given) o->quant_step_scale = share < 0.016 ? 4.0f : share < 0.03 ? 3.0f : share < 0.045 ? 2.0f : 1.0f;
+  if (!mlp_levels_given && share < 0.016) o->mlp_levels = 31;
+}
+
 int ScaleMilestone(int milestone, int iters, int reference_iters) {
   if (reference_iters <= 0 || iters == reference_iters) return milestone;
   return int(std::lround(double(milestone) * iters / reference_iters));

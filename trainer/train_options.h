@@ -105,6 +105,18 @@ TrainOptions PresetOptions(const std::string& name);
 // (README "Training" gives the commands.) Throws std::invalid_argument for other names.
 void ApplyRatePoint(const std::string& name, TrainOptions* options);
 
+// The float32 size of the grids a run of these options ends with, before the box shrinks
+// (voxels_final cubic voxels, every rank of both grids): what --target-size is measured against
+// when it picks a step scale, before any data is read.
+double NominalFloat32GridBytes(const TrainOptions& options);
+
+// --target-size without --quant-step-scale / --mlp-levels: the step scale (and MLP levels) of the
+// nearest named rate point, by the target's share of NominalFloat32GridBytes. On chair-400 `fast`
+// (docs/reports/chair_v2) steps x4 with 31 MLP levels win below about 1.6% (400 KB), x3 up to
+// about 3%, x2 up to 4.5%, x1 above. The trained steps may still be refined at encode time
+// (trainer/encode_rate_control.h), so a scale picked too coarse costs little.
+void ApplyTargetSizeDefaults(TrainOptions* options, bool step_scale_given, bool mlp_levels_given);
+
 // What a run's metrics record as its data: the procedural scene's name or the data directory.
 inline const std::string& DataSource(const TrainOptions& o) {
   return o.procedural_scene.empty() ? o.data_dir : o.procedural_scene;

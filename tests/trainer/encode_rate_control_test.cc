@@ -4,6 +4,7 @@
 
 #include <stdexcept>
 
+#include "trainer/rate_state.h"
 #include "trainer/tensorf_model.h"
 
 namespace ecrf {
@@ -46,6 +47,34 @@ TEST(EncodeRateControl, LandsJustUnderEachTarget) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("smallest file"), std::string::npos) << e.what();
   }
+}
+
+// Steps trained 4x coarser than the 8-bit peak step leave room below: a target above their file is
+// reached with finer steps, never finer than the peak step (no coefficient clips).
+TEST(EncodeRateControl, RefinesCoarseStepsUpToThePeakStep) {
+  const TensorfModel model = Model();
+  EncodeOptions o;
+  o.blocks.plane_block[0] = 4;
+  const std::vector<float> peak = ChooseQuantSteps(model, o.blocks, o.coef_bits);
+  EXPECT_DOUBLE_EQ(FinestStepScale(model, o, peak), 1.0);
+  for (float s : peak) o.steps.push_back(4.f * s);
+  EXPECT_NEAR(FinestStepScale(model, o, o.steps), 0.25, 1e-6);
+  const size_t coarse = EncodeScene(model, o).size();
+  EncodeOptions at_peak = o;
+  at_peak.steps = peak;
+  const size_t finest = EncodeScene(model, at_peak).size();
+  ASSERT_GT(finest, coarse + coarse / 10);
+
+  const size_t target = (coarse + finest) / 2;
+  const TargetSizeResult r = EncodeToTargetSize(model, o, target);
+  EXPECT_LE(r.bytes.size(), target);
+  EXPECT_GE(double(r.bytes.size()), 0.95 * double(target));
+  EXPECT_LT(r.step_scale, 1.0);
+  EXPECT_GE(r.step_scale, 0.25 - 1e-9);
+  // Above the finest file: the finest file, at the peak steps.
+  const TargetSizeResult top = EncodeToTargetSize(model, o, 2 * finest);
+  EXPECT_NEAR(top.step_scale, 0.25, 1e-6);
+  EXPECT_EQ(top.bytes.size(), finest);
 }
 
 TEST(EncodeRateControl, ParsesSizes) {

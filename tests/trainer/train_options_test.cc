@@ -92,6 +92,36 @@ TEST(RatePoints, NamedPointsSetLambdaStepsAndMlpLevels) {
   EXPECT_THROW(ApplyRatePoint("extreme", &o), std::invalid_argument);
 }
 
+TEST(RatePoints, TargetSizeTakesTheStepsOfTheNearestRatePoint) {
+  TrainOptions o = PresetOptions("fast");
+  const double grid_bytes = NominalFloat32GridBytes(o);
+  EXPECT_NEAR(grid_bytes, 25.0e6, 0.1e6);  // 180^3 voxels, 3 x (16 + 48) components
+  struct Case {
+    size_t target;
+    float scale;
+    int levels;
+  } cases[] = {{300000, 4.f, 31}, {600000, 3.f, 127}, {1000000, 2.f, 127}, {1200000, 1.f, 127}};
+  for (const Case& c : cases) {
+    TrainOptions t = o;
+    t.target_bytes = c.target;
+    ApplyTargetSizeDefaults(&t, false, false);
+    EXPECT_EQ(t.quant_step_scale, c.scale) << c.target;
+    EXPECT_EQ(t.mlp_levels, c.levels) << c.target;
+  }
+  // What the user gave stays; without a target nothing changes.
+  TrainOptions given = o;
+  given.target_bytes = 300000;
+  given.quant_step_scale = 2.5f;
+  given.mlp_levels = 63;
+  ApplyTargetSizeDefaults(&given, true, true);
+  EXPECT_EQ(given.quant_step_scale, 2.5f);
+  EXPECT_EQ(given.mlp_levels, 63);
+  TrainOptions none = o;
+  ApplyTargetSizeDefaults(&none, false, false);
+  EXPECT_EQ(none.quant_step_scale, o.quant_step_scale);
+  EXPECT_EQ(none.mlp_levels, o.mlp_levels);
+}
+
 }  // namespace
 }  // namespace trainer
 }  // namespace ecrf
