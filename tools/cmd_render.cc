@@ -31,7 +31,7 @@ const char kEvalUsage[] =
     "usage: ecrf eval SCENE.ecrf (--data DIR | --scene builtin|capture) [options]\n"
     "  --split NAME        split to score (default test)\n"
     "  --seed N            the procedural scene's seed (as given to train)\n"
-    "  --downscale N       shrink the images by N\n"
+    "  --downscale N       score at 1/N of the image size (area filter; also for --scene)\n"
     "  --image-scale K     render at 1/K of the size, score the bilinear upsampling to full size\n"
     "  --stride K          every K-th view\n"
     "  --max-views N       at most N views\n"
@@ -260,12 +260,13 @@ int RunEval(int argc, char** argv) {
   const LoadedScene s = LoadSceneFile(c.scene, c.int16 ? dec::GridStorage::kInt16 : dec::GridStorage::kFloat32,
                                       c.max_memory_bytes);
   const trainer::Dataset test = procedural.empty() ? trainer::LoadDataset(data, split, downscale)
-                                                   : ProceduralDataset(procedural, split, seed);
+                                                   : trainer::DownscaleViews(ProceduralDataset(procedural, split, seed), downscale);
   const trainer::EvalResult r = EvaluateDecoded(*s.field, test, stride, c.max_views, RenderOptionsFor(c), false, image_scale);
   std::printf("%s: %zu bytes, PSNR %.2f dB, SSIM %.4f over %d %s views; decode %.1f ms, render %.1f ms/view "
-              "(%d thread%s, %s grids)\n",
+              "(%d thread%s, %s grids; %.1f samples, %.1f MLP samples per ray)\n",
               c.scene.c_str(), s.bytes.size(), r.psnr, r.ssim, r.views, split.c_str(), 1e3 * s.decode_seconds,
-              1e3 * r.seconds_per_view, c.threads, c.threads == 1 ? "" : "s", c.int16 ? "int16" : "float32");
+              1e3 * r.seconds_per_view, c.threads, c.threads == 1 ? "" : "s", c.int16 ? "int16" : "float32",
+              r.samples_per_ray, r.color_samples_per_ray);
   if (!json_path.empty()) {
     nlohmann::json j = {{"scene", c.scene},          {"bytes", s.bytes.size()},
                         {"psnr", r.psnr},            {"ssim", r.ssim},
@@ -273,6 +274,9 @@ int RunEval(int argc, char** argv) {
                         {"render_seconds_per_view", r.seconds_per_view},
                         {"threads", c.threads},      {"grid_storage", c.int16 ? "int16" : "float32"},
                         {"image_scale", image_scale},
+                        {"downscale", downscale},
+                        {"samples_per_ray", r.samples_per_ray},
+                        {"mlp_samples_per_ray", r.color_samples_per_ray},
                         {"render_options",
                          {{"skip_empty_space", c.render.skip_empty_space},
                           {"early_stop_transmittance", c.render.early_stop_transmittance},

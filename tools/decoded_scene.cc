@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <stdexcept>
 
 #include "trainer/camera.h"
 #include "trainer/checkpoint.h"
+#include "trainer/eval_progress.h"
 #include "trainer/image_metrics.h"
 
 namespace ecrf {
@@ -101,6 +103,8 @@ trainer::EvalResult EvaluateDecoded(const dec::SceneField& scene, const trainer:
   double render_seconds = 0.0;
   stride = std::max(1, stride);
   image_scale = std::max(1, image_scale);
+  dec::RenderStats all;
+  trainer::EvalProgress progress("evaluating the decoded file", trainer::EvalViewCount(test.views.size(), stride, max_views));
   for (size_t v = 0; v < test.views.size(); v += size_t(stride)) {
     if (max_views > 0 && r.views >= max_views) break;
     trainer::Camera camera = test.views[v].camera;
@@ -115,19 +119,29 @@ trainer::EvalResult EvaluateDecoded(const dec::SceneField& scene, const trainer:
       camera.cy *= ky;
     }
     const auto start = std::chrono::steady_clock::now();
-    trainer::Image img = RenderDecoded(scene, camera, options, stats);
+    trainer::Image img = RenderDecoded(scene, camera, options, &all);
     render_seconds += SecondsSince(start);
     if (image_scale > 1) img = ResizeBilinear(img, test.views[v].rgb.width, test.views[v].rgb.height);
     r.psnr += std::min(100.0, trainer::Psnr(img, test.views[v].rgb));
     r.ssim += trainer::Ssim(img, test.views[v].rgb);
     ++r.views;
     if (keep_renders) r.renders.push_back(std::move(img));
+    char extra[96];
+    std::snprintf(extra, sizeof(extra), "%.1f samples and %.1f MLP samples per ray",
+                  double(all.samples) / double(std::max<uint64_t>(1, all.rays)),
+                  double(all.color_samples) / double(std::max<uint64_t>(1, all.rays)));
+    progress.ViewDone(extra);
   }
   if (r.views > 0) {
     r.psnr /= r.views;
     r.ssim /= r.views;
     r.seconds_per_view = render_seconds / r.views;
   }
+  if (all.rays > 0) {
+    r.samples_per_ray = double(all.samples) / double(all.rays);
+    r.color_samples_per_ray = double(all.color_samples) / double(all.rays);
+  }
+  if (stats) stats->Add(all);
   return r;
 }
 

@@ -33,6 +33,7 @@ const char kTrainFlagsUsage[] =
     "  --eval-every N             test PSNR every N iterations (a PSNR-vs-minutes curve)\n"
     "  --test-stride K            evaluate every K-th test view\n"
     "  --max-test-views N         evaluate at most N test views\n"
+    "  --eval-downscale N         score the test views at 1/N of their size (area filter)\n"
     "  --save-renders             write the test renders as PNG into RUN_DIR/renders\n"
     "  --threads N                worker threads (default: all cores)\n"
     "ECRF objective:\n"
@@ -83,6 +84,9 @@ bool ParseTrainFlag(int argc, char** argv, int* i, trainer::TrainOptions* o) {
     o->eval_every = ParseInt("--eval-every", value());
   } else if (a == "--test-stride") {
     o->test_view_stride = std::max(1, ParseInt("--test-stride", value()));
+  } else if (a == "--eval-downscale") {
+    o->eval_downscale = ParseInt("--eval-downscale", value());
+    if (o->eval_downscale < 1) throw std::invalid_argument("--eval-downscale must be at least 1");
   } else if (a == "--max-test-views") {
     o->max_test_views = ParseInt("--max-test-views", value());
   } else if (a == "--lambda-e") {
@@ -171,9 +175,10 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& o) {
   const OutputDirectory out_dir(o.out_dir);  // before the data: a bad -o fails now
 
   const trainer::Dataset train = trainer::LoadTrainingViews(o, "train");
-  const trainer::Dataset test = trainer::LoadTrainingViews(o, "test");
-  std::fprintf(stderr, "data: %zu train views, %zu test views (%dx%d)\n", train.views.size(),
-               test.views.size(), train.views[0].rgb.width, train.views[0].rgb.height);
+  const trainer::Dataset test = trainer::DownscaleViews(trainer::LoadTrainingViews(o, "test"), o.eval_downscale);
+  std::fprintf(stderr, "data: %zu train views, %zu test views (%dx%d, scored at %dx%d)\n", train.views.size(),
+               test.views.size(), train.views[0].rgb.width, train.views[0].rgb.height,
+               test.views.empty() ? 0 : test.views[0].rgb.width, test.views.empty() ? 0 : test.views[0].rgb.height);
   trainer::TensorfModel model(trainer::ConfigFor(o, train));
   trainer::RateState rate;
   const trainer::TrainResult r = trainer::Train(o, train, test, &model, &rate);
@@ -218,9 +223,10 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& o) {
               r.iterations, r.train_seconds, r.train_seconds / std::max(1, r.iterations), r.test.psnr,
               r.test.ssim, r.test.views, float_bytes / 1e6, r.rate.total_bits / 8e6);
   std::printf("encoded %s/scene.ecrf: %zu bytes (%.1fx smaller than float32); decoded stream: test PSNR %.2f dB "
-              "(%+.2f dB), SSIM %.4f; decode %.0f ms, render %.0f ms/view\n",
+              "(%+.2f dB), SSIM %.4f; decode %.0f ms, render %.0f ms/view (%.1f samples, %.1f MLP samples per ray)\n",
               o.out_dir.c_str(), decoded.bytes.size(), double(float_bytes) / decoded.bytes.size(), d.psnr,
-              d.psnr - r.test.psnr, d.ssim, 1e3 * decoded.decode_seconds, 1e3 * d.seconds_per_view);
+              d.psnr - r.test.psnr, d.ssim, 1e3 * decoded.decode_seconds, 1e3 * d.seconds_per_view,
+              d.samples_per_ray, d.color_samples_per_ray);
 
   nlohmann::json m;
   m["preset"] = o.preset;
@@ -229,6 +235,7 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& o) {
   m["seed"] = o.seed;
   m["test_view_stride"] = o.test_view_stride;
   m["max_test_views"] = o.max_test_views;
+  m["eval_downscale"] = o.eval_downscale;
   m["train_seconds"] = r.train_seconds;
   m["train_psnr"] = r.final_train_psnr;
   m["test_psnr"] = r.test.psnr;
@@ -255,6 +262,8 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& o) {
   m["decoded_test_ssim"] = d.ssim;
   m["decode_seconds"] = decoded.decode_seconds;
   m["decoded_render_seconds_per_view"] = d.seconds_per_view;
+  m["decoded_samples_per_ray"] = d.samples_per_ray;
+  m["decoded_mlp_samples_per_ray"] = d.color_samples_per_ray;
   m["encode_seconds"] = encode_seconds;
   m["encode"] = EncodeReportJson(report);
   m["coded_to_estimated_grid_bytes"] = r.rate.total_bits > 0 ? report.coefficient_bytes() * 8.0 / r.rate.total_bits : 0.0;

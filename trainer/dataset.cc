@@ -434,4 +434,18 @@ Dataset LoadDataset(const std::string& dir, const std::string& split, int downsc
   return dataset;
 }
 
+Dataset DownscaleViews(Dataset dataset, int factor) {
+  if (factor < 1) throw std::invalid_argument("downscale must be >= 1, got " + std::to_string(factor));
+  if (factor == 1) return dataset;
+  for (View& view : dataset.views) {
+    if (view.rgb.width < factor || view.rgb.height < factor) {
+      throw std::invalid_argument("downscale " + std::to_string(factor) + " leaves no pixel of a " +
+                                  std::to_string(view.rgb.width) + "x" + std::to_string(view.rgb.height) + " view");
+    }
+    view.rgb = DownscaleArea(view.rgb, factor);
+    view.camera = ScaledCamera(view.camera, factor);
+  }
+  return dataset;
+}
+
 }  // namespace ecrf::trainer

@@ -72,6 +72,10 @@ void NgpAabb(double aabb_scale, double scale, const double offset[3], double aab
 // a camera to a box corner (no ray leaves the box later).
 void NearFarFromCameras(const std::vector<Camera>& cameras, const double aabb[2][3], double* near, double* far);
 
+// The views area-filtered to 1/factor of their size with their cameras scaled to match (what
+// --downscale does at load time), for evaluating at less than capture resolution.
+Dataset DownscaleViews(Dataset dataset, int factor);
+
 // ReadDatasetManifest + LoadViews. downscale >= 1.
 Dataset LoadDataset(const std::string& dir, const std::string& split, int downscale);
 

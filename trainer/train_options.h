@@ -81,6 +81,7 @@ struct TrainOptions {
   int stop_after = 0;
   int test_view_stride = 1;  // evaluate every k-th test view
   int max_test_views = 0;    // 0 = all
+  int eval_downscale = 1;    // test views scored at 1/N of their size (area filter, cameras scaled)
   bool save_renders = false;
   int progress_every = 50;
   int eval_every = 0;  // iterations between test evaluations for a PSNR-vs-time curve (0 = end only)

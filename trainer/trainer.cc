@@ -17,6 +17,7 @@
 #include "trainer/capture_scene.h"
 #include "trainer/camera.h"
 #include "trainer/checkpoint.h"
+#include "trainer/eval_progress.h"
 #include "trainer/image_metrics.h"
 #include "trainer/quant_aware.h"
 #include "trainer/ray_set.h"
@@ -126,6 +127,7 @@ EvalResult Evaluate(const TensorfModel& model, const Dataset& test, int stride, 
   EvalResult r;
   const auto start = Clock::now();
   stride = std::max(1, stride);
+  EvalProgress progress("evaluating the float model", EvalViewCount(test.views.size(), stride, max_views));
   for (size_t v = 0; v < test.views.size(); v += size_t(stride)) {
     if (max_views > 0 && r.views >= max_views) break;
     Image img = RenderView(model, test.views[v].camera);
@@ -134,6 +136,7 @@ EvalResult Evaluate(const TensorfModel& model, const Dataset& test, int stride, 
     r.ssim += Ssim(img, test.views[v].rgb);
     ++r.views;
     if (keep_renders) r.renders.push_back(std::move(img));
+    progress.ViewDone();
   }
   if (r.views > 0) {
     r.psnr /= r.views;

@@ -25,6 +25,9 @@ struct EvalResult {
   double ssim = 0.0;  // mean over views
   int views = 0;
   double seconds_per_view = 0.0;
+  // Density and MLP evaluations per ray (what bounds render time), where the renderer counts them.
+  double samples_per_ray = 0.0;
+  double color_samples_per_ray = 0.0;
   std::vector<Image> renders;  // filled when requested
 };
 

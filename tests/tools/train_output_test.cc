@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "tools/cli_args.h"
 #include "tests/common/invoke.h"
 #include "tools/commands.h"
@@ -68,6 +70,27 @@ TEST_F(TrainOutputTest, ResumeWithoutCheckpointSaysSo) {
   const std::string error = ErrorOf({"train", "--scene", "builtin", "--resume", "-o", root_ + "/fresh"});
   EXPECT_NE(error.find("--resume: no checkpoint"), std::string::npos) << error;
   EXPECT_FALSE(FileExists(root_ + "/fresh"));
+}
+
+// --eval-downscale: a short run scored at half size records it, with the renderer's samples per ray.
+TEST_F(TrainOutputTest, EvalDownscaleIsRecordedWithSamplesPerRay) {
+  const std::string out = root_ + "/run";
+  Invoke(RunTrain, {"train", "--scene", "builtin", "--iters", "300", "--batch", "1024", "--lambda-e", "0", "--eval-downscale", "2",
+                    "--max-test-views", "2", "-o", out});
+  std::FILE* f = std::fopen((out + "/metrics.json").c_str(), "rb");
+  ASSERT_NE(f, nullptr);
+  std::string text;
+  char buffer[4096];
+  for (size_t n; (n = std::fread(buffer, 1, sizeof(buffer), f)) > 0;) text.append(buffer, n);
+  std::fclose(f);
+  const nlohmann::json m = nlohmann::json::parse(text);
+  EXPECT_EQ(m["eval_downscale"], 2);
+  EXPECT_EQ(m["test_views"], 2);
+  EXPECT_GT(m["decoded_samples_per_ray"].get<double>(), 1.0);
+  EXPECT_GT(m["decoded_samples_per_ray"].get<double>(), m["decoded_mlp_samples_per_ray"].get<double>());
+  EXPECT_GT(m["decoded_test_psnr"].get<double>(), 10.0);
+  EXPECT_NE(ErrorOf({"train", "--scene", "builtin", "--eval-downscale", "0", "-o", root_ + "/bad"}).find("--eval-downscale"),
+            std::string::npos);
 }
 
 TEST(OutputDirectory, ProbesAndRemovesOnlyWhatItCreatedWhileEmpty) {
