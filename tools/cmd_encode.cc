@@ -25,6 +25,8 @@ const char kEncodeUsage[] =
     "                       quantization step by one factor (searched)\n"
     "  --mlp-levels L       store them as integer levels, at most L per row, range-coded (MLPW\n"
     "                       precision 2, bitstream 1.1; e.g. 31)\n"
+    "  --rounding-offset X  coefficient quantizer: floor(|c| / step + X), 0 < X <= 0.5 (default: the\n"
+    "                       one the run trained through, else 0.5; smaller widens the dead zone)\n"
     "  --no-drop            keep rank components that decode to zero\n"
     "  --no-occupancy       leave the alpha mask out\n"
     "  --dct-block CxHxW    plane blocks when the checkpoint has no trained rate (default 16x16x16)\n"
@@ -35,7 +37,7 @@ const char kEncodeUsage[] =
 int RunEncode(int argc, char** argv) {
   std::string input, output;
   trainer::EncodeOptions o;
-  bool blocks_given = false;
+  bool blocks_given = false, offset_given = false;
   size_t target_bytes = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -53,6 +55,9 @@ int RunEncode(int argc, char** argv) {
       o.mlp_max_level = std::max(1, ParseInt("--mlp-levels", value()));
     } else if (a == "--mlp-f32") {
       o.mlp_float32 = true;
+    } else if (a == "--rounding-offset") {
+      o.rounding_offset = ParseFloat("--rounding-offset", value());
+      offset_given = true;
     } else if (a == "--no-drop") {
       o.drop_zero_components = false;
     } else if (a == "--no-occupancy") {
@@ -88,6 +93,7 @@ int RunEncode(int argc, char** argv) {
     if (blocks_given) std::fprintf(stderr, "note: using the trained block shapes of %s\n", ckpt.c_str());
     o.blocks = rate.config;
     if (o.coef_bits == 8) o.steps = rate.steps;
+    if (!offset_given) o.rounding_offset = rate.rounding_offset;
   } else if (!blocks_given) {
     o.blocks = rate.config;  // the run's block shapes (defaults for old checkpoints)
   }

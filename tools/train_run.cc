@@ -50,6 +50,8 @@ const char kTrainFlagsUsage[] =
     "  --quant-step-scale S       quantization steps S times the 8-bit peak step (default 1)\n"
     "  --qat-start F              quantization-aware training from this share of the run on\n"
     "                             (never before the rate phase; 1 = off; default: the rate phase)\n"
+    "  --rounding-offset X        coefficient quantizer floor(|c| / step + X), 0 < X <= 0.5, in\n"
+    "                             training and encoding (default 0.5: rounding to nearest)\n"
     "  --qat-refresh N            recompute the decoded grids every N iterations (default 1)\n"
     "  --mlp-levels L             code the basis and MLP as integer levels, at most L per row\n"
     "                             (default 127; 0 = binary16)\n";
@@ -112,6 +114,11 @@ bool ParseTrainFlag(int argc, char** argv, int* i, trainer::TrainOptions* o) {
     if (!(o->quant_step_scale > 0.f)) throw std::invalid_argument("--quant-step-scale must be > 0");
   } else if (a == "--qat-start") {
     o->qat_start = ParseFloat("--qat-start", value());
+  } else if (a == "--rounding-offset") {
+    o->rounding_offset = ParseFloat("--rounding-offset", value());
+    if (!(o->rounding_offset > 0.f && o->rounding_offset <= 0.5f)) {
+      throw std::invalid_argument("--rounding-offset must be in (0, 0.5]");
+    }
   } else if (a == "--qat-refresh") {
     o->qat_refresh = std::max(1, ParseInt("--qat-refresh", value()));
   } else if (a == "--mlp-levels") {
@@ -254,6 +261,7 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& o) {
   m["quant_step_scale"] = o.quant_step_scale;
   m["qat_start"] = o.qat_start;
   m["qat_refresh"] = o.qat_refresh;
+  m["rounding_offset"] = o.rounding_offset;
   m["mlp_levels"] = o.mlp_levels;
   m["plane_block"] = o.plane_block;
   m["line_block"] = o.line_block;

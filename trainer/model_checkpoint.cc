@@ -23,6 +23,7 @@ void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int itera
   j["preset"] = o.preset;
   j["iters"] = o.iters;
   j["lambda_e"] = o.lambda_e;  // the live value under rate control
+  j["rounding_offset"] = o.rounding_offset;  // the quantizer the run trained through
   j["res"] = model.res();
   j["aabb_min"] = model.aabb().min;
   j["aabb_max"] = model.aabb().max;
@@ -155,6 +156,11 @@ int LoadModelCheckpointOrThrow(const std::string& path, TensorfModel* model, Rat
     rate->adam.Reset(rate->entropy.params().size());
     rate->active = true;
     rate->checkpoint_lambda_e = j.value("lambda_e", 0.0f);
+    rate->rounding_offset = j.value("rounding_offset", 0.5f);
+    if (!(rate->rounding_offset > 0.f && rate->rounding_offset <= 0.5f)) {
+      throw std::runtime_error(path + ": checkpoint holds a rounding offset of " +
+                               std::to_string(rate->rounding_offset) + " (expected (0, 0.5])");
+    }
   }
   const int iteration = j.at("iteration").get<int>();
   if (whole) *whole = std::move(ck);

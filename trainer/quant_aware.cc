@@ -4,13 +4,14 @@
 #include <stdexcept>
 #include <utility>
 
+#include "trainer/coef_quantizer.h"
 #include "trainer/grid_dct.h"
 
 namespace ecrf {
 namespace trainer {
 
 void ReconstructQuantizedGrid(const VmGrid& grid, const float* steps, const RateConfig& config,
-                              std::vector<float>* out) {
+                              std::vector<float>* out, float rounding_offset) {
   // The six tensors tile params() and InverseBlocks writes every element of each: no copy.
   out->resize(grid.params().size());
   std::vector<float> coeffs;
@@ -22,8 +23,8 @@ void ReconstructQuantizedGrid(const VmGrid& grid, const float* steps, const Rate
     const long n = static_cast<long>(coeffs.size());
 #pragma omp parallel for schedule(static) if (n > 65536)
     for (long i = 0; i < n; ++i) {
-      // The encoder's rounding: half away from zero, on the double quotient.
-      coeffs[i] = static_cast<float>(std::round(static_cast<double>(coeffs[i]) / step) * step);
+      // The encoder's quantizer, on the double quotient.
+      coeffs[i] = static_cast<float>(QuantizeLevel(static_cast<double>(coeffs[i]), step, rounding_offset) * step);
     }
     const size_t offset = static_cast<size_t>(RateTensorData(grid, t) - grid.params().data());
     InverseBlocks(coeffs.data(), layout, out->data() + offset);
@@ -49,13 +50,13 @@ std::vector<float>& QuantAwareModel::Params(TensorfModel* model, int k) {
 }
 
 void QuantAwareModel::Refresh(const TensorfModel& model, const std::vector<float>& steps,
-                              const RateConfig& config, int mlp_levels) {
+                              const RateConfig& config, int mlp_levels, float rounding_offset) {
   if (applied_) throw std::logic_error("QuantAwareModel::Refresh while applied");
   if (steps.size() != 2 * kTensorsPerGrid) {
     throw std::invalid_argument("QuantAwareModel: need 12 quantization steps");
   }
-  ReconstructQuantizedGrid(model.density(), steps.data(), config, &error_[0]);
-  ReconstructQuantizedGrid(model.appearance(), steps.data() + kTensorsPerGrid, config, &error_[1]);
+  ReconstructQuantizedGrid(model.density(), steps.data(), config, &error_[0], rounding_offset);
+  ReconstructQuantizedGrid(model.appearance(), steps.data() + kTensorsPerGrid, config, &error_[1], rounding_offset);
   error_[2].clear();
   if (mlp_levels > 0) ReconstructQuantizedHead(model, mlp_levels, &error_[2]);
   const std::vector<float>* params[3] = {&model.density().params(), &model.appearance().params(),

@@ -23,6 +23,8 @@ struct RateState {
   Adam adam;
   // The lambda_e a checkpointed run last trained with (rate control moves it); 0 when unknown.
   float checkpoint_lambda_e = 0.f;
+  // The coefficient quantizer's rounding offset a checkpointed run trained through.
+  float rounding_offset = 0.5f;
   double last_bits = 0.0;         // latest unbiased estimate (bits)
   double last_regularizer = 0.0;
 

@@ -13,6 +13,7 @@
 #include "format/mlp_coder.h"
 #include "format/occupancy_coder.h"
 #include "format/scene_header.h"
+#include "trainer/coef_quantizer.h"
 #include "trainer/grid_dct.h"
 #include "trainer/rate_state.h"
 
@@ -133,7 +134,7 @@ std::vector<uint8_t> EncodeCoefficients(const SceneTensors& s, int g, int t, flo
   for (int b = 0; b < layout.num_blocks(); ++b) {
     bool zero = true;
     for (int i = 0; i < volume; ++i) {
-      const double level = std::round(double(coeffs[size_t(b) * volume + i]) / step);
+      const double level = QuantizeLevel(double(coeffs[size_t(b) * volume + i]), step, o.rounding_offset);
       if (std::fabs(level) > max_abs) ++report->clipped_coefficients;
       q[i] = int32_t(std::max<double>(-max_abs, std::min<double>(max_abs, level)));
       zero &= q[i] == 0;
@@ -258,6 +259,9 @@ std::vector<uint8_t> EncodeScene(const TensorfModel& model, const EncodeOptions&
                                  EncodeReport* report_out) {
   if (o.coef_bits != 8 && o.coef_bits != 16) {
     throw std::invalid_argument("coefficient bits must be 8 or 16, not " + std::to_string(o.coef_bits));
+  }
+  if (!(o.rounding_offset > 0.f && o.rounding_offset <= 0.5f)) {
+    throw std::invalid_argument("rounding offset " + std::to_string(o.rounding_offset) + " outside (0, 0.5]");
   }
   if (!o.steps.empty() && o.steps.size() != 12) {
     throw std::invalid_argument("EncodeScene: expected 12 quantization steps, got " +

@@ -36,6 +36,9 @@ struct EncodeOptions {
   // One step per tensor (density planes 0..2, lines 0..2, then appearance), e.g. the steps the
   // rate objective froze in training; empty: ChooseQuantSteps (largest coefficient -> max level).
   std::vector<float> steps;
+  // Rounding offset of the coefficient quantizer (trainer/coef_quantizer.h): 0.5 rounds to
+  // nearest, smaller values widen the dead zone.
+  float rounding_offset = 0.5f;
   std::string metadata_json;      // the ancillary meta chunk (empty: none)
 };
 

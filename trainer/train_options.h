@@ -62,6 +62,9 @@ struct TrainOptions {
   // starts (with lambda_e = 0 too). On by default: on chair it lifted the decoded file by
   // 0.12 dB at lambda_e 1e-10 and 0.37 dB at 5e-10 for the same size (README).
   float qat_start = -1.0f;
+  // The coefficient quantizer's rounding offset (trainer/coef_quantizer.h), in the encoder and in
+  // quantization-aware training alike: 0.5 rounds to nearest.
+  float rounding_offset = 0.5f;
   int qat_refresh = 1;
   // How `ecrf train` codes the basis and MLP: > 0 integer levels (at most this many per row,
   // MLPW precision 2); 0 binary16. 127 cost no measurable PSNR on chair (README) and halves MLPW.

@@ -201,6 +201,7 @@ EncodeOptions RunEncodeOptions(const TrainOptions& o, const RateState& rate) {
   eo.steps = rate.steps;
   eo.coef_bits = o.coef_bits;
   eo.mlp_max_level = o.mlp_levels;
+  eo.rounding_offset = o.rounding_offset;
   return eo;
 }
 
@@ -326,7 +327,7 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
         if (it == qat_start) {
           std::fprintf(stderr, "%squantization-aware training from iteration %d\n", isatty(2) ? "\n" : "", it);
         }
-        qat.Refresh(*model, rate.steps, rate.config, o.mlp_levels);
+        qat.Refresh(*model, rate.steps, rate.config, o.mlp_levels, o.rounding_offset);
       }
       qat.Apply(model);
     }

@@ -13,6 +13,7 @@
 #include "format/container.h"
 #include "format/mlp_coder.h"
 #include "format/int_idct.h"
+#include "trainer/coef_quantizer.h"
 #include "trainer/rate_state.h"
 #include "trainer/scene_encoder.h"
 #include "trainer/volume_render.h"
@@ -49,7 +50,11 @@ RateConfig SmallBlocks() {
   return b;
 }
 
-TEST(QuantAware, ReconstructionIsWhatTheDecoderDecodes) {
+// With rounding to nearest and with a dead zone (rounding offset 0.3): training sees the file.
+class QuantAwareOffset : public ::testing::TestWithParam<float> {};
+
+TEST_P(QuantAwareOffset, ReconstructionIsWhatTheDecoderDecodes) {
+  const float offset = GetParam();
   const TensorfModel model = SmallModel(3);
   const RateConfig blocks = SmallBlocks();
   // Coarser than the 8-bit peak step, as --quant-step-scale 3 trains.
@@ -58,6 +63,7 @@ TEST(QuantAware, ReconstructionIsWhatTheDecoderDecodes) {
   EncodeOptions o;
   o.blocks = blocks;
   o.steps = steps;
+  o.rounding_offset = offset;
   o.drop_zero_components = false;
   const std::vector<uint8_t> bytes = EncodeScene(model, o);
   dec::SceneField field;
@@ -69,7 +75,7 @@ TEST(QuantAware, ReconstructionIsWhatTheDecoderDecodes) {
   double worst_units = 0.0, worst_steps = 0.0;
   for (int g = 0; g < 2; ++g) {
     std::vector<float> q;
-    ReconstructQuantizedGrid(*grids[g], steps.data() + 6 * g, blocks, &q);
+    ReconstructQuantizedGrid(*grids[g], steps.data() + 6 * g, blocks, &q, offset);
     ASSERT_EQ(q.size(), grids[g]->params().size());
     for (int t = 0; t < 6; ++t) {
       const float* mine = q.data() + (RateTensorData(*grids[g], t) - grids[g]->params().data());
@@ -88,6 +94,32 @@ TEST(QuantAware, ReconstructionIsWhatTheDecoderDecodes) {
   EXPECT_LT(worst_units, 1.05);
   // And the reconstruction did quantize: the coarse steps move values by a visible fraction.
   EXPECT_GT(worst_steps, 0.1);
+}
+
+INSTANTIATE_TEST_SUITE_P(Offsets, QuantAwareOffset, ::testing::Values(0.5f, 0.3f));
+
+// The dead zone: levels move toward zero by 0.5 - offset, so the file shrinks.
+TEST(CoefQuantizer, OffsetWidensTheDeadZone) {
+  for (double v : {-2.5, -1.7, -0.5, -0.49, 0.0, 0.3, 0.5, 0.69, 0.71, 1.5, 126.6}) {
+    EXPECT_EQ(QuantizeLevel(v, 1.0, 0.5), std::round(v)) << v;
+  }
+  EXPECT_EQ(QuantizeLevel(0.69, 1.0, 0.3), 0.0);
+  EXPECT_EQ(QuantizeLevel(0.71, 1.0, 0.3), 1.0);
+  EXPECT_EQ(QuantizeLevel(-0.71, 1.0, 0.3), -1.0);
+  EXPECT_EQ(QuantizeLevel(-1.69, 1.0, 0.3), -1.0);
+  EXPECT_EQ(QuantizeLevel(3.4, 2.0, 0.3), 2.0);  // 1.7 + 0.3
+  EXPECT_EQ(QuantizeLevel(0.49999999999999994, 1.0, 0.5), 0.0);  // as std::round, not floor(x + 0.5)
+
+  const TensorfModel model = SmallModel(4);
+  EncodeOptions o;
+  o.blocks = SmallBlocks();
+  const size_t nearest = EncodeScene(model, o).size();
+  o.rounding_offset = 0.25f;
+  EXPECT_LT(EncodeScene(model, o).size(), nearest);
+  for (float bad : {0.f, -0.1f, 0.6f}) {
+    o.rounding_offset = bad;
+    EXPECT_THROW(EncodeScene(model, o), std::invalid_argument) << bad;
+  }
 }
 
 struct Batch {
