@@ -76,7 +76,9 @@ double NominalFloat32GridBytes(const TrainOptions& o) {
 void ApplyTargetSizeDefaults(TrainOptions* o, bool step_scale_given, bool mlp_levels_given) {
   if (o->target_bytes == 0) return;
   const double share = double(o->target_bytes) / NominalFloat32GridBytes(*o);
-  if (!step_scale_given) o->quant_step_scale = share < 0.016 ? 4.0f : share < 0.03 ? 3.0f : share < 0.045 ? 2.0f : 1.0f;
+  // Never finer than x2: encode-time rate control can then still refine the steps (to the 8-bit
+  // peak step) when training ends below the target.
+  if (!step_scale_given) o->quant_step_scale = share < 0.016 ? 4.0f : share < 0.03 ? 3.0f : 2.0f;
   if (!mlp_levels_given && share < 0.016) o->mlp_levels = 31;
 }
 

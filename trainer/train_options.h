@@ -117,8 +117,8 @@ double NominalFloat32GridBytes(const TrainOptions& options);
 // --target-size without --quant-step-scale / --mlp-levels: the step scale (and MLP levels) of the
 // nearest named rate point, by the target's share of NominalFloat32GridBytes. On chair-400 `fast`
 // (docs/reports/chair_v2) steps x4 with 31 MLP levels win below about 1.6% (400 KB), x3 up to
-// about 3%, x2 up to 4.5%, x1 above. The trained steps may still be refined at encode time
-// (trainer/encode_rate_control.h), so a scale picked too coarse costs little.
+// about 3%, and x2 above: never x1, so that encode-time rate control (trainer/encode_rate_control.h)
+// can refine the steps when training ends below the target.
 void ApplyTargetSizeDefaults(TrainOptions* options, bool step_scale_given, bool mlp_levels_given);
 
 // What a run's metrics record as its data: the procedural scene's name or the data directory.
