@@ -9,6 +9,8 @@
 #include <string>
 #include <utility>
 
+#include "decoder/contraction.h"
+
 namespace ecrf {
 namespace trainer {
 namespace {
@@ -94,7 +96,13 @@ void TensorfModel::Initialize(const std::array<int, 3>& res, uint64_t seed) {
   head_.Initialize(static_cast<uint32_t>(seed * 3 + 3));
   ClearAlphaMask();
   UpdateStepSize();
-  n_samples_ = std::min(config_.max_samples, CalNSamples(res, config_.step_ratio));
+  n_samples_ = std::min(config_.max_samples, DefaultSamples());
+}
+
+int TensorfModel::DefaultSamples() const {
+  if (!unbounded()) return CalNSamples(res_, config_.step_ratio);
+  const double n = std::ceil(3.0 * 2.0 * kContractedExtent / step_size_) + 1;
+  return n >= 1e6 ? 1000000 : static_cast<int>(n);
 }
 
 void TensorfModel::SetGeometry(const Aabb& aabb, const std::array<int, 3>& res) {
@@ -105,7 +113,7 @@ void TensorfModel::SetGeometry(const Aabb& aabb, const std::array<int, 3>& res) 
   appearance_.Allocate(res, config_.app_ranks);
   ClearAlphaMask();
   UpdateStepSize();
-  if (n_samples_ == 0) n_samples_ = std::min(config_.max_samples, CalNSamples(res, config_.step_ratio));
+  if (n_samples_ == 0) n_samples_ = std::min(config_.max_samples, DefaultSamples());
 }
 
 void TensorfModel::set_n_samples(int n) {
@@ -124,7 +132,7 @@ void TensorfModel::UpsampleTo(const std::array<int, 3>& res) {
   appearance_.UpsampleTo(res);
   res_ = res;
   UpdateStepSize();
-  n_samples_ = std::min(config_.max_samples, CalNSamples(res, config_.step_ratio));
+  n_samples_ = std::min(config_.max_samples, DefaultSamples());
 }
 
 void TensorfModel::Normalize(const float xyz[3], float out[3]) const {
