@@ -213,6 +213,38 @@ void NaiveMlp(const MlpConfig& cfg, const std::vector<float>& params,
   for (int c = 0; c < 3; ++c) rgb[c] = 1.0 / (1.0 + std::exp(-z[c]));
 }
 
+// Compositing of 7.2 / 7.5 in double, one sample at a time; `rp` null: a sample with sigma 0.
+struct NaiveComposite {
+  double T = 1.0, acc = 0.0, col[3] = {0, 0, 0};
+  std::vector<double> prod;
+
+  void Add(const TestScene& ts, const RefPoint* rp, double dist, const float d[3]) {
+    const SceneField& s = ts.field;
+    double sigma = 0.0;
+    if (rp != nullptr) {
+      RefProducts(s.density, *rp, &prod);
+      double feat = 0.0;
+      for (double v : prod) feat += v;
+      const double x = feat + s.density_shift;
+      sigma = x > 20.0 ? x : std::log1p(std::exp(x));
+    }
+    const double alpha = 1.0 - std::exp(-sigma * dist * s.distance_scale);
+    const double w = alpha * T;
+    T *= 1.0 - alpha + 1e-10;
+    acc += w;
+    if (w > s.weight_threshold) {
+      RefProducts(s.appearance, *rp, &prod);
+      double c[3];
+      NaiveMlp(s.mlp.config(), ts.mlp_params, prod, d, c);
+      for (int k = 0; k < 3; ++k) col[k] += w * c[k];
+    }
+  }
+  void Finish(const SceneField& s, double rgb[3], double* acc_out) const {
+    for (int k = 0; k < 3; ++k) rgb[k] = std::min(std::max(col[k] + (1.0 - acc) * s.background[k], 0.0), 1.0);
+    *acc_out = acc;
+  }
+};
+
 void NaiveRender(const TestScene& ts, const float o[3], const float d[3], double rgb[3],
                  double* acc_out) {
   const SceneField& s = ts.field;
@@ -226,37 +258,17 @@ void NaiveRender(const TestScene& ts, const float o[3], const float d[3], double
   const float t0 = std::min(std::max(tmin, s.near_far[0]), s.near_far[1]);
   std::vector<float> z(n);
   for (int i = 0; i < n; ++i) z[i] = t0 + step * float(i);
-  double T = 1.0, acc = 0.0, col[3] = {0, 0, 0};
-  std::vector<double> prod;
+  NaiveComposite comp;
   for (int i = 0; i < n; ++i) {
     const float p[3] = {o[0] + d[0] * z[i], o[1] + d[1] * z[i], o[2] + d[2] * z[i]};
     bool valid = true;
     for (int a = 0; a < 3; ++a) valid = valid && !(s.aabb_min[a] > p[a] || p[a] > s.aabb_max[a]);
     if (valid && s.has_mask) valid = RefMaskKeeps(s.mask, p);
-    double sigma = 0.0;
-    RefPoint rp{};
-    if (valid) {
-      rp = Locate(s, p);
-      RefProducts(s.density, rp, &prod);
-      double feat = 0.0;
-      for (double v : prod) feat += v;
-      const double x = feat + s.density_shift;
-      sigma = x > 20.0 ? x : std::log1p(std::exp(x));
-    }
+    const RefPoint rp = valid ? Locate(s, p) : RefPoint{};
     const double dist = i + 1 < n ? double(float(z[i + 1] - z[i])) : 0.0;
-    const double alpha = 1.0 - std::exp(-sigma * dist * s.distance_scale);
-    const double w = alpha * T;
-    T *= 1.0 - alpha + 1e-10;
-    acc += w;
-    if (w > s.weight_threshold) {
-      RefProducts(s.appearance, rp, &prod);
-      double c[3];
-      NaiveMlp(s.mlp.config(), ts.mlp_params, prod, d, c);
-      for (int k = 0; k < 3; ++k) col[k] += w * c[k];
-    }
+    comp.Add(ts, valid ? &rp : nullptr, dist, d);
   }
-  for (int k = 0; k < 3; ++k) rgb[k] = std::min(std::max(col[k] + (1.0 - acc) * s.background[k], 0.0), 1.0);
-  *acc_out = acc;
+  comp.Finish(s, rgb, acc_out);
 }
 
 // SPEC.md 7.2.1 written out from the pseudo-code (not decoder/contraction.h): positions in
@@ -267,8 +279,7 @@ void NaiveRenderUnbounded(const TestScene& ts, const float o[3], const float d[3
   float S[3];
   for (int a = 0; a < 3; ++a) S[a] = (1.f / (s.aabb_max[a] - s.aabb_min[a])) * 2.f;
   auto contract = [](float v) { return v >= -1.f && v <= 1.f ? v : (v > 0.f ? 2.f - 1.f / v : -2.f - 1.f / v); };
-  double T = 1.0, acc = 0.0, col[3] = {0, 0, 0};
-  std::vector<double> prod;
+  NaiveComposite comp;
   float t = s.near_far[0];
   const int n = s.NumSamples();
   for (int i = 0; i < n; ++i) {
@@ -289,27 +300,12 @@ void NaiveRenderUnbounded(const TestScene& ts, const float o[3], const float d[3
     const double dist = last ? 0.0 : double(next - t);
     if (!s.has_mask || RefMaskKeeps(s.mask, x)) {
       const RefPoint rp = Locate(s, x);
-      RefProducts(s.density, rp, &prod);
-      double feat = 0.0;
-      for (double v : prod) feat += v;
-      const double f = feat + s.density_shift;
-      const double sigma = f > 20.0 ? f : std::log1p(std::exp(f));
-      const double alpha = 1.0 - std::exp(-sigma * dist * s.distance_scale);
-      const double w = alpha * T;
-      T *= 1.0 - alpha + 1e-10;
-      acc += w;
-      if (w > s.weight_threshold) {
-        RefProducts(s.appearance, rp, &prod);
-        double c[3];
-        NaiveMlp(s.mlp.config(), ts.mlp_params, prod, d, c);
-        for (int k = 0; k < 3; ++k) col[k] += w * c[k];
-      }
+      comp.Add(ts, &rp, dist, d);
     }
     if (last) break;
     t = next;
   }
-  for (int k = 0; k < 3; ++k) rgb[k] = std::min(std::max(col[k] + (1.0 - acc) * s.background[k], 0.0), 1.0);
-  *acc_out = acc;
+  comp.Finish(s, rgb, acc_out);
 }
 
 // ------------------------------------------------------------------------------------------

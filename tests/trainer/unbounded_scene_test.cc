@@ -13,6 +13,7 @@
 #include "decoder/scene_decoder.h"
 #include "format/byte_io.h"
 #include "format/scene_header.h"
+#include "tests/common/decode_or_die.h"
 #include "trainer/builtin_scene.h"
 #include "trainer/capture_scene.h"
 #include "trainer/scene_encoder.h"
@@ -128,13 +129,6 @@ TensorfModel SmallUnboundedModel(uint64_t seed) {
   TensorfModel model(c);
   model.Initialize({17, 15, 16}, seed);
   return model;
-}
-
-dec::SceneField DecodeOrDie(const std::vector<uint8_t>& bytes) {
-  dec::SceneField field;
-  const Status s = dec::DecodeScene(bytes.data(), bytes.size(), dec::DecodeOptions(), &field, nullptr);
-  EXPECT_TRUE(s.ok()) << s.message();
-  return field;
 }
 
 // Copies the decoded grids into the model so that both renderers see the same values.
