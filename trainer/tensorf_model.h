@@ -105,6 +105,8 @@ class TensorfModel {
   // n_samples = min(max_samples, CalNSamples(res)). Grad buffers are re-allocated (zero).
   void UpsampleTo(const std::array<int, 3>& res);
   // TensoRF updateAlphaMask: alpha of the current field on a mask_res grid spanning the aabb
+  // (unbounded scenes: the contracted cube, with each point's alpha over the world length of a
+  // sample there)
   // (points rejected by the current mask get alpha 0), 3x3x3 max-pool, >= threshold. Installs the
   // new mask (over the current aabb) and returns the bounding box of the occupied grid points;
   // if nothing is occupied the mask is empty and the current aabb is returned.
