@@ -125,6 +125,14 @@ int ecrf_scene_tensor(const ecrf_scene* scene, int grid, int tensor, const float
   return ECRF_OK;
 }
 
+int ecrf_scene_model(const ecrf_scene* scene) {
+  if (!scene || !scene->decoded) return ECRF_ERR_INVALID_ARGUMENT;
+  static_assert(ECRF_SCENE_OBJECT == static_cast<int>(ecrf::SceneModel::kObject) &&
+                    ECRF_SCENE_UNBOUNDED == static_cast<int>(ecrf::SceneModel::kUnbounded),
+                "C API scene models must equal the format's");
+  return static_cast<int>(scene->field.scene_model);
+}
+
 int ecrf_scene_get_field(const ecrf_scene* scene, ecrf_scene_field* out) {
   if (!scene || !out || !scene->decoded) return ECRF_ERR_INVALID_ARGUMENT;
   const ecrf::dec::SceneField& f = scene->field;

@@ -19,6 +19,7 @@
 #include <type_traits>
 
 #include "decoder/mlp.h"
+#include "format/scene_header.h"
 #include "format/status.h"
 
 namespace ecrf {
@@ -198,6 +199,10 @@ class OccupancyMask {
 
 // Everything the renderer needs for one scene.
 struct SceneField {
+  // kObject: the box is the scene and the grids span it. kUnbounded: the box is the region of
+  // interest; world points are contracted (decoder/contraction.h) and the grids and the mask
+  // span the contracted cube [-2, 2]^3 (SPEC.md 7.2.1).
+  SceneModel scene_model = SceneModel::kObject;
   float aabb_min[3] = {-1.5f, -1.5f, -1.5f};
   float aabb_max[3] = {1.5f, 1.5f, 1.5f};
   int res[3] = {0, 0, 0};  // grid resolution (density and appearance)
@@ -219,6 +224,7 @@ struct SceneField {
   OccupancyMask mask;
   AppearanceMlp mlp;
 
+  // Object: world units; unbounded: contracted units (derived from the cube [-2, 2]^3).
   float StepSize() const;
   int NumSamples() const;
   // Shapes agree (grid res == res, mlp num_products == appearance total rank), values finite,

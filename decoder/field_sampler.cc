@@ -4,6 +4,8 @@
 #include <cmath>
 #include <type_traits>
 
+#include "decoder/contraction.h"
+
 namespace ecrf {
 namespace dec {
 namespace {
@@ -318,7 +320,11 @@ bool OccupancyMask::EmptyBlock(int level, const float idx[3], int lo[3], int hi[
 float SceneField::StepSize() const {
   if (step_size > 0.f) return step_size;
   float mean = 0.f;
-  for (int a = 0; a < 3; ++a) mean += (aabb_max[a] - aabb_min[a]) / static_cast<float>(res[a] - 1);
+  for (int a = 0; a < 3; ++a) {
+    const float extent = scene_model == SceneModel::kUnbounded ? 2.f * kContractedExtent
+                                                               : aabb_max[a] - aabb_min[a];
+    mean += extent / static_cast<float>(res[a] - 1);
+  }
   return mean / 3.f * step_ratio;
 }
 
@@ -332,6 +338,10 @@ int SceneField::NumSamples() const {
 }
 
 Status SceneField::Validate() const {
+  ECRF_CHECK_OR_RETURN(scene_model == SceneModel::kObject || scene_model == SceneModel::kUnbounded,
+                       kErrInvalidArgument, "scene: unknown scene model %d", static_cast<int>(scene_model));
+  ECRF_CHECK_OR_RETURN(scene_model == SceneModel::kObject || near_far[0] >= 0.f, kErrInvalidArgument,
+                       "scene: near is negative in an unbounded scene");
   for (int a = 0; a < 3; ++a) {
     ECRF_CHECK_OR_RETURN(std::isfinite(aabb_min[a]) && std::isfinite(aabb_max[a]) &&
                              aabb_max[a] > aabb_min[a],

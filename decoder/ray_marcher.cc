@@ -9,6 +9,7 @@
 #include <new>
 #include <thread>
 
+#include "decoder/contraction.h"
 #include "decoder/field_sampler.h"
 
 namespace ecrf {
@@ -60,6 +61,8 @@ struct Ctx {
   float shift, dscale, wthr, early;
   const OccupancyMask* mask;  // null: no mask
   bool skip;
+  bool unbounded;                       // SPEC.md 7.2.1; min/max/inv then span the contracted cube
+  float roi_min[3], roi_scale[3];       // unbounded: the HEAD box, (1 / (max - min)) * 2
   double mask_scale[3];  // (res - 1) / (max - min) of the mask
   int tile_size;
   int tile_rays;
@@ -147,6 +150,31 @@ void Flush(const Ctx& c, RayMarcher::Workspace& ws) {
   ws.count = 0;
 }
 
+// Evaluates the sample at grid-box point p (world for the object model, contracted for the
+// unbounded one) with interval `dist` and composites it (7.2, 7.5). False once the ray may stop
+// early (T below the early-termination threshold).
+bool CompositeSample(const Ctx& c, RayMarcher::Workspace& ws, int slot, const float p[3], float dist,
+                     float* T, float* acc) {
+  ++ws.stats.samples;
+  float cn[3];
+  for (int a = 0; a < 3; ++a) cn[a] = (p[a] - c.min[a]) * c.inv[a] - 1.f;
+  GridPoint gp;
+  LocateGridPoint(cn, c.s->res, &gp);
+  const float sigma = Softplus(DensityFeature(c.s->density, gp) + c.shift);
+  const float alpha = 1.f - std::exp(-sigma * (dist * c.dscale));
+  const float weight = alpha * *T;
+  *T *= 1.f - alpha + 1e-10f;
+  *acc += weight;
+  if (weight > c.wthr) {
+    BatchEntry& be = ws.entries[ws.count++];
+    be.slot = slot;
+    be.weight = weight;
+    be.gp = gp;
+    if (ws.count == ws.capacity) Flush(c, ws);
+  }
+  return !(*T < c.early);
+}
+
 void MarchRay(const Ctx& c, RayMarcher::Workspace& ws, int slot) {
   const float* o = ws.ray_o.data() + static_cast<size_t>(slot) * 3;
   const float* d = ws.ray_d.data() + static_cast<size_t>(slot) * 3;
@@ -186,7 +214,6 @@ void MarchRay(const Ctx& c, RayMarcher::Workspace& ws, int slot) {
   }
   if (te > tx) return;
 
-  const SceneField& s = *c.s;
   float T = 1.f, acc = 0.f;
   int i = FirstIndexAtLeast(t0, step, n, te);
   while (i < n) {
@@ -213,26 +240,46 @@ void MarchRay(const Ctx& c, RayMarcher::Workspace& ws, int slot) {
         continue;
       }
     }
-    ++ws.stats.samples;
-    float cn[3];
-    for (int a = 0; a < 3; ++a) cn[a] = (p[a] - c.min[a]) * c.inv[a] - 1.f;
-    GridPoint gp;
-    LocateGridPoint(cn, s.res, &gp);
-    const float sigma = Softplus(DensityFeature(s.density, gp) + c.shift);
     const float dist = i + 1 < n ? SampleT(t0, step, i + 1) - t : 0.f;
-    const float alpha = 1.f - std::exp(-sigma * (dist * c.dscale));
-    const float weight = alpha * T;
-    T *= 1.f - alpha + 1e-10f;
-    acc += weight;
-    if (weight > c.wthr) {
-      BatchEntry& be = ws.entries[ws.count++];
-      be.slot = slot;
-      be.weight = weight;
-      be.gp = gp;
-      if (ws.count == ws.capacity) Flush(c, ws);
-    }
-    if (T < c.early) break;
+    if (!CompositeSample(c, ws, slot, p, dist, &T, &acc)) break;
     ++i;
+  }
+  ws.ray_acc[slot] = acc;
+}
+
+// SPEC.md 7.2.1: samples from `near` on, spaced `step` apart in contracted distance, until the
+// sample budget or the edge of the contracted cube. The mask hierarchy assumes straight rays, so
+// empty space is skipped only sample by sample here (the output is the same).
+void MarchRayUnbounded(const Ctx& c, RayMarcher::Workspace& ws, int slot) {
+  ContractedRay ray;
+  for (int a = 0; a < 3; ++a) {
+    ray.o[a] = ws.ray_o[static_cast<size_t>(slot) * 3 + a];
+    ray.d[a] = ws.ray_d[static_cast<size_t>(slot) * 3 + a];
+    ray.roi_min[a] = c.roi_min[a];
+    ray.roi_scale[a] = c.roi_scale[a];
+  }
+  ray.step = c.step;
+  ws.ray_acc[slot] = 0.f;
+  for (int a = 0; a < 3; ++a) {
+    if (!std::isfinite(ray.o[a]) || !std::isfinite(ray.d[a])) return;
+  }
+  float T = 1.f, acc = 0.f;
+  float t = c.near;
+  for (int i = 0; i < c.n; ++i) {
+    float q[3], x[3];
+    ray.At(t, q, x);
+    const float next = t + ray.Increment(q);
+    const bool last = i + 1 == c.n || !std::isfinite(next);
+    const float dist = last ? 0.f : next - t;
+    bool occupied = true;
+    if (c.mask != nullptr) {
+      float idx[3];
+      c.mask->Index(x, idx);
+      occupied = c.mask->OccupiedAtIndex(idx);
+    }
+    if (occupied && !CompositeSample(c, ws, slot, x, dist, &T, &acc)) break;
+    if (last) break;
+    t = next;
   }
   ws.ray_acc[slot] = acc;
 }
@@ -245,7 +292,13 @@ inline float ClipUnit(float v) { return v > 0.f ? (v < 1.f ? v : 1.f) : 0.f; }
 void ProcessRays(const Ctx& c, RayMarcher::Workspace& ws, int nrays) {
   std::memset(ws.ray_rgb.data(), 0, static_cast<size_t>(nrays) * 3 * sizeof(float));
   ws.count = 0;
-  for (int r = 0; r < nrays; ++r) MarchRay(c, ws, r);
+  for (int r = 0; r < nrays; ++r) {
+    if (c.unbounded) {
+      MarchRayUnbounded(c, ws, r);
+    } else {
+      MarchRay(c, ws, r);
+    }
+  }
   Flush(c, ws);
   const float* bg = c.s->background;
   for (int r = 0; r < nrays; ++r) {
@@ -373,10 +426,13 @@ Status RayMarcher::Run(Job* job, RenderStats* stats) {
   const SceneField& s = *scene_;
   Ctx c;
   c.s = &s;
+  c.unbounded = s.scene_model == SceneModel::kUnbounded;
   for (int a = 0; a < 3; ++a) {
-    c.min[a] = s.aabb_min[a];
-    c.max[a] = s.aabb_max[a];
-    c.inv[a] = 1.0f / (s.aabb_max[a] - s.aabb_min[a]) * 2.f;
+    c.roi_min[a] = s.aabb_min[a];
+    c.roi_scale[a] = 1.0f / (s.aabb_max[a] - s.aabb_min[a]) * 2.f;
+    c.min[a] = c.unbounded ? -kContractedExtent : s.aabb_min[a];
+    c.max[a] = c.unbounded ? kContractedExtent : s.aabb_max[a];
+    c.inv[a] = 1.0f / (c.max[a] - c.min[a]) * 2.f;
   }
   c.step = s.StepSize();
   if (options_.step_scale != 1.f) c.step *= options_.step_scale;
@@ -390,7 +446,7 @@ Status RayMarcher::Run(Job* job, RenderStats* stats) {
   c.mask = s.has_mask ? &s.mask : nullptr;
   ECRF_CHECK_OR_RETURN(c.mask == nullptr || c.mask->acceleration_ready(), kErrInvalidArgument,
                        "render: alpha mask acceleration not built");
-  c.skip = options_.skip_empty_space && c.mask != nullptr;
+  c.skip = options_.skip_empty_space && c.mask != nullptr && !c.unbounded;
   for (int a = 0; a < 3; ++a) {
     c.mask_scale[a] = c.mask == nullptr ? 0.0
                                         : static_cast<double>(c.mask->res()[a] - 1) /

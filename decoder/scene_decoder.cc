@@ -249,6 +249,7 @@ Status DecodeMlpChunk(const ChunkView& chunk, const SceneHeader& h, MemoryBudget
 }
 
 void ApplyHeader(const SceneHeader& h, SceneField* scene) {
+  scene->scene_model = static_cast<SceneModel>(h.scene_model);
   for (int a = 0; a < 3; ++a) {
     scene->aabb_min[a] = h.aabb_min[a];
     scene->aabb_max[a] = h.aabb_max[a];

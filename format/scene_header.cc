@@ -37,7 +37,7 @@ void WriteSceneHeader(const SceneHeader& h, ByteWriter* out) {
   out->U8(h.viewdir_pe_freqs);
   out->U16(h.hidden);
   out->U8(h.has_occupancy);
-  out->U8(0);  // reserved
+  out->U8(h.scene_model);
 }
 
 Status ParseSceneHeader(const uint8_t* payload, size_t size, SceneHeader* h) {
@@ -106,9 +106,14 @@ Status ParseSceneHeader(const uint8_t* payload, size_t size, SceneHeader* h) {
   ECRF_RETURN_IF_ERROR(r.ReadU8(&h->has_occupancy, "has_occupancy"));
   ECRF_CHECK_OR_RETURN(h->has_occupancy <= 1, kErrCorrupt, "HEAD: has_occupancy is %u",
                        h->has_occupancy);
-  uint8_t reserved = 0;
-  ECRF_RETURN_IF_ERROR(r.ReadU8(&reserved, "reserved"));
-  ECRF_CHECK_OR_RETURN(reserved == 0, kErrCorrupt, "HEAD: reserved byte is %u, must be 0", reserved);
+  ECRF_RETURN_IF_ERROR(r.ReadU8(&h->scene_model, "scene_model"));
+  ECRF_CHECK_OR_RETURN(h->scene_model < kNumSceneModels, kErrUnsupported,
+                       "HEAD: scene model %u is unknown (this decoder knows 0, object, and 1, unbounded; "
+                       "the stream needs a newer decoder)",
+                       h->scene_model);
+  // The unbounded model samples from `near` on with t only growing (7.2.1).
+  ECRF_CHECK_OR_RETURN(h->scene_model == 0 || h->near_far[0] >= 0.f, kErrCorrupt,
+                       "HEAD: near is negative in an unbounded scene");
   return Status::Ok();
 }
 

@@ -34,6 +34,15 @@ constexpr int kTensorsPerSceneGrid = 6;  // planes 0..2, then lines 0..2
 
 constexpr size_t kSceneHeaderBytes = 90;
 
+// HEAD scene_model (SPEC.md 6.2).
+enum class SceneModel : uint8_t {
+  kObject = 0,     // the box is the scene: rays sample it with a fixed step (7.2)
+  kUnbounded = 1,  // the box is the region of interest of a contracted, unbounded scene (7.2.1)
+};
+constexpr int kNumSceneModels = 2;
+// The container minor version a stream with this scene model needs at least (2.1).
+constexpr uint8_t kSceneModelMinVersionMinor[kNumSceneModels] = {0, 2};
+
 struct SceneHeader {
   float aabb_min[3] = {-1.5f, -1.5f, -1.5f};
   float aabb_max[3] = {1.5f, 1.5f, 1.5f};
@@ -51,6 +60,9 @@ struct SceneHeader {
   uint8_t viewdir_pe_freqs = 2;
   uint16_t hidden = 128;
   uint8_t has_occupancy = 0;
+  // 0: object (the box is the scene); 1: unbounded (the box is the region of interest of a
+  // contracted scene, SPEC.md 7.2.1; streams of version 1.2). ecrf::SceneModel names them.
+  uint8_t scene_model = 0;
 
   int total_rank(int grid) const { return ranks[grid][0] + ranks[grid][1] + ranks[grid][2]; }
 };

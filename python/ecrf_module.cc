@@ -85,6 +85,8 @@ py::dict Info(Scene& s) {
   d["background"] = Tuple3(i.background);
   d["stream_bytes"] = i.stream_bytes;
   d["grid_bytes"] = i.grid_bytes;
+  // "unbounded": aabb is the region of interest of a contracted scene (SPEC.md 7.2.1).
+  d["scene_model"] = ecrf_scene_model(s.get()) == ECRF_SCENE_UNBOUNDED ? "unbounded" : "object";
   return d;
 }
 

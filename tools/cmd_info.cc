@@ -62,8 +62,10 @@ int RunInfo(int argc, char** argv) {
   const SceneHeader& h = in.header;
   std::printf("%s: ecrf stream version %u.%u, %zu bytes, decoded in %.1f ms\n", path.c_str(),
               in.version_major, in.version_minor, in.stream_bytes, s.decode_seconds * 1e3);
-  std::printf("box      [%g %g %g] - [%g %g %g]\n", h.aabb_min[0], h.aabb_min[1], h.aabb_min[2],
-              h.aabb_max[0], h.aabb_max[1], h.aabb_max[2]);
+  const bool unbounded = h.scene_model == static_cast<uint8_t>(SceneModel::kUnbounded);
+  std::printf("box      [%g %g %g] - [%g %g %g]%s\n", h.aabb_min[0], h.aabb_min[1], h.aabb_min[2],
+              h.aabb_max[0], h.aabb_max[1], h.aabb_max[2],
+              unbounded ? " (unbounded scene: the region of interest; space beyond it is contracted)" : "");
   std::printf("grid     %u x %u x %u; density ranks %u %u %u; appearance ranks %u %u %u\n", h.res[0],
               h.res[1], h.res[2], h.ranks[0][0], h.ranks[0][1], h.ranks[0][2], h.ranks[1][0],
               h.ranks[1][1], h.ranks[1][2]);

@@ -98,7 +98,7 @@ json SceneVectorJson(const std::string& file, size_t bytes, const dec::SceneFiel
   const char* mlp = info.mlp_precision == 2 ? "quantized" : info.mlp_precision == 1 ? "float32" : "float16";
   json occupancy = nullptr;
   if (field.has_mask) occupancy = {field.mask.res()[0], field.mask.res()[1], field.mask.res()[2]};
-  return json{{"file", file},
+  json entry{{"file", file},
               {"bytes", bytes},
               {"version", std::to_string(info.version_major) + "." + std::to_string(info.version_minor)},
               {"grid", Triple(info.header.res)},
@@ -109,6 +109,9 @@ json SceneVectorJson(const std::string& file, size_t bytes, const dec::SceneFiel
               {"occupancy", occupancy},
               {"md5", {{"grids", checksums.grids}, {"occupancy", checksums.occupancy}, {"mlp", checksums.mlp}}},
               {"render", {{"png", png}, {"camera", CameraJson(camera)}}}};
+  // Object scenes (every vector before bitstream 1.2) leave the key out.
+  if (field.scene_model == SceneModel::kUnbounded) entry["scene_model"] = "unbounded";
+  return entry;
 }
 
 namespace {

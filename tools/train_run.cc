@@ -24,6 +24,10 @@ namespace tools {
 const char kTrainFlagsUsage[] =
     "  --preset fast|paper|tiny   schedule and grid sizes (default fast; tiny for --scene)\n"
     "  --iters N                  iterations (milestones scale with it)\n"
+    "  --scene-type auto|object|unbounded\n"
+    "                             scene model (default auto, from the camera layout): object keeps\n"
+    "                             the dataset box; unbounded contracts space around the fitted region\n"
+    "                             of interest (SPEC.md 7.2.1); forward (NDC) is not implemented yet\n"
     "  --downscale N              shrink the images by N (area filter)\n"
     "  --batch N                  rays per iteration (default 4096)\n"
     "  --seed N                   random seed\n"
@@ -68,6 +72,9 @@ bool ParseTrainFlag(int argc, char** argv, int* i, trainer::TrainOptions* o) {
     trainer::SelectProceduralScene(value(), o);
   } else if (a == "--data") {
     o->data_dir = value();
+  } else if (a == "--scene-type") {
+    o->scene_type = value();
+    trainer::FitScene(o->scene_type, trainer::Dataset());  // a bad name fails before the data loads
   } else if (a == "--iters") {
     o->iters = ParseInt("--iters", value());
   } else if (a == "--downscale") {
@@ -186,7 +193,12 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& o) {
   std::fprintf(stderr, "data: %zu train views, %zu test views (%dx%d, scored at %dx%d)\n", train.views.size(),
                test.views.size(), train.views[0].rgb.width, train.views[0].rgb.height,
                test.views.empty() ? 0 : test.views[0].rgb.width, test.views.empty() ? 0 : test.views[0].rgb.height);
-  trainer::TensorfModel model(trainer::ConfigFor(o, train));
+  const trainer::SceneFit fit = trainer::FitScene(o.scene_type, train);
+  std::fprintf(stderr, "scene model: %s (%s); fitted region of interest [%.3g %.3g %.3g] - [%.3g %.3g %.3g], "
+               "%.2f%% of the dataset box's volume\n",
+               fit.model == SceneModel::kUnbounded ? "unbounded" : "object", fit.reason.c_str(), fit.roi.min[0],
+               fit.roi.min[1], fit.roi.min[2], fit.roi.max[0], fit.roi.max[1], fit.roi.max[2], 100 * fit.roi_share);
+  trainer::TensorfModel model(trainer::ConfigFor(o, train, fit));
   trainer::RateState rate;
   const trainer::TrainResult r = trainer::Train(o, train, test, &model, &rate);
 
@@ -222,8 +234,7 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& o) {
                                                 dec::GridStorage::kFloat32, kUnlimitedMemory);
   dec::RenderOptions ro;
   ro.num_threads = 0;
-  const trainer::EvalResult d =
-      EvaluateDecoded(*decoded.field, test, o.test_view_stride, o.max_test_views, ro, false);
+  const trainer::EvalResult d = EvaluateDecoded(*decoded.field, test, o.test_view_stride, o.max_test_views, ro, false);
 
   std::printf("trained %d iterations in %.1f s (%.3f s/it); test PSNR %.2f dB, SSIM %.4f over %d views; "
               "float32 model %.2f MB; estimated coded grids %.3f MB\n",
@@ -252,6 +263,14 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& o) {
   m["grid_res"] = model.res();
   m["aabb_min"] = model.aabb().min;
   m["aabb_max"] = model.aabb().max;
+  m["scene_model"] = fit.model == SceneModel::kUnbounded ? "unbounded" : "object";
+  m["scene_model_reason"] = fit.reason;
+  m["dataset_aabb_min"] = {train.scene_aabb[0][0], train.scene_aabb[0][1], train.scene_aabb[0][2]};
+  m["dataset_aabb_max"] = {train.scene_aabb[1][0], train.scene_aabb[1][1], train.scene_aabb[1][2]};
+  m["fitted_roi_min"] = fit.roi.min;
+  m["fitted_roi_max"] = fit.roi.max;
+  m["fitted_roi_volume_share"] = fit.roi_share;
+  m["samples_per_ray"] = model.n_samples();  // the cap; decoded_samples_per_ray: evaluated ones
   m["float32_model_bytes"] = float_bytes;
   m["lambda_e"] = o.lambda_e;
   m["final_lambda_e"] = r.final_lambda_e;

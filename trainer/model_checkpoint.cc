@@ -33,7 +33,9 @@ void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int itera
   const TensorfConfig& c = model.config();
   j["render"] = {{"near", c.near}, {"far", c.far}, {"white_background", c.white_background},
                  {"density_shift", c.density_shift}, {"distance_scale", c.distance_scale},
-                 {"step_ratio", c.step_ratio}, {"weight_threshold", c.weight_threshold}};
+                 {"step_ratio", c.step_ratio}, {"weight_threshold", c.weight_threshold},
+                 {"scene_model", static_cast<int>(c.scene_model)}, {"roi_min", c.roi.min},
+                 {"roi_max", c.roi.max}};
   j["head"] = {{"feature_dim", c.head.feature_dim}, {"feature_pe_freqs", c.head.feature_pe_freqs},
                {"viewdir_pe_freqs", c.head.viewdir_pe_freqs}, {"hidden", c.head.hidden}};
   if (const AlphaMask* mask = model.alpha_mask()) {
@@ -196,6 +198,18 @@ TensorfModel LoadModelFromCheckpoint(const std::string& path, RateState* rate) {
     c.distance_scale = render.value("distance_scale", c.distance_scale);
     c.step_ratio = render.value("step_ratio", c.step_ratio);
     c.weight_threshold = render.value("weight_threshold", c.weight_threshold);
+    const int scene_model = render.value("scene_model", 0);
+    if (scene_model < 0 || scene_model >= kNumSceneModels) {
+      throw std::runtime_error(path + ": checkpoint has unknown scene model " + std::to_string(scene_model));
+    }
+    c.scene_model = static_cast<SceneModel>(scene_model);
+    c.roi.min = render.value("roi_min", c.roi.min);
+    c.roi.max = render.value("roi_max", c.roi.max);
+    for (int a = 0; a < 3; ++a) {
+      if (!std::isfinite(c.roi.min[a]) || !std::isfinite(c.roi.max[a]) || !(c.roi.min[a] < c.roi.max[a])) {
+        throw std::runtime_error(path + ": checkpoint region of interest is empty or not finite");
+      }
+    }
     const nlohmann::json head = j.value("head", nlohmann::json::object());
     c.head.feature_dim = head.value("feature_dim", c.head.feature_dim);
     c.head.feature_pe_freqs = head.value("feature_pe_freqs", c.head.feature_pe_freqs);

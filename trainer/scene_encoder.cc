@@ -33,9 +33,12 @@ SceneTensors FromModel(const TensorfModel& model) {
   SceneTensors s;
   SceneHeader& h = s.header;
   const TensorfConfig& c = model.config();
+  // Unbounded: HEAD carries the region of interest; the grids span the contracted cube.
+  const Aabb& box = model.unbounded() ? c.roi : model.aabb();
+  h.scene_model = static_cast<uint8_t>(c.scene_model);
   for (int a = 0; a < 3; ++a) {
-    h.aabb_min[a] = model.aabb().min[a];
-    h.aabb_max[a] = model.aabb().max[a];
+    h.aabb_min[a] = box.min[a];
+    h.aabb_max[a] = box.max[a];
     h.res[a] = static_cast<uint16_t>(model.res()[a]);
   }
   const VmGrid* grids[2] = {&model.density(), &model.appearance()};
@@ -193,8 +196,10 @@ std::vector<uint8_t> EncodeMlpChunk(const SceneHeader& h, const std::vector<floa
 std::vector<uint8_t> Assemble(const SceneTensors& s, const std::vector<float>& steps,
                               const EncodeOptions& o, EncodeReport* report) {
   *report = EncodeReport{};
-  ContainerWriter writer(o.mlp_max_level > 0 ? 1 : 0);  // 1.1 for the quantized MLP
   SceneHeader h = s.header;
+  // The lowest minor version of the features used: 1.1 for the quantized MLP, 1.2 unbounded.
+  const uint8_t minor = std::max<uint8_t>(o.mlp_max_level > 0 ? 1 : 0, kSceneModelMinVersionMinor[h.scene_model]);
+  ContainerWriter writer(minor);
   h.has_occupancy = (o.include_occupancy && s.mask) ? 1 : 0;
   ByteWriter head;
   WriteSceneHeader(h, &head);

@@ -9,6 +9,8 @@
 #include <string>
 #include <utility>
 
+#include "decoder/contraction.h"
+
 namespace ecrf {
 namespace trainer {
 namespace {
@@ -94,7 +96,13 @@ void TensorfModel::Initialize(const std::array<int, 3>& res, uint64_t seed) {
   head_.Initialize(static_cast<uint32_t>(seed * 3 + 3));
   ClearAlphaMask();
   UpdateStepSize();
-  n_samples_ = std::min(config_.max_samples, CalNSamples(res, config_.step_ratio));
+  n_samples_ = std::min(config_.max_samples, DefaultSamples());
+}
+
+int TensorfModel::DefaultSamples() const {
+  if (!unbounded()) return CalNSamples(res_, config_.step_ratio);
+  const double n = std::ceil(3.0 * 2.0 * kContractedExtent / step_size_) + 1;
+  return n >= 1e6 ? 1000000 : static_cast<int>(n);
 }
 
 void TensorfModel::SetGeometry(const Aabb& aabb, const std::array<int, 3>& res) {
@@ -105,7 +113,7 @@ void TensorfModel::SetGeometry(const Aabb& aabb, const std::array<int, 3>& res) 
   appearance_.Allocate(res, config_.app_ranks);
   ClearAlphaMask();
   UpdateStepSize();
-  if (n_samples_ == 0) n_samples_ = std::min(config_.max_samples, CalNSamples(res, config_.step_ratio));
+  if (n_samples_ == 0) n_samples_ = std::min(config_.max_samples, DefaultSamples());
 }
 
 void TensorfModel::set_n_samples(int n) {
@@ -124,7 +132,7 @@ void TensorfModel::UpsampleTo(const std::array<int, 3>& res) {
   appearance_.UpsampleTo(res);
   res_ = res;
   UpdateStepSize();
-  n_samples_ = std::min(config_.max_samples, CalNSamples(res, config_.step_ratio));
+  n_samples_ = std::min(config_.max_samples, DefaultSamples());
 }
 
 void TensorfModel::Normalize(const float xyz[3], float out[3]) const {
@@ -154,6 +162,20 @@ Aabb TensorfModel::UpdateAlphaMask(const std::array<int, 3>& mask_res) {
   const AlphaMask* old_mask = alpha_mask();
   const float length = step_size_ * config_.alpha_mask_length_scale;
   const float thres = config_.alpha_mask_threshold;
+  // Unbounded: step_size_ is a contracted length; a sample at contracted point x stands for about
+  // step * (ROI half-size) * max_a q_a^2 world units (q = the uncontracted, normalised point), so
+  // the background, sampled ever more sparsely, keeps what its long intervals make opaque.
+  float roi_half = 0.f;
+  for (int a = 0; a < 3; ++a) roi_half += (config_.roi.max[a] - config_.roi.min[a]) / 6.f;
+  auto sample_length = [&](const float xyz[3]) {
+    if (!unbounded()) return length;
+    float stretch = 1.f;
+    for (int a = 0; a < 3; ++a) {
+      const float q = UncontractCoordinate(xyz[a]);
+      stretch = std::max(stretch, q * q);
+    }
+    return length * roi_half * stretch;
+  };
   const int64_t rows = static_cast<int64_t>(Y) * Z;
 #pragma omp parallel for schedule(dynamic, 4) if (total > 65536)
   for (int64_t row = 0; row < rows; ++row) {
@@ -163,7 +185,7 @@ Aabb TensorfModel::UpdateAlphaMask(const std::array<int, 3>& mask_res) {
       const float xyz[3] = {coord[0][x], coord[1][y], coord[2][z]};
       if (old_mask && !old_mask->Occupied(xyz)) continue;  // alpha 0
       const float sigma = Sigma(xyz);
-      const float alpha = 1.f - std::exp(-sigma * length);
+      const float alpha = 1.f - std::exp(-sigma * sample_length(xyz));
       out[x] = alpha >= thres ? 1 : 0;
     }
   }

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "format/scene_header.h"
 #include "trainer/alpha_mask.h"
 #include "trainer/appearance_head.h"
 #include "trainer/vm_grid.h"
@@ -45,7 +46,11 @@ struct TensorfConfig {
   // TrainStep runs the head on chunks of rays with at most this many colour samples (bounds the
   // head's activation memory; the loss is separable over rays, so results do not depend on it).
   int head_chunk_rows = 32768;
-  Aabb aabb;                       // initial scene box
+  Aabb aabb;                       // initial scene box (unbounded: the contracted cube [-2, 2]^3)
+  // kUnbounded: world points are normalised by `roi` and contracted (decoder/contraction.h,
+  // SPEC.md 7.2.1); the grids span the contracted cube, which never shrinks.
+  SceneModel scene_model = SceneModel::kObject;
+  Aabb roi;                        // unbounded only: the region of interest, world units
   AppearanceHeadConfig head;       // head.num_products must equal the sum of app_ranks
 };
 
@@ -90,7 +95,7 @@ class TensorfModel {
   const TensorfConfig& config() const { return config_; }
 
   // Random init of both grids (0.1 * N(0,1)) and of the head; aabb = config.aabb; no alpha mask;
-  // n_samples = min(max_samples, CalNSamples(res)).
+  // n_samples = min(max_samples, DefaultSamples()).
   void Initialize(const std::array<int, 3>& res, uint64_t seed);
   // Zero-filled grids of this shape (for loading checkpoints); keeps the head, drops the mask.
   // Does not change n_samples.
@@ -100,6 +105,8 @@ class TensorfModel {
   // n_samples = min(max_samples, CalNSamples(res)). Grad buffers are re-allocated (zero).
   void UpsampleTo(const std::array<int, 3>& res);
   // TensoRF updateAlphaMask: alpha of the current field on a mask_res grid spanning the aabb
+  // (unbounded scenes: the contracted cube, with each point's alpha over the world length of a
+  // sample there)
   // (points rejected by the current mask get alpha 0), 3x3x3 max-pool, >= threshold. Installs the
   // new mask (over the current aabb) and returns the bounding box of the occupied grid points;
   // if nothing is occupied the mask is empty and the current aabb is returned.
@@ -124,6 +131,11 @@ class TensorfModel {
   const std::array<float, 3>& units() const { return units_; }
   float step_size() const { return step_size_; }
   int n_samples() const { return n_samples_; }
+  bool unbounded() const { return config_.scene_model == SceneModel::kUnbounded; }
+  // Samples per ray for the current grid: CalNSamples(res) for an object; for an unbounded scene
+  // enough to cross the contracted cube (SPEC.md 7.2.1: a ray's contracted path is at most
+  // 3 * 4 long, each coordinate being monotone along it).
+  int DefaultSamples() const;
   void set_n_samples(int n);
 
   VmGrid& density() { return density_; }

@@ -20,6 +20,8 @@ struct TrainOptions {
   // Data.
   std::string data_dir;        // NeRF Blender or Instant-NGP/nerfstudio layout
   std::string procedural_scene;  // "builtin" (Blender-like) or "capture" instead of data_dir; "" = data_dir
+  // "auto" (from the camera layout, trainer/scene_fit.h), "object" or "unbounded".
+  std::string scene_type = "auto";
   int downscale = 1;
   std::string out_dir;
 

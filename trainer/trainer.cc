@@ -12,6 +12,7 @@
 #include <random>
 #include <stdexcept>
 
+#include "decoder/contraction.h"
 #include "trainer/adam.h"
 #include "trainer/builtin_scene.h"
 #include "trainer/capture_scene.h"
@@ -90,6 +91,10 @@ Dataset LoadTrainingViews(const TrainOptions& o, const std::string& split) {
 }
 
 TensorfConfig ConfigFor(const TrainOptions& o, const Dataset& data) {
+  return ConfigFor(o, data, FitScene(o.scene_type, data));
+}
+
+TensorfConfig ConfigFor(const TrainOptions& o, const Dataset& data, const SceneFit& fit) {
   TensorfConfig c;
   c.density_ranks = {o.density_rank, o.density_rank, o.density_rank};
   c.app_ranks = {o.appearance_rank, o.appearance_rank, o.appearance_rank};
@@ -101,6 +106,14 @@ TensorfConfig ConfigFor(const TrainOptions& o, const Dataset& data) {
   for (int a = 0; a < 3; ++a) {
     c.aabb.min[a] = float(data.scene_aabb[0][a]);
     c.aabb.max[a] = float(data.scene_aabb[1][a]);
+  }
+  c.scene_model = fit.model;
+  if (fit.model == SceneModel::kUnbounded) {
+    c.roi = fit.roi;
+    for (int a = 0; a < 3; ++a) {
+      c.aabb.min[a] = -kContractedExtent;
+      c.aabb.max[a] = kContractedExtent;
+    }
   }
   return c;
 }
@@ -255,7 +268,7 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   const bool exact_resume =
       o.resume && LoadTrainState(resumed_from, ckpt_path, &opt, &rate, &rays, &progress);
   resumed_from = Checkpoint();  // the arrays are in the model and the optimizers now
-  if (!exact_resume) {
+  if (!exact_resume && !model->unbounded()) {  // every ray of an unbounded scene meets it
     const Aabb box = model->aabb();
     rays.Filter([&box](const float* org, const float* dir) {
       float tn, tf;
@@ -362,11 +375,11 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
       const std::array<int, 3> mask_res = model->res();
       const Aabb new_box = model->UpdateAlphaMask(mask_res);
       if (k == 0) {
-        model->Shrink(new_box);
+        if (!model->unbounded()) model->Shrink(new_box);  // the contracted cube is all of space
         l1_weight = o.l1_weight_rest;
         opt.Reset(*model);
       }
-      if (k == 1) {
+      if (k == 1 && !model->unbounded()) {
         const TensorfModel& m = *model;
         const bool filtered = rays.FilterChunked(
             [&m](int count, const float* org, const float* dir, uint8_t* keep) {

@@ -13,6 +13,7 @@
 #include "trainer/dataset.h"
 #include "trainer/image_io.h"
 #include "trainer/rate_state.h"
+#include "trainer/scene_fit.h"
 #include "trainer/scene_encoder.h"
 #include "trainer/tensorf_model.h"
 #include "trainer/train_options.h"
@@ -48,7 +49,10 @@ EncodeOptions RunEncodeOptions(const TrainOptions& options, const RateState& rat
 // The datasets a run uses: the built-in procedural scene or a directory on disk.
 Dataset LoadTrainingViews(const TrainOptions& options, const std::string& split);
 
-// Model configuration for a dataset (its box, near/far, background) and the options' ranks.
+// Model configuration for a dataset (its box, near/far, background), the options' ranks and the
+// scene model of `fit` (unbounded: the grids span the contracted cube around fit.roi).
+TensorfConfig ConfigFor(const TrainOptions& options, const Dataset& data, const SceneFit& fit);
+// The same with FitScene(options.scene_type, data).
 TensorfConfig ConfigFor(const TrainOptions& options, const Dataset& data);
 
 // Trains on `train`, evaluating on `test` at the end (and every options.eval_every iterations).

@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "decoder/contraction.h"
+
 namespace ecrf {
 namespace trainer {
 namespace {
@@ -26,6 +28,7 @@ uint64_t SplitMix64(uint64_t x) {
 struct SampleRec {
   GridPoint gp;  // kept so the gather and scatter passes need not locate the sample again
   float t;
+  float dscale;  // dist * distance_scale of this sample's interval
   float feat;   // density feature + shift; after the composite pass: dL/d(feature)
   float alpha;
   float trans;  // transmittance before this sample
@@ -35,6 +38,7 @@ struct SampleRec {
 // A sample inside the aabb and the mask, before its density is known.
 struct Candidate {
   float t;
+  float dscale;
   GridPoint gp;
 };
 
@@ -91,6 +95,11 @@ struct MarchParams {
   int n_samples;
   const AlphaMask* mask;
   const VmGrid* density;
+  // Unbounded scene model (SPEC.md 7.2.1): box is the contracted cube, these normalise world
+  // points by the region of interest.
+  bool unbounded;
+  float distance_scale;
+  float roi_min[3], roi_scale[3];
 };
 
 MarchParams MakeMarchParams(const TensorfModel& model) {
@@ -109,6 +118,12 @@ MarchParams MakeMarchParams(const TensorfModel& model) {
   p.n_samples = model.n_samples();
   p.mask = model.alpha_mask();
   p.density = &model.density();
+  p.unbounded = c.scene_model == SceneModel::kUnbounded;
+  p.distance_scale = c.distance_scale;
+  for (int a = 0; a < 3; ++a) {
+    p.roi_min[a] = c.roi.min[a];
+    p.roi_scale[a] = 1.0f / (c.roi.max[a] - c.roi.min[a]) * 2.f;
+  }
   if (p.n_samples < 1) throw std::runtime_error("volume render: model has no samples per ray");
   if (model.res()[0] < 2) throw std::runtime_error("volume render: model is not initialized");
   return p;
@@ -126,24 +141,55 @@ inline void ToGridPoint(const MarchParams& p, const float x[3], GridPoint* gp) {
   LocateGridPoint(c, p.res, gp);
 }
 
-// Marches one ray: appends its evaluated samples to buf, returns the number of appearance
-// samples (their `app` field holds the local index 0..k-1 until offset by the caller).
-int MarchRay(const MarchParams& p, const float* o, const float* d, float jitter,
-             std::vector<Candidate>& cand, std::vector<SampleRec>& buf, int* count) {
+// Candidates of an unbounded scene (SPEC.md 7.2.1, the decoder's MarchRayUnbounded): from near
+// on (shifted by jitter times the first interval in training), spaced `step` in contracted
+// distance. The last sample (dist 0) never contributes and is left out.
+void UnboundedCandidates(const MarchParams& p, const float* o, const float* d, float jitter,
+                         std::vector<Candidate>& cand) {
+  ContractedRay ray;
+  for (int a = 0; a < 3; ++a) {
+    ray.o[a] = o[a];
+    ray.d[a] = d[a];
+    ray.roi_min[a] = p.roi_min[a];
+    ray.roi_scale[a] = p.roi_scale[a];
+  }
+  ray.step = p.step;
+  float q[3], x[3];
+  float t = p.near;
+  if (jitter > 0.f) {
+    ray.At(t, q, x);
+    const float first = ray.Increment(q);
+    if (std::isfinite(first)) t = t + jitter * first;
+  }
+  for (int i = 0; i + 1 < p.n_samples; ++i) {
+    ray.At(t, q, x);
+    const float next = t + ray.Increment(q);
+    if (!std::isfinite(next)) break;
+    if (!p.mask || p.mask->Occupied(x)) {
+      Candidate c;
+      c.t = t;
+      c.dscale = (next - t) * p.distance_scale;
+      ToGridPoint(p, x, &c.gp);
+      cand.push_back(c);
+    }
+    t = next;
+  }
+}
+
+// Samples inside the aabb and the alpha mask (no feature lookups) of an object scene.
+void ObjectCandidates(const MarchParams& p, const float* o, const float* d, float jitter,
+                      std::vector<Candidate>& cand) {
   float t_enter, t_exit;
   RayAabb(p.box, o, d, &t_enter, &t_exit);
   const float t_min = std::min(std::max(t_enter, p.near), p.far);
-  *count = 0;
   // Index range that can be inside the box (with a margin; the exact test follows). The last
   // sample (dist 0, alpha 0) never contributes and is skipped.
   const double a = (static_cast<double>(t_enter) - t_min) / p.step - jitter;
   const double b = (static_cast<double>(t_exit) - t_min) / p.step - jitter;
-  if (!(b >= -2.0)) return 0;
+  if (!(b >= -2.0)) return;
   const int last = p.n_samples - 1;
   const int i_lo = a > 0 ? static_cast<int>(std::min<double>(std::floor(a) - 1, last)) : 0;
   const int i_hi = static_cast<int>(std::min<double>(std::ceil(b) + 2, last));
-  // Pass 1: samples inside the aabb and the alpha mask (no feature lookups).
-  cand.clear();
   for (int i = std::max(i_lo, 0); i < i_hi; ++i) {
     const float ri = static_cast<float>(i) + jitter;
     const float t = t_min + p.step * ri;
@@ -155,8 +201,23 @@ int MarchRay(const MarchParams& p, const float* o, const float* d, float jitter,
     if (p.mask && !p.mask->Occupied(x)) continue;
     Candidate c;
     c.t = t;
+    c.dscale = p.dscale;
     ToGridPoint(p, x, &c.gp);
     cand.push_back(c);
+  }
+}
+
+// Marches one ray: appends its evaluated samples to buf, returns the number of appearance
+// samples (their `app` field holds the local index 0..k-1 until offset by the caller).
+int MarchRay(const MarchParams& p, const float* o, const float* d, float jitter,
+             std::vector<Candidate>& cand, std::vector<SampleRec>& buf, int* count) {
+  *count = 0;
+  // Pass 1: the samples to evaluate (no feature lookups).
+  cand.clear();
+  if (p.unbounded) {
+    UnboundedCandidates(p, o, d, jitter, cand);
+  } else {
+    ObjectCandidates(p, o, d, jitter, cand);
   }
   // Pass 2: density, alpha, transmittance (prefetching the grid a few samples ahead).
   float trans = 1.f;
@@ -170,11 +231,12 @@ int MarchRay(const MarchParams& p, const float* o, const float* d, float jitter,
       p.density->Prefetch(cand[k + kPrefetchDistance].gp);
     const float feat = p.density->Density(cand[k].gp) + p.shift;
     const float sigma = Softplus(feat);
-    const float alpha = 1.f - std::exp(-sigma * p.dscale);
+    const float alpha = 1.f - std::exp(-sigma * cand[k].dscale);
     const float w = alpha * trans;
     SampleRec rec;
     rec.gp = cand[k].gp;
     rec.t = cand[k].t;
+    rec.dscale = cand[k].dscale;
     rec.feat = feat;
     rec.alpha = alpha;
     rec.trans = trans;
@@ -364,7 +426,7 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
         const float f = (1.f - sk.alpha) + 1e-10f;
         const float dl_dalpha = e * sk.trans - suffix / f;
         suffix += e * w;
-        const float dl_dsigma = dl_dalpha * (1.f - sk.alpha) * p.dscale;
+        const float dl_dsigma = dl_dalpha * (1.f - sk.alpha) * sk.dscale;
         sk.feat = dl_dsigma * SoftplusGrad(sk.feat);
       }
     }

@@ -5,7 +5,8 @@
 // Each exercises an edge of the syntax: rank-0 modes, 2D-only plane blocks, 16-bit
 // coefficients with escapes, an occupancy mask, an empty occupancy mask, float16/float32 MLPs,
 // a quantized MLP (bitstream 1.1) whose rows span 2^-3..2^3 in scale and whose largest levels
-// take the class escape.
+// take the class escape, an unbounded scene (bitstream 1.2: contracted space, SPEC.md 7.2.1) seen
+// from outside its region of interest.
 #ifndef ECRF_TESTS_COMMON_SCENE_VECTORS_H_
 #define ECRF_TESTS_COMMON_SCENE_VECTORS_H_
 
@@ -38,20 +39,23 @@ struct SceneVector {
   int mlp_precision;  // 0 float16, 1 float32, 2 quantized
   OccupancyKind occupancy;
   uint32_t seed;
+  SceneModel scene_model;
 };
 
 inline const std::vector<SceneVector>& SceneVectors() {
   static const std::vector<SceneVector> v = {
       {"scene_ranks_dropped", {12, 10, 9}, {{0, 3, 2}, {2, 0, 3}}, {4, 8, 8}, {1, 4, 8}, 8, 0,
-       OccupancyKind::kNone, 11},
+       OccupancyKind::kNone, 11, SceneModel::kObject},
       {"scene_2d_blocks", {20, 18, 16}, {{2, 2, 2}, {3, 3, 3}}, {1, 8, 8}, {1, 1, 16}, 8, 1,
-       OccupancyKind::kSphere, 12},
+       OccupancyKind::kSphere, 12, SceneModel::kObject},
       {"scene_16bit", {9, 9, 9}, {{2, 1, 2}, {2, 2, 1}}, {2, 4, 4}, {1, 2, 4}, 16, 0,
-       OccupancyKind::kSphere, 13},
+       OccupancyKind::kSphere, 13, SceneModel::kObject},
       {"scene_empty_occupancy", {8, 8, 8}, {{1, 1, 1}, {1, 1, 1}}, {1, 4, 4}, {1, 1, 8}, 8, 0,
-       OccupancyKind::kEmpty, 14},
+       OccupancyKind::kEmpty, 14, SceneModel::kObject},
       {"scene_quantized_mlp", {10, 12, 8}, {{2, 2, 2}, {2, 3, 2}}, {2, 4, 4}, {1, 2, 8}, 8, 2,
-       OccupancyKind::kSphere, 15},
+       OccupancyKind::kSphere, 15, SceneModel::kObject},
+      {"scene_unbounded", {16, 16, 16}, {{2, 2, 2}, {2, 2, 2}}, {2, 4, 4}, {1, 2, 8}, 8, 0,
+       OccupancyKind::kSphere, 16, SceneModel::kUnbounded},
   };
   return v;
 }
@@ -81,7 +85,22 @@ inline SceneHeader SceneVectorHeader(const SceneVector& v) {
   h.viewdir_pe_freqs = 2;
   h.hidden = 16;
   h.has_occupancy = v.occupancy == OccupancyKind::kNone ? 0 : 1;
+  h.scene_model = static_cast<uint8_t>(v.scene_model);
+  if (v.scene_model == SceneModel::kUnbounded) {
+    // The box is the region of interest; 12 / step_size samples cross the contracted cube.
+    h.step_size = 0.05f;
+    h.num_samples = 240;
+    h.near_far[0] = 0.1f;
+  }
   return h;
+}
+
+// The box the grids and the occupancy mask span: the HEAD box, or the contracted cube.
+inline void SceneVectorGridBox(const SceneVector& v, const SceneHeader& h, float lo[3], float hi[3]) {
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = v.scene_model == SceneModel::kUnbounded ? -2.f : h.aabb_min[a];
+    hi[a] = v.scene_model == SceneModel::kUnbounded ? 2.f : h.aabb_max[a];
+  }
 }
 
 // Coefficients of one block: a strong DC, decaying lower frequencies, some zero blocks.
@@ -107,15 +126,18 @@ inline void MakeSceneBlock(Lcg& rng, const int dims[3], int32_t max_abs, bool de
 inline std::vector<uint8_t> BuildSceneVector(const SceneVector& v) {
   const SceneHeader h = SceneVectorHeader(v);
   Lcg rng(v.seed);
-  ContainerWriter writer(v.mlp_precision == kMlpPrecisionQuantized ? 1 : 0);  // 1.1: quantized MLP
+  // 1.1: quantized MLP; 1.2: unbounded scene model.
+  ContainerWriter writer(v.scene_model == SceneModel::kUnbounded ? 2 : v.mlp_precision == kMlpPrecisionQuantized ? 1 : 0);
   ByteWriter head;
   WriteSceneHeader(h, &head);
   writer.AddChunk(kChunkHead, head.bytes());
   if (h.has_occupancy) {
     ByteWriter occ;
     const int mres[3] = {7, 6, 5};
-    for (float x : h.aabb_min) occ.F32(x);
-    for (float x : h.aabb_max) occ.F32(x);
+    float lo[3], hi[3];
+    SceneVectorGridBox(v, h, lo, hi);
+    for (float x : lo) occ.F32(x);
+    for (float x : hi) occ.F32(x);
     for (int r : mres) occ.U16(uint16_t(r));
     occ.U16(0);
     std::vector<uint8_t> voxels(size_t(mres[0]) * mres[1] * mres[2], 0);
@@ -154,7 +176,9 @@ inline std::vector<uint8_t> BuildSceneVector(const SceneVector& v) {
       c.U8(0);
       for (int a = 0; a < 3; ++a) c.U8(uint8_t(dims[a]));
       c.U8(0);
-      c.F32(v.coef_bits == 16 ? 0.0005f : (g == 0 ? 0.125f : 0.03125f));
+      // The unbounded vector's density is translucent: samples far along its rays count too.
+      const float density_step = v.scene_model == SceneModel::kUnbounded ? 0.00390625f : 0.125f;
+      c.F32(v.coef_bits == 16 ? 0.0005f : (g == 0 ? density_step : 0.03125f));
       c.Bytes(enc.Finish());
       writer.AddChunk(kChunkCoefficients, c.bytes());
     }

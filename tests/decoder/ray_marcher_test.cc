@@ -123,8 +123,10 @@ struct RefPoint {
 
 RefPoint Locate(const SceneField& s, const float p[3]) {
   RefPoint rp;
+  const bool unbounded = s.scene_model == SceneModel::kUnbounded;  // grids span [-2, 2]^3
   for (int a = 0; a < 3; ++a) {
-    const double c = (double(p[a]) - s.aabb_min[a]) * 2.0 / (double(s.aabb_max[a]) - s.aabb_min[a]) - 1.0;
+    const double lo = unbounded ? -2.0 : s.aabb_min[a], hi = unbounded ? 2.0 : s.aabb_max[a];
+    const double c = (double(p[a]) - lo) * 2.0 / (hi - lo) - 1.0;
     double idx = (c + 1.0) / 2.0 * (s.res[a] - 1);
     idx = std::min(std::max(idx, 0.0), double(s.res[a] - 1));
     int i = int(std::floor(idx));
@@ -211,6 +213,38 @@ void NaiveMlp(const MlpConfig& cfg, const std::vector<float>& params,
   for (int c = 0; c < 3; ++c) rgb[c] = 1.0 / (1.0 + std::exp(-z[c]));
 }
 
+// Compositing of 7.2 / 7.5 in double, one sample at a time; `rp` null: a sample with sigma 0.
+struct NaiveComposite {
+  double T = 1.0, acc = 0.0, col[3] = {0, 0, 0};
+  std::vector<double> prod;
+
+  void Add(const TestScene& ts, const RefPoint* rp, double dist, const float d[3]) {
+    const SceneField& s = ts.field;
+    double sigma = 0.0;
+    if (rp != nullptr) {
+      RefProducts(s.density, *rp, &prod);
+      double feat = 0.0;
+      for (double v : prod) feat += v;
+      const double x = feat + s.density_shift;
+      sigma = x > 20.0 ? x : std::log1p(std::exp(x));
+    }
+    const double alpha = 1.0 - std::exp(-sigma * dist * s.distance_scale);
+    const double w = alpha * T;
+    T *= 1.0 - alpha + 1e-10;
+    acc += w;
+    if (w > s.weight_threshold) {
+      RefProducts(s.appearance, *rp, &prod);
+      double c[3];
+      NaiveMlp(s.mlp.config(), ts.mlp_params, prod, d, c);
+      for (int k = 0; k < 3; ++k) col[k] += w * c[k];
+    }
+  }
+  void Finish(const SceneField& s, double rgb[3], double* acc_out) const {
+    for (int k = 0; k < 3; ++k) rgb[k] = std::min(std::max(col[k] + (1.0 - acc) * s.background[k], 0.0), 1.0);
+    *acc_out = acc;
+  }
+};
+
 void NaiveRender(const TestScene& ts, const float o[3], const float d[3], double rgb[3],
                  double* acc_out) {
   const SceneField& s = ts.field;
@@ -224,37 +258,54 @@ void NaiveRender(const TestScene& ts, const float o[3], const float d[3], double
   const float t0 = std::min(std::max(tmin, s.near_far[0]), s.near_far[1]);
   std::vector<float> z(n);
   for (int i = 0; i < n; ++i) z[i] = t0 + step * float(i);
-  double T = 1.0, acc = 0.0, col[3] = {0, 0, 0};
-  std::vector<double> prod;
+  NaiveComposite comp;
   for (int i = 0; i < n; ++i) {
     const float p[3] = {o[0] + d[0] * z[i], o[1] + d[1] * z[i], o[2] + d[2] * z[i]};
     bool valid = true;
     for (int a = 0; a < 3; ++a) valid = valid && !(s.aabb_min[a] > p[a] || p[a] > s.aabb_max[a]);
     if (valid && s.has_mask) valid = RefMaskKeeps(s.mask, p);
-    double sigma = 0.0;
-    RefPoint rp{};
-    if (valid) {
-      rp = Locate(s, p);
-      RefProducts(s.density, rp, &prod);
-      double feat = 0.0;
-      for (double v : prod) feat += v;
-      const double x = feat + s.density_shift;
-      sigma = x > 20.0 ? x : std::log1p(std::exp(x));
-    }
+    const RefPoint rp = valid ? Locate(s, p) : RefPoint{};
     const double dist = i + 1 < n ? double(float(z[i + 1] - z[i])) : 0.0;
-    const double alpha = 1.0 - std::exp(-sigma * dist * s.distance_scale);
-    const double w = alpha * T;
-    T *= 1.0 - alpha + 1e-10;
-    acc += w;
-    if (w > s.weight_threshold) {
-      RefProducts(s.appearance, rp, &prod);
-      double c[3];
-      NaiveMlp(s.mlp.config(), ts.mlp_params, prod, d, c);
-      for (int k = 0; k < 3; ++k) col[k] += w * c[k];
-    }
+    comp.Add(ts, valid ? &rp : nullptr, dist, d);
   }
-  for (int k = 0; k < 3; ++k) rgb[k] = std::min(std::max(col[k] + (1.0 - acc) * s.background[k], 0.0), 1.0);
-  *acc_out = acc;
+  comp.Finish(s, rgb, acc_out);
+}
+
+// SPEC.md 7.2.1 written out from the pseudo-code (not decoder/contraction.h): positions in
+// binary32 as specified, compositing in double.
+void NaiveRenderUnbounded(const TestScene& ts, const float o[3], const float d[3], double rgb[3],
+                          double* acc_out) {
+  const SceneField& s = ts.field;
+  float S[3];
+  for (int a = 0; a < 3; ++a) S[a] = (1.f / (s.aabb_max[a] - s.aabb_min[a])) * 2.f;
+  auto contract = [](float v) { return v >= -1.f && v <= 1.f ? v : (v > 0.f ? 2.f - 1.f / v : -2.f - 1.f / v); };
+  NaiveComposite comp;
+  float t = s.near_far[0];
+  const int n = s.NumSamples();
+  for (int i = 0; i < n; ++i) {
+    float q[3], x[3];
+    for (int a = 0; a < 3; ++a) {
+      const float p = o[a] + d[a] * t;
+      q[a] = (p - s.aabb_min[a]) * S[a] - 1.f;
+      x[a] = contract(q[a]);
+    }
+    float sum = 0.f;
+    for (int a = 0; a < 3; ++a) {
+      const float qq = q[a] * q[a];
+      const float g = d[a] * S[a] / (qq > 1.f ? qq : 1.f);
+      sum = sum + g * g;
+    }
+    const float next = t + s.StepSize() / std::sqrt(sum);
+    const bool last = i + 1 == n || !std::isfinite(next);
+    const double dist = last ? 0.0 : double(next - t);
+    if (!s.has_mask || RefMaskKeeps(s.mask, x)) {
+      const RefPoint rp = Locate(s, x);
+      comp.Add(ts, &rp, dist, d);
+    }
+    if (last) break;
+    t = next;
+  }
+  comp.Finish(s, rgb, acc_out);
 }
 
 // ------------------------------------------------------------------------------------------
@@ -423,6 +474,59 @@ TEST(RayMarcherTest, MatchesNaiveReferenceWithoutMask) {
   TestScene ts;
   BuildScene(spec, &ts);
   ExpectMatchesNaive(ts, Exact(), 13);
+}
+
+// An unbounded scene (SPEC.md 7.2.1): the HEAD box is the region of interest, the grids and the
+// mask span the contracted cube; cameras inside and outside the region, rays in every direction.
+TEST(RayMarcherTest, UnboundedSceneMatchesNaiveReference) {
+  TestScene ts;
+  BuildScene(SceneSpec(), &ts);
+  SceneField& s = ts.field;
+  s.scene_model = SceneModel::kUnbounded;
+  s.step_size = 0.04f;
+  s.n_samples = 300;
+  s.background[1] = 0.f;
+  const float cube_min[3] = {-2.f, -2.f, -2.f}, cube_max[3] = {2.f, 2.f, 2.f};
+  const int mres[3] = {21, 17, 19};
+  ASSERT_TRUE(s.mask.Init(cube_min, cube_max, mres).ok());
+  for (int z = 0; z < mres[2]; ++z)
+    for (int y = 0; y < mres[1]; ++y)
+      for (int x = 0; x < mres[0]; ++x) s.mask.Set(x, y, z, (x * 7 + y * 3 + z) % 5 != 0);
+  ASSERT_TRUE(s.mask.BuildAcceleration().ok());
+  ASSERT_TRUE(s.Validate().ok()) << s.Validate().message();
+
+  std::mt19937 rng(21);
+  std::normal_distribution<float> nrm(0.f, 1.f);
+  Rays rays;
+  for (int i = 0; i < 240; ++i) {
+    float o[3] = {nrm(rng), nrm(rng), nrm(rng)}, d[3] = {nrm(rng), nrm(rng), nrm(rng)};
+    Normalize(o);
+    for (float& v : o) v *= i % 3 == 0 ? 0.3f : 3.5f;
+    if (i % 2 == 0) {
+      for (int a = 0; a < 3; ++a) d[a] = 0.1f * d[a] - o[a];  // towards the region
+    }
+    if (i % 17 == 0) d[i % 3] = 0.f;  // axis-parallel components
+    Normalize(d);
+    rays.Add(o, d, "camera");
+  }
+  for (const bool skip : {true, false}) {
+    RenderOptions opt = Exact();
+    opt.skip_empty_space = skip;
+    std::vector<float> rgb, acc;
+    RenderStats stats;
+    RenderWith(s, opt, rays, &rgb, &acc, &stats);
+    double max_err = 0.0, sum_acc = 0.0;
+    for (size_t r = 0; r < rays.size(); ++r) {
+      double ref[3], ref_acc;
+      NaiveRenderUnbounded(ts, &rays.o[3 * r], &rays.d[3 * r], ref, &ref_acc);
+      sum_acc += ref_acc;
+      for (int k = 0; k < 3; ++k) max_err = std::max(max_err, std::fabs(ref[k] - rgb[3 * r + k]));
+      max_err = std::max(max_err, std::fabs(ref_acc - acc[r]));
+    }
+    EXPECT_LT(max_err, 1e-4);
+    EXPECT_GT(sum_acc / rays.size(), 0.05);
+    EXPECT_GT(stats.samples, rays.size() * 30);  // rays sample far beyond the region
+  }
 }
 
 TEST(RayMarcherTest, NearPlaneAndSampleCap) {

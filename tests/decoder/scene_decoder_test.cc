@@ -345,7 +345,8 @@ TEST(DecoderCApi, DecodeInfoTensorRenderAndErrors) {
 // What a renderer of its own reads through the C API is what the reference renderer uses: the
 // scene constants, the mask's bits and the MLP parameters, for every conformance scene.
 TEST(SceneDecoder, CApiExposesTheFieldOccupancyAndMlpOfTheReferenceRenderer) {
-  for (const char* name : {"scene_builtin.ecrf", "scene_quantized_mlp.ecrf", "scene_ranks_dropped.ecrf"}) {
+  for (const char* name :
+       {"scene_builtin.ecrf", "scene_quantized_mlp.ecrf", "scene_ranks_dropped.ecrf", "scene_unbounded.ecrf"}) {
     SCOPED_TRACE(name);
     const std::vector<uint8_t> bytes = ReadFile(kDir + name);
     SceneField field;
@@ -356,6 +357,8 @@ TEST(SceneDecoder, CApiExposesTheFieldOccupancyAndMlpOfTheReferenceRenderer) {
     EXPECT_EQ(ecrf_scene_get_field(scene, &f), ECRF_ERR_INVALID_ARGUMENT);  // nothing decoded
     ASSERT_EQ(ecrf_scene_decode(scene, bytes.data(), bytes.size(), ECRF_STORAGE_FLOAT32), ECRF_OK);
     ASSERT_EQ(ecrf_scene_get_field(scene, &f), ECRF_OK);
+    EXPECT_EQ(ecrf_scene_model(scene), static_cast<int>(field.scene_model));
+    EXPECT_EQ(ecrf_scene_model(scene) == ECRF_SCENE_UNBOUNDED, std::string(name) == "scene_unbounded.ecrf");
     EXPECT_EQ(f.density_shift, field.density_shift);
     EXPECT_EQ(f.distance_scale, field.distance_scale);
     EXPECT_EQ(f.weight_threshold, field.weight_threshold);

@@ -157,16 +157,21 @@ class DecodeTest(unittest.TestCase):
 
 class RenderTest(unittest.TestCase):
     def test_matches_the_reference_render(self):
-        _, c2w, (fx, fy, cx, cy), width, height = manifest_camera("scene_builtin.ecrf")
-        reference = read_png(os.path.join(CONFORMANCE, "scene_builtin.png"))[:, :, :3].astype(int)
-        rgba = ecrf.decode(SCENE).render(c2w, fx, fy, cx, cy, width, height)
-        self.assertEqual(rgba.shape, (height, width, 4))
-        self.assertEqual(rgba.dtype, np.uint8)
-        diff = np.abs(rgba[:, :, :3].astype(int) - reference)
-        mse = np.mean((diff / 255.0) ** 2)
-        psnr = float("inf") if mse == 0 else -10 * np.log10(mse)
-        within = np.mean(diff.max(axis=2) <= 2)  # SPEC.md 7.7
-        self.assertTrue(psnr >= 40 or within >= 0.99, "PSNR %.2f dB, %.4f within 2" % (psnr, within))
+        # An object scene and an unbounded one (SPEC.md 7.2.1), both through the decoder.
+        for name, model in (("scene_builtin", "object"), ("scene_unbounded", "unbounded")):
+            with self.subTest(name):
+                _, c2w, (fx, fy, cx, cy), width, height = manifest_camera(name + ".ecrf")
+                reference = read_png(os.path.join(CONFORMANCE, name + ".png"))[:, :, :3].astype(int)
+                scene = ecrf.decode(os.path.join(CONFORMANCE, name + ".ecrf"))
+                self.assertEqual(scene.info["scene_model"], model)
+                rgba = scene.render(c2w, fx, fy, cx, cy, width, height)
+                self.assertEqual(rgba.shape, (height, width, 4))
+                self.assertEqual(rgba.dtype, np.uint8)
+                diff = np.abs(rgba[:, :, :3].astype(int) - reference)
+                mse = np.mean((diff / 255.0) ** 2)
+                psnr = float("inf") if mse == 0 else -10 * np.log10(mse)
+                within = np.mean(diff.max(axis=2) <= 2)  # SPEC.md 7.7
+                self.assertTrue(psnr >= 40 or within >= 0.99, "PSNR %.2f dB, %.4f within 2" % (psnr, within))
 
     def test_orbit_camera_is_the_reference_one(self):
         # The manifest camera of scene_builtin is OrbitCamera(64, 64, az, el, 4): same intrinsics.

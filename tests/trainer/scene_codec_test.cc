@@ -12,6 +12,7 @@
 #include "decoder/ray_marcher.h"
 #include "decoder/scene_decoder.h"
 #include "format/int_idct.h"
+#include "tests/common/decode_or_die.h"
 #include "trainer/grid_dct.h"
 #include "trainer/image_io.h"
 #include "trainer/image_metrics.h"
@@ -32,13 +33,6 @@ TensorfModel SmallModel(uint64_t seed) {
   TensorfModel model(c);
   model.Initialize({21, 18, 13}, seed);
   return model;
-}
-
-dec::SceneField DecodeOrDie(const std::vector<uint8_t>& bytes) {
-  dec::SceneField field;
-  const Status s = dec::DecodeScene(bytes.data(), bytes.size(), dec::DecodeOptions(), &field, nullptr);
-  EXPECT_TRUE(s.ok()) << s.message();
-  return field;
 }
 
 const float* DecodedTensor(const dec::SceneField& f, int g, int t) {

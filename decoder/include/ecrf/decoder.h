@@ -137,6 +137,14 @@ typedef struct ecrf_scene_field {
 
 ECRF_API int ecrf_scene_get_field(const ecrf_scene* scene, ecrf_scene_field* field);
 
+/* The scene model of the decoded stream (SPEC.md 6.2). With ECRF_SCENE_UNBOUNDED the info's box
+ * is the region of interest and the grids and the occupancy mask span the contracted cube
+ * [-2, 2]^3 (SPEC.md 7.2.1): a renderer of its own must implement that section. */
+#define ECRF_SCENE_OBJECT 0
+#define ECRF_SCENE_UNBOUNDED 1
+/* ECRF_SCENE_OBJECT or ECRF_SCENE_UNBOUNDED; ECRF_ERR_INVALID_ARGUMENT before a decode. */
+ECRF_API int ecrf_scene_model(const ecrf_scene* scene);
+
 /* The occupancy mask's bits, packed [z][y][x] with x fastest, LSB first (SPEC.md 6.3);
  * ECRF_ERR_INVALID_ARGUMENT when the scene has no mask. */
 ECRF_API int ecrf_scene_occupancy(const ecrf_scene* scene, const uint8_t** bits, int res[3], size_t* bytes);

@@ -1,0 +1,50 @@
+// What a capture's cameras say about its scene: the region of interest (where the views meet)
+// and the scene model that suits the layout (a bounded object, or an unbounded scene whose
+// surroundings are contracted, SPEC.md 7.2.1).
+#ifndef ECRF_TRAINER_SCENE_FIT_H_
+#define ECRF_TRAINER_SCENE_FIT_H_
+
+#include <string>
+#include <vector>
+
+#include "format/scene_header.h"
+#include "trainer/alpha_mask.h"
+#include "trainer/camera.h"
+#include "trainer/dataset.h"
+
+namespace ecrf::trainer {
+
+// The share of the cameras that must see a point for it to belong to the region of interest.
+inline constexpr double kRoiViewShare = 0.9;
+// The fitted box grows by this share of its extent on each side.
+inline constexpr double kRoiMargin = 0.1;
+// A fitted box holding at least this share of the dataset box's volume means the box already
+// is the object's: the object model keeps it.
+inline constexpr double kObjectRoiShare = 0.25;
+
+// The box of the points of `box` that at least kRoiViewShare of the cameras see (in front of the
+// camera, inside its image, lens distortion applied), on a 64^3 lattice, grown by kRoiMargin of
+// its extent and one lattice step: where the frusta meet. `box` itself when fewer than 8 lattice points qualify.
+Aabb FitRegionOfInterest(const std::vector<Camera>& cameras, const double box[2][3]);
+
+// True when every camera looks within 35 degrees of their mean viewing direction (an LLFF-style
+// forward-facing capture).
+bool CamerasFaceOneWay(const std::vector<Camera>& cameras);
+
+struct SceneFit {
+  SceneModel model = SceneModel::kObject;
+  Aabb roi;                  // the fitted region of interest
+  double roi_share = 1.0;    // its volume over the dataset box's
+  bool forward_facing = false;
+  std::string reason;        // why this model (for the log)
+};
+
+// scene_type "auto" chooses from the layout: the object model for white-background datasets
+// (Blender) and boxes the views already fill (roi_share >= kObjectRoiShare), the unbounded model
+// otherwise (forward-facing captures too: there is no NDC model yet). "object" and "unbounded"
+// force it; "forward" throws std::invalid_argument (not implemented), as do other names.
+SceneFit FitScene(const std::string& scene_type, const Dataset& data);
+
+}  // namespace ecrf::trainer
+
+#endif  // ECRF_TRAINER_SCENE_FIT_H_
