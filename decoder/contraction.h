@@ -38,6 +38,16 @@ struct ContractedRay {
   float roi_min[3], roi_scale[3];
   float step;  // distance between samples in contracted coordinates
 
+  ContractedRay(const float* origin, const float* dir, const float* min, const float* scale, float sample_step)
+      : step(sample_step) {
+    for (int a = 0; a < 3; ++a) {
+      o[a] = origin[a];
+      d[a] = dir[a];
+      roi_min[a] = min[a];
+      roi_scale[a] = scale[a];
+    }
+  }
+
   // Normalised point q (the ROI box is [-1, 1]^3) and its contraction x at parameter t.
   void At(float t, float q[3], float x[3]) const {
     for (int a = 0; a < 3; ++a) {

@@ -251,14 +251,8 @@ void MarchRay(const Ctx& c, RayMarcher::Workspace& ws, int slot) {
 // sample budget or the edge of the contracted cube. The mask hierarchy assumes straight rays, so
 // empty space is skipped only sample by sample here (the output is the same).
 void MarchRayUnbounded(const Ctx& c, RayMarcher::Workspace& ws, int slot) {
-  ContractedRay ray;
-  for (int a = 0; a < 3; ++a) {
-    ray.o[a] = ws.ray_o[static_cast<size_t>(slot) * 3 + a];
-    ray.d[a] = ws.ray_d[static_cast<size_t>(slot) * 3 + a];
-    ray.roi_min[a] = c.roi_min[a];
-    ray.roi_scale[a] = c.roi_scale[a];
-  }
-  ray.step = c.step;
+  const ContractedRay ray(ws.ray_o.data() + static_cast<size_t>(slot) * 3,
+                          ws.ray_d.data() + static_cast<size_t>(slot) * 3, c.roi_min, c.roi_scale, c.step);
   ws.ray_acc[slot] = 0.f;
   for (int a = 0; a < 3; ++a) {
     if (!std::isfinite(ray.o[a]) || !std::isfinite(ray.d[a])) return;

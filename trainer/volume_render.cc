@@ -146,14 +146,7 @@ inline void ToGridPoint(const MarchParams& p, const float x[3], GridPoint* gp) {
 // distance. The last sample (dist 0) never contributes and is left out.
 void UnboundedCandidates(const MarchParams& p, const float* o, const float* d, float jitter,
                          std::vector<Candidate>& cand) {
-  ContractedRay ray;
-  for (int a = 0; a < 3; ++a) {
-    ray.o[a] = o[a];
-    ray.d[a] = d[a];
-    ray.roi_min[a] = p.roi_min[a];
-    ray.roi_scale[a] = p.roi_scale[a];
-  }
-  ray.step = p.step;
+  const ContractedRay ray(o, d, p.roi_min, p.roi_scale, p.step);
   float q[3], x[3];
   float t = p.near;
   if (jitter > 0.f) {

@@ -48,15 +48,9 @@ TEST(Contraction, IsMonotoneContinuousAndInvertible) {
 }
 
 ContractedRay UnitRoiRay(const float o[3], const float d[3], float step) {
-  ContractedRay ray;
-  for (int a = 0; a < 3; ++a) {
-    ray.o[a] = o[a];
-    ray.d[a] = d[a];
-    ray.roi_min[a] = -1.f;
-    ray.roi_scale[a] = 1.f;  // (1 / 2) * 2: the ROI [-1, 1]^3 is its own normalisation
-  }
-  ray.step = step;
-  return ray;
+  // (1 / 2) * 2: the ROI [-1, 1]^3 is its own normalisation.
+  const float roi_min[3] = {-1.f, -1.f, -1.f}, roi_scale[3] = {1.f, 1.f, 1.f};
+  return ContractedRay(o, d, roi_min, roi_scale, step);
 }
 
 TEST(Contraction, SamplesAreEvenlySpacedInContractedDistanceAndEndAtTheEdge) {
