@@ -128,7 +128,8 @@ int ecrf_scene_tensor(const ecrf_scene* scene, int grid, int tensor, const float
 int ecrf_scene_model(const ecrf_scene* scene) {
   if (!scene || !scene->decoded) return ECRF_ERR_INVALID_ARGUMENT;
   static_assert(ECRF_SCENE_OBJECT == static_cast<int>(ecrf::SceneModel::kObject) &&
-                    ECRF_SCENE_UNBOUNDED == static_cast<int>(ecrf::SceneModel::kUnbounded),
+                    ECRF_SCENE_UNBOUNDED == static_cast<int>(ecrf::SceneModel::kUnbounded) &&
+                    ECRF_SCENE_FORWARD == static_cast<int>(ecrf::SceneModel::kForward),
                 "C API scene models must equal the format's");
   return static_cast<int>(scene->field.scene_model);
 }
@@ -154,6 +155,12 @@ int ecrf_scene_get_field(const ecrf_scene* scene, ecrf_scene_field* out) {
   out->mlp_viewdir_freqs = c.viewdir_pe_freqs;
   out->mlp_inputs = c.input_dim();
   out->mlp_params = f.mlp.num_params();
+  if (f.scene_model == ecrf::SceneModel::kForward) {
+    for (int k = 0; k < 12; ++k) out->ndc_world_to_ref[k] = f.ndc.world_to_ref[k];
+    out->ndc_scale[0] = f.ndc.scale[0];
+    out->ndc_scale[1] = f.ndc.scale[1];
+    out->ndc_near_plane = f.ndc.near_plane;
+  }
   return ECRF_OK;
 }
 

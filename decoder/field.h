@@ -19,6 +19,7 @@
 #include <type_traits>
 
 #include "decoder/mlp.h"
+#include "format/ndc_frame.h"
 #include "format/scene_header.h"
 #include "format/status.h"
 
@@ -201,8 +202,10 @@ class OccupancyMask {
 struct SceneField {
   // kObject: the box is the scene and the grids span it. kUnbounded: the box is the region of
   // interest; world points are contracted (decoder/contraction.h) and the grids and the mask
-  // span the contracted cube [-2, 2]^3 (SPEC.md 7.2.1).
+  // span the contracted cube [-2, 2]^3 (SPEC.md 7.2.1). kForward: the box, grids and mask are in
+  // the NDC of `ndc`'s reference camera (decoder/ndc.h, SPEC.md 7.2.2).
   SceneModel scene_model = SceneModel::kObject;
+  NdcFrame ndc;
   float aabb_min[3] = {-1.5f, -1.5f, -1.5f};
   float aabb_max[3] = {1.5f, 1.5f, 1.5f};
   int res[3] = {0, 0, 0};  // grid resolution (density and appearance)

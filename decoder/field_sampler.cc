@@ -338,10 +338,18 @@ int SceneField::NumSamples() const {
 }
 
 Status SceneField::Validate() const {
-  ECRF_CHECK_OR_RETURN(scene_model == SceneModel::kObject || scene_model == SceneModel::kUnbounded,
+  ECRF_CHECK_OR_RETURN(scene_model == SceneModel::kObject || scene_model == SceneModel::kUnbounded ||
+                           scene_model == SceneModel::kForward,
                        kErrInvalidArgument, "scene: unknown scene model %d", static_cast<int>(scene_model));
-  ECRF_CHECK_OR_RETURN(scene_model == SceneModel::kObject || near_far[0] >= 0.f, kErrInvalidArgument,
+  ECRF_CHECK_OR_RETURN(scene_model != SceneModel::kUnbounded || near_far[0] >= 0.f, kErrInvalidArgument,
                        "scene: near is negative in an unbounded scene");
+  if (scene_model == SceneModel::kForward) {
+    bool finite = true;
+    for (float v : ndc.world_to_ref) finite = finite && std::isfinite(v);
+    ECRF_CHECK_OR_RETURN(finite && std::isfinite(ndc.scale[0]) && ndc.scale[0] > 0.f && std::isfinite(ndc.scale[1]) &&
+                             ndc.scale[1] > 0.f && std::isfinite(ndc.near_plane) && ndc.near_plane > 0.f,
+                         kErrInvalidArgument, "scene: the NDC frame of a forward-facing scene is not finite and positive");
+  }
   for (int a = 0; a < 3; ++a) {
     ECRF_CHECK_OR_RETURN(std::isfinite(aabb_min[a]) && std::isfinite(aabb_max[a]) &&
                              aabb_max[a] > aabb_min[a],

@@ -11,6 +11,7 @@
 
 #include "decoder/contraction.h"
 #include "decoder/field_sampler.h"
+#include "decoder/ndc.h"
 
 namespace ecrf {
 namespace dec {
@@ -62,6 +63,7 @@ struct Ctx {
   const OccupancyMask* mask;  // null: no mask
   bool skip;
   bool unbounded;                       // SPEC.md 7.2.1; min/max/inv then span the contracted cube
+  bool forward;                         // SPEC.md 7.2.2; min/max/inv are in NDC
   float roi_min[3], roi_scale[3];       // unbounded: the HEAD box, (1 / (max - min)) * 2
   double mask_scale[3];  // (res - 1) / (max - min) of the mask
   int tile_size;
@@ -175,9 +177,9 @@ bool CompositeSample(const Ctx& c, RayMarcher::Workspace& ws, int slot, const fl
   return !(*T < c.early);
 }
 
-void MarchRay(const Ctx& c, RayMarcher::Workspace& ws, int slot) {
-  const float* o = ws.ray_o.data() + static_cast<size_t>(slot) * 3;
-  const float* d = ws.ray_d.data() + static_cast<size_t>(slot) * 3;
+// SPEC.md 7.2: the straight line o + d t through the box (world for the object model, NDC for
+// the forward-facing one); the colour samples take their view direction from ws.ray_d[slot].
+void MarchStraight(const Ctx& c, RayMarcher::Workspace& ws, int slot, const float* o, const float* d) {
   ws.ray_acc[slot] = 0.f;
   for (int a = 0; a < 3; ++a) {
     if (!std::isfinite(o[a]) || !std::isfinite(d[a])) return;
@@ -247,6 +249,24 @@ void MarchRay(const Ctx& c, RayMarcher::Workspace& ws, int slot) {
   ws.ray_acc[slot] = acc;
 }
 
+void MarchRay(const Ctx& c, RayMarcher::Workspace& ws, int slot) {
+  MarchStraight(c, ws, slot, ws.ray_o.data() + static_cast<size_t>(slot) * 3,
+                ws.ray_d.data() + static_cast<size_t>(slot) * 3);
+}
+
+// SPEC.md 7.2.2: the object process along the ray's image in NDC; the MLP sees the world direction.
+void MarchRayForward(const Ctx& c, RayMarcher::Workspace& ws, int slot) {
+  const float* o = ws.ray_o.data() + static_cast<size_t>(slot) * 3;
+  const float* d = ws.ray_d.data() + static_cast<size_t>(slot) * 3;
+  ws.ray_acc[slot] = 0.f;
+  for (int a = 0; a < 3; ++a) {
+    if (!std::isfinite(o[a]) || !std::isfinite(d[a])) return;
+  }
+  float ndc_o[3], ndc_d[3];
+  if (!NdcRay(c.s->ndc, o, d, ndc_o, ndc_d)) return;
+  MarchStraight(c, ws, slot, ndc_o, ndc_d);
+}
+
 // SPEC.md 7.2.1: samples from `near` on, spaced `step` apart in contracted distance, until the
 // sample budget or the edge of the contracted cube. The mask hierarchy assumes straight rays, so
 // empty space is skipped only sample by sample here (the output is the same).
@@ -289,6 +309,8 @@ void ProcessRays(const Ctx& c, RayMarcher::Workspace& ws, int nrays) {
   for (int r = 0; r < nrays; ++r) {
     if (c.unbounded) {
       MarchRayUnbounded(c, ws, r);
+    } else if (c.forward) {
+      MarchRayForward(c, ws, r);
     } else {
       MarchRay(c, ws, r);
     }
@@ -421,6 +443,7 @@ Status RayMarcher::Run(Job* job, RenderStats* stats) {
   Ctx c;
   c.s = &s;
   c.unbounded = s.scene_model == SceneModel::kUnbounded;
+  c.forward = s.scene_model == SceneModel::kForward;
   for (int a = 0; a < 3; ++a) {
     c.roi_min[a] = s.aabb_min[a];
     c.roi_scale[a] = 1.0f / (s.aabb_max[a] - s.aabb_min[a]) * 2.f;

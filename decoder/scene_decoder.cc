@@ -10,6 +10,7 @@
 #include "format/container.h"
 #include "format/half_float.h"
 #include "format/mlp_coder.h"
+#include "format/ndc_frame.h"
 #include "format/int_idct.h"
 #include "format/occupancy_coder.h"
 #include "decoder/field_sampler.h"
@@ -267,7 +268,7 @@ void ApplyHeader(const SceneHeader& h, SceneField* scene) {
 }
 
 // The critical chunks in the only order a stream may have them (SPEC.md 6.1).
-enum class Expect { kHead, kOccupancy, kCoefficients, kMlp, kDone };
+enum class Expect { kHead, kNdcFrame, kOccupancy, kCoefficients, kMlp, kDone };
 
 }  // namespace
 
@@ -310,6 +311,7 @@ Status DecodeScene(const uint8_t* data, size_t size, const DecodeOptions& option
                            "DONE at offset %zu before the scene is complete (%s missing)",
                            chunk.offset,
                            expect == Expect::kHead ? "HEAD"
+                           : expect == Expect::kNdcFrame ? "NDCP"
                            : expect == Expect::kOccupancy ? "OCCU"
                            : expect == Expect::kCoefficients ? "COEF" : "MLPW");
       break;
@@ -338,6 +340,16 @@ Status DecodeScene(const uint8_t* data, size_t size, const DecodeOptions& option
       }
       ECRF_RETURN_IF_ERROR(scene->density.Allocate(res, ranks[0], GridStorage::kFloat32));
       ECRF_RETURN_IF_ERROR(scene->appearance.Allocate(res, ranks[1], GridStorage::kFloat32));
+      if (h.scene_model == static_cast<uint8_t>(SceneModel::kForward)) {
+        expect = Expect::kNdcFrame;
+      } else if (h.has_occupancy) {
+        expect = Expect::kOccupancy;
+      } else {
+        advance_tensor();
+      }
+    } else if (chunk.type == kChunkNdcFrame && expect == Expect::kNdcFrame) {
+      ECRF_RETURN_IF_ERROR(ParseNdcFrame(chunk.data, chunk.size, &scene->ndc));
+      info.ndc_bytes = chunk.size;
       if (h.has_occupancy) {
         expect = Expect::kOccupancy;
       } else {
@@ -356,7 +368,7 @@ Status DecodeScene(const uint8_t* data, size_t size, const DecodeOptions& option
       ECRF_RETURN_IF_ERROR(DecodeMlpChunk(chunk, h, &budget, scene, &info));
       expect = Expect::kDone;
     } else {
-      const bool known = chunk.type == kChunkHead || chunk.type == kChunkOccupancy ||
+      const bool known = chunk.type == kChunkHead || chunk.type == kChunkNdcFrame || chunk.type == kChunkOccupancy ||
                          chunk.type == kChunkCoefficients || chunk.type == kChunkMlpWeights;
       return Status::Error(known ? kErrCorrupt : kErrUnsupported,
                            known ? "chunk '%s' at offset %zu is out of order"

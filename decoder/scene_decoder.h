@@ -47,7 +47,7 @@ struct SceneInfo {
   SceneHeader header;
   uint8_t version_major = 0, version_minor = 0;
   size_t stream_bytes = 0;
-  uint32_t head_bytes = 0, occupancy_bytes = 0, mlp_bytes = 0, metadata_bytes = 0;
+  uint32_t head_bytes = 0, ndc_bytes = 0, occupancy_bytes = 0, mlp_bytes = 0, metadata_bytes = 0;
   uint32_t other_ancillary_bytes = 0;
   int mlp_precision = 0;       // MLPW precision field: 0 float16, 1 float32, 2 quantized
   int mlp_precision_bits = 0;  // 16 or 32 for floating weights, 0 for quantized

@@ -108,11 +108,13 @@ Status ParseSceneHeader(const uint8_t* payload, size_t size, SceneHeader* h) {
                        h->has_occupancy);
   ECRF_RETURN_IF_ERROR(r.ReadU8(&h->scene_model, "scene_model"));
   ECRF_CHECK_OR_RETURN(h->scene_model < kNumSceneModels, kErrUnsupported,
-                       "HEAD: scene model %u is unknown (this decoder knows 0, object, and 1, unbounded; "
+                       "HEAD: scene model %u is unknown (this decoder knows 0, object, 1, unbounded, and 2, "
+                       "forward-facing; "
                        "the stream needs a newer decoder)",
                        h->scene_model);
   // The unbounded model samples from `near` on with t only growing (7.2.1).
-  ECRF_CHECK_OR_RETURN(h->scene_model == 0 || h->near_far[0] >= 0.f, kErrCorrupt,
+  ECRF_CHECK_OR_RETURN(h->scene_model != static_cast<uint8_t>(SceneModel::kUnbounded) || h->near_far[0] >= 0.f,
+                       kErrCorrupt,
                        "HEAD: near is negative in an unbounded scene");
   return Status::Ok();
 }

@@ -38,10 +38,16 @@ constexpr size_t kSceneHeaderBytes = 90;
 enum class SceneModel : uint8_t {
   kObject = 0,     // the box is the scene: rays sample it with a fixed step (7.2)
   kUnbounded = 1,  // the box is the region of interest of a contracted, unbounded scene (7.2.1)
+  kForward = 2,    // the box is in the NDC of a reference camera (NDCP chunk, 7.2.2)
 };
-constexpr int kNumSceneModels = 2;
+constexpr int kNumSceneModels = 3;
+// "object", "unbounded", "forward"; "unknown" for other values.
+inline const char* SceneModelName(SceneModel m) {
+  return m == SceneModel::kObject ? "object" : m == SceneModel::kUnbounded ? "unbounded"
+         : m == SceneModel::kForward ? "forward" : "unknown";
+}
 // The container minor version a stream with this scene model needs at least (2.1).
-constexpr uint8_t kSceneModelMinVersionMinor[kNumSceneModels] = {0, 2};
+constexpr uint8_t kSceneModelMinVersionMinor[kNumSceneModels] = {0, 2, 3};
 
 struct SceneHeader {
   float aabb_min[3] = {-1.5f, -1.5f, -1.5f};
@@ -61,7 +67,8 @@ struct SceneHeader {
   uint16_t hidden = 128;
   uint8_t has_occupancy = 0;
   // 0: object (the box is the scene); 1: unbounded (the box is the region of interest of a
-  // contracted scene, SPEC.md 7.2.1; streams of version 1.2). ecrf::SceneModel names them.
+  // contracted scene, SPEC.md 7.2.1; streams of version 1.2); 2: forward-facing (the box is in
+  // the NDC of the NDCP chunk's reference camera, 7.2.2; version 1.3). ecrf::SceneModel names them.
   uint8_t scene_model = 0;
 
   int total_rank(int grid) const { return ranks[grid][0] + ranks[grid][1] + ranks[grid][2]; }

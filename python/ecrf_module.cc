@@ -86,7 +86,9 @@ py::dict Info(Scene& s) {
   d["stream_bytes"] = i.stream_bytes;
   d["grid_bytes"] = i.grid_bytes;
   // "unbounded": aabb is the region of interest of a contracted scene (SPEC.md 7.2.1).
-  d["scene_model"] = ecrf_scene_model(s.get()) == ECRF_SCENE_UNBOUNDED ? "unbounded" : "object";
+  // "forward": aabb is in the NDC of a reference camera (SPEC.md 7.2.2).
+  const int model = ecrf_scene_model(s.get());
+  d["scene_model"] = model == ECRF_SCENE_UNBOUNDED ? "unbounded" : model == ECRF_SCENE_FORWARD ? "forward" : "object";
   return d;
 }
 

@@ -63,9 +63,19 @@ int RunInfo(int argc, char** argv) {
   std::printf("%s: ecrf stream version %u.%u, %zu bytes, decoded in %.1f ms\n", path.c_str(),
               in.version_major, in.version_minor, in.stream_bytes, s.decode_seconds * 1e3);
   const bool unbounded = h.scene_model == static_cast<uint8_t>(SceneModel::kUnbounded);
+  const bool forward = h.scene_model == static_cast<uint8_t>(SceneModel::kForward);
   std::printf("box      [%g %g %g] - [%g %g %g]%s\n", h.aabb_min[0], h.aabb_min[1], h.aabb_min[2],
               h.aabb_max[0], h.aabb_max[1], h.aabb_max[2],
-              unbounded ? " (unbounded scene: the region of interest; space beyond it is contracted)" : "");
+              unbounded ? " (unbounded scene: the region of interest; space beyond it is contracted)"
+              : forward ? " (forward-facing scene: in the NDC of the reference camera)"
+                        : "");
+  if (forward) {
+    const NdcFrame& f = s.field->ndc;
+    const float* m = f.world_to_ref;
+    std::printf("ndc      near plane %g, scale %g %g, world to reference [%g %g %g %g; %g %g %g %g; %g %g %g %g] (%u bytes)\n",
+                f.near_plane, f.scale[0], f.scale[1], m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8], m[9],
+                m[10], m[11], in.ndc_bytes);
+  }
   std::printf("grid     %u x %u x %u; density ranks %u %u %u; appearance ranks %u %u %u\n", h.res[0],
               h.res[1], h.res[2], h.ranks[0][0], h.ranks[0][1], h.ranks[0][2], h.ranks[1][0],
               h.ranks[1][1], h.ranks[1][2]);

@@ -110,7 +110,7 @@ json SceneVectorJson(const std::string& file, size_t bytes, const dec::SceneFiel
               {"md5", {{"grids", checksums.grids}, {"occupancy", checksums.occupancy}, {"mlp", checksums.mlp}}},
               {"render", {{"png", png}, {"camera", CameraJson(camera)}}}};
   // Object scenes (every vector before bitstream 1.2) leave the key out.
-  if (field.scene_model == SceneModel::kUnbounded) entry["scene_model"] = "unbounded";
+  if (field.scene_model != SceneModel::kObject) entry["scene_model"] = SceneModelName(field.scene_model);
   return entry;
 }
 

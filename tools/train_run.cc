@@ -24,10 +24,11 @@ namespace tools {
 const char kTrainFlagsUsage[] =
     "  --preset fast|paper|tiny   schedule and grid sizes (default fast; tiny for --scene)\n"
     "  --iters N                  iterations (milestones scale with it)\n"
-    "  --scene-type auto|object|unbounded\n"
+    "  --scene-type auto|object|unbounded|forward\n"
     "                             scene model (default auto, from the camera layout): object keeps\n"
     "                             the dataset box; unbounded contracts space around the fitted region\n"
-    "                             of interest (SPEC.md 7.2.1); forward (NDC) is not implemented yet\n"
+    "                             of interest (SPEC.md 7.2.1); forward samples the NDC of the average\n"
+    "                             camera, for captures whose cameras all look one way (7.2.2)\n"
     "  --downscale N              shrink the images by N (area filter)\n"
     "  --batch N                  rays per iteration (default 4096)\n"
     "  --seed N                   random seed\n"
@@ -74,7 +75,7 @@ bool ParseTrainFlag(int argc, char** argv, int* i, trainer::TrainOptions* o) {
     o->data_dir = value();
   } else if (a == "--scene-type") {
     o->scene_type = value();
-    trainer::FitScene(o->scene_type, trainer::Dataset());  // a bad name fails before the data loads
+    trainer::CheckSceneType(o->scene_type);  // a bad name fails before the data loads
   } else if (a == "--iters") {
     o->iters = ParseInt("--iters", value());
   } else if (a == "--downscale") {
@@ -194,10 +195,16 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& o) {
                test.views.size(), train.views[0].rgb.width, train.views[0].rgb.height,
                test.views.empty() ? 0 : test.views[0].rgb.width, test.views.empty() ? 0 : test.views[0].rgb.height);
   const trainer::SceneFit fit = trainer::FitScene(o.scene_type, train);
-  std::fprintf(stderr, "scene model: %s (%s); fitted region of interest [%.3g %.3g %.3g] - [%.3g %.3g %.3g], "
-               "%.2f%% of the dataset box's volume\n",
-               fit.model == SceneModel::kUnbounded ? "unbounded" : "object", fit.reason.c_str(), fit.roi.min[0],
-               fit.roi.min[1], fit.roi.min[2], fit.roi.max[0], fit.roi.max[1], fit.roi.max[2], 100 * fit.roi_share);
+  if (fit.model == SceneModel::kForward) {
+    std::fprintf(stderr, "scene model: forward (%s); NDC box [%.3g %.3g %.3g] - [%.3g %.3g %.3g], near plane %.3g\n",
+                 fit.reason.c_str(), fit.roi.min[0], fit.roi.min[1], fit.roi.min[2], fit.roi.max[0], fit.roi.max[1],
+                 fit.roi.max[2], fit.ndc.near_plane);
+  } else {
+    std::fprintf(stderr, "scene model: %s (%s); fitted region of interest [%.3g %.3g %.3g] - [%.3g %.3g %.3g], "
+                 "%.2f%% of the dataset box's volume\n",
+                 SceneModelName(fit.model), fit.reason.c_str(), fit.roi.min[0], fit.roi.min[1], fit.roi.min[2],
+                 fit.roi.max[0], fit.roi.max[1], fit.roi.max[2], 100 * fit.roi_share);
+  }
   trainer::TensorfModel model(trainer::ConfigFor(o, train, fit));
   trainer::RateState rate;
   const trainer::TrainResult r = trainer::Train(o, train, test, &model, &rate);
@@ -263,7 +270,7 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& o) {
   m["grid_res"] = model.res();
   m["aabb_min"] = model.aabb().min;
   m["aabb_max"] = model.aabb().max;
-  m["scene_model"] = fit.model == SceneModel::kUnbounded ? "unbounded" : "object";
+  m["scene_model"] = SceneModelName(fit.model);
   m["scene_model_reason"] = fit.reason;
   m["dataset_aabb_min"] = {train.scene_aabb[0][0], train.scene_aabb[0][1], train.scene_aabb[0][2]};
   m["dataset_aabb_max"] = {train.scene_aabb[1][0], train.scene_aabb[1][1], train.scene_aabb[1][2]};

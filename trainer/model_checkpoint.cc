@@ -1,5 +1,6 @@
 // Model checkpoints: the grids, the head, the alpha mask and the rate state, with the
 // configuration that rebuilds the model, written and read with their sanity checks.
+#include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <new>
@@ -36,6 +37,11 @@ void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int itera
                  {"step_ratio", c.step_ratio}, {"weight_threshold", c.weight_threshold},
                  {"scene_model", static_cast<int>(c.scene_model)}, {"roi_min", c.roi.min},
                  {"roi_max", c.roi.max}};
+  if (c.scene_model == SceneModel::kForward) {
+    j["render"]["ndc_world_to_ref"] = std::vector<float>(c.ndc.world_to_ref, c.ndc.world_to_ref + 12);
+    j["render"]["ndc_scale"] = std::vector<float>(c.ndc.scale, c.ndc.scale + 2);
+    j["render"]["ndc_near_plane"] = c.ndc.near_plane;
+  }
   j["head"] = {{"feature_dim", c.head.feature_dim}, {"feature_pe_freqs", c.head.feature_pe_freqs},
                {"viewdir_pe_freqs", c.head.viewdir_pe_freqs}, {"hidden", c.head.hidden}};
   if (const AlphaMask* mask = model.alpha_mask()) {
@@ -209,6 +215,17 @@ TensorfModel LoadModelFromCheckpoint(const std::string& path, RateState* rate) {
       if (!std::isfinite(c.roi.min[a]) || !std::isfinite(c.roi.max[a]) || !(c.roi.min[a] < c.roi.max[a])) {
         throw std::runtime_error(path + ": checkpoint region of interest is empty or not finite");
       }
+    }
+    if (c.scene_model == SceneModel::kForward) {
+      const std::vector<float> m = render.at("ndc_world_to_ref").get<std::vector<float>>();
+      const std::vector<float> scale = render.at("ndc_scale").get<std::vector<float>>();
+      if (m.size() != 12 || scale.size() != 2) throw std::runtime_error(path + ": checkpoint NDC frame has the wrong shape");
+      std::copy(m.begin(), m.end(), c.ndc.world_to_ref);
+      std::copy(scale.begin(), scale.end(), c.ndc.scale);
+      c.ndc.near_plane = render.at("ndc_near_plane").get<float>();
+      bool ok = std::all_of(m.begin(), m.end(), [](float v) { return std::isfinite(v); });
+      for (float v : {c.ndc.scale[0], c.ndc.scale[1], c.ndc.near_plane}) ok = ok && std::isfinite(v) && v > 0.f;
+      if (!ok) throw std::runtime_error(path + ": checkpoint NDC frame is not finite and positive");
     }
     const nlohmann::json head = j.value("head", nlohmann::json::object());
     c.head.feature_dim = head.value("feature_dim", c.head.feature_dim);

@@ -11,6 +11,7 @@
 #include "format/container.h"
 #include "format/half_float.h"
 #include "format/mlp_coder.h"
+#include "format/ndc_frame.h"
 #include "format/occupancy_coder.h"
 #include "format/scene_header.h"
 #include "trainer/coef_quantizer.h"
@@ -24,6 +25,7 @@ namespace {
 // The model as the stream sees it: explicit ranks (possibly 0), channels-last tensors.
 struct SceneTensors {
   SceneHeader header;
+  NdcFrame ndc;  // forward-facing scenes only
   std::vector<float> tensors[2][6];  // planes [res[v]][res[u]][rank], lines [res[w]][rank]
   std::vector<float> head_params;    // trainer layout, P = appearance total rank
   const AlphaMask* mask = nullptr;
@@ -36,6 +38,7 @@ SceneTensors FromModel(const TensorfModel& model) {
   // Unbounded: HEAD carries the region of interest; the grids span the contracted cube.
   const Aabb& box = model.unbounded() ? c.roi : model.aabb();
   h.scene_model = static_cast<uint8_t>(c.scene_model);
+  s.ndc = c.ndc;
   for (int a = 0; a < 3; ++a) {
     h.aabb_min[a] = box.min[a];
     h.aabb_max[a] = box.max[a];
@@ -197,7 +200,8 @@ std::vector<uint8_t> Assemble(const SceneTensors& s, const std::vector<float>& s
                               const EncodeOptions& o, EncodeReport* report) {
   *report = EncodeReport{};
   SceneHeader h = s.header;
-  // The lowest minor version of the features used: 1.1 for the quantized MLP, 1.2 unbounded.
+  // The lowest minor version of the features used: 1.1 for the quantized MLP, 1.2 unbounded, 1.3
+  // forward-facing.
   const uint8_t minor = std::max<uint8_t>(o.mlp_max_level > 0 ? 1 : 0, kSceneModelMinVersionMinor[h.scene_model]);
   ContainerWriter writer(minor);
   h.has_occupancy = (o.include_occupancy && s.mask) ? 1 : 0;
@@ -205,12 +209,19 @@ std::vector<uint8_t> Assemble(const SceneTensors& s, const std::vector<float>& s
   WriteSceneHeader(h, &head);
   writer.AddChunk(kChunkHead, head.bytes());
   report->head_bytes = head.size();
+  size_t chunks = 2 + h.has_occupancy;  // HEAD, DONE, OCCU
+  if (h.scene_model == static_cast<uint8_t>(SceneModel::kForward)) {
+    ByteWriter ndc;
+    WriteNdcFrame(s.ndc, &ndc);
+    writer.AddChunk(kChunkNdcFrame, ndc.bytes());
+    report->head_bytes += ndc.size();
+    ++chunks;
+  }
   if (h.has_occupancy) {
     const std::vector<uint8_t> occ = EncodeOccupancyChunk(*s.mask);
     writer.AddChunk(kChunkOccupancy, occ);
     report->occupancy_bytes = occ.size();
   }
-  size_t chunks = 2 + h.has_occupancy;  // HEAD, DONE, OCCU
   for (int g = 0; g < 2; ++g) {
     for (int t = 0; t < 6; ++t) {
       report->steps[g * 6 + t] = steps[g * 6 + t];

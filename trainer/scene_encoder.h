@@ -44,7 +44,7 @@ struct EncodeOptions {
 
 struct EncodeReport {
   size_t total_bytes = 0;
-  size_t head_bytes = 0, occupancy_bytes = 0, mlp_bytes = 0, metadata_bytes = 0;
+  size_t head_bytes = 0, occupancy_bytes = 0, mlp_bytes = 0, metadata_bytes = 0;  // head: HEAD and NDCP
   size_t container_bytes = 0;  // signature, chunk headers and CRCs
   std::array<size_t, 12> tensor_bytes{};  // COEF payload per tensor (0 when dropped)
   std::array<size_t, 12> tensor_coeffs{};  // coefficients per tensor (padded blocks)

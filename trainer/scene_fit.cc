@@ -4,6 +4,9 @@
 #include <cmath>
 #include <cstdint>
 #include <stdexcept>
+#include <string>
+
+#include "decoder/ndc.h"
 
 namespace ecrf::trainer {
 namespace {
@@ -105,16 +108,93 @@ bool CamerasFaceOneWay(const std::vector<Camera>& cameras) {
   return true;
 }
 
-SceneFit FitScene(const std::string& scene_type, const Dataset& data) {
-  if (scene_type != "auto" && scene_type != "object" && scene_type != "unbounded") {
-    if (scene_type == "forward") {
-      throw std::invalid_argument(
-          "--scene-type forward: the NDC model for forward-facing captures is not implemented yet; "
-          "use --scene-type unbounded (the contraction also covers forward-facing captures)");
-    }
-    throw std::invalid_argument("--scene-type: unknown scene type '" + scene_type +
-                                "' (auto, object or unbounded)");
+NdcFrame FitNdcFrame(const std::vector<Camera>& cameras, double near) {
+  if (cameras.empty()) throw std::invalid_argument("forward-facing scene: no cameras");
+  if (!(near > 0) || !std::isfinite(near)) {
+    throw std::invalid_argument("forward-facing scene: the dataset's near bound must be positive (got " +
+                                std::to_string(near) + ")");
   }
+  double centre[3] = {0, 0, 0}, back[3] = {0, 0, 0}, up[3] = {0, 0, 0}, scale[2] = {0, 0};
+  for (const Camera& c : cameras) {
+    for (int a = 0; a < 3; ++a) {
+      centre[a] += c.c2w[a][3] / cameras.size();
+      back[a] += c.c2w[a][2];
+      up[a] += c.c2w[a][1];
+    }
+    scale[0] += 2 * c.fx / c.width / cameras.size();
+    scale[1] += 2 * c.fy / c.height / cameras.size();
+  }
+  auto normalise = [](double v[3]) {
+    const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    for (int a = 0; a < 3; ++a) v[a] /= len;
+  };
+  auto cross = [](const double a[3], const double b[3], double out[3]) {
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+  };
+  double x[3], y[3];
+  normalise(back);
+  cross(up, back, x);
+  normalise(x);
+  cross(back, x, y);
+  const double* axes[3] = {x, y, back};  // rows of the rotation world -> reference
+  NdcFrame f;
+  for (int r = 0; r < 3; ++r) {
+    double offset = 0;
+    for (int a = 0; a < 3; ++a) {
+      f.world_to_ref[4 * r + a] = float(axes[r][a]);
+      offset -= axes[r][a] * centre[a];
+    }
+    f.world_to_ref[4 * r + 3] = float(offset);
+  }
+  f.scale[0] = float(scale[0]);
+  f.scale[1] = float(scale[1]);
+  f.near_plane = float(kNdcNearShare * near);
+  return f;
+}
+
+Aabb FitNdcBox(const std::vector<Camera>& cameras, const NdcFrame& frame) {
+  double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+  for (const Camera& c : cameras) {
+    for (int corner = 0; corner < 4; ++corner) {
+      const double px = (corner & 1) ? c.width - 0.5 : -0.5, py = (corner & 2) ? c.height - 0.5 : -0.5;
+      float o[3], d[3], ndc_o[3], ndc_d[3];
+      GenerateRay(c, px, py, o, d);
+      if (!NdcRay(frame, o, d, ndc_o, ndc_d)) continue;
+      const double t_far = (1.0 - ndc_o[2]) / ndc_d[2];  // where the ray reaches z = 1
+      for (int a = 0; a < 2; ++a) {
+        for (double t : {0.0, t_far}) {
+          const double v = ndc_o[a] + ndc_d[a] * t;
+          lo[a] = std::min(lo[a], v);
+          hi[a] = std::max(hi[a], v);
+        }
+      }
+    }
+  }
+  if (!(hi[0] > lo[0] && hi[1] > lo[1])) {
+    throw std::invalid_argument("forward-facing scene: the cameras' corner rays never cross the reference near plane");
+  }
+  Aabb box;
+  for (int a = 0; a < 2; ++a) {
+    const double margin = kNdcBoxMargin * (hi[a] - lo[a]);
+    box.min[a] = float(lo[a] - margin);
+    box.max[a] = float(hi[a] + margin);
+  }
+  box.min[2] = -1.f;
+  box.max[2] = 1.f;
+  return box;
+}
+
+void CheckSceneType(const std::string& scene_type) {
+  if (scene_type != "auto" && scene_type != "object" && scene_type != "unbounded" && scene_type != "forward") {
+    throw std::invalid_argument("--scene-type: unknown scene type '" + scene_type +
+                                "' (auto, object, unbounded or forward)");
+  }
+}
+
+SceneFit FitScene(const std::string& scene_type, const Dataset& data) {
+  CheckSceneType(scene_type);
   std::vector<Camera> cameras;
   cameras.reserve(data.views.size());
   for (const View& v : data.views) cameras.push_back(v.camera);
@@ -130,16 +210,26 @@ SceneFit FitScene(const std::string& scene_type, const Dataset& data) {
   } else if (scene_type == "unbounded") {
     fit.model = SceneModel::kUnbounded;
     fit.reason = "--scene-type unbounded";
+  } else if (scene_type == "forward") {
+    fit.model = SceneModel::kForward;
+    fit.reason = "--scene-type forward";
   } else if (data.white_background) {
     fit.model = SceneModel::kObject;
     fit.reason = "white background: an object dataset";
+  } else if (fit.forward_facing) {
+    fit.model = SceneModel::kForward;
+    fit.reason = "every camera looks within 35 degrees of their mean direction";
   } else if (fit.roi_share >= kObjectRoiShare) {
     fit.model = SceneModel::kObject;
     fit.reason = "the views fill the dataset box";
   } else {
     fit.model = SceneModel::kUnbounded;
-    fit.reason = fit.forward_facing ? "forward-facing cameras (no NDC model yet: contracted instead)"
-                                    : "the views meet in a small part of the dataset box";
+    fit.reason = "the views meet in a small part of the dataset box";
+  }
+  if (fit.model == SceneModel::kForward) {
+    fit.ndc = FitNdcFrame(cameras, data.near);
+    fit.roi = FitNdcBox(cameras, fit.ndc);
+    fit.roi_share = 1.0;  // an NDC box: not comparable with the dataset box
   }
   return fit;
 }

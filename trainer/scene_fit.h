@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "format/ndc_frame.h"
 #include "format/scene_header.h"
 #include "trainer/alpha_mask.h"
 #include "trainer/camera.h"
@@ -31,8 +32,24 @@ Aabb FitRegionOfInterest(const std::vector<Camera>& cameras, const double box[2]
 // forward-facing capture).
 bool CamerasFaceOneWay(const std::vector<Camera>& cameras);
 
+// TensoRF's NDC near plane on LLFF data is 0.75 of the nearest depth bound; loaders give `near`
+// as 0.9 of it (trainer/llff.h), so the plane is this share of the dataset's near.
+inline constexpr double kNdcNearShare = 0.75 / 0.9;
+// The NDC box grows by this share of its x and y extents on each side.
+inline constexpr double kNdcBoxMargin = 0.05;
+
+// The NDC frame of a forward-facing capture: the reference camera is the cameras' average pose
+// (NeRF's poses_avg: mean centre, mean viewing axis, mean up orthogonalised), its scale 2 f / size
+// the cameras' mean, its near plane kNdcNearShare * near.
+NdcFrame FitNdcFrame(const std::vector<Camera>& cameras, double near);
+
+// The NDC box every training ray passes through: x and y from the image corners of every camera
+// at NDC z = -1 and z = 1, grown by kNdcBoxMargin; z is [-1, 1] (the near plane to infinity).
+Aabb FitNdcBox(const std::vector<Camera>& cameras, const NdcFrame& frame);
+
 struct SceneFit {
   SceneModel model = SceneModel::kObject;
+  NdcFrame ndc;              // forward: the reference camera; roi is then the NDC box
   Aabb roi;                  // the fitted region of interest
   double roi_share = 1.0;    // its volume over the dataset box's
   bool forward_facing = false;
@@ -40,10 +57,12 @@ struct SceneFit {
 };
 
 // scene_type "auto" chooses from the layout: the object model for white-background datasets
-// (Blender) and boxes the views already fill (roi_share >= kObjectRoiShare), the unbounded model
-// otherwise (forward-facing captures too: there is no NDC model yet). "object" and "unbounded"
-// force it; "forward" throws std::invalid_argument (not implemented), as do other names.
+// (Blender) and boxes the views already fill (roi_share >= kObjectRoiShare), the forward-facing
+// model when every camera looks one way (CamerasFaceOneWay), the unbounded model otherwise.
+// "object", "unbounded" and "forward" force it; other names throw std::invalid_argument.
 SceneFit FitScene(const std::string& scene_type, const Dataset& data);
+// Throws std::invalid_argument unless scene_type is auto, object, unbounded or forward.
+void CheckSceneType(const std::string& scene_type);
 
 }  // namespace ecrf::trainer
 

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "format/ndc_frame.h"
 #include "format/scene_header.h"
 #include "trainer/alpha_mask.h"
 #include "trainer/appearance_head.h"
@@ -51,6 +52,9 @@ struct TensorfConfig {
   // SPEC.md 7.2.1); the grids span the contracted cube, which never shrinks.
   SceneModel scene_model = SceneModel::kObject;
   Aabb roi;                        // unbounded only: the region of interest, world units
+  // kForward: rays are mapped into the NDC of this frame's reference camera (decoder/ndc.h,
+  // SPEC.md 7.2.2) and `aabb` is an NDC box; the view direction stays the world one.
+  NdcFrame ndc;
   AppearanceHeadConfig head;       // head.num_products must equal the sum of app_ranks
 };
 
@@ -132,6 +136,7 @@ class TensorfModel {
   float step_size() const { return step_size_; }
   int n_samples() const { return n_samples_; }
   bool unbounded() const { return config_.scene_model == SceneModel::kUnbounded; }
+  bool forward() const { return config_.scene_model == SceneModel::kForward; }
   // Samples per ray for the current grid: CalNSamples(res) for an object; for an unbounded scene
   // enough to cross the contracted cube (SPEC.md 7.2.1: a ray's contracted path is at most
   // 3 * 4 long, each coordinate being monotone along it).

@@ -108,6 +108,12 @@ TensorfConfig ConfigFor(const TrainOptions& o, const Dataset& data, const SceneF
     c.aabb.max[a] = float(data.scene_aabb[1][a]);
   }
   c.scene_model = fit.model;
+  if (fit.model == SceneModel::kForward) {
+    c.ndc = fit.ndc;
+    c.aabb = fit.roi;  // the NDC box
+    c.near = 0.f;      // rays start on the near plane (NDC z = -1)
+    c.far = 10.f;      // beyond any NDC box's diagonal: never clamps
+  }
   if (fit.model == SceneModel::kUnbounded) {
     c.roi = fit.roi;
     for (int a = 0; a < 3; ++a) {
@@ -268,7 +274,8 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   const bool exact_resume =
       o.resume && LoadTrainState(resumed_from, ckpt_path, &opt, &rate, &rays, &progress);
   resumed_from = Checkpoint();  // the arrays are in the model and the optimizers now
-  if (!exact_resume && !model->unbounded()) {  // every ray of an unbounded scene meets it
+  // Every ray of an unbounded scene meets its cube, and a forward-facing scene's box is in NDC.
+  if (!exact_resume && !model->unbounded() && !model->forward()) {
     const Aabb box = model->aabb();
     rays.Filter([&box](const float* org, const float* dir) {
       float tn, tf;
@@ -379,7 +386,7 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
         l1_weight = o.l1_weight_rest;
         opt.Reset(*model);
       }
-      if (k == 1 && !model->unbounded()) {
+      if (k == 1 && !model->unbounded() && !model->forward()) {
         const TensorfModel& m = *model;
         const bool filtered = rays.FilterChunked(
             [&m](int count, const float* org, const float* dir, uint8_t* keep) {

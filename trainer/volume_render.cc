@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "decoder/contraction.h"
+#include "decoder/ndc.h"
 
 namespace ecrf {
 namespace trainer {
@@ -100,6 +101,9 @@ struct MarchParams {
   bool unbounded;
   float distance_scale;
   float roi_min[3], roi_scale[3];
+  // Forward-facing scene model (SPEC.md 7.2.2): box is in the NDC of this frame.
+  bool forward;
+  NdcFrame ndc;
 };
 
 MarchParams MakeMarchParams(const TensorfModel& model) {
@@ -119,6 +123,8 @@ MarchParams MakeMarchParams(const TensorfModel& model) {
   p.mask = model.alpha_mask();
   p.density = &model.density();
   p.unbounded = c.scene_model == SceneModel::kUnbounded;
+  p.forward = c.scene_model == SceneModel::kForward;
+  p.ndc = c.ndc;
   p.distance_scale = c.distance_scale;
   for (int a = 0; a < 3; ++a) {
     p.roi_min[a] = c.roi.min[a];
@@ -209,6 +215,9 @@ int MarchRay(const MarchParams& p, const float* o, const float* d, float jitter,
   cand.clear();
   if (p.unbounded) {
     UnboundedCandidates(p, o, d, jitter, cand);
+  } else if (p.forward) {
+    float ndc_o[3], ndc_d[3];
+    if (NdcRay(p.ndc, o, d, ndc_o, ndc_d)) ObjectCandidates(p, ndc_o, ndc_d, jitter, cand);
   } else {
     ObjectCandidates(p, o, d, jitter, cand);
   }

@@ -100,8 +100,9 @@ TEST(SceneFit, BlenderLayoutStaysAnObjectAndNamesAreChecked) {
   const Dataset train = MakeBuiltinScene("train", 32, 32, 20, 3);
   EXPECT_EQ(FitScene("auto", train).model, SceneModel::kObject);
   EXPECT_EQ(FitScene("unbounded", train).model, SceneModel::kUnbounded);
-  EXPECT_THROW(FitScene("forward", train), std::invalid_argument);
   EXPECT_THROW(FitScene("room", train), std::invalid_argument);
+  EXPECT_THROW(CheckSceneType("ndc"), std::invalid_argument);
+  EXPECT_NO_THROW(CheckSceneType("forward"));
 }
 
 TensorfModel SmallUnboundedModel(uint64_t seed) {

@@ -202,7 +202,7 @@
       const check = (ok, what) => { if (!ok) throw new Error(`GpuRenderer.setScene: ${what}`); };
       // The shaders march straight rays through the box (SPEC.md 7.2); the contracted sampling of
       // 7.2.1 is not implemented here: the viewer falls back to its CPU (WebAssembly) renderer.
-      check(!info.sceneModel, 'unbounded scenes (SPEC.md 7.2.1) are not implemented in the GPU renderer');
+      check(!info.sceneModel, 'unbounded and forward-facing scenes (SPEC.md 7.2.1, 7.2.2) are not implemented in the GPU renderer');
       const MAT = [[0, 1], [0, 2], [1, 2]], VEC = [2, 1, 0];
       const ranksOf = (g) => g.planes.map((pl) => pl.shape[2]);
       const dRanks = ranksOf(density), aRanks = ranksOf(appearance);

@@ -85,7 +85,8 @@
         appearanceRanks: i(48, 3), hasOccupancy: i(60, 1)[0] !== 0, occupancyRes: i(64, 3),
         numSamples: i(76, 1)[0], stepSize: f(80, 1)[0], nearPlane: f(84, 1)[0],
         farPlane: f(88, 1)[0], background: f(92, 3), streamBytes: u(104), gridBytes: u(108),
-        // 0 object, 1 unbounded (SPEC.md 7.2.1: the box is the region of interest).
+        // 0 object, 1 unbounded (SPEC.md 7.2.1: the box is the region of interest), 2 forward-facing
+        // (7.2.2: the box is in NDC).
         sceneModel: m._ecrf_scene_model(this.scene),
       };
       m._free(p);
