@@ -196,7 +196,7 @@ int RunConformance(int argc, char** argv) {
     stored = json::parse(text.begin(), text.end(), nullptr, /*allow_exceptions=*/false);
     if (stored.is_discarded() || !stored.is_object()) throw std::runtime_error(dir + "/manifest.json: not a JSON object");
   }
-  json manifest = {{"spec", "SPEC.md 1.1"},
+  json manifest = {{"spec", "SPEC.md 1.3"},
                    {"note", "written by `ecrf conformance --write`; checksums as in SPEC.md 6.5, cameras exact (7.1)"},
                    {"coefficient_vectors", json::array()},
                    {"scene_vectors", json::array()}};

@@ -6,7 +6,8 @@
 // coefficients with escapes, an occupancy mask, an empty occupancy mask, float16/float32 MLPs,
 // a quantized MLP (bitstream 1.1) whose rows span 2^-3..2^3 in scale and whose largest levels
 // take the class escape, an unbounded scene (bitstream 1.2: contracted space, SPEC.md 7.2.1) seen
-// from outside its region of interest.
+// from outside its region of interest, a forward-facing scene (bitstream 1.3: NDC, 7.2.2) seen
+// from in front of its reference camera.
 #ifndef ECRF_TESTS_COMMON_SCENE_VECTORS_H_
 #define ECRF_TESTS_COMMON_SCENE_VECTORS_H_
 
@@ -20,6 +21,7 @@
 #include "format/container.h"
 #include "format/half_float.h"
 #include "format/mlp_coder.h"
+#include "format/ndc_frame.h"
 #include "format/occupancy_coder.h"
 #include "format/scene_header.h"
 #include "tests/common/coef_vectors.h"
@@ -56,6 +58,8 @@ inline const std::vector<SceneVector>& SceneVectors() {
        OccupancyKind::kSphere, 15, SceneModel::kObject},
       {"scene_unbounded", {16, 16, 16}, {{2, 2, 2}, {2, 2, 2}}, {2, 4, 4}, {1, 2, 8}, 8, 0,
        OccupancyKind::kSphere, 16, SceneModel::kUnbounded},
+      {"scene_forward", {16, 16, 16}, {{2, 2, 2}, {2, 2, 2}}, {2, 4, 4}, {1, 2, 8}, 8, 0,
+       OccupancyKind::kSphere, 17, SceneModel::kForward},
   };
   return v;
 }
@@ -92,7 +96,33 @@ inline SceneHeader SceneVectorHeader(const SceneVector& v) {
     h.num_samples = 240;
     h.near_far[0] = 0.1f;
   }
+  if (v.scene_model == SceneModel::kForward) {
+    // The box is in NDC, narrower than the reference camera's view (x, y in [-1, 1]) so that the
+    // render shows its edges; rays start on the near plane (t = 0) and cross it in about 2 units.
+    h.aabb_min[0] = -0.55f;
+    h.aabb_max[0] = 0.6f;
+    h.aabb_min[1] = -0.5f;
+    h.aabb_max[1] = 0.45f;
+    h.step_size = 0.05f;
+    h.num_samples = 120;
+    h.near_far[0] = 0.f;
+    h.near_far[1] = 10.f;
+  }
   return h;
+}
+
+// The forward vector's reference camera: about the conformance camera OrbitCamera(48, 48, 0.7,
+// 0.5, 3.5) moved back by 0.5 (the world origin at depth 4), in decimal constants so that every
+// platform writes the same bytes; scale 2.75 is about its 2 fx / width.
+inline NdcFrame SceneVectorNdcFrame() {
+  NdcFrame f;
+  const float m[12] = {-0.644218f, 0.764842f, 0.f,       0.f,  -0.366685f, -0.308854f,
+                       0.877583f,  0.f,       0.671212f, 0.565354f, 0.479426f, -4.f};
+  for (int k = 0; k < 12; ++k) f.world_to_ref[k] = m[k];
+  f.scale[0] = 2.75f;
+  f.scale[1] = 2.75f;
+  f.near_plane = 1.5f;
+  return f;
 }
 
 // The box the grids and the occupancy mask span: the HEAD box, or the contracted cube.
@@ -126,11 +156,19 @@ inline void MakeSceneBlock(Lcg& rng, const int dims[3], int32_t max_abs, bool de
 inline std::vector<uint8_t> BuildSceneVector(const SceneVector& v) {
   const SceneHeader h = SceneVectorHeader(v);
   Lcg rng(v.seed);
-  // 1.1: quantized MLP; 1.2: unbounded scene model.
-  ContainerWriter writer(v.scene_model == SceneModel::kUnbounded ? 2 : v.mlp_precision == kMlpPrecisionQuantized ? 1 : 0);
+  // 1.1: quantized MLP; 1.2: unbounded scene model; 1.3: forward-facing scene model.
+  ContainerWriter writer(v.scene_model == SceneModel::kForward     ? 3
+                         : v.scene_model == SceneModel::kUnbounded ? 2
+                         : v.mlp_precision == kMlpPrecisionQuantized ? 1
+                                                                     : 0);
   ByteWriter head;
   WriteSceneHeader(h, &head);
   writer.AddChunk(kChunkHead, head.bytes());
+  if (v.scene_model == SceneModel::kForward) {
+    ByteWriter ndc;
+    WriteNdcFrame(SceneVectorNdcFrame(), &ndc);
+    writer.AddChunk(kChunkNdcFrame, ndc.bytes());
+  }
   if (h.has_occupancy) {
     ByteWriter occ;
     const int mres[3] = {7, 6, 5};

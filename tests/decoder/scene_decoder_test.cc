@@ -346,7 +346,8 @@ TEST(DecoderCApi, DecodeInfoTensorRenderAndErrors) {
 // scene constants, the mask's bits and the MLP parameters, for every conformance scene.
 TEST(SceneDecoder, CApiExposesTheFieldOccupancyAndMlpOfTheReferenceRenderer) {
   for (const char* name :
-       {"scene_builtin.ecrf", "scene_quantized_mlp.ecrf", "scene_ranks_dropped.ecrf", "scene_unbounded.ecrf"}) {
+       {"scene_builtin.ecrf", "scene_quantized_mlp.ecrf", "scene_ranks_dropped.ecrf", "scene_unbounded.ecrf",
+        "scene_forward.ecrf"}) {
     SCOPED_TRACE(name);
     const std::vector<uint8_t> bytes = ReadFile(kDir + name);
     SceneField field;
@@ -359,6 +360,11 @@ TEST(SceneDecoder, CApiExposesTheFieldOccupancyAndMlpOfTheReferenceRenderer) {
     ASSERT_EQ(ecrf_scene_get_field(scene, &f), ECRF_OK);
     EXPECT_EQ(ecrf_scene_model(scene), static_cast<int>(field.scene_model));
     EXPECT_EQ(ecrf_scene_model(scene) == ECRF_SCENE_UNBOUNDED, std::string(name) == "scene_unbounded.ecrf");
+    EXPECT_EQ(ecrf_scene_model(scene) == ECRF_SCENE_FORWARD, std::string(name) == "scene_forward.ecrf");
+    const bool forward = field.scene_model == SceneModel::kForward;
+    for (int k = 0; k < 12; ++k) EXPECT_EQ(f.ndc_world_to_ref[k], forward ? field.ndc.world_to_ref[k] : 0.f);
+    EXPECT_EQ(f.ndc_scale[1], forward ? field.ndc.scale[1] : 0.f);
+    EXPECT_EQ(f.ndc_near_plane, forward ? field.ndc.near_plane : 0.f);
     EXPECT_EQ(f.density_shift, field.density_shift);
     EXPECT_EQ(f.distance_scale, field.distance_scale);
     EXPECT_EQ(f.weight_threshold, field.weight_threshold);

@@ -157,8 +157,9 @@ class DecodeTest(unittest.TestCase):
 
 class RenderTest(unittest.TestCase):
     def test_matches_the_reference_render(self):
-        # An object scene and an unbounded one (SPEC.md 7.2.1), both through the decoder.
-        for name, model in (("scene_builtin", "object"), ("scene_unbounded", "unbounded")):
+        # An object scene, an unbounded one (SPEC.md 7.2.1) and a forward-facing one (7.2.2).
+        for name, model in (("scene_builtin", "object"), ("scene_unbounded", "unbounded"),
+                            ("scene_forward", "forward")):
             with self.subTest(name):
                 _, c2w, (fx, fy, cx, cy), width, height = manifest_camera(name + ".ecrf")
                 reference = read_png(os.path.join(CONFORMANCE, name + ".png"))[:, :, :3].astype(int)

@@ -94,7 +94,7 @@ TEST(ConformanceManifest, ScenesMatchEveryChecksumAndRenderWithinTolerance) {
     EXPECT_GE(a.psnr_db, 40.0) << file;
     ++checked;
   }
-  EXPECT_EQ(checked, 7);  // six hand-made scenes (one unbounded) and the trained one
+  EXPECT_EQ(checked, 8);  // seven hand-made scenes (one unbounded, one forward-facing) and the trained one
 }
 
 TEST(ConformanceManifest, RenderAgreementCountsPixelsByTheirWorstChannel) {
