@@ -134,6 +134,18 @@ int ecrf_scene_model(const ecrf_scene* scene) {
   return static_cast<int>(scene->field.scene_model);
 }
 
+int ecrf_scene_ndc_frame(const ecrf_scene* scene, float frame[15]) {
+  if (!scene || !frame || !scene->decoded || scene->field.scene_model != ecrf::SceneModel::kForward) {
+    return ECRF_ERR_INVALID_ARGUMENT;
+  }
+  const ecrf::NdcFrame& f = scene->field.ndc;
+  for (int k = 0; k < 12; ++k) frame[k] = f.world_to_ref[k];
+  frame[12] = f.scale[0];
+  frame[13] = f.scale[1];
+  frame[14] = f.near_plane;
+  return ECRF_OK;
+}
+
 int ecrf_scene_get_field(const ecrf_scene* scene, ecrf_scene_field* out) {
   if (!scene || !out || !scene->decoded) return ECRF_ERR_INVALID_ARGUMENT;
   const ecrf::dec::SceneField& f = scene->field;
@@ -155,12 +167,6 @@ int ecrf_scene_get_field(const ecrf_scene* scene, ecrf_scene_field* out) {
   out->mlp_viewdir_freqs = c.viewdir_pe_freqs;
   out->mlp_inputs = c.input_dim();
   out->mlp_params = f.mlp.num_params();
-  if (f.scene_model == ecrf::SceneModel::kForward) {
-    for (int k = 0; k < 12; ++k) out->ndc_world_to_ref[k] = f.ndc.world_to_ref[k];
-    out->ndc_scale[0] = f.ndc.scale[0];
-    out->ndc_scale[1] = f.ndc.scale[1];
-    out->ndc_near_plane = f.ndc.near_plane;
-  }
   return ECRF_OK;
 }
 

@@ -89,6 +89,15 @@ py::dict Info(Scene& s) {
   // "forward": aabb is in the NDC of a reference camera (SPEC.md 7.2.2).
   const int model = ecrf_scene_model(s.get());
   d["scene_model"] = model == ECRF_SCENE_UNBOUNDED ? "unbounded" : model == ECRF_SCENE_FORWARD ? "forward" : "object";
+  float frame[15];
+  if (ecrf_scene_ndc_frame(s.get(), frame) == ECRF_OK) {
+    // A 3x4 world-to-reference matrix, the two NDC scales and the near plane (SPEC.md 6.2.1).
+    py::list m;
+    for (int k = 0; k < 12; ++k) m.append(frame[k]);
+    d["ndc_world_to_ref"] = m;
+    d["ndc_scale"] = py::make_tuple(frame[12], frame[13]);
+    d["ndc_near_plane"] = frame[14];
+  }
   return d;
 }
 

@@ -53,6 +53,7 @@ const char kTrainFlagsUsage[] =
     "  --line-block CxL           line block shape (default 8x8)\n"
     "  --rate-fraction F          share of blocks in each step's rate estimate (default 0.1)\n"
     "  --quant-step-scale S       quantization steps S times the 8-bit peak step (default 1)\n"
+    "  --rate-start F             share of the run after which the rate terms switch on (default 0.533)\n"
     "  --qat-start F              quantization-aware training from this share of the run on\n"
     "                             (never before the rate phase; 1 = off; default: the rate phase)\n"
     "  --rounding-offset X        coefficient quantizer floor(|c| / step + X), 0 < X <= 0.5, in\n"
@@ -120,6 +121,9 @@ bool ParseTrainFlag(int argc, char** argv, int* i, trainer::TrainOptions* o) {
   } else if (a == "--quant-step-scale") {
     o->quant_step_scale = ParseFloat("--quant-step-scale", value());
     if (!(o->quant_step_scale > 0.f)) throw std::invalid_argument("--quant-step-scale must be > 0");
+  } else if (a == "--rate-start") {
+    o->rate_start = ParseFloat("--rate-start", value());
+    if (!(o->rate_start >= 0.f && o->rate_start < 1.f)) throw std::invalid_argument("--rate-start must be in [0, 1)");
   } else if (a == "--qat-start") {
     o->qat_start = ParseFloat("--qat-start", value());
   } else if (a == "--rounding-offset") {
@@ -285,6 +289,7 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& o) {
   m["encode_step_scale"] = step_scale;
   m["alpha"] = o.alpha;
   m["quant_step_scale"] = o.quant_step_scale;
+  m["rate_start"] = o.rate_start;
   m["qat_start"] = o.qat_start;
   m["qat_refresh"] = o.qat_refresh;
   m["rounding_offset"] = o.rounding_offset;

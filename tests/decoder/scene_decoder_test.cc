@@ -361,10 +361,16 @@ TEST(SceneDecoder, CApiExposesTheFieldOccupancyAndMlpOfTheReferenceRenderer) {
     EXPECT_EQ(ecrf_scene_model(scene), static_cast<int>(field.scene_model));
     EXPECT_EQ(ecrf_scene_model(scene) == ECRF_SCENE_UNBOUNDED, std::string(name) == "scene_unbounded.ecrf");
     EXPECT_EQ(ecrf_scene_model(scene) == ECRF_SCENE_FORWARD, std::string(name) == "scene_forward.ecrf");
-    const bool forward = field.scene_model == SceneModel::kForward;
-    for (int k = 0; k < 12; ++k) EXPECT_EQ(f.ndc_world_to_ref[k], forward ? field.ndc.world_to_ref[k] : 0.f);
-    EXPECT_EQ(f.ndc_scale[1], forward ? field.ndc.scale[1] : 0.f);
-    EXPECT_EQ(f.ndc_near_plane, forward ? field.ndc.near_plane : 0.f);
+    float frame[15];
+    if (field.scene_model == SceneModel::kForward) {
+      ASSERT_EQ(ecrf_scene_ndc_frame(scene, frame), ECRF_OK);
+      for (int k = 0; k < 12; ++k) EXPECT_EQ(frame[k], field.ndc.world_to_ref[k]);
+      EXPECT_EQ(frame[12], field.ndc.scale[0]);
+      EXPECT_EQ(frame[13], field.ndc.scale[1]);
+      EXPECT_EQ(frame[14], field.ndc.near_plane);
+    } else {
+      EXPECT_EQ(ecrf_scene_ndc_frame(scene, frame), ECRF_ERR_INVALID_ARGUMENT);
+    }
     EXPECT_EQ(f.density_shift, field.density_shift);
     EXPECT_EQ(f.distance_scale, field.distance_scale);
     EXPECT_EQ(f.weight_threshold, field.weight_threshold);

@@ -165,6 +165,10 @@ class RenderTest(unittest.TestCase):
                 reference = read_png(os.path.join(CONFORMANCE, name + ".png"))[:, :, :3].astype(int)
                 scene = ecrf.decode(os.path.join(CONFORMANCE, name + ".ecrf"))
                 self.assertEqual(scene.info["scene_model"], model)
+                self.assertEqual("ndc_near_plane" in scene.info, model == "forward")
+                if model == "forward":
+                    self.assertEqual(scene.info["ndc_near_plane"], 1.5)  # the vector's NDCP chunk
+                    self.assertEqual(len(scene.info["ndc_world_to_ref"]), 12)
                 rgba = scene.render(c2w, fx, fy, cx, cy, width, height)
                 self.assertEqual(rgba.shape, (height, width, 4))
                 self.assertEqual(rgba.dtype, np.uint8)

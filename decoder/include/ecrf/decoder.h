@@ -133,11 +133,6 @@ typedef struct ecrf_scene_field {
   int mlp_viewdir_freqs;    /* Fv */
   int mlp_inputs;           /* In = F + 3 + 2 F Ff + 6 Fv */
   size_t mlp_params;        /* floats of ecrf_scene_mlp_params */
-  /* ECRF_SCENE_FORWARD only (zero otherwise): the NDCP chunk (SPEC.md 6.2.1), the reference frame
-   * [A | b] row-major (p_ref = A p + b), 2 fx / width and 2 fy / height, and the near plane. */
-  float ndc_world_to_ref[12];
-  float ndc_scale[2];
-  float ndc_near_plane;
 } ecrf_scene_field;
 
 ECRF_API int ecrf_scene_get_field(const ecrf_scene* scene, ecrf_scene_field* field);
@@ -145,7 +140,7 @@ ECRF_API int ecrf_scene_get_field(const ecrf_scene* scene, ecrf_scene_field* fie
 /* The scene model of the decoded stream (SPEC.md 6.2). With ECRF_SCENE_UNBOUNDED the info's box
  * is the region of interest and the grids and the occupancy mask span the contracted cube
  * [-2, 2]^3 (SPEC.md 7.2.1); with ECRF_SCENE_FORWARD the box, grids and mask are in the
- * normalised device coordinates of the reference camera of ecrf_scene_field's ndc_* fields
+ * normalised device coordinates of the reference camera of ecrf_scene_ndc_frame
  * (SPEC.md 7.2.2). A renderer of its own must implement that section. */
 #define ECRF_SCENE_OBJECT 0
 #define ECRF_SCENE_UNBOUNDED 1
@@ -153,6 +148,12 @@ ECRF_API int ecrf_scene_get_field(const ecrf_scene* scene, ecrf_scene_field* fie
 /* ECRF_SCENE_OBJECT, ECRF_SCENE_UNBOUNDED or ECRF_SCENE_FORWARD; ECRF_ERR_INVALID_ARGUMENT
  * before a decode. */
 ECRF_API int ecrf_scene_model(const ecrf_scene* scene);
+
+/* The NDC frame of an ECRF_SCENE_FORWARD scene (the NDCP chunk, SPEC.md 6.2.1) as 15 floats: the
+ * world-to-reference matrix [A | b] row-major (p_ref = A p + b), then 2 fx / width and
+ * 2 fy / height of the reference camera, then its near plane. ECRF_ERR_INVALID_ARGUMENT for other
+ * scene models or before a decode. */
+ECRF_API int ecrf_scene_ndc_frame(const ecrf_scene* scene, float frame[15]);
 
 /* The occupancy mask's bits, packed [z][y][x] with x fastest, LSB first (SPEC.md 6.3);
  * ECRF_ERR_INVALID_ARGUMENT when the scene has no mask. */
