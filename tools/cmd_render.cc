@@ -28,7 +28,7 @@ const char kRenderUsage[] =
     "  --int16             keep the grids in 16-bit fixed point (half the memory)\n";
 
 const char kEvalUsage[] =
-    "usage: ecrf eval SCENE.ecrf (--data DIR | --scene builtin|capture) [options]\n"
+    "usage: ecrf eval SCENE.ecrf (--data DIR | --scene builtin|capture|forward) [options]\n"
     "  --split NAME        split to score (default test)\n"
     "  --seed N            the procedural scene's seed (as given to train)\n"
     "  --downscale N       score at 1/N of the image size (area filter; also for --scene)\n"
@@ -253,7 +253,7 @@ int RunEval(int argc, char** argv) {
     }
   }
   if (c.scene.empty() || data.empty() == procedural.empty()) {
-    std::fprintf(stderr, "ecrf eval: needs SCENE.ecrf and one of --data DIR / --scene builtin|capture\n\n");
+    std::fprintf(stderr, "ecrf eval: needs SCENE.ecrf and one of --data DIR / --scene builtin|capture|forward\n\n");
     PrintUsage(stderr, kEvalUsage);
     return 2;
   }

@@ -14,7 +14,7 @@ int RunTrain(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--help" || a == "-h") {
-      std::printf("usage: ecrf train (--data DIR | --scene builtin|capture) [options] -o RUN_DIR\n%s", kTrainFlagsUsage);
+      std::printf("usage: ecrf train (--data DIR | --scene builtin|capture|forward) [options] -o RUN_DIR\n%s", kTrainFlagsUsage);
       return 0;
     }
   }
@@ -25,7 +25,7 @@ int RunTrain(int argc, char** argv) {
     if ((a == "-o" || a == "--out") && k + 1 < rest.size() && rest[k + 1] == rest[k] + 1) {
       o.out_dir = argv[rest[++k]];
     } else {
-      std::fprintf(stderr, "ecrf train: unknown option '%s'\n\nusage: ecrf train (--data DIR | --scene builtin|capture) "
+      std::fprintf(stderr, "ecrf train: unknown option '%s'\n\nusage: ecrf train (--data DIR | --scene builtin|capture|forward) "
                    "[options] -o RUN_DIR\n%s", a.c_str(), kTrainFlagsUsage);
       return 2;
     }

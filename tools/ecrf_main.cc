@@ -27,7 +27,7 @@ const Command kCommands[] = {
     {"version", RunVersion, "print the library and bitstream versions"},
     {"selfcheck", ecrf::tools::RunSelfCheck,
      "round-trip the entropy coder and check the integer IDCT against float64"},
-    {"train", ecrf::tools::RunTrain, "train a TensoRF VM model: train --data DIR|--scene builtin|capture -o RUN"},
+    {"train", ecrf::tools::RunTrain, "train a TensoRF VM model: train --data DIR|--scene builtin|capture|forward -o RUN"},
     {"encode", ecrf::tools::RunEncode, "encode a trained run: encode RUN_DIR -o SCENE.ecrf"},
     {"info", ecrf::tools::RunInfo, "describe a stream: info SCENE.ecrf [--md5]"},
     {"render", ecrf::tools::RunRender,

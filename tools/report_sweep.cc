@@ -29,7 +29,7 @@ namespace tools {
 namespace {
 
 const char kSweepUsage[] =
-    "usage: ecrf report sweep (--data DIR | --scene builtin|capture) --lambdas L1,L2,... -o REPORT_DIR [options]\n"
+    "usage: ecrf report sweep (--data DIR | --scene builtin|capture|forward) --lambdas L1,L2,... -o REPORT_DIR [options]\n"
     "  --lambdas L1,L2@S,...      one run per lambda_e; L@S trains that point with steps x S\n"
     "                             (S overrides --quant-step-scale for it; e.g. 0,2e-11@3,5e-10)\n"
     "  --anchors FILE.json        reference points drawn on the plots (docs/reports/anchors_paper.json)\n"
@@ -196,7 +196,7 @@ int RunReportSweep(int argc, char** argv) {
     }
   }
   if (out.empty() || lambdas_text.empty() || trainer::DataSource(o).empty()) {
-    std::fprintf(stderr, "ecrf report sweep: needs --data DIR or --scene builtin|capture, --lambdas and -o\n\n%s%s",
+    std::fprintf(stderr, "ecrf report sweep: needs --data DIR or --scene builtin|capture|forward, --lambdas and -o\n\n%s%s",
                  kSweepUsage, kTrainFlagsUsage);
     return 2;
   }

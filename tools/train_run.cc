@@ -187,7 +187,7 @@ trainer::TrainOptions TrainOptionsFromArgs(int argc, char** argv, std::vector<in
 
 nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& o) {
   if (o.out_dir.empty()) throw std::invalid_argument("no output directory (-o RUN_DIR)");
-  if (trainer::DataSource(o).empty()) throw std::invalid_argument("no data: --data DIR or --scene builtin|capture");
+  if (trainer::DataSource(o).empty()) throw std::invalid_argument("no data: --data DIR or --scene builtin|capture|forward");
   if (o.resume && !FileExists(o.out_dir + "/checkpoint.ckpt")) {
     throw std::invalid_argument("--resume: no checkpoint to resume from (" + o.out_dir + "/checkpoint.ckpt does not exist)");
   }

@@ -87,18 +87,29 @@ Vec3 Wall(int axis, bool positive, Vec3 p, double floor_z) {
   return positive ? WindowWall(u, height) : Brick(u, height);
 }
 
-}  // namespace
-
-Vec3 ShadeRoom(const double room_min[3], const double room_max[3], Vec3 origin, Vec3 dir) {
-  // From inside a box the ray leaves through the nearest of the three faces it heads for.
+// From inside a box the ray leaves through the nearest of the three faces it heads for.
+double Exit(const double room_min[3], const double room_max[3], Vec3 origin, Vec3 dir, int* exit_axis) {
   double t_exit = INFINITY;
-  int exit_axis = 2;
+  *exit_axis = 2;
   for (int axis = 0; axis < 3; ++axis) {
     const double d = Axis(dir, axis);
     if (d == 0) continue;
     const double t = ((d > 0 ? room_max[axis] : room_min[axis]) - Axis(origin, axis)) / d;
-    if (t < t_exit) t_exit = t, exit_axis = axis;
+    if (t < t_exit) t_exit = t, *exit_axis = axis;
   }
+  return t_exit;
+}
+
+}  // namespace
+
+double RoomExitDistance(const double room_min[3], const double room_max[3], Vec3 origin, Vec3 dir) {
+  int axis;
+  return Exit(room_min, room_max, origin, dir, &axis);
+}
+
+Vec3 ShadeRoom(const double room_min[3], const double room_max[3], Vec3 origin, Vec3 dir) {
+  int exit_axis;
+  const double t_exit = Exit(room_min, room_max, origin, dir, &exit_axis);
   const bool positive = Axis(dir, exit_axis) > 0;
   const Vec3 p = origin + dir * t_exit;
   Vec3 normal;  // facing into the room

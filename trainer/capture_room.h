@@ -12,6 +12,10 @@ namespace ecrf::trainer::procedural {
 // starting outside the room get the colour of the far wall they would reach.
 Vec3 ShadeRoom(const double room_min[3], const double room_max[3], Vec3 origin, Vec3 dir);
 
+// Distance along the ray (unit `dir`) to the point of the room's walls, floor or ceiling that
+// ShadeRoom shades.
+double RoomExitDistance(const double room_min[3], const double room_max[3], Vec3 origin, Vec3 dir);
+
 }  // namespace ecrf::trainer::procedural
 
 #endif  // ECRF_TRAINER_CAPTURE_ROOM_H_

@@ -13,21 +13,12 @@
 namespace ecrf::trainer {
 namespace {
 
-using procedural::Cross;
 using procedural::kPi;
 using procedural::Normalized;
 using procedural::Random;
 using procedural::Vec3;
 
 constexpr double kDegree = kPi / 180.0;
-
-// Turns the unit vectors a, b of a frame by `angle` in their plane.
-void Rotate(Vec3* a, Vec3* b, double angle) {
-  const Vec3 ra = *a * std::cos(angle) + *b * std::sin(angle);
-  const Vec3 rb = *b * std::cos(angle) - *a * std::sin(angle);
-  *a = ra;
-  *b = rb;
-}
 
 Camera CaptureCamera(Vec3 position, Vec3 target, double roll, double pitch, double yaw, int width, int height) {
   Camera camera;
@@ -39,18 +30,7 @@ Camera CaptureCamera(Vec3 position, Vec3 target, double roll, double pitch, doub
   camera.cy = height * (0.5 + kCaptureCyOffset);
   camera.k1 = kCaptureK1;
   camera.k2 = kCaptureK2;
-  Vec3 forward = Normalized(target - position);
-  Vec3 right = Normalized(Cross(forward, {0, 0, 1}));
-  Vec3 up = Cross(right, forward);
-  Rotate(&forward, &up, pitch);
-  Rotate(&right, &forward, yaw);
-  Rotate(&right, &up, roll);
-  const Vec3 columns[4] = {right, up, forward * -1.0, position};  // OpenGL: looks down -z
-  for (int c = 0; c < 4; ++c) {
-    camera.c2w[0][c] = columns[c].x;
-    camera.c2w[1][c] = columns[c].y;
-    camera.c2w[2][c] = columns[c].z;
-  }
+  procedural::LookAtPose(position, target, roll, pitch, yaw, camera.c2w);
   return camera;
 }
 
@@ -105,6 +85,34 @@ void CaptureSceneRadiance(const float origin[3], const float dir[3], float rgb[3
   rgb[2] = static_cast<float>(colour.z);
 }
 
+double CaptureSceneHitDistance(const float origin[3], const float dir[3]) {
+  const Vec3 o{origin[0], origin[1], origin[2]};
+  const Vec3 d = Normalized({dir[0], dir[1], dir[2]});
+  double t;
+  // As in CaptureSceneRadiance: a still-life hit is always nearer than the room.
+  if (procedural::StillLifeHitDistance(o, d, &t)) return t;
+  return procedural::RoomExitDistance(kCaptureRoomMin, kCaptureRoomMax, o, d);
+}
+
+std::vector<View> RenderCaptureFrames(const char* scene, const std::vector<Camera>& cameras,
+                                      const std::string& split) {
+  std::vector<int> frames;
+  for (int i = 0; i < int(cameras.size()); ++i) {
+    if ((i % kCaptureTestEvery == 0) == (split != "train")) frames.push_back(i);
+  }
+  std::vector<View> views(frames.size());
+#pragma omp parallel for schedule(dynamic)
+  for (int v = 0; v < int(frames.size()); ++v) {
+    View& view = views[v];
+    view.camera = cameras[frames[v]];
+    view.rgb = Render(view.camera);
+    char name[64];
+    std::snprintf(name, sizeof name, "%s/frame_%03d", scene, frames[v]);
+    view.name = name;
+  }
+  return views;
+}
+
 Dataset MakeCaptureScene(const std::string& split, int width, int height, int num_frames, uint32_t seed) {
   procedural::CheckSceneArguments("capture", split, width, height);
   if (num_frames < 2) {
@@ -112,24 +120,11 @@ Dataset MakeCaptureScene(const std::string& split, int width, int height, int nu
                              std::to_string(num_frames));
   }
   const std::vector<Camera> cameras = CapturePath(num_frames, width, height, seed);
-  std::vector<int> frames;
-  for (int i = 0; i < num_frames; ++i) {
-    if ((i % kCaptureTestEvery == 0) == (split != "train")) frames.push_back(i);
-  }
   Dataset dataset;
   dataset.white_background = false;
   NgpAabb(kCaptureAabbScale, kNgpDefaultScale, kNgpDefaultOffset, dataset.scene_aabb);
   NearFarFromCameras(cameras, dataset.scene_aabb, &dataset.near, &dataset.far);
-  dataset.views.resize(frames.size());
-#pragma omp parallel for schedule(dynamic)
-  for (int v = 0; v < int(frames.size()); ++v) {
-    View& view = dataset.views[v];
-    view.camera = cameras[frames[v]];
-    view.rgb = Render(view.camera);
-    char name[64];
-    std::snprintf(name, sizeof name, "capture/frame_%03d", frames[v]);
-    view.name = name;
-  }
+  dataset.views = RenderCaptureFrames("capture", cameras, split);
   return dataset;
 }
 

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "trainer/dataset.h"
 
@@ -45,6 +46,17 @@ Dataset MakeCaptureScene(const std::string& split, int width, int height, int nu
 
 // The colour the images show along a ray (unit `dir`): what a pixel of the scene is.
 void CaptureSceneRadiance(const float origin[3], const float dir[3], float rgb[3]);
+
+// How far (metres) the ray travels to the surface whose colour CaptureSceneRadiance returns:
+// what LLFF-style depth bounds are measured from.
+double CaptureSceneHitDistance(const float origin[3], const float dir[3]);
+
+// The views of `split` of the still life in the room filmed by `cameras` (frame i is cameras[i]):
+// every 8th frame (0, 8, ...) for "test" and "val", the others for "train", named
+// SCENE/frame_NNN and rendered one ray per pixel as MakeCaptureScene's are. Shared so that the
+// procedural captures split and render alike.
+std::vector<View> RenderCaptureFrames(const char* scene, const std::vector<Camera>& cameras,
+                                      const std::string& split);
 
 }  // namespace ecrf::trainer
 

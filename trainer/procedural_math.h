@@ -1,4 +1,5 @@
-// Small vector maths and a portable random generator shared by the procedural scenes.
+// Small vector maths, a hand-held camera pose and a portable random generator shared by the
+// procedural scenes.
 #ifndef ECRF_TRAINER_PROCEDURAL_MATH_H_
 #define ECRF_TRAINER_PROCEDURAL_MATH_H_
 
@@ -22,6 +23,31 @@ inline double Dot(Vec3 a, Vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 inline Vec3 Cross(Vec3 a, Vec3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
 inline Vec3 Normalized(Vec3 a) { return a * (1.0 / std::sqrt(Dot(a, a))); }
 inline double Axis(Vec3 v, int axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
+
+// Turns the unit vectors a, b of a frame by `angle` in their plane.
+inline void Rotate(Vec3* a, Vec3* b, double angle) {
+  const Vec3 ra = *a * std::cos(angle) + *b * std::sin(angle);
+  const Vec3 rb = *b * std::cos(angle) - *a * std::sin(angle);
+  *a = ra;
+  *b = rb;
+}
+
+// Camera-to-world (OpenGL: looks down -z, +y up) of a hand-held camera at `position` aimed at
+// `target` with the horizon level (z up), then turned by the hand's pitch, yaw and roll.
+inline void LookAtPose(Vec3 position, Vec3 target, double roll, double pitch, double yaw, double c2w[3][4]) {
+  Vec3 forward = Normalized(target - position);
+  Vec3 right = Normalized(Cross(forward, {0, 0, 1}));
+  Vec3 up = Cross(right, forward);
+  Rotate(&forward, &up, pitch);
+  Rotate(&right, &forward, yaw);
+  Rotate(&right, &up, roll);
+  const Vec3 columns[4] = {right, up, forward * -1.0, position};
+  for (int c = 0; c < 4; ++c) {
+    c2w[0][c] = columns[c].x;
+    c2w[1][c] = columns[c].y;
+    c2w[2][c] = columns[c].z;
+  }
+}
 
 // The arguments every procedural scene takes, checked alike: "NAME scene: ..." errors.
 inline void CheckSceneArguments(const char* scene, const std::string& split, int width, int height) {

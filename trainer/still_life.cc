@@ -168,6 +168,13 @@ Vec3 StillLifeLight() { return kLight; }
 
 bool StillLifeOccludes(Vec3 origin, Vec3 dir) { return Occluded(origin, dir); }
 
+bool StillLifeHitDistance(Vec3 origin, Vec3 dir, double* t) {
+  if (MissesBoundingSphere(origin, dir)) return false;
+  const Hit hit = Trace(origin, dir, INFINITY);
+  *t = hit.t;
+  return hit.shape >= 0;
+}
+
 bool ShadeStillLife(Vec3 origin, Vec3 dir, Vec3* out) {
   if (MissesBoundingSphere(origin, dir)) return false;
   const Hit hit = Trace(origin, dir, INFINITY);

@@ -19,6 +19,9 @@ Vec3 StillLifeLight();
 // plus a Blinn-Phong highlight, shadowed by the still life itself. False when it misses.
 bool ShadeStillLife(Vec3 origin, Vec3 dir, Vec3* colour);
 
+// Distance along the ray (unit `dir`) to the surface ShadeStillLife shades; false when it misses.
+bool StillLifeHitDistance(Vec3 origin, Vec3 dir, double* t);
+
 // Whether the ray hits any part of the still life (shadow rays of surfaces around it).
 bool StillLifeOccludes(Vec3 origin, Vec3 dir);
 

@@ -43,8 +43,9 @@ TrainOptions PresetOptions(const std::string& name) {
 }
 
 void SelectProceduralScene(const std::string& name, TrainOptions* o) {
-  if (name != "builtin" && name != "capture") {
-    throw std::invalid_argument("--scene: unknown scene '" + name + "' (builtin or capture; for files use --data DIR)");
+  if (name != "builtin" && name != "capture" && name != "forward") {
+    throw std::invalid_argument("--scene: unknown scene '" + name +
+                                "' (builtin, capture or forward; for files use --data DIR)");
   }
   o->procedural_scene = name;
 }

@@ -19,7 +19,7 @@ struct TrainOptions {
   std::string preset = "fast";
   // Data.
   std::string data_dir;        // NeRF Blender or Instant-NGP/nerfstudio layout
-  std::string procedural_scene;  // "builtin" (Blender-like) or "capture" instead of data_dir; "" = data_dir
+  std::string procedural_scene;  // "builtin" (Blender-like), "capture" or "forward" instead of data_dir; "" = data_dir
   // "auto" (from the camera layout, trainer/scene_fit.h), "object" or "unbounded".
   std::string scene_type = "auto";
   int downscale = 1;
@@ -94,7 +94,7 @@ struct TrainOptions {
   // The built-in scene's size (train views; test views are an orbit of 1/4 as many).
   int builtin_size = 64;
   int builtin_views = 60;
-  // The capture scene: frames of one hand-held loop, every 8th held out for test.
+  // The capture and forward scenes: frames of one hand-held loop or sweep, every 8th held out for test.
   int capture_width = 120;
   int capture_height = 90;
   int capture_frames = 64;
@@ -128,7 +128,7 @@ inline const std::string& DataSource(const TrainOptions& o) {
   return o.procedural_scene.empty() ? o.data_dir : o.procedural_scene;
 }
 
-// --scene NAME: selects the procedural scene "builtin" or "capture" instead of --data.
+// --scene NAME: selects the procedural scene "builtin", "capture" or "forward" instead of --data.
 // Throws std::invalid_argument for other names.
 void SelectProceduralScene(const std::string& name, TrainOptions* options);
 

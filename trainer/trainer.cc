@@ -19,6 +19,7 @@
 #include "trainer/camera.h"
 #include "trainer/checkpoint.h"
 #include "trainer/eval_progress.h"
+#include "trainer/forward_scene.h"
 #include "trainer/image_metrics.h"
 #include "trainer/quant_aware.h"
 #include "trainer/ray_set.h"
@@ -80,6 +81,9 @@ void PrintProgress(int it, int iters, double loss, double psnr, const TensorfMod
 Dataset LoadTrainingViews(const TrainOptions& o, const std::string& split) {
   if (o.procedural_scene == "capture") {
     return MakeCaptureScene(split, o.capture_width, o.capture_height, o.capture_frames, o.seed);
+  }
+  if (o.procedural_scene == "forward") {
+    return MakeForwardScene(split, o.capture_width, o.capture_height, o.capture_frames, o.seed);
   }
   if (!o.procedural_scene.empty()) {
     if (o.procedural_scene != "builtin") throw std::invalid_argument("unknown scene '" + o.procedural_scene + "'");
