@@ -115,10 +115,7 @@ std::vector<View> RenderCaptureFrames(const char* scene, const std::vector<Camer
 
 Dataset MakeCaptureScene(const std::string& split, int width, int height, int num_frames, uint32_t seed) {
   procedural::CheckSceneArguments("capture", split, width, height);
-  if (num_frames < 2) {
-    throw std::runtime_error("capture scene: num_frames must be >= 2 (frame 0 is the only test frame), got " +
-                             std::to_string(num_frames));
-  }
+  procedural::CheckFrameCount("capture", num_frames);
   const std::vector<Camera> cameras = CapturePath(num_frames, width, height, seed);
   Dataset dataset;
   dataset.white_background = false;

@@ -88,10 +88,7 @@ void DepthRange(const std::vector<Camera>& cameras, double* nearest, double* far
 
 Dataset MakeForwardScene(const std::string& split, int width, int height, int num_frames, uint32_t seed) {
   procedural::CheckSceneArguments("forward", split, width, height);
-  if (num_frames < 2) {
-    throw std::runtime_error("forward scene: num_frames must be >= 2 (frame 0 is the only test frame), got " +
-                             std::to_string(num_frames));
-  }
+  procedural::CheckFrameCount("forward", num_frames);
   const std::vector<Camera> cameras = ForwardRig(num_frames, width, height, seed);
   Dataset dataset;
   dataset.white_background = false;

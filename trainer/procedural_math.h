@@ -61,6 +61,14 @@ inline void CheckSceneArguments(const char* scene, const std::string& split, int
   }
 }
 
+// The frames of a captured sequence: every 8th is held out, so at least 2 leave one to train on.
+inline void CheckFrameCount(const char* scene, int num_frames) {
+  if (num_frames < 2) {
+    throw std::runtime_error(std::string(scene) + " scene: num_frames must be >= 2 (frame 0 is the only test frame), got " +
+                             std::to_string(num_frames));
+  }
+}
+
 // splitmix64: the same numbers on every platform, unlike std:: distributions.
 class Random {
  public:

@@ -17,6 +17,7 @@
 #include "format/ndc_frame.h"
 #include "format/scene_header.h"
 #include "tests/common/decode_or_die.h"
+#include "tests/common/renderer_agreement.h"
 #include "trainer/camera.h"
 #include "trainer/scene_encoder.h"
 #include "trainer/scene_fit.h"
@@ -242,42 +243,22 @@ TEST(ForwardScene, StreamIsVersion13WithAnNdcpChunkAndTheDecoderRendersWhatTheTr
 
   std::vector<float> origins, dirs;
   ForwardRays(&origins, &dirs);
-  const size_t n = origins.size() / 3;
   // Both renderers on the decoded grids (the model's float grids differ by the quantization).
   TensorfModel decoded_model = SmallForwardModel(5);
   decoded_model.UpdateAlphaMask({9, 8, 9});
-  VmGrid* grids[2] = {&decoded_model.density(), &decoded_model.appearance()};
-  const dec::VmGrid* decoded[2] = {&field.density, &field.appearance};
-  for (int g = 0; g < 2; ++g) {
-    for (int m = 0; m < 3; ++m) {
-      std::copy(decoded[g]->plane_f32[m].data(), decoded[g]->plane_f32[m].data() + grids[g]->plane_size(m),
-                grids[g]->plane(m));
-      std::copy(decoded[g]->line_f32[m].data(), decoded[g]->line_f32[m].data() + grids[g]->line_size(m),
-                grids[g]->line(m));
-    }
-  }
-  std::vector<float> mine(n * 3), theirs(n * 3), acc(n);
-  RenderRays(decoded_model, int(n), origins.data(), dirs.data(), mine.data(), nullptr);
-  dec::RenderOptions ro;
-  ro.early_stop_transmittance = 0.f;
-  dec::RayMarcher marcher;
-  ASSERT_TRUE(marcher.Init(&field, ro).ok());
-  dec::RenderStats stats;
-  ASSERT_TRUE(marcher.RenderRays(n, origins.data(), dirs.data(), theirs.data(), acc.data(), &stats).ok());
-  float worst = 0.f, spread = 0.f;
-  for (size_t i = 0; i < mine.size(); ++i) {
-    worst = std::max(worst, std::fabs(mine[i] - theirs[i]));
-    spread = std::max(spread, std::fabs(theirs[i] - theirs[0]));
-  }
-  EXPECT_LT(worst, 2e-3f);
-  EXPECT_GT(spread, 0.01f);
-  EXPECT_GT(stats.samples, n * 5);
+  LoadDecodedGrids(field, &decoded_model);
+  const RendererAgreement r = RenderBothWays(decoded_model, field, origins, dirs);
+  EXPECT_LT(r.worst, 2e-3f);
+  EXPECT_GT(r.spread, 0.01f);
+  EXPECT_GT(r.decoder_samples, origins.size() / 3 * 5);
 
   // A ray looking away from the reference camera's view sees only the background.
   const float back_o[3] = {0.f, 0.f, 0.f};
   float back_d[3];
   for (int a = 0; a < 3; ++a) back_d[a] = -dirs[a];
   float rgb[3], alpha = 1.f;
+  dec::RayMarcher marcher;
+  ASSERT_TRUE(marcher.Init(&field, dec::RenderOptions()).ok());
   ASSERT_TRUE(marcher.RenderRays(1, back_o, back_d, rgb, &alpha, nullptr).ok());
   EXPECT_EQ(alpha, 0.f);
   for (float v : rgb) EXPECT_EQ(v, 0.f);

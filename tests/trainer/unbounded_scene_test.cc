@@ -14,6 +14,7 @@
 #include "format/byte_io.h"
 #include "format/scene_header.h"
 #include "tests/common/decode_or_die.h"
+#include "tests/common/renderer_agreement.h"
 #include "trainer/builtin_scene.h"
 #include "trainer/capture_scene.h"
 #include "trainer/scene_encoder.h"
@@ -126,20 +127,6 @@ TensorfModel SmallUnboundedModel(uint64_t seed) {
   return model;
 }
 
-// Copies the decoded grids into the model so that both renderers see the same values.
-void LoadDecodedGrids(const dec::SceneField& field, TensorfModel* model) {
-  VmGrid* grids[2] = {&model->density(), &model->appearance()};
-  const dec::VmGrid* decoded[2] = {&field.density, &field.appearance};
-  for (int g = 0; g < 2; ++g) {
-    for (int m = 0; m < 3; ++m) {
-      std::copy(decoded[g]->plane_f32[m].data(), decoded[g]->plane_f32[m].data() + grids[g]->plane_size(m),
-                grids[g]->plane(m));
-      std::copy(decoded[g]->line_f32[m].data(), decoded[g]->line_f32[m].data() + grids[g]->line_size(m),
-                grids[g]->line(m));
-    }
-  }
-}
-
 TEST(UnboundedScene, StreamIsVersion12AndTheDecoderRendersWhatTheTrainerRenders) {
   TensorfModel model = SmallUnboundedModel(5);
   model.UpdateAlphaMask({9, 8, 9});  // a mask over the contracted cube
@@ -171,24 +158,11 @@ TEST(UnboundedScene, StreamIsVersion12AndTheDecoderRendersWhatTheTrainerRenders)
       dirs.push_back(d3[a] / n);
     }
   }
-  const size_t n = origins.size() / 3;
-  std::vector<float> mine(n * 3), theirs(n * 3), acc(n);
-  RenderRays(model, int(n), origins.data(), dirs.data(), mine.data(), nullptr);
-  dec::RenderOptions ro;
-  ro.early_stop_transmittance = 0.f;
-  dec::RayMarcher marcher;
-  ASSERT_TRUE(marcher.Init(&field, ro).ok());
-  dec::RenderStats stats;
-  ASSERT_TRUE(marcher.RenderRays(n, origins.data(), dirs.data(), theirs.data(), acc.data(), &stats).ok());
-  float worst = 0.f, spread = 0.f;
-  for (size_t i = 0; i < mine.size(); ++i) {
-    worst = std::max(worst, std::fabs(mine[i] - theirs[i]));
-    spread = std::max(spread, std::fabs(theirs[i] - theirs[0]));
-  }
+  const RendererAgreement r = RenderBothWays(model, field, origins, dirs);
   // Same samples, same field: only the MLP's sin/cos approximations and summation order differ.
-  EXPECT_LT(worst, 2e-3f);
-  EXPECT_GT(spread, 0.01f);  // the rays see different things
-  EXPECT_GT(stats.samples, n * 20);
+  EXPECT_LT(r.worst, 2e-3f);
+  EXPECT_GT(r.spread, 0.01f);  // the rays see different things
+  EXPECT_GT(r.decoder_samples, origins.size() / 3 * 20);
 
   // The trainer's samples are the decoder's: same positions, same intervals.
   const std::vector<RaySampleInfo> trace = TraceRay(model, origins.data(), dirs.data(), 0.f);
