@@ -36,6 +36,29 @@
     return cam;
   }
 
+  // The view that starts at a forward-facing scene's reference camera (its NDCP frame: p_ref =
+  // A p + b, the camera at the reference origin looking along its -z) and orbits a point twice
+  // its near plane ahead: where such captures usually have their subject.
+  function forwardHomeView(frame) {
+    const A = [[frame[0], frame[1], frame[2]], [frame[4], frame[5], frame[6]], [frame[8], frame[9], frame[10]]];
+    const b = [frame[3], frame[7], frame[11]];
+    // A^-1 by cofactors (A may scale as well as rotate).
+    const c = (r, k) => A[(r + 1) % 3][(k + 1) % 3] * A[(r + 2) % 3][(k + 2) % 3] -
+                        A[(r + 1) % 3][(k + 2) % 3] * A[(r + 2) % 3][(k + 1) % 3];
+    const det = A[0][0] * c(0, 0) + A[0][1] * c(0, 1) + A[0][2] * c(0, 2);
+    if (!Number.isFinite(det) || det === 0) return DEFAULT_VIEW;
+    const inv = (r, k) => c(k, r) / det;  // (A^-1)[r][k]
+    const centre = [0, 1, 2].map((r) => -(inv(r, 0) * b[0] + inv(r, 1) * b[1] + inv(r, 2) * b[2]));
+    const back = [0, 1, 2].map((r) => inv(r, 2));  // the reference +z axis in world units
+    const unit = Math.hypot(...back);
+    const dir = back.map((v) => v / unit);
+    const radius = 2 * frame[14] * unit;
+    const target = centre.map((v, a) => v - dir[a] * radius);
+    const deg = (r) => (r * 180) / Math.PI;
+    return normalizeView({az: deg(Math.atan2(dir[1], dir[0])), el: deg(Math.asin(Math.max(-1, Math.min(1, dir[2])))),
+                          radius, target});
+  }
+
   // Pointer events cover mouse, pen and touch alike: one pointer orbits (or pans with the right
   // button / shift), two pointers pinch-zoom and pan with their midpoint.
   class OrbitControls {
@@ -152,5 +175,5 @@
     }
   }
 
-  globalThis.ecrfCamera = {DEFAULT_VIEW, normalizeView, viewCamera, OrbitControls};
+  globalThis.ecrfCamera = {DEFAULT_VIEW, normalizeView, viewCamera, forwardHomeView, OrbitControls};
 })();

@@ -90,6 +90,14 @@
         sceneModel: m._ecrf_scene_model(this.scene),
       };
       m._free(p);
+      if (info.sceneModel === 2) {
+        // The reference camera of a forward-facing scene (SPEC.md 6.2.1): 3x4 world to reference,
+        // 2 fx / width, 2 fy / height, near plane.
+        const q = m._malloc(60);
+        const rc2 = m._ecrf_scene_ndc_frame(this.scene, q);
+        info.ndcFrame = rc2 < 0 ? null : Array.from(m.HEAPF32.subarray(q >> 2, (q >> 2) + 15));
+        m._free(q);
+      }
       return info;
     }
 

@@ -237,6 +237,11 @@
       state.scene = {name, info: res.info, version: res.version};
       state.lastLoad = {name, bytes};  // for a fallback to the CPU path
       showInfo(name, res);
+      if (res.info.ndcFrame && !['az', 'el', 'radius'].some((k) => params.has(k))) {
+        // A forward-facing scene is seen from in front only: start at its reference camera.
+        controls.home = ecrfCamera.forwardHomeView(res.info.ndcFrame);
+        controls.setView(controls.home);
+      }
       // The first GPU frame compiles the shaders: seconds on a software GL, and it blocks the page.
       status(renderer.kind === 'gpu' ? 'compiling the GPU shaders…' : '');
       state.firstFrame = true;

@@ -13,7 +13,7 @@ const PAGE = 'tools/web/index.html';
 const hasGpu = existsSync(join(root, 'tools', 'web', 'gpu_renderer.js'));
 const t0 = Date.now();
 let failures = 0;
-// ONLY=cpu,size,missing,phone,gpu runs some sections (while debugging).
+// ONLY=cpu,forward,size,missing,phone,gpu runs some sections (while debugging).
 const only = process.env.ONLY ? new Set(process.env.ONLY.split(',')) : null;
 const run = (section) => !only || only.has(section);
 
@@ -74,7 +74,7 @@ async function dropTruncatedScene(page) {
 
 // PSNR over RGB of the viewer's last full frame (read back through the hook, not a screenshot)
 // against EcrfDecoder.render of the same camera, run in the page by the wasm decoder.
-async function psnrAgainstWasm(page) {
+async function psnrAgainstWasm(page, scene = SCENE) {
   if (!(await page.evaluate(() => typeof createEcrfDecoder === 'function'))) {
     await page.addScriptTag({url: '../../build-wasm/ecrf_decoder.js'});
   }
@@ -93,7 +93,7 @@ async function psnrAgainstWasm(page) {
     }
     const mse = se / (3 * cam.width * cam.height);
     return {psnr: mse === 0 ? Infinity : 10 * Math.log10(65025 / mse), size: `${cam.width}x${cam.height}`};
-  }, SCENE);
+  }, scene);
 }
 
 const pixelsKey = (page) => page.evaluate(() => {
@@ -172,6 +172,34 @@ try {
     check(cleared.blank && cleared.workers === 0 && !cleared.scene && cleared.info === 0 && !cleared.pixels,
           'cpu: ... and clears the old scene (canvas blank, workers terminated, panel empty)');
     consoleCheck('cpu');
+    await page.context().close();
+  }
+
+  // ---- a forward-facing scene starts at its reference camera --------------------------------------
+  if (run('forward')) {
+    const scene = '../../tests/conformance/scene_forward.ecrf';
+    const {page, consoleCheck} = await open(b, `renderer=cpu&size=48&scene=${scene}`);
+    await waitIdle(page);
+    const s = await state(page);
+    // The vector's frame: reference camera about 4 units from the origin, elevation asin(0.479426),
+    // near plane 1.5 (SPEC.md 7.7); the home view orbits a point 2 x 1.5 ahead of it.
+    check(Math.abs(s.view.radius - 3) < 1e-3 && Math.abs(s.view.el - 28.65) < 0.05 && Math.abs(s.view.az - 40.1) < 0.1,
+          `forward: the home view is the reference camera (az ${s.view.az.toFixed(2)}, el ${s.view.el.toFixed(2)}, r ${s.view.radius.toFixed(3)})`);
+    const cmp = await psnrAgainstWasm(page, scene);
+    check(cmp.psnr >= 40, `forward: ${cmp.size} frame vs EcrfDecoder.render of the same camera: PSNR ${cmp.psnr.toFixed(2)} dB`);
+    // The vector's NDC box is narrower than the reference camera's view: the scene in the middle,
+    // the background (1, 0.5, 0) around it.
+    const covered = await page.evaluate(() => {
+      const img = ecrfViewer.readPixels();
+      let scene = 0;
+      for (let p = 0; p < img.width * img.height; ++p) {
+        const d = img.data;
+        scene += Math.abs(d[4 * p] - 255) + Math.abs(d[4 * p + 1] - 128) + d[4 * p + 2] > 12 ? 1 : 0;
+      }
+      return scene / (img.width * img.height);
+    });
+    check(covered > 0.2 && covered < 0.9, `forward: the scene fills ${(100 * covered).toFixed(0)}% of the home view, the background the rest`);
+    consoleCheck('forward');
     await page.context().close();
   }
 
