@@ -18,7 +18,8 @@ namespace ecrf::trainer {
 // image (0, 8, ...) is "test" and "val", the rest "train"; focal length scaled to the image
 // size, principal point at the centre; near 0.9 x the smallest bound and far the largest
 // (after scaling). The aabb is the box around the camera centres and the four corner rays of
-// every camera between its near and far bounds (no NDC).
+// every camera between its near and far bounds; the forward-facing scene model (scene_fit.h)
+// replaces it with an NDC box whose near plane, 0.75 / 0.9 of `near`, is 1 as in TensoRF.
 // Throws std::runtime_error naming the file and the problem: a malformed .npy, a shape other
 // than N x 17, non-finite or non-positive values, a pose count that does not match the images.
 DatasetManifest ReadLlffManifest(const std::string& dir, const std::string& split, int downscale, int* prescaled);
