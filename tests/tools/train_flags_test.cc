@@ -1,0 +1,43 @@
+// The training flags as `ecrf train` reads them: the scene model and rate-phase flags this issue
+// added, their ranges, and flags left for the caller.
+#include <gtest/gtest.h>
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "tools/train_run.h"
+
+namespace ecrf {
+namespace tools {
+namespace {
+
+trainer::TrainOptions Parse(std::vector<std::string> args, std::vector<int>* rest = nullptr) {
+  args.insert(args.begin(), "train");
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  std::vector<int> ignored;
+  return TrainOptionsFromArgs(int(argv.size()), argv.data(), rest ? rest : &ignored);
+}
+
+TEST(TrainFlags, RateStartAndSceneTypeAreReadAndChecked) {
+  const trainer::TrainOptions defaults = Parse({"--scene", "forward"});
+  EXPECT_FLOAT_EQ(defaults.rate_start, 16000.f / 30000.f);
+  EXPECT_EQ(defaults.procedural_scene, "forward");
+  EXPECT_EQ(defaults.scene_type, "auto");
+  const trainer::TrainOptions o = Parse({"--scene", "forward", "--rate-start", "0.8", "--scene-type", "forward"});
+  EXPECT_FLOAT_EQ(o.rate_start, 0.8f);
+  EXPECT_EQ(o.scene_type, "forward");
+  EXPECT_THROW(Parse({"--rate-start", "1"}), std::invalid_argument);
+  EXPECT_THROW(Parse({"--rate-start", "-0.1"}), std::invalid_argument);
+  EXPECT_THROW(Parse({"--scene-type", "ndc"}), std::invalid_argument);
+  EXPECT_THROW(Parse({"--scene", "sideways"}), std::invalid_argument);
+  std::vector<int> rest;
+  Parse({"--scene", "forward", "--not-a-training-flag"}, &rest);
+  ASSERT_EQ(rest.size(), 1u);
+  EXPECT_EQ(rest[0], 3);
+}
+
+}  // namespace
+}  // namespace tools
+}  // namespace ecrf
