@@ -8,6 +8,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "tests/common/held_out_frames.h"
 #include "trainer/camera.h"
 #include "trainer/capture_room.h"
 #include "trainer/still_life.h"
@@ -81,24 +82,7 @@ TEST(CaptureScene, EveryEighthFrameIsATestView) {
   const Dataset train = MakeCaptureScene("train", 16, 12, frames, 3);
   const Dataset test = MakeCaptureScene("test", 16, 12, frames, 3);
   const Dataset val = MakeCaptureScene("val", 16, 12, frames, 3);
-  ASSERT_EQ(test.views.size(), 7u);  // frames 0, 8, ..., 48
-  EXPECT_EQ(train.views.size(), 43u);
-  ASSERT_EQ(val.views.size(), test.views.size());
-  for (size_t k = 0; k < test.views.size(); ++k) {
-    char name[32];
-    std::snprintf(name, sizeof name, "capture/frame_%03zu", 8 * k);
-    EXPECT_EQ(test.views[k].name, name);
-    EXPECT_EQ(val.views[k].rgb.pixels, test.views[k].rgb.pixels);
-  }
-  // The train views are the other frames, in order, from the same path.
-  size_t t = 0;
-  for (int i = 0; i < frames; ++i) {
-    if (i % 8 == 0) continue;
-    char name[32];
-    std::snprintf(name, sizeof name, "capture/frame_%03d", i);
-    ASSERT_LT(t, train.views.size());
-    EXPECT_EQ(train.views[t++].name, name);
-  }
+  ExpectEveryEighthFrameHeldOut(train, test, val, frames, "capture");
   // Neighbouring frames of the loop are close: test frame 8 sits between train frames 7 and 9.
   auto distance = [](const Camera& a, const Camera& b) {
     return std::hypot(a.c2w[0][3] - b.c2w[0][3], a.c2w[1][3] - b.c2w[1][3], a.c2w[2][3] - b.c2w[2][3]);

@@ -9,6 +9,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "tests/common/held_out_frames.h"
 #include "trainer/camera.h"
 #include "trainer/capture_room.h"
 #include "trainer/capture_scene.h"
@@ -69,23 +70,7 @@ TEST(ForwardScene, EveryEighthFrameIsATestView) {
   const Dataset train = MakeForwardScene("train", 16, 12, frames, 3);
   const Dataset test = MakeForwardScene("test", 16, 12, frames, 3);
   const Dataset val = MakeForwardScene("val", 16, 12, frames, 3);
-  ASSERT_EQ(test.views.size(), 7u);  // frames 0, 8, ..., 48
-  EXPECT_EQ(train.views.size(), 43u);
-  ASSERT_EQ(val.views.size(), test.views.size());
-  for (size_t k = 0; k < test.views.size(); ++k) {
-    char name[32];
-    std::snprintf(name, sizeof name, "forward/frame_%03zu", 8 * k);
-    EXPECT_EQ(test.views[k].name, name);
-    EXPECT_EQ(val.views[k].rgb.pixels, test.views[k].rgb.pixels);
-  }
-  size_t t = 0;
-  for (int i = 0; i < frames; ++i) {
-    if (i % 8 == 0) continue;
-    char name[32];
-    std::snprintf(name, sizeof name, "forward/frame_%03d", i);
-    ASSERT_LT(t, train.views.size());
-    EXPECT_EQ(train.views[t++].name, name);
-  }
+  ExpectEveryEighthFrameHeldOut(train, test, val, frames, "forward");
   // Both splits carry the bounds of the whole capture.
   EXPECT_EQ(train.near, test.near);
   EXPECT_EQ(train.far, test.far);
