@@ -116,7 +116,7 @@ TensorfConfig ConfigFor(const TrainOptions& o, const Dataset& data, const SceneF
     c.ndc = fit.ndc;
     c.aabb = fit.roi;  // the NDC box
     c.near = 0.f;      // rays start on the near plane (NDC z = -1)
-    c.far = 10.f;      // beyond any NDC box's diagonal: never clamps
+    c.far = 10.f;      // past the far side of any NDC box of cameras narrower than about 160 degrees
   }
   if (fit.model == SceneModel::kUnbounded) {
     c.roi = fit.roi;
