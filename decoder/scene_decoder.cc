@@ -68,23 +68,31 @@ TensorTarget TargetOf(VmGrid* grid, const SceneHeader& h, int g, int t) {
 }
 
 Status DecodeCoefficientChunk(const ChunkView& chunk, const SceneHeader& h, int g, int t,
-                              VmGrid* grid, TensorChunkInfo* info) {
+                              int version_minor, VmGrid* grid, TensorChunkInfo* info) {
   ByteReader r(chunk.data, chunk.size);
-  uint8_t grid_index = 0, tensor_index = 0, coef_bits = 0, reserved0 = 0, reserved1 = 0;
+  uint8_t grid_index = 0, tensor_index = 0, coef_bits = 0, contexts_byte = 0, reserved1 = 0;
   uint8_t block[3] = {0, 0, 0};
   float step = 0.f;
   ECRF_RETURN_IF_ERROR(r.ReadU8(&grid_index, "COEF grid"));
   ECRF_RETURN_IF_ERROR(r.ReadU8(&tensor_index, "COEF tensor"));
   ECRF_RETURN_IF_ERROR(r.ReadU8(&coef_bits, "COEF coef_bits"));
-  ECRF_RETURN_IF_ERROR(r.ReadU8(&reserved0, "COEF reserved"));
+  ECRF_RETURN_IF_ERROR(r.ReadU8(&contexts_byte, "COEF contexts"));
   for (uint8_t& b : block) ECRF_RETURN_IF_ERROR(r.ReadU8(&b, "COEF block shape"));
   ECRF_RETURN_IF_ERROR(r.ReadU8(&reserved1, "COEF reserved"));
   ECRF_RETURN_IF_ERROR(r.ReadF32(&step, "COEF step"));
   ECRF_CHECK_OR_RETURN(grid_index == g && tensor_index == t, kErrCorrupt,
                        "COEF chunk at offset %zu is for grid %u tensor %u, expected %s %s",
                        chunk.offset, grid_index, tensor_index, kGridNames[g], kTensorNames[t]);
-  ECRF_CHECK_OR_RETURN(reserved0 == 0 && reserved1 == 0, kErrCorrupt,
-                       "COEF %s %s: reserved bytes must be 0", kGridNames[g], kTensorNames[t]);
+  ECRF_CHECK_OR_RETURN(reserved1 == 0, kErrCorrupt, "COEF %s %s: reserved byte must be 0",
+                       kGridNames[g], kTensorNames[t]);
+  // Before 1.4 the byte was reserved (0); 1.0-1.3 decoders refuse wide chunks as corrupt.
+  ECRF_CHECK_OR_RETURN(contexts_byte == 0 || version_minor >= 4, kErrCorrupt,
+                       "COEF %s %s: contexts %u in a version 1.%d stream (reserved, 0, before 1.4)",
+                       kGridNames[g], kTensorNames[t], contexts_byte, version_minor);
+  ECRF_CHECK_OR_RETURN(contexts_byte <= static_cast<uint8_t>(CoefContextSet::kWide), kErrUnsupported,
+                       "COEF %s %s: unknown coefficient context set %u", kGridNames[g],
+                       kTensorNames[t], contexts_byte);
+  const CoefContextSet context_set = static_cast<CoefContextSet>(contexts_byte);
   ECRF_CHECK_OR_RETURN(coef_bits == 8 || coef_bits == 16, kErrUnsupported,
                        "COEF %s %s: coef_bits %u (8 or 16)", kGridNames[g], kTensorNames[t],
                        coef_bits);
@@ -105,6 +113,7 @@ Status DecodeCoefficientChunk(const ChunkView& chunk, const SceneHeader& h, int 
   for (int a = 0; a < 3; ++a) blocks[a] = (target.extent[a] + dims[a] - 1) / dims[a];
   info->present = true;
   info->coef_bits = coef_bits;
+  info->contexts = contexts_byte;
   for (int a = 0; a < 3; ++a) info->block[a] = dims[a];
   info->step = step;
   info->payload_bytes = chunk.size;
@@ -112,7 +121,7 @@ Status DecodeCoefficientChunk(const ChunkView& chunk, const SceneHeader& h, int 
   info->coded_blocks = 0;
 
   CoefContexts contexts;
-  ECRF_RETURN_IF_ERROR(contexts.Init(BlockShape{dims[0], dims[1], dims[2]}));
+  ECRF_RETURN_IF_ERROR(contexts.Init(BlockShape{dims[0], dims[1], dims[2]}, context_set));
   HeapArray<int32_t> work;
   ECRF_RETURN_IF_ERROR(work.Allocate(2 * static_cast<size_t>(kMaxBlockVolume)));
   int32_t* coeffs = work.data();
@@ -361,7 +370,8 @@ Status DecodeScene(const uint8_t* data, size_t size, const DecodeOptions& option
     } else if (chunk.type == kChunkCoefficients && expect == Expect::kCoefficients) {
       const int g = next_tensor / kTensorsPerSceneGrid, t = next_tensor % kTensorsPerSceneGrid;
       VmGrid* grid = g == 0 ? &scene->density : &scene->appearance;
-      ECRF_RETURN_IF_ERROR(DecodeCoefficientChunk(chunk, h, g, t, grid, &info.tensors[g][t]));
+      ECRF_RETURN_IF_ERROR(DecodeCoefficientChunk(chunk, h, g, t, info.version_minor, grid,
+                                                  &info.tensors[g][t]));
       ++next_tensor;
       advance_tensor();
     } else if (chunk.type == kChunkMlpWeights && expect == Expect::kMlp) {

@@ -36,6 +36,7 @@ struct DecodeOptions {
 struct TensorChunkInfo {
   bool present = false;
   int coef_bits = 0;
+  int contexts = 0;  // coefficient context set: 0 narrow, 1 wide (1.4)
   int block[3] = {0, 0, 0};
   float step = 0.f;
   uint32_t payload_bytes = 0;

@@ -6,10 +6,11 @@
 
 namespace ecrf {
 
-Status CoefContexts::Init(const BlockShape& shape) {
+Status CoefContexts::Init(const BlockShape& shape, CoefContextSet context_set) {
   ECRF_CHECK_OR_RETURN(IsValidBlockShape(shape), kErrInvalidArgument,
                        "invalid coefficient block shape %dx%dx%d", shape.n0, shape.n1, shape.n2);
   BuildScanTable(shape, &scan);
+  set = context_set;
   num_eob_classes = 1 + (31 - __builtin_clz(static_cast<uint32_t>(shape.Volume())));
   levels.assign(static_cast<size_t>(scan.padded_volume), 0);
   Reset();

@@ -62,7 +62,7 @@ Status DecodeCoefBlock(RangeDecoder& decoder, CoefContexts& contexts, int32_t ma
                       contexts.last_base_cdf[entry.base_band], kLastBaseSymbols));
     } else {
       level = static_cast<uint32_t>(decoder.DecodeSymbol(
-          contexts.base_cdf[BaseContext(slot, contexts.scan, entry.base_band)], kBaseSymbols));
+          contexts.base_cdf[BaseContext(slot, contexts, entry.base_band)], kBaseSymbols));
       if (level == 0) continue;  // the slot is already zero
     }
     if (level == kBaseLevelCap) level = DecodeLevelTail(decoder, contexts, slot, entry);

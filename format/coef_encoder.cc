@@ -68,7 +68,7 @@ void EncodeCoefBlock(RangeEncoder& encoder, CoefContexts& contexts, const int32_
                            kLastBaseSymbols);
     } else {
       encoder.EncodeSymbol(static_cast<int>(base),
-                           contexts.base_cdf[BaseContext(slot, contexts.scan, entry.base_band)],
+                           contexts.base_cdf[BaseContext(slot, contexts, entry.base_band)],
                            kBaseSymbols);
     }
     if (level != 0) EncodeLevelTail(encoder, contexts, slot, entry, level, value);

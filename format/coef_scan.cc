@@ -47,9 +47,9 @@ std::vector<uint16_t> ComputeScanOrder(const BlockShape& shape) {
 
 void BuildScanTable(const BlockShape& shape, ScanTable* table) {
   table->shape = shape;
-  table->padded_stride1 = shape.n2 + 1;
-  table->padded_stride0 = (shape.n1 + 1) * table->padded_stride1;
-  table->padded_volume = (shape.n0 + 1) * table->padded_stride0;
+  table->padded_stride1 = shape.n2 + 2;
+  table->padded_stride0 = (shape.n1 + 2) * table->padded_stride1;
+  table->padded_volume = (shape.n0 + 2) * table->padded_stride0;
   const std::vector<uint16_t> order = ComputeScanOrder(shape);
   table->entries.resize(order.size());
   for (size_t s = 0; s < order.size(); ++s) {

@@ -32,7 +32,7 @@ bool IsValidBlockShape(const BlockShape& shape);
 // What the coefficient coder needs to know about one scan position.
 struct ScanEntry {
   uint16_t raster;     // index into the [n0][n1][n2] coefficient array
-  uint16_t padded;     // index into a level map with one zero plane after each dimension
+  uint16_t padded;     // index into a level map with two zero planes after each dimension
   uint8_t base_band;   // frequency band of the base-level contexts
   uint8_t range_band;  // frequency band of the range-level contexts
 };
@@ -51,7 +51,8 @@ std::vector<uint16_t> ComputeScanOrder(const BlockShape& shape);
 struct ScanTable {
   BlockShape shape;
   std::vector<ScanEntry> entries;  // in scan order, Volume() entries
-  int padded_volume = 0;           // (n0 + 1) * (n1 + 1) * (n2 + 1)
+  int padded_volume = 0;           // (n0 + 2) * (n1 + 2) * (n2 + 2): neighbours up to two
+                                   // steps beyond the block read zeros
   int padded_stride1 = 0;          // padded index step of the n1 axis; the n2 axis steps by 1
   int padded_stride0 = 0;          // padded index step of the n0 axis
 };

@@ -19,9 +19,10 @@ constexpr uint8_t kSignature[4] = {'E', 'C', 'R', 'F'};
 constexpr uint8_t kVersionMajor = 1;
 // The newest minor version this implementation knows. A stream carries the lowest minor version
 // whose features it uses (1.1: MLPW precision 2, the quantized MLP; 1.2: the unbounded scene
-// model; 1.3: the forward-facing scene model and its NDCP chunk), so streams without them stay
-// byte-identical to 1.0 streams.
-constexpr uint8_t kVersionMinor = 3;
+// model; 1.3: the forward-facing scene model and its NDCP chunk; 1.4: the wide base-level contexts
+// of the coefficient coder). The encoder writes 1.4 unless asked for a stream older decoders
+// read (EncodeOptions::max_version_minor), which then carries the lowest version of its features.
+constexpr uint8_t kVersionMinor = 4;
 constexpr size_t kFileHeaderBytes = 8;   // signature, major, minor, reserved u16
 constexpr size_t kChunkOverheadBytes = 12;  // type, length, crc
 constexpr uint32_t kMaxChunkPayloadBytes = 1u << 28;  // 256 MiB

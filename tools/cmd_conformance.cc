@@ -212,7 +212,9 @@ int RunConformance(int argc, char** argv) {
     coef_md5_text << file << " " << md5 << "\n";
     manifest["coefficient_vectors"].push_back(
         {{"file", file}, {"block", {v.shape.n0, v.shape.n1, v.shape.n2}}, {"blocks", v.blocks},
-         {"coef_bits", v.coef_bits}, {"bytes", stream.size()}, {"md5", md5}});
+         {"coef_bits", v.coef_bits},
+         {"contexts", v.contexts == CoefContextSet::kWide ? "wide (1.4)" : "narrow (1.0-1.3)"},
+         {"bytes", stream.size()}, {"md5", md5}});
     if (write) {
       trainer::WriteFileAtomically(path, stream.data(), stream.size());
       std::printf("wrote %s (%zu bytes, output md5 %s)\n", path.c_str(), stream.size(), md5.c_str());

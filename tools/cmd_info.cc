@@ -86,8 +86,8 @@ int RunInfo(int argc, char** argv) {
               h.viewdir_pe_freqs, h.hidden,
               in.mlp_precision_bits == 16 ? "float16" : in.mlp_precision_bits == 32 ? "float32"
                                                                                    : "quantized (levels x row steps)");
-  std::printf("\n%-20s %10s %8s %10s %10s %12s%s\n", "chunk", "bytes", "bits", "block", "step",
-              "coded blocks", md5 ? "  md5 of decoded float32 values" : "");
+  std::printf("\n%-20s %10s %8s %10s %10s %12s %8s%s\n", "chunk", "bytes", "bits", "block", "step",
+              "coded blocks", "contexts", md5 ? "  md5 of decoded float32 values" : "");
   std::printf("%-20s %10u\n", "HEAD", in.head_bytes);
   if (h.has_occupancy) {
     std::printf("%-20s %10u   %dx%dx%d mask, %zu occupied voxels\n", "OCCU", in.occupancy_bytes,
@@ -103,8 +103,9 @@ int RunInfo(int argc, char** argv) {
       char block[32], coded[32];
       std::snprintf(block, sizeof(block), "%dx%dx%d", ti.block[0], ti.block[1], ti.block[2]);
       std::snprintf(coded, sizeof(coded), "%u/%u", ti.coded_blocks, ti.blocks);
-      std::printf("%-20s %10u %8d %10s %10.4g %12s", trainer::RateTensorName(g * 6 + t),
-                  ti.payload_bytes, ti.coef_bits, block, double(ti.step), coded);
+      std::printf("%-20s %10u %8d %10s %10.4g %12s %8s", trainer::RateTensorName(g * 6 + t),
+                  ti.payload_bytes, ti.coef_bits, block, double(ti.step), coded,
+                  ti.contexts == 1 ? "wide" : "narrow");
       if (md5) {
         std::printf("  %s", conformance::TensorMd5(g == 0 ? s.field->density : s.field->appearance, t).c_str());
       }

@@ -30,6 +30,7 @@ const char kTrainFlagsUsage[] =
     "                             of interest (SPEC.md 7.2.1); forward samples the NDC of the average\n"
     "                             camera, for captures whose cameras all look one way (7.2.2)\n"
     "  --downscale N              shrink the images by N (area filter)\n"
+    "  --ranks D,A                density and appearance components per plane/line (fast: 16,48)\n"
     "  --batch N                  rays per iteration (default 4096)\n"
     "  --seed N                   random seed\n"
     "  --checkpoint-every N       write RUN_DIR/checkpoint.ckpt every N iterations\n"
@@ -108,6 +109,17 @@ bool ParseTrainFlag(int argc, char** argv, int* i, trainer::TrainOptions* o) {
     o->target_bytes = trainer::ParseByteSize(value());
   } else if (a == "--alpha") {
     o->alpha = ParseFloat("--alpha", value());
+  } else if (a == "--ranks") {
+    const std::string text = value();
+    const size_t comma = text.find(',');
+    const int d = comma == std::string::npos ? 0 : std::atoi(text.substr(0, comma).c_str());
+    const int app = comma == std::string::npos ? 0 : std::atoi(text.substr(comma + 1).c_str());
+    if (d < 1 || d > 256 || app < 1 || app > 256 ||
+        text.find_first_not_of("0123456789,") != std::string::npos) {
+      throw std::invalid_argument("--ranks: '" + text + "' is not two integers in [1, 256] joined by ','");
+    }
+    o->density_rank = d;
+    o->appearance_rank = app;
   } else if (a == "--dct-block") {
     ParseShape("--dct-block", value(), 3, o->plane_block);
   } else if (a == "--line-block") {

@@ -117,6 +117,23 @@ SceneTensors DropComponents(const SceneTensors& in, const std::vector<uint8_t> k
   return out;
 }
 
+// The lowest minor version of the features used, wide contexts aside: 1.1 for the quantized MLP,
+// 1.2 unbounded, 1.3 forward-facing.
+uint8_t FeatureVersionMinor(const SceneHeader& h, const EncodeOptions& o) {
+  return std::max<uint8_t>(o.mlp_max_level > 0 ? 1 : 0, kSceneModelMinVersionMinor[h.scene_model]);
+}
+
+std::vector<uint8_t> CodeLevels(const std::vector<int32_t>& levels, const GridBlockLayout& layout,
+                                CoefContextSet set) {
+  CoefContexts contexts;
+  const Status st = contexts.Init(BlockShape{layout.block[0], layout.block[1], layout.block[2]}, set);
+  if (!st.ok()) throw std::invalid_argument(st.message());
+  RangeEncoder enc;
+  const size_t volume = size_t(layout.block_volume());
+  for (int b = 0; b < layout.num_blocks(); ++b) EncodeCoefBlock(enc, contexts, &levels[size_t(b) * volume]);
+  return enc.Finish();
+}
+
 GridBlockLayout LayoutOf(const SceneHeader& h, int g, int t, const RateConfig& blocks) {
   const std::array<int, 3> res = {h.res[0], h.res[1], h.res[2]};
   const int rank = h.ranks[g][t % 3];
@@ -131,14 +148,11 @@ std::vector<uint8_t> EncodeCoefficients(const SceneTensors& s, int g, int t, flo
   ForwardBlocks(s.tensors[g][t].data(), layout, coeffs.data());
   const int32_t max_abs = o.coef_bits == 16 ? 32767 : 127;
   const int volume = layout.block_volume();
-  std::vector<int32_t> q(static_cast<size_t>(volume), 0);
-  CoefContexts contexts;
-  const Status st = contexts.Init(BlockShape{layout.block[0], layout.block[1], layout.block[2]});
-  if (!st.ok()) throw std::invalid_argument(st.message());
-  RangeEncoder enc;
+  std::vector<int32_t> levels(coeffs.size(), 0);
   const int index = g * 6 + t;
   for (int b = 0; b < layout.num_blocks(); ++b) {
     bool zero = true;
+    int32_t* q = &levels[size_t(b) * volume];
     for (int i = 0; i < volume; ++i) {
       const double level = QuantizeLevel(double(coeffs[size_t(b) * volume + i]), step, o.rounding_offset);
       if (std::fabs(level) > max_abs) ++report->clipped_coefficients;
@@ -146,7 +160,17 @@ std::vector<uint8_t> EncodeCoefficients(const SceneTensors& s, int g, int t, flo
       zero &= q[i] == 0;
     }
     report->tensor_zero_blocks[index] += zero;
-    EncodeCoefBlock(enc, contexts, q.data());
+  }
+  // Both context sets code the same levels; the chunk keeps the shorter code (the wide set
+  // only where 1.4 is allowed), so no tensor ever grows over its 1.3 size.
+  std::vector<uint8_t> code = CodeLevels(levels, layout, CoefContextSet::kNarrow);
+  CoefContextSet set = CoefContextSet::kNarrow;
+  if (o.max_version_minor >= 4) {
+    std::vector<uint8_t> wide = CodeLevels(levels, layout, CoefContextSet::kWide);
+    if (wide.size() < code.size()) {
+      code = std::move(wide);
+      set = CoefContextSet::kWide;
+    }
   }
   report->tensor_blocks[index] = size_t(layout.num_blocks());
   report->tensor_coeffs[index] = layout.num_coeffs();
@@ -154,11 +178,11 @@ std::vector<uint8_t> EncodeCoefficients(const SceneTensors& s, int g, int t, flo
   w.U8(uint8_t(g));
   w.U8(uint8_t(t));
   w.U8(uint8_t(o.coef_bits));
-  w.U8(0);
+  w.U8(static_cast<uint8_t>(set));
   for (int a = 0; a < 3; ++a) w.U8(uint8_t(layout.block[a]));
   w.U8(0);
   w.F32(step);
-  w.Bytes(enc.Finish());
+  w.Bytes(code);
   return std::move(w.bytes());
 }
 
@@ -200,10 +224,24 @@ std::vector<uint8_t> Assemble(const SceneTensors& s, const std::vector<float>& s
                               const EncodeOptions& o, EncodeReport* report) {
   *report = EncodeReport{};
   SceneHeader h = s.header;
-  // The lowest minor version of the features used: 1.1 for the quantized MLP, 1.2 unbounded, 1.3
-  // forward-facing.
-  const uint8_t minor = std::max<uint8_t>(o.mlp_max_level > 0 ? 1 : 0, kSceneModelMinVersionMinor[h.scene_model]);
-  ContainerWriter writer(minor);
+  const uint8_t feature_minor = FeatureVersionMinor(h, o);
+  if (feature_minor > o.max_version_minor) {
+    throw std::invalid_argument("this scene needs stream version 1." + std::to_string(feature_minor) + " (" +
+                                SceneModelName(static_cast<SceneModel>(h.scene_model)) + " model, MLP levels " +
+                                std::to_string(o.mlp_max_level) + "), above the asked 1." +
+                                std::to_string(o.max_version_minor));
+  }
+  std::vector<uint8_t> coef_chunks[2][6];
+  bool wide_contexts = false;
+  for (int g = 0; g < 2; ++g) {
+    for (int t = 0; t < 6; ++t) {
+      if (h.ranks[g][t % 3] == 0) continue;
+      coef_chunks[g][t] = EncodeCoefficients(s, g, t, steps[g * 6 + t], o, report);
+      wide_contexts |= coef_chunks[g][t][3] == static_cast<uint8_t>(CoefContextSet::kWide);
+    }
+  }
+  // 1.4 when a chunk uses the wide contexts, else the lowest version of the other features.
+  ContainerWriter writer(wide_contexts ? uint8_t{4} : feature_minor);
   h.has_occupancy = (o.include_occupancy && s.mask) ? 1 : 0;
   ByteWriter head;
   WriteSceneHeader(h, &head);
@@ -226,7 +264,7 @@ std::vector<uint8_t> Assemble(const SceneTensors& s, const std::vector<float>& s
     for (int t = 0; t < 6; ++t) {
       report->steps[g * 6 + t] = steps[g * 6 + t];
       if (h.ranks[g][t % 3] == 0) continue;
-      const std::vector<uint8_t> coef = EncodeCoefficients(s, g, t, steps[g * 6 + t], o, report);
+      const std::vector<uint8_t>& coef = coef_chunks[g][t];
       writer.AddChunk(kChunkCoefficients, coef);
       report->tensor_bytes[g * 6 + t] = coef.size();
       ++chunks;

@@ -1,7 +1,8 @@
 // Conformance vectors for coefficient decoding + integer IDCT (SPEC.md sections 3-5).
 //
 // Each vector is a raw range-coded stream of `blocks` coefficient blocks of one shape, decoded
-// with fresh contexts and max_abs = 127 (8-bit) or 32767 (16-bit). The normative output is the
+// with fresh contexts of its context set (narrow: streams 1.0-1.3, wide: 1.4) and max_abs = 127
+// (8-bit) or 32767 (16-bit). The normative output is the
 // concatenation of every block's InverseDctInt samples as int32 little endian; its MD5 is listed
 // in tests/conformance/coefficients.md5. Shared by the conformance test and `ecrf conformance`.
 #ifndef ECRF_TESTS_COMMON_COEF_VECTORS_H_
@@ -27,15 +28,20 @@ struct CoefVector {
   uint32_t seed;
   int zero_percent;  // share of all-zero blocks
   int scale;         // magnitude scale of the DC coefficient
+  CoefContextSet contexts;
 };
 
 inline const std::vector<CoefVector>& CoefVectors() {
   static const std::vector<CoefVector> v = {
-      {"coef_16x16x16_8bit", {16, 16, 16}, 24, 8, 1, 50, 40},
-      {"coef_1x8x8_lines_8bit", {1, 8, 8}, 96, 8, 2, 30, 30},
-      {"coef_4x8x32_16bit", {4, 8, 32}, 12, 16, 3, 25, 9000},
-      {"coef_1x1x32_extremes_8bit", {1, 1, 32}, 8, 8, 4, 0, 127},
-      {"coef_32x32x4_extremes_16bit", {32, 32, 4}, 6, 16, 5, 0, 32767},
+      {"coef_16x16x16_8bit", {16, 16, 16}, 24, 8, 1, 50, 40, CoefContextSet::kNarrow},
+      {"coef_1x8x8_lines_8bit", {1, 8, 8}, 96, 8, 2, 30, 30, CoefContextSet::kNarrow},
+      {"coef_4x8x32_16bit", {4, 8, 32}, 12, 16, 3, 25, 9000, CoefContextSet::kNarrow},
+      {"coef_1x1x32_extremes_8bit", {1, 1, 32}, 8, 8, 4, 0, 127, CoefContextSet::kNarrow},
+      {"coef_32x32x4_extremes_16bit", {32, 32, 4}, 6, 16, 5, 0, 32767, CoefContextSet::kNarrow},
+      {"coef_16x16x16_8bit_wide", {16, 16, 16}, 24, 8, 1, 50, 40, CoefContextSet::kWide},
+      {"coef_1x8x8_lines_8bit_wide", {1, 8, 8}, 96, 8, 2, 30, 30, CoefContextSet::kWide},
+      {"coef_4x8x32_16bit_wide", {4, 8, 32}, 12, 16, 3, 25, 9000, CoefContextSet::kWide},
+      {"coef_32x32x4_extremes_16bit_wide", {32, 32, 4}, 6, 16, 5, 0, 32767, CoefContextSet::kWide},
   };
   return v;
 }
@@ -95,7 +101,7 @@ inline std::vector<int32_t> MakeCoefficients(const CoefVector& v) {
 inline std::vector<uint8_t> EncodeVector(const CoefVector& v) {
   const std::vector<int32_t> c = MakeCoefficients(v);
   CoefContexts ctx;
-  if (!ctx.Init(v.shape).ok()) return {};
+  if (!ctx.Init(v.shape, v.contexts).ok()) return {};
   RangeEncoder enc;
   for (int b = 0; b < v.blocks; ++b) EncodeCoefBlock(enc, ctx, &c[size_t(b) * v.shape.Volume()]);
   return enc.Finish();
@@ -105,7 +111,7 @@ inline std::vector<uint8_t> EncodeVector(const CoefVector& v) {
 // (int32 little endian), or "error: ..." if decoding fails.
 inline std::string DecodeVectorMd5(const CoefVector& v, const std::vector<uint8_t>& stream) {
   CoefContexts ctx;
-  Status s = ctx.Init(v.shape);
+  Status s = ctx.Init(v.shape, v.contexts);
   if (!s.ok()) return std::string("error: ") + s.message();
   RangeDecoder dec(stream.data(), stream.size());
   const int volume = v.shape.Volume();

@@ -7,7 +7,8 @@
 // a quantized MLP (bitstream 1.1) whose rows span 2^-3..2^3 in scale and whose largest levels
 // take the class escape, an unbounded scene (bitstream 1.2: contracted space, SPEC.md 7.2.1) seen
 // from outside its region of interest, a forward-facing scene (bitstream 1.3: NDC, 7.2.2) seen
-// from in front of its reference camera.
+// from in front of its reference camera. Those carry the lowest version of their features and
+// the narrow coefficient contexts of 1.0-1.3; the `*_wide_contexts*` vectors are 1.4 streams.
 #ifndef ECRF_TESTS_COMMON_SCENE_VECTORS_H_
 #define ECRF_TESTS_COMMON_SCENE_VECTORS_H_
 
@@ -42,6 +43,7 @@ struct SceneVector {
   OccupancyKind occupancy;
   uint32_t seed;
   SceneModel scene_model;
+  bool wide_contexts = false;  // a 1.4 stream: wide coefficient contexts in the plane chunks
 };
 
 inline const std::vector<SceneVector>& SceneVectors() {
@@ -60,6 +62,10 @@ inline const std::vector<SceneVector>& SceneVectors() {
        OccupancyKind::kSphere, 16, SceneModel::kUnbounded},
       {"scene_forward", {16, 16, 16}, {{2, 2, 2}, {2, 2, 2}}, {2, 4, 4}, {1, 2, 8}, 8, 0,
        OccupancyKind::kSphere, 17, SceneModel::kForward},
+      {"scene_wide_contexts", {16, 14, 12}, {{2, 2, 2}, {4, 4, 4}}, {4, 8, 8}, {1, 4, 8}, 8, 2,
+       OccupancyKind::kSphere, 18, SceneModel::kObject, true},
+      {"scene_wide_contexts_16bit", {9, 9, 9}, {{2, 1, 2}, {2, 2, 1}}, {2, 4, 4}, {1, 2, 4}, 16, 0,
+       OccupancyKind::kSphere, 19, SceneModel::kObject, true},
   };
   return v;
 }
@@ -156,11 +162,14 @@ inline void MakeSceneBlock(Lcg& rng, const int dims[3], int32_t max_abs, bool de
 inline std::vector<uint8_t> BuildSceneVector(const SceneVector& v) {
   const SceneHeader h = SceneVectorHeader(v);
   Lcg rng(v.seed);
-  // 1.1: quantized MLP; 1.2: unbounded scene model; 1.3: forward-facing scene model.
-  ContainerWriter writer(v.scene_model == SceneModel::kForward     ? 3
-                         : v.scene_model == SceneModel::kUnbounded ? 2
-                         : v.mlp_precision == kMlpPrecisionQuantized ? 1
-                                                                     : 0);
+  // 1.1: quantized MLP; 1.2: unbounded scene model; 1.3: forward-facing scene model; 1.4: wide
+  // coefficient contexts.
+  const uint8_t version_minor = v.wide_contexts                              ? 4
+                                : v.scene_model == SceneModel::kForward     ? 3
+                                : v.scene_model == SceneModel::kUnbounded   ? 2
+                                : v.mlp_precision == kMlpPrecisionQuantized ? 1
+                                                                            : 0;
+  ContainerWriter writer(version_minor);
   ByteWriter head;
   WriteSceneHeader(h, &head);
   writer.AddChunk(kChunkHead, head.bytes());
@@ -200,7 +209,10 @@ inline std::vector<uint8_t> BuildSceneVector(const SceneVector& v) {
       int blocks = 1;
       for (int a = 0; a < 3; ++a) blocks *= (extent[a] + dims[a] - 1) / dims[a];
       CoefContexts ctx;
-      if (!ctx.Init(BlockShape{dims[0], dims[1], dims[2]}).ok()) return {};
+      // The 1.4 vectors code planes with the wide set and lines with the narrow one: the set is
+      // chosen per chunk.
+      const CoefContextSet set = v.wide_contexts && t < 3 ? CoefContextSet::kWide : CoefContextSet::kNarrow;
+      if (!ctx.Init(BlockShape{dims[0], dims[1], dims[2]}, set).ok()) return {};
       RangeEncoder enc;
       std::vector<int32_t> q(size_t(dims[0]) * dims[1] * dims[2]);
       for (int b = 0; b < blocks; ++b) {
@@ -211,7 +223,7 @@ inline std::vector<uint8_t> BuildSceneVector(const SceneVector& v) {
       c.U8(uint8_t(g));
       c.U8(uint8_t(t));
       c.U8(uint8_t(v.coef_bits));
-      c.U8(0);
+      c.U8(static_cast<uint8_t>(set));
       for (int a = 0; a < 3; ++a) c.U8(uint8_t(dims[a]));
       c.U8(0);
       // The unbounded vector's density is translucent: samples far along its rays count too.

@@ -185,6 +185,41 @@ TEST(SceneDecoder, ChunkOrderAndUnknownChunks) {
   EXPECT_EQ(Decode(build(missing_mlp), &field).code(), kErrCorrupt);
 }
 
+// The COEF `contexts` byte (SPEC.md 6.4.2): 1 (wide) only from version 1.4 on, as 1.0-1.3 decoders
+// refuse it; unknown sets are unsupported.
+TEST(SceneDecoder, CoefficientContextSetIsCheckedAgainstTheVersion) {
+  const conformance::SceneVector& wide_vector = conformance::SceneVectors()[7];
+  ASSERT_TRUE(wide_vector.wide_contexts);
+  const std::vector<uint8_t> good = conformance::BuildSceneVector(wide_vector);
+  ASSERT_EQ(good[5], 4);
+  std::vector<std::pair<uint32_t, std::vector<uint8_t>>> chunks;
+  for (size_t pos = 8; pos < good.size();) {
+    uint32_t type, length;
+    std::memcpy(&type, good.data() + pos, 4);
+    std::memcpy(&length, good.data() + pos + 4, 4);
+    chunks.emplace_back(type, std::vector<uint8_t>(good.begin() + long(pos) + 8, good.begin() + long(pos) + 8 + length));
+    pos += 12 + length;
+  }
+  auto build = [&chunks](uint8_t minor, uint8_t plane_contexts) {
+    ContainerWriter w(minor);
+    for (auto [type, payload] : chunks) {
+      if (type == kChunkDone) continue;
+      if (type == kChunkCoefficients && payload[1] < 3) payload[3] = plane_contexts;
+      w.AddChunk(type, payload);
+    }
+    return w.Finish();
+  };
+  SceneField field;
+  SceneInfo info;
+  ASSERT_TRUE(DecodeScene(good.data(), good.size(), DecodeOptions(), &field, &info).ok());
+  EXPECT_EQ(info.tensors[0][0].contexts, 1);  // planes wide
+  EXPECT_EQ(info.tensors[0][3].contexts, 0);  // lines narrow
+  EXPECT_EQ(build(4, 1), good);
+  EXPECT_EQ(Decode(build(3, 1), &field).code(), kErrCorrupt);
+  EXPECT_EQ(Decode(build(4, 2), &field).code(), kErrUnsupported);
+  EXPECT_EQ(Decode(build(5, 2), &field).code(), kErrUnsupported);
+}
+
 // A stream of a few hundred bytes that claims what the format allows but a device cannot afford.
 std::vector<uint8_t> HostileStream(const uint16_t res[3], int rank, const int occ_res[3]) {
   SceneHeader h;

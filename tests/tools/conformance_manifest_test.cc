@@ -64,7 +64,10 @@ TEST(ConformanceManifest, ListsEveryVectorWithItsParameters) {
     EXPECT_EQ(cam.width, 48);
     EXPECT_EQ(cam.height, 48);
   }
-  EXPECT_EQ(m.at("coefficient_vectors").size(), 5u);
+  EXPECT_EQ(m.at("coefficient_vectors").size(), 9u);  // five narrow-context, four wide-context
+  int wide = 0;
+  for (const auto& c : m.at("coefficient_vectors")) wide += c.at("contexts") == "wide (1.4)";
+  EXPECT_EQ(wide, 4);
 }
 
 TEST(ConformanceManifest, ScenesMatchEveryChecksumAndRenderWithinTolerance) {
@@ -94,7 +97,8 @@ TEST(ConformanceManifest, ScenesMatchEveryChecksumAndRenderWithinTolerance) {
     EXPECT_GE(a.psnr_db, 40.0) << file;
     ++checked;
   }
-  EXPECT_EQ(checked, 8);  // seven hand-made scenes (one unbounded, one forward-facing) and the trained one
+  // Nine hand-made scenes (one unbounded, one forward-facing, two 1.4 streams) and the trained one.
+  EXPECT_EQ(checked, 10);
 }
 
 TEST(ConformanceManifest, RenderAgreementCountsPixelsByTheirWorstChannel) {

@@ -38,6 +38,18 @@ TEST(TrainFlags, RateStartAndSceneTypeAreReadAndChecked) {
   EXPECT_EQ(rest[0], 3);
 }
 
+TEST(TrainFlags, RanksSetDensityAndAppearanceComponents) {
+  const trainer::TrainOptions fast = Parse({});
+  EXPECT_EQ(fast.density_rank, 16);
+  EXPECT_EQ(fast.appearance_rank, 48);
+  const trainer::TrainOptions o = Parse({"--ranks", "8,32"});
+  EXPECT_EQ(o.density_rank, 8);
+  EXPECT_EQ(o.appearance_rank, 32);
+  for (const char* bad : {"8", "0,32", "8,", ",8", "8,300", "8,3x", "-1,4"}) {
+    EXPECT_THROW(Parse({"--ranks", bad}), std::invalid_argument) << bad;
+  }
+}
+
 }  // namespace
 }  // namespace tools
 }  // namespace ecrf

@@ -190,8 +190,9 @@ TensorfModel SmallForwardModel(uint64_t seed) {
   return model;
 }
 
-std::vector<uint8_t> EncodeForward(const TensorfModel& model) {
+std::vector<uint8_t> EncodeForward(const TensorfModel& model, int max_version_minor = kVersionMinor) {
   EncodeOptions o;
+  o.max_version_minor = max_version_minor;
   o.mlp_float32 = true;
   o.mlp_max_level = 0;
   o.drop_zero_components = false;
@@ -225,7 +226,7 @@ void ForwardRays(std::vector<float>* origins, std::vector<float>* dirs) {
 TEST(ForwardScene, StreamIsVersion13WithAnNdcpChunkAndTheDecoderRendersWhatTheTrainerRenders) {
   TensorfModel model = SmallForwardModel(5);
   model.UpdateAlphaMask({9, 8, 9});
-  const std::vector<uint8_t> bytes = EncodeForward(model);
+  const std::vector<uint8_t> bytes = EncodeForward(model, 3);
   EXPECT_EQ(bytes[5], 3);  // version_minor: the forward-facing model is a 1.3 feature
   // HEAD (12 + 90 bytes after the 8-byte file header), then NDCP.
   EXPECT_EQ(std::string(bytes.begin() + 8 + 12 + kSceneHeaderBytes, bytes.begin() + 8 + 12 + kSceneHeaderBytes + 4),

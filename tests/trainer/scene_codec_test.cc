@@ -13,6 +13,7 @@
 #include "decoder/scene_decoder.h"
 #include "format/int_idct.h"
 #include "tests/common/decode_or_die.h"
+#include "tests/common/grid_md5.h"
 #include "trainer/grid_dct.h"
 #include "trainer/image_io.h"
 #include "trainer/image_metrics.h"
@@ -124,9 +125,64 @@ float MaxRenderDifference(const dec::SceneField& a, const dec::SceneField& b) {
   return worst;
 }
 
+// 1.4 changes only how the levels are entropy coded, so a 1.4 stream and the 1.3 stream of the
+// same model decode to the same grids, mask and MLP to the bit.
+// Appearance planes made of smooth bumps of varied widths, like trained features: the spectra of
+// neighbouring blocks end at different frequencies.
+TensorfModel BumpyModel() {
+  TensorfModel model = SmallModel(9);
+  model.Initialize({48, 40, 44}, 9);
+  VmGrid& grid = model.appearance();
+  uint32_t state = 12345;
+  auto next = [&state] { state = state * 1664525u + 1013904223u; return float(state >> 8) / float(1u << 24); };
+  for (int m = 0; m < 3; ++m) {
+    const int rank = grid.ranks()[m];
+    const int h = grid.res()[kMatMode[m][1]], w = grid.res()[kMatMode[m][0]];
+    float* plane = grid.plane(m);
+    std::fill(plane, plane + size_t(h) * w * rank, 0.f);
+    for (int bump = 0; bump < 30; ++bump) {
+      const float cy = next() * h, cx = next() * w, width = 0.7f + 4.f * next(), amp = 2.f * next() - 1.f;
+      for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+          const float d2 = ((y - cy) * (y - cy) + (x - cx) * (x - cx)) / (width * width);
+          if (d2 > 9.f) continue;
+          for (int r = 0; r < rank; ++r) plane[(size_t(y) * w + x) * rank + r] += amp * std::exp(-d2) / float(1 + r);
+        }
+      }
+    }
+  }
+  return model;
+}
+
+TEST(SceneCodec, Version14AndVersion13StreamsDecodeToTheSameScene) {
+  TensorfModel model = BumpyModel();
+  model.UpdateAlphaMask({9, 8, 6});
+  EncodeOptions o;
+  o.mlp_max_level = 31;
+  o.blocks.plane_block[0] = 4;
+  o.blocks.plane_block[1] = 16;
+  o.blocks.plane_block[2] = 16;
+  EncodeReport r14, r13;
+  const std::vector<uint8_t> v14 = EncodeScene(model, o, &r14);
+  o.max_version_minor = 3;
+  const std::vector<uint8_t> v13 = EncodeScene(model, o, &r13);
+  EXPECT_EQ(v14[5], 4);
+  EXPECT_EQ(v13[5], 1);  // the quantized MLP's version
+  // Each chunk keeps the shorter of its two codes, so no tensor grows and some shrink.
+  for (int i = 0; i < 12; ++i) EXPECT_LE(r14.tensor_bytes[i], r13.tensor_bytes[i]) << i;
+  EXPECT_LT(r14.coefficient_bytes(), r13.coefficient_bytes());
+  const dec::SceneField a = DecodeOrDie(v14), b = DecodeOrDie(v13);
+  EXPECT_EQ(conformance::SceneGridMd5(a), conformance::SceneGridMd5(b));
+  EXPECT_EQ(conformance::OccupancyMd5(a), conformance::OccupancyMd5(b));
+  EXPECT_EQ(conformance::MlpMd5(a), conformance::MlpMd5(b));
+  o.max_version_minor = 0;  // the quantized MLP needs 1.1
+  EXPECT_THROW(EncodeScene(model, o), std::invalid_argument);
+}
+
 TEST(SceneCodec, QuantizedMlpIsVersion11SmallerAndRendersAlike) {
   const TensorfModel model = SmallModel(8);
   EncodeOptions o;
+  o.max_version_minor = 3;  // streams for 1.3 decoders carry the lowest version of their features
   const std::vector<uint8_t> f16 = EncodeScene(model, o);
   o.mlp_max_level = 127;
   const std::vector<uint8_t> q = EncodeScene(model, o);

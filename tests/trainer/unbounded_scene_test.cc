@@ -134,6 +134,7 @@ TEST(UnboundedScene, StreamIsVersion12AndTheDecoderRendersWhatTheTrainerRenders)
   o.mlp_float32 = true;
   o.mlp_max_level = 0;
   o.drop_zero_components = false;
+  o.max_version_minor = 3;
   const std::vector<uint8_t> bytes = EncodeScene(model, o);
   EXPECT_EQ(bytes[5], 2);  // version_minor: the unbounded model is a 1.2 feature
   const dec::SceneField field = DecodeOrDie(bytes);
