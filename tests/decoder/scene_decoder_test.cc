@@ -143,18 +143,25 @@ TEST(SceneDecoder, CorruptedStreamsFailCleanlyOrDecodeValidScenes) {
 }
 
 // Chunk-level syntax errors, each with its category.
-TEST(SceneDecoder, ChunkOrderAndUnknownChunks) {
-  const std::vector<uint8_t> good = conformance::BuildSceneVector(conformance::SceneVectors()[0]);
-  // Split the good stream into its chunks.
-  std::vector<std::pair<uint32_t, std::vector<uint8_t>>> chunks;
-  for (size_t pos = 8; pos < good.size();) {
+using Chunks = std::vector<std::pair<uint32_t, std::vector<uint8_t>>>;
+
+// A stream's chunks (type, payload) in order; DONE included.
+Chunks SplitChunks(const std::vector<uint8_t>& stream) {
+  Chunks chunks;
+  for (size_t pos = 8; pos < stream.size();) {
     uint32_t type, length;
-    std::memcpy(&type, good.data() + pos, 4);
-    std::memcpy(&length, good.data() + pos + 4, 4);
-    chunks.emplace_back(type, std::vector<uint8_t>(good.begin() + long(pos) + 8, good.begin() + long(pos) + 8 + length));
+    std::memcpy(&type, stream.data() + pos, 4);
+    std::memcpy(&length, stream.data() + pos + 4, 4);
+    chunks.emplace_back(type, std::vector<uint8_t>(stream.begin() + long(pos) + 8, stream.begin() + long(pos) + 8 + length));
     pos += 12 + length;
   }
-  auto build = [](const std::vector<std::pair<uint32_t, std::vector<uint8_t>>>& list) {
+  return chunks;
+}
+
+TEST(SceneDecoder, ChunkOrderAndUnknownChunks) {
+  const std::vector<uint8_t> good = conformance::BuildSceneVector(conformance::SceneVectors()[0]);
+  Chunks chunks = SplitChunks(good);
+  auto build = [](const Chunks& list) {
     ContainerWriter w;
     for (const auto& [type, payload] : list) {
       if (type != kChunkDone) w.AddChunk(type, payload);
@@ -192,14 +199,7 @@ TEST(SceneDecoder, CoefficientContextSetIsCheckedAgainstTheVersion) {
   ASSERT_TRUE(wide_vector.wide_contexts);
   const std::vector<uint8_t> good = conformance::BuildSceneVector(wide_vector);
   ASSERT_EQ(good[5], 4);
-  std::vector<std::pair<uint32_t, std::vector<uint8_t>>> chunks;
-  for (size_t pos = 8; pos < good.size();) {
-    uint32_t type, length;
-    std::memcpy(&type, good.data() + pos, 4);
-    std::memcpy(&length, good.data() + pos + 4, 4);
-    chunks.emplace_back(type, std::vector<uint8_t>(good.begin() + long(pos) + 8, good.begin() + long(pos) + 8 + length));
-    pos += 12 + length;
-  }
+  Chunks chunks = SplitChunks(good);
   auto build = [&chunks](uint8_t minor, uint8_t plane_contexts) {
     ContainerWriter w(minor);
     for (auto [type, payload] : chunks) {
