@@ -112,10 +112,10 @@ bool ParseTrainFlag(int argc, char** argv, int* i, trainer::TrainOptions* o) {
   } else if (a == "--ranks") {
     const std::string text = value();
     const size_t comma = text.find(',');
-    const int d = comma == std::string::npos ? 0 : std::atoi(text.substr(0, comma).c_str());
-    const int app = comma == std::string::npos ? 0 : std::atoi(text.substr(comma + 1).c_str());
-    if (d < 1 || d > 256 || app < 1 || app > 256 ||
-        text.find_first_not_of("0123456789,") != std::string::npos) {
+    if (comma == std::string::npos) throw std::invalid_argument("--ranks: '" + text + "' is not D,A");
+    const int d = ParseInt("--ranks", text.substr(0, comma).c_str());
+    const int app = ParseInt("--ranks", text.substr(comma + 1).c_str());
+    if (d < 1 || d > 256 || app < 1 || app > 256) {
       throw std::invalid_argument("--ranks: '" + text + "' is not two integers in [1, 256] joined by ','");
     }
     o->density_rank = d;

@@ -41,9 +41,9 @@ struct EncodeOptions {
   // nearest, smaller values widen the dead zone.
   float rounding_offset = 0.5f;
   std::string metadata_json;      // the ancillary meta chunk (empty: none)
-  // The newest stream version 1.x to write. From 4 on, the coefficients use the wide contexts
-  // of 1.4; below 4 the narrow ones of 1.0-1.3 (decoders of 1.3 read the stream; 2-3.5% larger
-  // coefficient chunks), and the stream carries the lowest version its features need.
+  // The newest stream version 1.x to write. From 4 on, each COEF chunk takes the shorter of its
+  // narrow and wide (1.4) codes; below 4 all are narrow, so 1.3 decoders read the stream (2-3.5%
+  // larger coefficient chunks). The stream carries the lowest version its chunks need.
   int max_version_minor = kVersionMinor;
 };
 
