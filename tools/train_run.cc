@@ -31,6 +31,7 @@ const char kTrainFlagsUsage[] =
     "                             camera, for captures whose cameras all look one way (7.2.2)\n"
     "  --downscale N              shrink the images by N (area filter)\n"
     "  --ranks D,A                density and appearance components per plane/line (fast: 16,48)\n"
+    "  --mlp-hidden N             width of the appearance MLP's hidden layers (default 128)\n"
     "  --batch N                  rays per iteration (default 4096)\n"
     "  --seed N                   random seed\n"
     "  --checkpoint-every N       write RUN_DIR/checkpoint.ckpt every N iterations\n"
@@ -120,6 +121,11 @@ bool ParseTrainFlag(int argc, char** argv, int* i, trainer::TrainOptions* o) {
     }
     o->density_rank = d;
     o->appearance_rank = app;
+  } else if (a == "--mlp-hidden") {
+    o->mlp_hidden = ParseInt("--mlp-hidden", value());
+    if (o->mlp_hidden < 1 || o->mlp_hidden > 1024) {  // the format's limit (SPEC.md 6.2)
+      throw std::invalid_argument("--mlp-hidden: " + std::to_string(o->mlp_hidden) + " is not in [1, 1024]");
+    }
   } else if (a == "--dct-block") {
     ParseShape("--dct-block", value(), 3, o->plane_block);
   } else if (a == "--line-block") {

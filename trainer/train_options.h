@@ -43,6 +43,7 @@ struct TrainOptions {
   // Model.
   int density_rank = 16;    // per mode
   int appearance_rank = 48;  // per mode
+  int mlp_hidden = 128;      // width of the appearance MLP's two hidden layers (TensoRF: 128)
 
   // ECRF objective: loss = MSE + lambda_e * R + lambda_r * ||F(G)||^2, lambda_r = alpha * lambda_e.
   // R is the estimated size in bits of all coded grid coefficients (the same unit as the paper,

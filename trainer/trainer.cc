@@ -103,6 +103,7 @@ TensorfConfig ConfigFor(const TrainOptions& o, const Dataset& data, const SceneF
   c.density_ranks = {o.density_rank, o.density_rank, o.density_rank};
   c.app_ranks = {o.appearance_rank, o.appearance_rank, o.appearance_rank};
   c.head.num_products = 3 * o.appearance_rank;
+  c.head.hidden = o.mlp_hidden;
   c.near = float(data.near);
   c.far = float(data.far);
   c.white_background = data.white_background;

@@ -7,6 +7,9 @@
 #include <vector>
 
 #include "tools/train_run.h"
+#include "trainer/dataset.h"
+#include "trainer/scene_fit.h"
+#include "trainer/trainer.h"
 
 namespace ecrf {
 namespace tools {
@@ -47,6 +50,17 @@ TEST(TrainFlags, RanksSetDensityAndAppearanceComponents) {
   EXPECT_EQ(o.appearance_rank, 32);
   for (const char* bad : {"8", "0,32", "8,", ",8", "8,300", "8,3x", "-1,4"}) {
     EXPECT_THROW(Parse({"--ranks", bad}), std::invalid_argument) << bad;
+  }
+}
+
+TEST(TrainFlags, MlpHiddenSetsTheWidthOfTheModelsHead) {
+  EXPECT_EQ(Parse({}).mlp_hidden, 128);
+  const trainer::TrainOptions o = Parse({"--mlp-hidden", "64"});
+  EXPECT_EQ(o.mlp_hidden, 64);
+  const trainer::TensorfConfig c = trainer::ConfigFor(o, trainer::Dataset(), trainer::SceneFit());
+  EXPECT_EQ(c.head.hidden, 64);
+  for (const char* bad : {"0", "1025", "6x", "-8"}) {
+    EXPECT_THROW(Parse({"--mlp-hidden", bad}), std::invalid_argument) << bad;
   }
 }
 
