@@ -81,9 +81,14 @@ TEST(RaySet, BatchesCoverEveryRayOncePerEpochAndFilterKeepsMatches) {
 TEST(RatePoints, NamedPointsSetLambdaStepsAndMlpLevels) {
   TrainOptions o = PresetOptions("fast");
   ApplyRatePoint("low", &o);
-  EXPECT_EQ(o.lambda_e, 5e-10f);
+  EXPECT_EQ(o.lambda_e, 2e-10f);
   EXPECT_EQ(o.quant_step_scale, 4.0f);
-  EXPECT_EQ(o.mlp_levels, 31);
+  EXPECT_EQ(o.mlp_levels, 15);
+  EXPECT_EQ(o.appearance_rank, 32);
+  EXPECT_EQ(o.density_rank, 16);
+  TrainOptions tiny = PresetOptions("tiny");  // already below 32 appearance components
+  ApplyRatePoint("low", &tiny);
+  EXPECT_EQ(tiny.appearance_rank, 24);
   ApplyRatePoint("medium", &o);
   EXPECT_EQ(o.lambda_e, 2e-11f);
   EXPECT_EQ(o.quant_step_scale, 3.0f);
