@@ -49,8 +49,9 @@ const char kTrainFlagsUsage[] =
     "                             with steps x4, x3, x1 (low: 15 MLP levels and at most 32 appearance\n"
     "                             components; give --mlp-levels or --ranks after it)\n"
     "  --target-size SIZE         adapt lambda_e during training, then the steps at encode time, for\n"
-    "                             a file of at most SIZE (e.g. 500KB, 1.2MB); the step scale and MLP\n"
-    "                             levels follow the nearest rate point unless given\n"
+    "                             a file of at most SIZE (e.g. 500KB, 1.2MB); the step scale, MLP\n"
+    "                             levels and appearance components follow the nearest rate point\n"
+    "                             unless given\n"
     "  --alpha A                  lambda_r = A * lambda_e for the DCT-coefficient L2 term (default 1)\n"
     "  --dct-block CxHxW          plane block shape (default 16x16x16)\n"
     "  --line-block CxL           line block shape (default 8x8)\n"
@@ -192,12 +193,14 @@ trainer::TrainOptions TrainOptionsFromArgs(int argc, char** argv, std::vector<in
     const int at = i;
     if (!ParseTrainFlag(argc, argv, &i, &o)) rest->push_back(at);
   }
-  bool step_scale_given = false, mlp_levels_given = false;
+  trainer::TargetSizeFlagsGiven given;
   for (int i = 1; i < argc; ++i) {
-    step_scale_given |= !std::strcmp(argv[i], "--quant-step-scale") || !std::strcmp(argv[i], "--rate");
-    mlp_levels_given |= !std::strcmp(argv[i], "--mlp-levels") || !std::strcmp(argv[i], "--rate");
+    const bool rate = !std::strcmp(argv[i], "--rate");
+    given.step_scale |= rate || !std::strcmp(argv[i], "--quant-step-scale");
+    given.mlp_levels |= rate || !std::strcmp(argv[i], "--mlp-levels");
+    given.ranks |= rate || !std::strcmp(argv[i], "--ranks");
   }
-  trainer::ApplyTargetSizeDefaults(&o, step_scale_given, mlp_levels_given);
+  trainer::ApplyTargetSizeDefaults(&o, given);
   if (o.iters < 1) throw std::invalid_argument("--iters must be at least 1");
   // Stopping on purpose keeps the work: a checkpoint is written at the stop.
   if (o.stop_after > 0 && o.checkpoint_every == 0) o.checkpoint_every = o.stop_after;

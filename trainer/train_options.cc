@@ -78,13 +78,16 @@ double NominalFloat32GridBytes(const TrainOptions& o) {
   return 4.0 * ranks * (res * res + res);
 }
 
-void ApplyTargetSizeDefaults(TrainOptions* o, bool step_scale_given, bool mlp_levels_given) {
+void ApplyTargetSizeDefaults(TrainOptions* o, const TargetSizeFlagsGiven& given) {
   if (o->target_bytes == 0) return;
   const double share = double(o->target_bytes) / NominalFloat32GridBytes(*o);
   // Never finer than x2: encode-time rate control can then still refine the steps (to the 8-bit
   // peak step) when training ends below the target.
-  if (!step_scale_given) o->quant_step_scale = share < 0.016 ? 4.0f : share < 0.03 ? 3.0f : 2.0f;
-  if (!mlp_levels_given && share < 0.016) o->mlp_levels = 31;
+  if (!given.step_scale) o->quant_step_scale = share < 0.016 ? 4.0f : share < 0.03 ? 3.0f : 2.0f;
+  if (share >= 0.016) return;
+  // The low rate point's head and components (ApplyRatePoint "low").
+  if (!given.mlp_levels) o->mlp_levels = 15;
+  if (!given.ranks) o->appearance_rank = std::min(o->appearance_rank, 32);
 }
 
 int ScaleMilestone(int milestone, int iters, int reference_iters) {

@@ -118,12 +118,20 @@ void ApplyRatePoint(const std::string& name, TrainOptions* options);
 // when it picks a step scale, before any data is read.
 double NominalFloat32GridBytes(const TrainOptions& options);
 
-// --target-size without --quant-step-scale / --mlp-levels: the step scale (and MLP levels) of the
-// nearest named rate point, by the target's share of NominalFloat32GridBytes. On chair-400 `fast`
-// (docs/reports/chair_v2) steps x4 with 31 MLP levels win below about 1.6% (400 KB), x3 up to
-// about 3%, and x2 above: never x1, so that encode-time rate control (trainer/encode_rate_control.h)
-// can refine the steps when training ends below the target.
-void ApplyTargetSizeDefaults(TrainOptions* options, bool step_scale_given, bool mlp_levels_given);
+// Which of the settings --target-size picks the user gave explicitly (those stay).
+struct TargetSizeFlagsGiven {
+  bool step_scale = false;  // --quant-step-scale or --rate
+  bool mlp_levels = false;  // --mlp-levels or --rate
+  bool ranks = false;       // --ranks or --rate
+};
+
+// --target-size: the step scale of the nearest named rate point, by the target's share of
+// NominalFloat32GridBytes, and below 1.6% (chair-400 `fast`: 400 KB) also the low rate point's 15
+// MLP levels and at most 32 appearance components. On chair-400 `fast` (docs/reports/chair_v2)
+// steps x4 win below that share, x3 up to about 3%, and x2 above: never x1, so that encode-time
+// rate control (trainer/encode_rate_control.h) can refine the steps when training ends below the
+// target.
+void ApplyTargetSizeDefaults(TrainOptions* options, const TargetSizeFlagsGiven& given);
 
 // What a run's metrics record as its data: the procedural scene's name or the data directory.
 inline const std::string& DataSource(const TrainOptions& o) {

@@ -105,26 +105,34 @@ TEST(RatePoints, TargetSizeTakesTheStepsOfTheNearestRatePoint) {
     size_t target;
     float scale;
     int levels;
-  } cases[] = {{300000, 4.f, 31}, {600000, 3.f, 127}, {1000000, 2.f, 127}, {5000000, 2.f, 127}};
+    int appearance_rank;
+  } cases[] = {{300000, 4.f, 15, 32}, {600000, 3.f, 127, 48}, {1000000, 2.f, 127, 48}, {5000000, 2.f, 127, 48}};
   for (const Case& c : cases) {
     TrainOptions t = o;
     t.target_bytes = c.target;
-    ApplyTargetSizeDefaults(&t, false, false);
+    ApplyTargetSizeDefaults(&t, TargetSizeFlagsGiven());
     EXPECT_EQ(t.quant_step_scale, c.scale) << c.target;
     EXPECT_EQ(t.mlp_levels, c.levels) << c.target;
+    EXPECT_EQ(t.appearance_rank, c.appearance_rank) << c.target;
+    EXPECT_EQ(t.density_rank, 16) << c.target;
   }
   // What the user gave stays; without a target nothing changes.
   TrainOptions given = o;
   given.target_bytes = 300000;
   given.quant_step_scale = 2.5f;
   given.mlp_levels = 63;
-  ApplyTargetSizeDefaults(&given, true, true);
+  given.appearance_rank = 40;
+  TargetSizeFlagsGiven all;
+  all.step_scale = all.mlp_levels = all.ranks = true;
+  ApplyTargetSizeDefaults(&given, all);
   EXPECT_EQ(given.quant_step_scale, 2.5f);
   EXPECT_EQ(given.mlp_levels, 63);
+  EXPECT_EQ(given.appearance_rank, 40);
   TrainOptions none = o;
-  ApplyTargetSizeDefaults(&none, false, false);
+  ApplyTargetSizeDefaults(&none, TargetSizeFlagsGiven());
   EXPECT_EQ(none.quant_step_scale, o.quant_step_scale);
   EXPECT_EQ(none.mlp_levels, o.mlp_levels);
+  EXPECT_EQ(none.appearance_rank, o.appearance_rank);
 }
 
 }  // namespace
