@@ -55,7 +55,7 @@ void ApplyRatePoint(const std::string& name, TrainOptions* o) {
   if (name == "low") {
     // Coarser steps under QAT beat a larger lambda_e at the same size (chair: 182,217 B at
     // 33.76 dB against 266,445 B at 33.79 dB with steps x1). At this rate fewer appearance
-    // components code better: chair with 32 instead of 48 gains 0.07-0.15 dB at equal size,
+    // components code better: chair with 32 instead of 48 gains 0.03-0.13 dB at equal size,
     // while a 64-unit head or 8 density components cost 0.3-0.4 dB (README "Measured").
     o->lambda_e = 2e-10f;
     o->quant_step_scale = 4.0f;
