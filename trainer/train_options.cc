@@ -51,6 +51,12 @@ void SelectProceduralScene(const std::string& name, TrainOptions* o) {
   o->procedural_scene = name;
 }
 
+namespace {
+// The low rate point's head and components, shared with --target-size's low shares.
+constexpr int kLowRateMlpLevels = 15;
+constexpr int kLowRateMaxAppearanceRank = 32;
+}  // namespace
+
 void ApplyRatePoint(const std::string& name, TrainOptions* o) {
   if (name == "low") {
     // Coarser steps under QAT beat a larger lambda_e at the same size (chair: 182,217 B at
@@ -59,8 +65,8 @@ void ApplyRatePoint(const std::string& name, TrainOptions* o) {
     // while a 64-unit head or 8 density components cost 0.3-0.4 dB (README "Measured").
     o->lambda_e = 2e-10f;
     o->quant_step_scale = 4.0f;
-    o->mlp_levels = 15;
-    o->appearance_rank = std::min(o->appearance_rank, 32);
+    o->mlp_levels = kLowRateMlpLevels;
+    o->appearance_rank = std::min(o->appearance_rank, kLowRateMaxAppearanceRank);
   } else if (name == "medium") {
     o->lambda_e = 2e-11f;
     o->quant_step_scale = 3.0f;
@@ -85,9 +91,8 @@ void ApplyTargetSizeDefaults(TrainOptions* o, const TargetSizeFlagsGiven& given)
   // peak step) when training ends below the target.
   if (!given.step_scale) o->quant_step_scale = share < 0.016 ? 4.0f : share < 0.03 ? 3.0f : 2.0f;
   if (share >= 0.016) return;
-  // The low rate point's head and components (ApplyRatePoint "low").
-  if (!given.mlp_levels) o->mlp_levels = 15;
-  if (!given.ranks) o->appearance_rank = std::min(o->appearance_rank, 32);
+  if (!given.mlp_levels) o->mlp_levels = kLowRateMlpLevels;
+  if (!given.ranks) o->appearance_rank = std::min(o->appearance_rank, kLowRateMaxAppearanceRank);
 }
 
 int ScaleMilestone(int milestone, int iters, int reference_iters) {
