@@ -31,6 +31,8 @@ const char kTrainFlagsUsage[] =
     "                             camera, for captures whose cameras all look one way (7.2.2)\n"
     "  --downscale N              shrink the images by N (area filter)\n"
     "  --ranks D,A                density and appearance components per plane/line (fast: 16,48)\n"
+    "  --final-grid N             about N^3 voxels in the box after the last upsampling (fast: 180)\n"
+    "  --upsample-at I,J,...      iterations of the grid upsamplings (fast: 300,600,900,1200,1500)\n"
     "  --mlp-hidden N             width of the appearance MLP's hidden layers (default 128)\n"
     "  --batch N                  rays per iteration (default 4096)\n"
     "  --seed N                   random seed\n"
@@ -123,6 +125,24 @@ bool ParseTrainFlag(int argc, char** argv, int* i, trainer::TrainOptions* o) {
     }
     o->density_rank = d;
     o->appearance_rank = app;
+  } else if (a == "--final-grid") {
+    const int n = ParseInt("--final-grid", value());
+    if (n < 2 || n > 1024) throw std::invalid_argument("--final-grid: " + std::to_string(n) + " is not in [2, 1024]");
+    o->voxels_final = long(n) * n * n;
+    o->voxels_init = std::min(o->voxels_init, o->voxels_final);  // upsampling never shrinks
+  } else if (a == "--upsample-at") {
+    const std::string text = value();
+    std::vector<int> at;
+    for (size_t begin = 0; begin <= text.size();) {
+      size_t end = text.find(',', begin);
+      if (end == std::string::npos) end = text.size();
+      at.push_back(ParseInt("--upsample-at", text.substr(begin, end - begin).c_str()));
+      if (at.back() < 1 || (at.size() > 1 && at.back() <= at[at.size() - 2])) {
+        throw std::invalid_argument("--upsample-at: '" + text + "' is not increasing positive iterations");
+      }
+      begin = end + 1;
+    }
+    o->upsample_iters = at;
   } else if (a == "--mlp-hidden") {
     o->mlp_hidden = ParseInt("--mlp-hidden", value());
     if (o->mlp_hidden < 1 || o->mlp_hidden > 1024) {  // the format's limit (SPEC.md 6.2)

@@ -64,6 +64,32 @@ TEST(TrainFlags, MlpHiddenSetsTheWidthOfTheModelsHead) {
   }
 }
 
+TEST(TrainFlags, FinalGridSetsWhereUpsamplingEnds) {
+  const trainer::TrainOptions o = Parse({"--final-grid", "150"});
+  EXPECT_EQ(o.voxels_final, 150L * 150 * 150);
+  const std::vector<long> counts = trainer::UpsampleVoxelCounts(o);
+  ASSERT_FALSE(counts.empty());
+  EXPECT_EQ(counts.back(), o.voxels_final);
+  for (size_t i = 1; i < counts.size(); ++i) EXPECT_GT(counts[i], counts[i - 1]);
+  // A final grid below the preset's initial one starts there instead of shrinking.
+  const trainer::TrainOptions small = Parse({"--final-grid", "40"});
+  EXPECT_EQ(small.voxels_init, small.voxels_final);
+  for (const char* bad : {"1", "1025", "12x", "-150"}) {
+    EXPECT_THROW(Parse({"--final-grid", bad}), std::invalid_argument) << bad;
+  }
+}
+
+TEST(TrainFlags, UpsampleAtMovesTheUpsamplingsAndTheRatePhaseFollows) {
+  const trainer::TrainOptions o = Parse({"--upsample-at", "200,400,600,800,1000", "--rate-start", "0.1"});
+  EXPECT_EQ(o.upsample_iters, (std::vector<int>{200, 400, 600, 800, 1000}));
+  // The rate phase still waits for the last upsampling and the last mask update (fast: 900).
+  EXPECT_EQ(trainer::RateStartIteration(o), 1001);
+  EXPECT_EQ(trainer::UpsampleVoxelCounts(o).back(), o.voxels_final);
+  for (const char* bad : {"", "300,200", "0,100", "100,100", "100,x"}) {
+    EXPECT_THROW(Parse({"--upsample-at", bad}), std::invalid_argument) << bad;
+  }
+}
+
 }  // namespace
 }  // namespace tools
 }  // namespace ecrf
