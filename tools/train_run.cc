@@ -33,6 +33,7 @@ const char kTrainFlagsUsage[] =
     "  --ranks D,A                density and appearance components per plane/line (fast: 16,48)\n"
     "  --final-grid N             about N^3 voxels in the box after the last upsampling (fast: 180)\n"
     "  --upsample-at I,J,...      iterations of the grid upsamplings (fast: 300,600,900,1200,1500)\n"
+    "  --mask-at I,J,...          iterations of the alpha-mask updates and box shrink (fast: 300,900)\n"
     "  --mlp-hidden N             width of the appearance MLP's hidden layers (default 128)\n"
     "  --batch N                  rays per iteration (default 4096)\n"
     "  --seed N                   random seed\n"
@@ -69,6 +70,21 @@ const char kTrainFlagsUsage[] =
     "                             (default 127; 0 = binary16)\n";
 
 namespace {
+
+// "I,J,...": increasing positive iterations.
+std::vector<int> ParseIterationList(const char* flag, const std::string& text) {
+  std::vector<int> at;
+  for (size_t begin = 0; begin <= text.size();) {
+    size_t end = text.find(',', begin);
+    if (end == std::string::npos) end = text.size();
+    at.push_back(ParseInt(flag, text.substr(begin, end - begin).c_str()));
+    if (at.back() < 1 || (at.size() > 1 && at.back() <= at[at.size() - 2])) {
+      throw std::invalid_argument(std::string(flag) + ": '" + text + "' is not increasing positive iterations");
+    }
+    begin = end + 1;
+  }
+  return at;
+}
 
 // Consumes argv[*i] (and its value) when it is a training flag; false otherwise.
 bool ParseTrainFlag(int argc, char** argv, int* i, trainer::TrainOptions* o) {
@@ -131,18 +147,9 @@ bool ParseTrainFlag(int argc, char** argv, int* i, trainer::TrainOptions* o) {
     o->voxels_final = long(n) * n * n;
     o->voxels_init = std::min(o->voxels_init, o->voxels_final);  // upsampling never shrinks
   } else if (a == "--upsample-at") {
-    const std::string text = value();
-    std::vector<int> at;
-    for (size_t begin = 0; begin <= text.size();) {
-      size_t end = text.find(',', begin);
-      if (end == std::string::npos) end = text.size();
-      at.push_back(ParseInt("--upsample-at", text.substr(begin, end - begin).c_str()));
-      if (at.back() < 1 || (at.size() > 1 && at.back() <= at[at.size() - 2])) {
-        throw std::invalid_argument("--upsample-at: '" + text + "' is not increasing positive iterations");
-      }
-      begin = end + 1;
-    }
-    o->upsample_iters = at;
+    o->upsample_iters = ParseIterationList("--upsample-at", value());
+  } else if (a == "--mask-at") {
+    o->alpha_mask_iters = ParseIterationList("--mask-at", value());
   } else if (a == "--mlp-hidden") {
     o->mlp_hidden = ParseInt("--mlp-hidden", value());
     if (o->mlp_hidden < 1 || o->mlp_hidden > 1024) {  // the format's limit (SPEC.md 6.2)

@@ -79,7 +79,7 @@ TEST(TrainFlags, FinalGridSetsWhereUpsamplingEnds) {
   }
 }
 
-TEST(TrainFlags, UpsampleAtMovesTheUpsamplingsAndTheRatePhaseFollows) {
+TEST(TrainFlags, UpsampleAtAndMaskAtMoveTheScheduleAndTheRatePhaseFollows) {
   const trainer::TrainOptions o = Parse({"--upsample-at", "200,400,600,800,1000", "--rate-start", "0.1"});
   EXPECT_EQ(o.upsample_iters, (std::vector<int>{200, 400, 600, 800, 1000}));
   // The rate phase still waits for the last upsampling and the last mask update (fast: 900).
@@ -87,7 +87,12 @@ TEST(TrainFlags, UpsampleAtMovesTheUpsamplingsAndTheRatePhaseFollows) {
   EXPECT_EQ(trainer::UpsampleVoxelCounts(o).back(), o.voxels_final);
   for (const char* bad : {"", "300,200", "0,100", "100,100", "100,x"}) {
     EXPECT_THROW(Parse({"--upsample-at", bad}), std::invalid_argument) << bad;
+    EXPECT_THROW(Parse({"--mask-at", bad}), std::invalid_argument) << bad;
   }
+  const trainer::TrainOptions early =
+      Parse({"--upsample-at", "100,200,300,400,500", "--mask-at", "200,600", "--rate-start", "0.1"});
+  EXPECT_EQ(early.alpha_mask_iters, (std::vector<int>{200, 600}));
+  EXPECT_EQ(trainer::RateStartIteration(early), 601);
 }
 
 }  // namespace
