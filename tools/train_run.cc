@@ -49,8 +49,10 @@ const char kTrainFlagsUsage[] =
     "ECRF objective:\n"
     "  --lambda-e X               weight of the estimated size in bits (0 = plain TensoRF)\n"
     "  --rate low|medium|high     named rate points (default medium): lambda_e 2e-10, 2e-11, 2e-11\n"
-    "                             with steps x4, x3, x1 (low: 15 MLP levels and at most 32 appearance\n"
-    "                             components; give --mlp-levels or --ranks after it)\n"
+    "                             with steps x4, x3, x1 (low: 15 MLP levels, at most 32 appearance\n"
+    "                             components, a final grid (11/9)^3 times larger reached at 2/3 of the\n"
+    "                             upsampling iterations; give --mlp-levels, --ranks, --final-grid or\n"
+    "                             --upsample-at after it)\n"
     "  --target-size SIZE         adapt lambda_e during training, then the steps at encode time, for\n"
     "                             a file of at most SIZE (e.g. 500KB, 1.2MB); the step scale, MLP\n"
     "                             levels and appearance components follow the nearest rate point\n"
@@ -226,6 +228,7 @@ trainer::TrainOptions TrainOptionsFromArgs(int argc, char** argv, std::vector<in
     given.step_scale |= rate || !std::strcmp(argv[i], "--quant-step-scale");
     given.mlp_levels |= rate || !std::strcmp(argv[i], "--mlp-levels");
     given.ranks |= rate || !std::strcmp(argv[i], "--ranks");
+    for (const char* f : {"--final-grid", "--upsample-at", "--rate-start"}) given.schedule |= rate || !std::strcmp(argv[i], f);
   }
   trainer::ApplyTargetSizeDefaults(&o, given);
   if (o.iters < 1) throw std::invalid_argument("--iters must be at least 1");

@@ -55,6 +55,17 @@ namespace {
 // The low rate point's head and components, shared with --target-size's low shares.
 constexpr int kLowRateMlpLevels = 15;
 constexpr int kLowRateMaxAppearanceRank = 32;
+
+// The low rate point's grid schedule: a final grid (11/9)^3 times the preset's (fast: 220^3
+// voxels instead of 180^3), reached by upsamplings at 2/3 of the preset's iterations (fast: the
+// last at 1000 instead of 1500), so that the rate phase starts that much earlier. On chair the
+// two together gain about 0.3 dB at equal size; each alone 0.08-0.11 dB (README "Measured").
+void ApplyLowRateSchedule(TrainOptions* o) {
+  constexpr double kGridScale = 11.0 / 9.0;
+  o->voxels_final = long(std::lround(double(o->voxels_final) * kGridScale * kGridScale * kGridScale));
+  for (int& at : o->upsample_iters) at = std::max(1, int(std::lround(at * 2.0 / 3.0)));
+  o->rate_start = 0.0f;  // right after the last upsampling and mask update
+}
 }  // namespace
 
 void ApplyRatePoint(const std::string& name, TrainOptions* o) {
@@ -67,6 +78,7 @@ void ApplyRatePoint(const std::string& name, TrainOptions* o) {
     o->quant_step_scale = 4.0f;
     o->mlp_levels = kLowRateMlpLevels;
     o->appearance_rank = std::min(o->appearance_rank, kLowRateMaxAppearanceRank);
+    ApplyLowRateSchedule(o);
   } else if (name == "medium") {
     o->lambda_e = 2e-11f;
     o->quant_step_scale = 3.0f;
@@ -93,6 +105,7 @@ void ApplyTargetSizeDefaults(TrainOptions* o, const TargetSizeFlagsGiven& given)
   if (share >= 0.016) return;
   if (!given.mlp_levels) o->mlp_levels = kLowRateMlpLevels;
   if (!given.ranks) o->appearance_rank = std::min(o->appearance_rank, kLowRateMaxAppearanceRank);
+  if (!given.schedule) ApplyLowRateSchedule(o);
 }
 
 int ScaleMilestone(int milestone, int iters, int reference_iters) {

@@ -123,11 +123,12 @@ struct TargetSizeFlagsGiven {
   bool step_scale = false;  // --quant-step-scale or --rate
   bool mlp_levels = false;  // --mlp-levels or --rate
   bool ranks = false;       // --ranks or --rate
+  bool schedule = false;    // --final-grid, --upsample-at, --rate-start or --rate
 };
 
 // --target-size: the step scale of the nearest named rate point, by the target's share of
 // NominalFloat32GridBytes, and below 1.6% (chair-400 `fast`: 400 KB) also the low rate point's 15
-// MLP levels and at most 32 appearance components. On chair-400 `fast` (docs/reports/chair_v2)
+// MLP levels, at most 32 appearance components and its grid schedule (ApplyRatePoint). On chair-400 `fast` (docs/reports/chair_v2)
 // steps x4 win below that share, x3 up to about 3%, and x2 above: never x1, so that encode-time
 // rate control (trainer/encode_rate_control.h) can refine the steps when training ends below the
 // target.

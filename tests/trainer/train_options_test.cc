@@ -86,9 +86,14 @@ TEST(RatePoints, NamedPointsSetLambdaStepsAndMlpLevels) {
   EXPECT_EQ(o.mlp_levels, 15);
   EXPECT_EQ(o.appearance_rank, 32);
   EXPECT_EQ(o.density_rank, 16);
+  // A finer final grid, reached earlier: the rate phase starts after the upsampling at 1000.
+  EXPECT_EQ(o.voxels_final, 220L * 220 * 220);
+  EXPECT_EQ(o.upsample_iters, (std::vector<int>{200, 400, 600, 800, 1000}));
+  EXPECT_EQ(RateStartIteration(o), 1001);
   TrainOptions tiny = PresetOptions("tiny");  // already below 32 appearance components
   ApplyRatePoint("low", &tiny);
   EXPECT_EQ(tiny.appearance_rank, 24);
+  EXPECT_EQ(RateStartIteration(tiny), 701);  // the last mask update (700) comes after 533
   ApplyRatePoint("medium", &o);
   EXPECT_EQ(o.lambda_e, 2e-11f);
   EXPECT_EQ(o.quant_step_scale, 3.0f);
@@ -106,7 +111,11 @@ TEST(RatePoints, TargetSizeTakesTheStepsOfTheNearestRatePoint) {
     float scale;
     int levels;
     int appearance_rank;
-  } cases[] = {{300000, 4.f, 15, 32}, {600000, 3.f, 127, 48}, {1000000, 2.f, 127, 48}, {5000000, 2.f, 127, 48}};
+    long voxels_final;
+  } cases[] = {{300000, 4.f, 15, 32, 220L * 220 * 220},
+               {600000, 3.f, 127, 48, 180L * 180 * 180},
+               {1000000, 2.f, 127, 48, 180L * 180 * 180},
+               {5000000, 2.f, 127, 48, 180L * 180 * 180}};
   for (const Case& c : cases) {
     TrainOptions t = o;
     t.target_bytes = c.target;
@@ -115,6 +124,7 @@ TEST(RatePoints, TargetSizeTakesTheStepsOfTheNearestRatePoint) {
     EXPECT_EQ(t.mlp_levels, c.levels) << c.target;
     EXPECT_EQ(t.appearance_rank, c.appearance_rank) << c.target;
     EXPECT_EQ(t.density_rank, 16) << c.target;
+    EXPECT_EQ(t.voxels_final, c.voxels_final) << c.target;
   }
   // What the user gave stays; without a target nothing changes.
   TrainOptions given = o;
@@ -123,11 +133,13 @@ TEST(RatePoints, TargetSizeTakesTheStepsOfTheNearestRatePoint) {
   given.mlp_levels = 63;
   given.appearance_rank = 40;
   TargetSizeFlagsGiven all;
-  all.step_scale = all.mlp_levels = all.ranks = true;
+  all.step_scale = all.mlp_levels = all.ranks = all.schedule = true;
   ApplyTargetSizeDefaults(&given, all);
   EXPECT_EQ(given.quant_step_scale, 2.5f);
   EXPECT_EQ(given.mlp_levels, 63);
   EXPECT_EQ(given.appearance_rank, 40);
+  EXPECT_EQ(given.voxels_final, o.voxels_final);
+  EXPECT_EQ(given.upsample_iters, o.upsample_iters);
   TrainOptions none = o;
   ApplyTargetSizeDefaults(&none, TargetSizeFlagsGiven());
   EXPECT_EQ(none.quant_step_scale, o.quant_step_scale);
