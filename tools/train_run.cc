@@ -55,8 +55,8 @@ const char kTrainFlagsUsage[] =
     "                             --upsample-at after it)\n"
     "  --target-size SIZE         adapt lambda_e during training, then the steps at encode time, for\n"
     "                             a file of at most SIZE (e.g. 500KB, 1.2MB); the step scale, MLP\n"
-    "                             levels and appearance components follow the nearest rate point\n"
-    "                             unless given\n"
+    "                             levels, appearance components and grid schedule follow the nearest\n"
+    "                             rate point unless given\n"
     "  --alpha A                  lambda_r = A * lambda_e for the DCT-coefficient L2 term (default 1)\n"
     "  --dct-block CxHxW          plane block shape (default 16x16x16)\n"
     "  --line-block CxL           line block shape (default 8x8)\n"
@@ -228,7 +228,9 @@ trainer::TrainOptions TrainOptionsFromArgs(int argc, char** argv, std::vector<in
     given.step_scale |= rate || !std::strcmp(argv[i], "--quant-step-scale");
     given.mlp_levels |= rate || !std::strcmp(argv[i], "--mlp-levels");
     given.ranks |= rate || !std::strcmp(argv[i], "--ranks");
-    for (const char* f : {"--final-grid", "--upsample-at", "--rate-start"}) given.schedule |= rate || !std::strcmp(argv[i], f);
+    for (const char* f : {"--final-grid", "--upsample-at", "--rate-start"}) {
+      given.schedule |= rate || !std::strcmp(argv[i], f);
+    }
   }
   trainer::ApplyTargetSizeDefaults(&o, given);
   if (o.iters < 1) throw std::invalid_argument("--iters must be at least 1");

@@ -106,8 +106,10 @@ struct TrainOptions {
 TrainOptions PresetOptions(const std::string& name);
 
 // The named rate points set lambda_e and the step scale (with quantization-aware training on):
-//   "low"    lambda_e 2e-10, steps x4, 15 MLP levels, at most 32 appearance components:
-//            chair-400 `fast` 216,283 B, 34.14 dB decoded (117.6x)
+//   "low"    lambda_e 2e-10, steps x4, 15 MLP levels, at most 32 appearance components, a
+//            final grid (11/9)^3 times the preset's reached at 2/3 of its upsampling iterations:
+//            chair-400 `fast` 240,086 B, 34.53 dB decoded (106.0x; at lambda_e 3e-10 206,819 B,
+//            34.34 dB, 123.0x)
 //   "medium" lambda_e 2e-11, steps x3: chair-400 `fast` 550,181 B, 34.94 dB decoded (46x)
 //   "high"   lambda_e 2e-11, steps x1 (1,044,897 B, 35.19 dB before quantization-aware training)
 // (README "Training" gives the commands.) Throws std::invalid_argument for other names.
@@ -128,10 +130,10 @@ struct TargetSizeFlagsGiven {
 
 // --target-size: the step scale of the nearest named rate point, by the target's share of
 // NominalFloat32GridBytes, and below 1.6% (chair-400 `fast`: 400 KB) also the low rate point's 15
-// MLP levels, at most 32 appearance components and its grid schedule (ApplyRatePoint). On chair-400 `fast` (docs/reports/chair_v2)
-// steps x4 win below that share, x3 up to about 3%, and x2 above: never x1, so that encode-time
-// rate control (trainer/encode_rate_control.h) can refine the steps when training ends below the
-// target.
+// MLP levels, at most 32 appearance components and its grid schedule (ApplyRatePoint). On
+// chair-400 `fast` (docs/reports/chair_v2) steps x4 win below that share, x3 up to about 3%, and
+// x2 above: never x1, so that encode-time rate control (trainer/encode_rate_control.h) can refine
+// the steps when training ends below the target.
 void ApplyTargetSizeDefaults(TrainOptions* options, const TargetSizeFlagsGiven& given);
 
 // What a run's metrics record as its data: the procedural scene's name or the data directory.
