@@ -51,8 +51,7 @@ const char kTrainFlagsUsage[] =
     "  --rate low|medium|high     named rate points (default medium): lambda_e 2e-10, 2e-11, 2e-11\n"
     "                             with steps x4, x3, x1 (low: 15 MLP levels, at most 32 appearance\n"
     "                             components, a final grid (11/9)^3 times larger reached at 2/3 of the\n"
-    "                             upsampling iterations; give --mlp-levels, --ranks, --final-grid or\n"
-    "                             --upsample-at after it)\n"
+    "                             upsampling iterations); other flags override a point's settings\n"
     "  --target-size SIZE         adapt lambda_e during training, then the steps at encode time, for\n"
     "                             a file of at most SIZE (e.g. 500KB, 1.2MB); the step scale, MLP\n"
     "                             levels, appearance components and grid schedule follow the nearest\n"
@@ -127,7 +126,7 @@ bool ParseTrainFlag(int argc, char** argv, int* i, trainer::TrainOptions* o) {
   } else if (a == "--lambda-e") {
     o->lambda_e = ParseFloat("--lambda-e", value());
   } else if (a == "--rate") {
-    trainer::ApplyRatePoint(value(), o);
+    value();  // applied before every other flag (TrainOptionsFromArgs), so they override it
   } else if (a == "--target-size") {
     o->target_bytes = trainer::ParseByteSize(value());
   } else if (a == "--alpha") {
@@ -209,14 +208,20 @@ trainer::TrainOptions TrainOptionsFromArgs(int argc, char** argv, std::vector<in
   }
   if (builtin && !preset_given) preset = "tiny";
   trainer::TrainOptions o = trainer::PresetOptions(preset);
-  if (rate_point_by_default) {
+  // A rate point is a set of defaults, like the preset: it applies first, so that the flags that
+  // tune it (--lambda-e, --ranks, --final-grid, --rate-start, ...) win wherever they stand.
+  const char* rate_point = nullptr;
+  bool rate_flag = false;
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--rate") && i + 1 < argc) rate_point = argv[i + 1];
+    for (const char* f : {"--lambda-e", "--rate", "--target-size"}) rate_flag |= !std::strcmp(argv[i], f);
+  }
+  if (rate_point) {
+    trainer::ApplyRatePoint(rate_point, &o);
+  } else if (rate_point_by_default && !rate_flag) {
     // A compressor by default: the medium rate point unless a rate flag says otherwise
     // (--lambda-e 0 trains plain TensoRF, with the 8-bit peak steps).
-    bool rate_flag = false;
-    for (int i = 1; i < argc; ++i) {
-      for (const char* f : {"--lambda-e", "--rate", "--target-size"}) rate_flag |= !std::strcmp(argv[i], f);
-    }
-    if (!rate_flag) trainer::ApplyRatePoint("medium", &o);
+    trainer::ApplyRatePoint("medium", &o);
   }
   for (int i = 1; i < argc; ++i) {
     const int at = i;

@@ -11,9 +11,10 @@
 namespace ecrf {
 namespace tools {
 
-// Options for a command line: the preset (named anywhere on the line, so later flags override
-// it whatever their order; "tiny" when --scene builtin has no --preset), then every training
-// flag of argv that ParseTrainFlag knows. Flags it does not know are left for the caller: their
+// Options for a command line: the preset (named anywhere on the line; "tiny" when --scene builtin
+// has no --preset), then the rate point (--rate, also named anywhere), then every training flag
+// of argv that ParseTrainFlag knows, so that flags override the preset and the point whatever
+// their order. Flags it does not know are left for the caller: their
 // indices go to *rest. rate_point_by_default (`ecrf train`): without --lambda-e, --rate or
 // --target-size the run trains at the "medium" rate point.
 trainer::TrainOptions TrainOptionsFromArgs(int argc, char** argv, std::vector<int>* rest,

@@ -15,12 +15,13 @@ namespace ecrf {
 namespace tools {
 namespace {
 
-trainer::TrainOptions Parse(std::vector<std::string> args, std::vector<int>* rest = nullptr) {
+trainer::TrainOptions Parse(std::vector<std::string> args, std::vector<int>* rest = nullptr,
+                            bool rate_point_by_default = false) {
   args.insert(args.begin(), "train");
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());
   std::vector<int> ignored;
-  return TrainOptionsFromArgs(int(argv.size()), argv.data(), rest ? rest : &ignored);
+  return TrainOptionsFromArgs(int(argv.size()), argv.data(), rest ? rest : &ignored, rate_point_by_default);
 }
 
 TEST(TrainFlags, RateStartAndSceneTypeAreReadAndChecked) {
@@ -93,6 +94,27 @@ TEST(TrainFlags, UpsampleAtAndMaskAtMoveTheScheduleAndTheRatePhaseFollows) {
       Parse({"--upsample-at", "100,200,300,400,500", "--mask-at", "200,600", "--rate-start", "0.1"});
   EXPECT_EQ(early.alpha_mask_iters, (std::vector<int>{200, 600}));
   EXPECT_EQ(trainer::RateStartIteration(early), 601);
+}
+
+TEST(TrainFlags, ARatePointIsADefaultThatOtherFlagsOverrideInAnyOrder) {
+  // The low point sets lambda_e, the steps, the head, the components and the grid schedule;
+  // flags given before or after it win alike.
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"--rate", "low", "--final-grid", "200", "--rate-start", "0.8", "--lambda-e", "3e-10"},
+        std::vector<std::string>{"--final-grid", "200", "--rate-start", "0.8", "--lambda-e", "3e-10", "--rate", "low"}}) {
+    const trainer::TrainOptions o = Parse(args, nullptr, /*rate_point_by_default=*/true);
+    EXPECT_EQ(o.voxels_final, 200L * 200 * 200);
+    EXPECT_FLOAT_EQ(o.rate_start, 0.8f);
+    EXPECT_FLOAT_EQ(o.lambda_e, 3e-10f);
+    EXPECT_EQ(o.quant_step_scale, 4.0f);  // the point's, not given
+    EXPECT_EQ(o.mlp_levels, 15);
+  }
+  // Without a rate flag the medium point applies; --lambda-e alone keeps the preset's steps.
+  EXPECT_FLOAT_EQ(Parse({}, nullptr, true).lambda_e, 2e-11f);
+  EXPECT_EQ(Parse({}, nullptr, true).quant_step_scale, 3.0f);
+  EXPECT_EQ(Parse({"--lambda-e", "0"}, nullptr, true).quant_step_scale, 1.0f);
+  EXPECT_THROW(Parse({"--rate", "extreme"}), std::invalid_argument);
+  EXPECT_THROW(Parse({"--rate"}), std::invalid_argument);
 }
 
 }  // namespace
