@@ -110,7 +110,7 @@ TEST(TrainFlags, ARatePointIsADefaultThatOtherFlagsOverrideInAnyOrder) {
     EXPECT_EQ(o.mlp_levels, 15);
   }
   // Without a rate flag the medium point applies; --lambda-e alone keeps the preset's steps.
-  EXPECT_FLOAT_EQ(Parse({}, nullptr, true).lambda_e, 2e-11f);
+  EXPECT_FLOAT_EQ(Parse({}, nullptr, true).lambda_e, 3e-11f);
   EXPECT_EQ(Parse({}, nullptr, true).quant_step_scale, 3.0f);
   EXPECT_EQ(Parse({"--lambda-e", "0"}, nullptr, true).quant_step_scale, 1.0f);
   EXPECT_THROW(Parse({"--rate", "extreme"}), std::invalid_argument);

@@ -93,12 +93,24 @@ TEST(RatePoints, NamedPointsSetLambdaStepsAndMlpLevels) {
   TrainOptions tiny = PresetOptions("tiny");  // already below 32 appearance components
   ApplyRatePoint("low", &tiny);
   EXPECT_EQ(tiny.appearance_rank, 24);
-  EXPECT_EQ(RateStartIteration(tiny), 701);  // the last mask update (700) comes after 533
-  ApplyRatePoint("medium", &o);
-  EXPECT_EQ(o.lambda_e, 2e-11f);
-  EXPECT_EQ(o.quant_step_scale, 3.0f);
-  ApplyRatePoint("high", &o);
-  EXPECT_EQ(o.quant_step_scale, 1.0f);
+  EXPECT_EQ(tiny.mlp_levels, 15);
+  // tiny keeps its grid schedule at every rate point (fine_grid_at_rate_points).
+  EXPECT_EQ(tiny.voxels_final, PresetOptions("tiny").voxels_final);
+  EXPECT_EQ(tiny.upsample_iters, PresetOptions("tiny").upsample_iters);
+  EXPECT_EQ(RateStartIteration(tiny), RateStartIteration(PresetOptions("tiny")));
+  TrainOptions medium = PresetOptions("fast");
+  ApplyRatePoint("medium", &medium);
+  EXPECT_EQ(medium.lambda_e, 3e-11f);
+  EXPECT_EQ(medium.quant_step_scale, 3.0f);
+  EXPECT_EQ(medium.mlp_levels, 31);
+  EXPECT_EQ(medium.appearance_rank, 48);
+  EXPECT_EQ(medium.voxels_final, 220L * 220 * 220);  // the low point's grid schedule
+  EXPECT_EQ(RateStartIteration(medium), 1001);
+  TrainOptions high = PresetOptions("fast");
+  ApplyRatePoint("high", &high);
+  EXPECT_EQ(high.quant_step_scale, 1.0f);
+  EXPECT_EQ(high.voxels_final, 180L * 180 * 180);  // the preset's schedule
+  EXPECT_EQ(RateStartIteration(high), RateStartIteration(PresetOptions("fast")));
   EXPECT_THROW(ApplyRatePoint("extreme", &o), std::invalid_argument);
 }
 
@@ -113,7 +125,7 @@ TEST(RatePoints, TargetSizeTakesTheStepsOfTheNearestRatePoint) {
     int appearance_rank;
     long voxels_final;
   } cases[] = {{300000, 4.f, 15, 32, 220L * 220 * 220},
-               {600000, 3.f, 127, 48, 180L * 180 * 180},
+               {600000, 3.f, 31, 48, 220L * 220 * 220},
                {1000000, 2.f, 127, 48, 180L * 180 * 180},
                {5000000, 2.f, 127, 48, 180L * 180 * 180}};
   for (const Case& c : cases) {
