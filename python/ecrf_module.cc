@@ -261,10 +261,16 @@ py::array Render(Scene& s, const py::array_t<float, py::array::c_style | py::arr
   return std::move(out);
 }
 
+// Degrees, as `ecrf render --elevation` and the web viewer take them, to the radians of the
+// orbit: in float64, rounded once to float32, exactly as tools/cmd_render.cc (OrbitRadians) and
+// tools/web/camera_controls.js convert, so that the same degrees give the same camera bit for bit.
+float OrbitRadians(double degrees) { return static_cast<float>(degrees * M_PI / 180.0); }
+
 // SPEC.md 7.1 (informative): the reference tools' orbit, in binary32 with the C library's
 // sin/cos/tan, so that it reproduces the conformance cameras.
-py::tuple OrbitCamera(int width, int height, float az, float el, float radius) {
+py::tuple OrbitCamera(int width, int height, double azimuth_deg, double elevation_deg, float radius) {
   if (width <= 0 || height <= 0 || !(radius > 0.f)) throw py::value_error("bad orbit camera");
+  const float az = OrbitRadians(azimuth_deg), el = OrbitRadians(elevation_deg);
   const float pos[3] = {radius * std::cos(el) * std::cos(az), radius * std::cos(el) * std::sin(az),
                         radius * std::sin(el)};
   const float z[3] = {pos[0] / radius, pos[1] / radius, pos[2] / radius};
@@ -329,7 +335,9 @@ PYBIND11_MODULE(ecrf, m) {
   m.def("decode", &Decode, py::arg("data"), py::arg("storage") = "float32",
         py::arg("memory_budget") = py::none(),
         "Decodes an .ecrf stream from bytes-like data or a path; raises ecrf.DecodeError");
-  m.def("orbit_camera", &OrbitCamera, py::arg("width"), py::arg("height"), py::arg("azimuth"),
-        py::arg("elevation"), py::arg("radius"),
-        "(c2w 3x4 float32, fx, fy, cx, cy) of the reference tools' orbit camera (angles in radians)");
+  m.def("orbit_camera", &OrbitCamera, py::arg("width"), py::arg("height"), py::arg("azimuth_deg"),
+        py::arg("elevation_deg"), py::arg("radius"),
+        "(c2w 3x4 float32, fx, fy, cx, cy) of the reference tools' orbit camera. Angles in degrees, as "
+        "`ecrf render --elevation` and the web viewer: frame k of `ecrf render --orbit N` is "
+        "orbit_camera(W, H, 360.0 * k / N, elevation_deg, radius), bit for bit.");
 }

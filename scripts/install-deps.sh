@@ -4,7 +4,7 @@
 set -euo pipefail
 # python3-matplotlib draws the plots of `ecrf report` (which works without it: tables and CSV).
 packages=(build-essential cmake ninja-build pkg-config libgtest-dev libeigen3-dev libpng-dev
-          libjpeg-dev libzstd-dev nlohmann-json3-dev zstd python3-matplotlib)
+          libjpeg-dev libzstd-dev nlohmann-json3-dev libcli11-dev zstd python3-matplotlib)
 if [ "${1:-}" = "--test" ]; then
   # clang and emscripten build the decoder for scripts/conformance-matrix.sh and the web viewer;
   # chromium runs the viewer's browser tests; pybind11, python3-dev and numpy the Python module.

@@ -8,14 +8,16 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs="$(nproc)"
 
-echo "== release build (-O2) and tests"
-cmake -S . -B build-test -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DECRF_NATIVE=ON \
+# The same build/ as scripts/build.sh (Release, tuned for this CPU), with the Python module: after
+# this command build/tools/ecrf is there, and every command the README shows next works as written.
+echo "== release build (build/, as scripts/build.sh) and tests"
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DECRF_NATIVE="${ECRF_NATIVE:-ON}" \
       -DECRF_BUILD_PYTHON=ON -DPython_EXECUTABLE=/usr/bin/python3 -DCMAKE_INSTALL_LIBDIR=lib >/dev/null
-cmake --build build-test -j"$jobs"
-ctest --test-dir build-test -j"$jobs" --output-on-failure
+cmake --build build -j"$jobs"
+ctest --test-dir build -j"$jobs" --output-on-failure
 
 echo "== install tree: CMake package, pkg-config, C and C++ examples, ABI, Python module"
-ECRF_INSTALL_BUILD_DIR=build-test ECRF_JOBS="$jobs" bash scripts/test-install.sh
+ECRF_INSTALL_BUILD_DIR=build ECRF_JOBS="$jobs" bash scripts/test-install.sh
 
 echo "== format/ and decoder/ as the main job builds them (Release -O3, -Werror sees more there)"
 cmake -S . -B build-embedded -G Ninja -DCMAKE_BUILD_TYPE=Release -DECRF_NATIVE=ON \

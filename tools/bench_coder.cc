@@ -165,6 +165,13 @@ std::vector<uint8_t> EncodeSymbols(const std::vector<uint8_t>& symbols) {
 }  // namespace
 
 int RunCoderBench(int argc, char** argv) {
+  std::string json;
+  const int rc = ParseJsonOnlyCommandLine(
+      "bench coder",
+      "speed of the range coder and the coefficient coder (one thread), and how the coefficient coder compresses "
+      "compared with the order-0 entropy of the same int8 values and with zstd -19",
+      argc, argv, &json);
+  if (rc >= 0) return rc;
   BenchReport report;
   const std::vector<uint8_t> symbols = SkewedSymbols(1 << 20);
   const std::vector<uint8_t> symbol_stream = EncodeSymbols(symbols);
@@ -206,7 +213,6 @@ int RunCoderBench(int argc, char** argv) {
   }
   if (!exact) std::fprintf(stderr, "ecrf bench coder: DECODE MISMATCH\n");
 
-  const std::string json = JsonPathFromArgs(argc, argv);
   if (!json.empty() && !report.WriteJson(json)) {
     std::fprintf(stderr, "ecrf bench coder: cannot write %s\n", json.c_str());
     return 1;

@@ -111,6 +111,13 @@ double DecodePlusIdctPerSecond(const std::vector<int32_t>& blocks, const int dim
 }  // namespace
 
 int RunIdctBench(int argc, char** argv) {
+  std::string json;
+  const int rc = ParseJsonOnlyCommandLine(
+      "bench idct",
+      "integer inverse DCT throughput on 16x16x16 blocks (dense, typical sparse, all-zero) and 1x8x8 line blocks, "
+      "one thread, alone and after the coefficient decoder, against the float64 reference transform",
+      argc, argv, &json);
+  if (rc >= 0) return rc;
   BenchReport report;
   std::printf("integer inverse DCT, one thread (coefficients per second, input included)\n");
   const int cube[3] = {16, 16, 16};
@@ -130,7 +137,6 @@ int RunIdctBench(int argc, char** argv) {
   report.Add("decode_plus_idct_1x8x8_lines_mcoef_per_s", DecodePlusIdctPerSecond(lines, line) / 1e6, "M/s");
   report.Add("float64_idct_16x16x16_dense_mcoef_per_s", FloatCoefficientsPerSecond(dense, cube) / 1e6,
              "M/s");
-  const std::string json = JsonPathFromArgs(argc, argv);
   if (!json.empty() && !report.WriteJson(json)) {
     std::fprintf(stderr, "ecrf bench idct: cannot write %s\n", json.c_str());
     return 1;

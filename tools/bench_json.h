@@ -1,10 +1,13 @@
-// Figures printed by a benchmark and optionally written as a flat JSON object (--json FILE).
+// Figures printed by a benchmark and optionally written as a flat JSON object (--json FILE), and
+// the command-line pieces the benchmarks share.
 #ifndef ECRF_TOOLS_BENCH_JSON_H_
 #define ECRF_TOOLS_BENCH_JSON_H_
 
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "tools/cli.h"
 
 namespace ecrf {
 namespace tools {
@@ -20,8 +23,16 @@ class BenchReport {
   std::vector<std::pair<std::string, double>> figures_;
 };
 
-// Finds "--json FILE" in argv; empty when absent.
-std::string JsonPathFromArgs(int argc, char** argv);
+// --threads LIST for the benchmarks that measure several thread counts one after the other:
+// "1,2,0" (0 = all cores, as --threads elsewhere), checked while parsing.
+CLI::Option* AddThreadListFlag(CLI::App* app, std::string* list);
+// The counts of a list that AddThreadListFlag accepted, 0 replaced by AllCores().
+std::vector<int> ThreadCounts(const std::string& list);
+
+// Parses the command line of a benchmark whose only flag is --json FILE (into *json_path).
+// Returns -1 to run, else the exit code (tools/cli.h's ParseCommandLine).
+int ParseJsonOnlyCommandLine(const std::string& name, const std::string& description, int argc, char** argv,
+                             std::string* json_path);
 
 }  // namespace tools
 }  // namespace ecrf

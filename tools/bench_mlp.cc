@@ -1,10 +1,7 @@
 // `ecrf bench mlp`: throughput of the appearance MLP (AppearanceHead, on SmallGemm) and Adam
 // against this CPU's measured single-precision FMA peak, with Eigen's GEMM on the shape of the
-// first MLP layer for comparison.
-//
-//   ecrf bench mlp [--n 131072] [--threads 1,2] [--reps 5] [--chunk 256] [--adam 20000000]
-//                  [--best] [--json out.json]
-// Times are medians of --reps runs, or the fastest run with --best.
+// first MLP layer for comparison. Times are medians of --reps runs, or the fastest run with
+// --best; flags and their defaults: `ecrf bench mlp --help`.
 #include <omp.h>
 
 #include <Eigen/Core>
@@ -12,14 +9,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
-#include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <string>
 #include <vector>
 
+#include "tools/bench_json.h"
 #include "tools/cpu_peak.h"
 #include "trainer/adam.h"
 #include "trainer/appearance_head.h"
@@ -51,55 +47,37 @@ double MedianSeconds(int reps, F&& f) {
   return g_use_best ? t.front() : t[t.size() / 2];
 }
 
-std::vector<int> ParseList(const char* s) {
-  std::vector<int> out;
-  std::string str(s);
-  size_t pos = 0;
-  while (pos <= str.size()) {
-    const size_t comma = std::min(str.find(',', pos), str.size());
-    if (comma > pos) out.push_back(std::atoi(str.substr(pos, comma - pos).c_str()));
-    pos = comma + 1;
-  }
-  return out;
-}
-
 }  // namespace
 
 int RunMlpBench(int argc, char** argv) {
   int n = 131072, reps = 5, chunk = 256;
   long adam_size = 20000000;
-  std::vector<int> thread_counts = {1, std::max(1, omp_get_max_threads())};
-  std::string json_path;
-  for (int i = 1; i < argc; ++i) {
-    const bool has_value = i + 1 < argc;
-    if (!std::strcmp(argv[i], "--n") && has_value) {
-      n = std::atoi(argv[++i]);
-    } else if (!std::strcmp(argv[i], "--reps") && has_value) {
-      reps = std::max(1, std::atoi(argv[++i]));
-    } else if (!std::strcmp(argv[i], "--chunk") && has_value) {
-      chunk = std::atoi(argv[++i]);
-    } else if (!std::strcmp(argv[i], "--threads") && has_value) {
-      thread_counts = ParseList(argv[++i]);
-    } else if (!std::strcmp(argv[i], "--adam") && has_value) {
-      adam_size = std::atol(argv[++i]);
-    } else if (!std::strcmp(argv[i], "--best")) {
-      g_use_best = true;
-    } else if (!std::strcmp(argv[i], "--json") && has_value) {
-      json_path = argv[++i];
-    } else {
-      std::fprintf(stderr,
-                   "usage: ecrf bench mlp [--n N] [--threads 1,2] [--reps R] [--chunk ROWS] "
-                   "[--adam FLOATS] [--best] [--json PATH]\n");
-      return 2;
-    }
-  }
-  thread_counts.erase(std::remove_if(thread_counts.begin(), thread_counts.end(),
-                                     [](int t) { return t < 1; }),
-                      thread_counts.end());
-  if (n < 1 || thread_counts.empty()) {
-    std::fprintf(stderr, "bench mlp: need --n >= 1 and at least one thread count\n");
-    return 2;
-  }
+  std::string threads = "1," + std::to_string(std::max(1, omp_get_max_threads())), json_path;
+  auto app = MakeCommand("bench mlp",
+                         "throughput of the appearance MLP (AppearanceHead, on SmallGemm) and Adam against this "
+                         "CPU's measured single-precision FMA peak, with Eigen's GEMM on the shape of the first MLP "
+                         "layer for comparison; times are medians of --reps runs, or the fastest with --best");
+  app->add_option("--n", n, "rows (samples) per forward/backward")
+      ->type_name("N")
+      ->check(CLI::Range(1, 1 << 26))
+      ->capture_default_str();
+  AddThreadListFlag(app.get(), &threads);
+  app->add_option("--reps", reps, "timed runs per figure (after one warm-up run)")
+      ->type_name("R")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  app->add_option("--chunk", chunk, "the head's rows per chunk (at least 16 are used)")
+      ->type_name("ROWS")
+      ->check(CLI::Range(1, 1 << 26))
+      ->capture_default_str();
+  app->add_option("--adam", adam_size, "parameters of the Adam step measured (0 = no Adam figure)")
+      ->type_name("FLOATS")
+      ->check(CLI::Range(0L, 1L << 32))
+      ->capture_default_str();
+  app->add_flag("--best", g_use_best, "report the fastest run instead of the median (steadier on a shared machine)");
+  app->add_option("--json", json_path, "also write the figures as JSON")->type_name("FILE");
+  if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
+  const std::vector<int> thread_counts = ThreadCounts(threads);
   const int saved_threads = omp_get_max_threads();
   const int saved_eigen_threads = Eigen::nbThreads();
 

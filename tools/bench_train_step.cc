@@ -1,26 +1,14 @@
 // `ecrf bench train`: times one training iteration as the trainer runs it (zero the gradients,
 // TrainStep = forward + backward incl. the appearance head, density L1, Adam on grids and head)
 // on a synthetic Blender-like scene: aabb [-1.5,1.5]^3, cameras on a sphere of radius 4, an
-// opaque soft blob in the middle of a randomly initialised VM-192 field.
-//
-//   --res N          grid resolution per axis (128)
-//   --rays N         rays per batch (4096)
-//   --reps N         timed steps per configuration (5, after one warm-up step)
-//   --threads LIST   comma-separated thread counts (1,2)
-//   --mask 0|1       update the alpha mask (and shrink) before timing (0: no mask)
-//   --early-stop T   early_stop_transmittance (0)
-//   --blob-peak F    peak density feature of the blob (14); larger -> more opaque -> fewer
-//                    appearance samples per ray (e.g. 40 gives about the 0.14 M of the reference
-//                    PyTorch run's iterations 150-320)
-//   --json FILE      also write the figures of the last thread count as JSON
+// opaque soft blob in the middle of a randomly initialised VM-192 field. Flags and their
+// defaults: `ecrf bench train --help`.
 #include <omp.h>
 #include <sys/resource.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
-#include <cstring>
 #include <random>
 #include <string>
 #include <vector>
@@ -99,43 +87,41 @@ void MakeRays(int n, uint32_t seed, std::vector<float>* o, std::vector<float>* d
 int RunTrainStepBench(int argc, char** argv) {
   int res = 128, rays = 4096, reps = 5, mask = 0;
   float early = 0.f, blob_peak = 14.f;
-  std::string threads_arg = "1,2", json_path;
-  for (int i = 1; i < argc; ++i) {
-    auto next = [&](const char* name) -> const char* {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "%s needs a value\n", name);
-        std::exit(2);
-      }
-      return argv[++i];
-    };
-    if (!std::strcmp(argv[i], "--res")) res = std::atoi(next("--res"));
-    else if (!std::strcmp(argv[i], "--rays")) rays = std::atoi(next("--rays"));
-    else if (!std::strcmp(argv[i], "--reps")) reps = std::atoi(next("--reps"));
-    else if (!std::strcmp(argv[i], "--threads")) threads_arg = next("--threads");
-    else if (!std::strcmp(argv[i], "--mask")) mask = std::atoi(next("--mask"));
-    else if (!std::strcmp(argv[i], "--early-stop")) early = static_cast<float>(std::atof(next("--early-stop")));
-    else if (!std::strcmp(argv[i], "--blob-peak")) blob_peak = static_cast<float>(std::atof(next("--blob-peak")));
-    else if (!std::strcmp(argv[i], "--json")) json_path = next("--json");
-    else {
-      std::fprintf(stderr,
-                   "unknown argument %s\nusage: ecrf bench train [--res N] [--rays N] [--reps N] "
-                   "[--threads 1,2] [--mask 0|1] [--early-stop T] [--blob-peak F] [--json FILE]\n",
-                   argv[i]);
-      return 2;
-    }
-  }
-  std::vector<int> thread_counts;
-  for (size_t pos = 0; pos < threads_arg.size();) {
-    size_t comma = threads_arg.find(',', pos);
-    if (comma == std::string::npos) comma = threads_arg.size();
-    thread_counts.push_back(std::atoi(threads_arg.substr(pos, comma - pos).c_str()));
-    pos = comma + 1;
-  }
-  if (res < 2 || rays < 1 || reps < 1 || thread_counts.empty() ||
-      *std::min_element(thread_counts.begin(), thread_counts.end()) < 1) {
-    std::fprintf(stderr, "bench train: need --res >= 2, --rays >= 1, --reps >= 1, threads >= 1\n");
-    return 2;
-  }
+  std::string threads = "1,2", json_path;
+  auto app = MakeCommand("bench train",
+                         "times one training iteration as the trainer runs it (zero the gradients, forward + "
+                         "backward incl. the appearance head, density L1, Adam on grids and head) on a synthetic "
+                         "Blender-like scene: an opaque soft blob in a randomly initialised VM-192 field");
+  app->add_option("--res", res, "grid resolution per axis")
+      ->type_name("N")
+      ->check(CLI::Range(2, 1024))
+      ->capture_default_str();
+  app->add_option("--rays", rays, "rays per batch")
+      ->type_name("N")
+      ->check(CLI::Range(1, 1 << 24))
+      ->capture_default_str();
+  app->add_option("--reps", reps, "timed steps per thread count (after one warm-up step)")
+      ->type_name("N")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  AddThreadListFlag(app.get(), &threads);
+  app->add_option("--mask", mask, "update the alpha mask (and shrink) before timing (0: no mask)")
+      ->type_name("0|1")
+      ->check(CLI::Range(0, 1))
+      ->capture_default_str();
+  app->add_option("--early-stop", early, "early_stop_transmittance of the ray marching")
+      ->type_name("T")
+      ->check(CLI::Range(0.0f, 1.0f))
+      ->capture_default_str();
+  app->add_option("--blob-peak", blob_peak,
+                  "peak density feature of the blob; larger -> more opaque -> fewer appearance samples per ray "
+                  "(e.g. 40 gives about the 0.14 M of the reference PyTorch run's iterations 150-320)")
+      ->type_name("F")
+      ->check(CLI::Range(0.0f, 1000.0f))
+      ->capture_default_str();
+  app->add_option("--json", json_path, "also write the figures of the last thread count as JSON")->type_name("FILE");
+  if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
+  const std::vector<int> thread_counts = ThreadCounts(threads);
 
   TensorfConfig config;
   config.early_stop_transmittance = early;

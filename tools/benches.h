@@ -5,6 +5,9 @@
 namespace ecrf {
 namespace tools {
 
+// `ecrf bench <what>`: argv[0] is "bench", argv[1] the benchmark's name.
+int RunBench(int argc, char** argv);
+
 // argv[0] is the subcommand name ("coder", "train", ...). Returns a process exit code.
 int RunCoderBench(int argc, char** argv);
 int RunIdctBench(int argc, char** argv);

@@ -11,7 +11,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <iterator>
 #include <fstream>
 #include <map>
@@ -22,6 +21,7 @@
 #include "tests/common/coef_vectors.h"
 #include "tests/common/conformance_camera.h"
 #include "tests/common/scene_vectors.h"
+#include "tools/cli.h"
 #include "tools/commands.h"
 #include "tools/conformance_manifest.h"
 #include "tools/decoded_scene.h"
@@ -179,17 +179,30 @@ int CheckOrWriteScenes(const std::string& dir, bool write, bool retrain, json* m
 }  // namespace
 
 int RunConformance(int argc, char** argv) {
-  if (argc == 2 && (!std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h"))) {
-    std::printf("usage: ecrf conformance --write DIR [--retrain-builtin] | --check DIR\n");
-    return 0;
-  }
-  const bool retrain = argc == 4 && !std::strcmp(argv[3], "--retrain-builtin");
-  if ((argc != 3 && !retrain) || (std::strcmp(argv[1], "--write") && std::strcmp(argv[1], "--check"))) {
-    std::fprintf(stderr, "usage: ecrf conformance --write DIR [--retrain-builtin] | --check DIR\n");
+  std::string write_dir, check_dir;
+  bool retrain = false;
+  auto app = MakeCommand("conformance",
+                         "rebuild (--write DIR) or check (--check DIR) the conformance vectors of tests/conformance: "
+                         "their MD5s, that this encoder still writes them byte for byte (if not, the format "
+                         "changed), and the reference renders within the tolerance of SPEC.md 7.7");
+  CLI::Option* write_flag =
+      app->add_option("--write", write_dir, "write every vector, its checksums and manifest.json into DIR")
+          ->type_name("DIR");
+  CLI::Option* check_flag =
+      app->add_option("--check", check_dir, "check the vectors in DIR against their manifest")->type_name("DIR");
+  write_flag->excludes(check_flag);
+  app->add_flag("--retrain-builtin", retrain,
+                "with --write: retrain scene_builtin.ecrf (training is not bit-reproducible across compilers, "
+                "so --write keeps the existing one otherwise)")
+      ->needs(write_flag);
+  if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
+  if (write_dir.empty() && check_dir.empty()) {
+    std::fprintf(stderr, "%s: error: needs --write DIR or --check DIR; see '%s --help'\n", app->get_name().c_str(),
+                 app->get_name().c_str());
     return 2;
   }
-  const bool write = !std::strcmp(argv[1], "--write");
-  const std::string dir = argv[2];
+  const bool write = !write_dir.empty();
+  const std::string dir = write ? write_dir : check_dir;
   json stored = json::object();
   if (!write) {
     const std::vector<uint8_t> text = trainer::ReadWholeFile(dir + "/manifest.json");

@@ -1,131 +1,147 @@
-// `ecrf encode RUN_DIR -o scene.ecrf`: a trained checkpoint -> an .ecrf stream.
+// `ecrf encode RUN_DIR -o scene.ecrf`: a trained run -> an .ecrf stream.
+//
+// A run's checkpoint stores its resolved configuration (trainer/train_config.h): the encoder
+// settings come from it, so `encode RUN` writes the bytes `ecrf train` wrote unless a flag changes
+// a setting, and then it says which.
 #include <cstdio>
-#include <cstring>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
 
+#include "tools/cli.h"
 #include "tools/cli_args.h"
 #include "tools/commands.h"
 #include "tools/encode_report.h"
+#include "tools/encode_run.h"
 #include "trainer/checkpoint.h"
-#include "trainer/encode_rate_control.h"
-#include "trainer/scene_encoder.h"
+#include "trainer/train_config.h"
 #include "trainer/trainer.h"
 
 namespace ecrf {
 namespace tools {
-namespace {
-
-const char kEncodeUsage[] =
-    "usage: ecrf encode RUN_DIR|CHECKPOINT -o SCENE.ecrf [options]\n"
-    "  --coef-bits 8|16     coefficient depth (default 8)\n"
-    "  --mlp-f32            store the basis and MLP as float32 (default float16)\n"
-    "  --target-size SIZE   the largest file of at most SIZE (e.g. 500KB, 1.2MB) by scaling every\n"
-    "                       quantization step by one factor (searched)\n"
-    "  --mlp-levels L       store them as integer levels, at most L per row, range-coded (MLPW\n"
-    "                       precision 2, bitstream 1.1; e.g. 31)\n"
-    "  --rounding-offset X  coefficient quantizer: floor(|c| / step + X), 0 < X <= 0.5 (default: the\n"
-    "                       one the run trained through, else 0.5; smaller widens the dead zone)\n"
-    "  --max-version 1.N    write a stream decoders of 1.N read (default 1.4; 1.0-1.3 use the\n"
-    "                       older coefficient contexts, 2-3.5% more coefficient bytes)\n"
-    "  --no-drop            keep rank components that decode to zero\n"
-    "  --no-occupancy       leave the alpha mask out\n"
-    "  --dct-block CxHxW    plane blocks when the checkpoint has no trained rate (default 16x16x16)\n"
-    "  --line-block CxL     line blocks likewise (default 8x8)\n";
-
-}  // namespace
 
 int RunEncode(int argc, char** argv) {
-  std::string input, output;
-  trainer::EncodeOptions o;
-  bool blocks_given = false, offset_given = false;
-  size_t target_bytes = 0;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&] { return FlagValue(argc, argv, &i); };
-    if (a == "--help" || a == "-h") {
-      std::fputs(kEncodeUsage, stdout);
-      return 0;
-    } else if (a == "-o" || a == "--out") {
-      output = value();
-    } else if (a == "--coef-bits") {
-      o.coef_bits = ParseInt("--coef-bits", value());
-    } else if (a == "--target-size") {
-      target_bytes = trainer::ParseByteSize(value());
-    } else if (a == "--mlp-levels") {
-      o.mlp_max_level = std::max(1, ParseInt("--mlp-levels", value()));
-    } else if (a == "--mlp-f32") {
-      o.mlp_float32 = true;
-    } else if (a == "--rounding-offset") {
-      o.rounding_offset = ParseFloat("--rounding-offset", value());
-      offset_given = true;
-    } else if (a == "--max-version") {
-      const std::string v = value();
-      const size_t dot = v.find('.');
-      const std::string minor = dot == std::string::npos ? "" : v.substr(dot + 1);
-      if (v.substr(0, dot) != "1" || minor.size() != 1 || minor[0] < '0' || minor[0] > '0' + kVersionMinor) {
-        std::fprintf(stderr, "ecrf encode: --max-version '%s' is not 1.0 .. 1.%d\n", v.c_str(), kVersionMinor);
-        return 2;
-      }
-      o.max_version_minor = minor[0] - '0';
-    } else if (a == "--no-drop") {
-      o.drop_zero_components = false;
-    } else if (a == "--no-occupancy") {
-      o.include_occupancy = false;
-    } else if (a == "--dct-block") {
-      ParseShape("--dct-block", value(), 3, o.blocks.plane_block);
-      blocks_given = true;
-    } else if (a == "--line-block") {
-      int shape[2];
-      ParseShape("--line-block", value(), 2, shape);
-      o.blocks.line_block[1] = shape[0];
-      o.blocks.line_block[2] = shape[1];
-      blocks_given = true;
-    } else if (!a.empty() && a[0] == '-') {
-      std::fprintf(stderr, "ecrf encode: unknown option '%s'\n\n%s", a.c_str(), kEncodeUsage);
-      return 2;
-    } else if (input.empty()) {
-      input = a;
-    } else {
-      std::fprintf(stderr, "ecrf encode: more than one input\n\n%s", kEncodeUsage);
-      return 2;
-    }
-  }
-  if (input.empty() || output.empty()) {
-    std::fprintf(stderr, "ecrf encode: needs an input and -o\n\n%s", kEncodeUsage);
+  auto app = MakeCommand("encode",
+                         "Encodes a trained run (its checkpoint) into an .ecrf file, with the settings the run was "
+                         "trained with; the flags below change them.\n"
+                         "usage: ecrf encode RUN_DIR|CHECKPOINT -o SCENE.ecrf [options]");
+  std::string input, output, target_size, dct_block, line_block, max_version;
+  trainer::EncodeOptions defaults;
+  int coef_bits = defaults.coef_bits, mlp_levels = 0;
+  float rounding_offset = defaults.rounding_offset;
+  bool mlp_f32 = false, no_drop = false, no_occupancy = false;
+  app->add_option("run", input, "run directory (or its checkpoint.ckpt)")->required()->type_name("RUN_DIR");
+  app->add_option("-o,--out", output, "the .ecrf file to write (atomically)")->required()->type_name("SCENE.ecrf");
+  app->add_option("--target-size", target_size,
+                  "the largest file of at most SIZE (units B, KB, MB, KiB, MiB) by scaling every quantization step "
+                  "by one factor (searched); default: the run's --target-size, if any")
+      ->type_name("SIZE");
+  app->add_option("--mlp-levels", mlp_levels,
+                  "code the basis and MLP as integer levels, at most L per row (0 = binary16); default: the run's")
+      ->type_name("L")->check(CLI::Range(0, 32767));
+  app->add_flag("--mlp-f32", mlp_f32, "store the basis and MLP as float32 (with --mlp-levels 0)");
+  app->add_option("--coef-bits", coef_bits, "coefficient depth (16: the 16-bit peak steps, not the trained ones)")
+      ->check(CLI::IsMember({8, 16}))->capture_default_str();
+  app->add_option("--rounding-offset", rounding_offset,
+                  "coefficient quantizer floor(|c| / step + X), 0 < X <= 0.5; default: the one the run trained "
+                  "through")
+      ->type_name("X");
+  app->add_option("--max-version", max_version,
+                  "write a stream decoders of 1.N read (default 1." + std::to_string(kVersionMinor) +
+                      "; 1.0-1.3 use the older coefficient contexts, 2-3.5% more coefficient bytes)")
+      ->type_name("1.N");
+  app->add_flag("--no-drop", no_drop, "keep rank components that decode to zero");
+  app->add_flag("--no-occupancy", no_occupancy, "leave the alpha mask out");
+  app->add_option("--dct-block", dct_block, "plane blocks of a run without a trained rate (default 16x16x16)")
+      ->type_name("CxHxW");
+  app->add_option("--line-block", line_block, "line blocks of such a run (default 8x8)")->type_name("CxL");
+  const int parsed = ParseCommandLine(app.get(), argc, argv);
+  if (parsed >= 0) return parsed;
+  auto given = [&](const char* flag) { return app->count(flag) > 0; };
+  size_t target_flag = 0;
+  try {
+    if (given("--target-size")) target_flag = ParseSizeWithUnit("--target-size", target_size);
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "ecrf encode: error: %s\n", e.what());
     return 2;
   }
+
   const std::string ckpt = IsDirectory(input) ? input + "/checkpoint.ckpt" : input;
+  const trainer::CheckpointRunInfo info = trainer::ReadCheckpointRunInfo(ckpt);
   trainer::RateState rate;
   const trainer::TensorfModel model = trainer::LoadModelFromCheckpoint(ckpt, &rate);
-  if (rate.active) {
-    // The steps and blocks the rate objective trained for: the trained rate is the file's rate.
-    if (blocks_given) std::fprintf(stderr, "note: using the trained block shapes of %s\n", ckpt.c_str());
-    o.blocks = rate.config;
-    if (o.coef_bits == 8) o.steps = rate.steps;
-    if (!offset_given) o.rounding_offset = rate.rounding_offset;
-  } else if (!blocks_given) {
-    o.blocks = rate.config;  // the run's block shapes (defaults for old checkpoints)
-  }
-  nlohmann::json meta;
-  meta["encoder"] = "ecrf";
-  meta["source"] = ckpt;
-  o.metadata_json = meta.dump();
-  trainer::EncodeReport report;
-  std::vector<uint8_t> bytes;
-  if (target_bytes > 0) {
-    trainer::TargetSizeResult t = trainer::EncodeToTargetSize(model, o, target_bytes);
-    bytes = std::move(t.bytes);
-    report = t.report;
-    std::printf("target %zu bytes: steps x%.4g after %d encodes, %zu bytes (%+.2f%%)\n", target_bytes, t.step_scale,
-                t.encodes, bytes.size(), 100.0 * (double(bytes.size()) / double(target_bytes) - 1.0));
+
+  trainer::EncodeOptions o;
+  size_t target_bytes = 0;
+  if (info.has_config) {
+    // The run's own settings; flags change them, and the user is told which.
+    trainer::TrainOptions config = info.config;
+    if (given("--mlp-levels")) config.mlp_levels = mlp_levels;
+    if (given("--rounding-offset")) config.rounding_offset = rounding_offset;
+    if (given("--coef-bits")) config.coef_bits = coef_bits;
+    if (given("--target-size")) config.target_bytes = target_flag;
+    for (const std::string& c : trainer::ChangedSettings(info.config, config)) {
+      std::fprintf(stderr, "note: the flags change the run's setting %s\n", c.c_str());
+    }
+    o = TrainedRunEncodeOptions(config, rate, info.iteration, info.lambda_e);
+    target_bytes = config.target_bytes;
+    coef_bits = config.coef_bits;
+    if (!rate.active) o.steps.clear();  // a run without the rate objective: the peak steps
   } else {
-    bytes = trainer::EncodeScene(model, o, &report);
+    // A checkpoint of an ecrf older than stored configurations: the flags and defaults alone.
+    std::fprintf(stderr, "note: %s stores no configuration (an older ecrf wrote it): encoding with the flags' "
+                 "settings, which may differ from what that run's `ecrf train` wrote\n", ckpt.c_str());
+    o.blocks = rate.config;
+    if (rate.active) {
+      o.steps = rate.steps;
+      o.rounding_offset = rate.rounding_offset;
+    }
+    o.mlp_max_level = mlp_levels;
+    if (given("--rounding-offset")) o.rounding_offset = rounding_offset;
+    target_bytes = target_flag;
+    nlohmann::json meta;
+    meta["encoder"] = "ecrf";
+    meta["source"] = ckpt;
+    o.metadata_json = meta.dump();
   }
-  trainer::WriteFileAtomically(output, bytes.data(), bytes.size());
-  PrintEncodeReport(stdout, report);
-  std::printf("wrote %s (%zu bytes)\n", output.c_str(), bytes.size());
+  if (!(o.rounding_offset > 0.f && o.rounding_offset <= 0.5f)) {
+    throw std::invalid_argument("--rounding-offset must be in (0, 0.5]");
+  }
+  o.coef_bits = coef_bits;
+  if (coef_bits != 8) o.steps.clear();  // the trained steps are 8-bit steps
+  o.mlp_float32 = mlp_f32;
+  o.drop_zero_components = !no_drop;
+  o.include_occupancy = !no_occupancy;
+  if (given("--max-version")) {
+    const std::string& v = max_version;
+    const size_t dot = v.find('.');
+    const std::string minor = dot == std::string::npos ? "" : v.substr(dot + 1);
+    if (v.substr(0, dot) != "1" || minor.size() != 1 || minor[0] < '0' || minor[0] > '0' + kVersionMinor) {
+      throw std::invalid_argument("--max-version '" + v + "' is not 1.0 .. 1." + std::to_string(kVersionMinor));
+    }
+    o.max_version_minor = minor[0] - '0';
+  }
+  if (given("--dct-block") || given("--line-block")) {
+    if (rate.active) {
+      std::fprintf(stderr, "note: using the trained block shapes of %s\n", ckpt.c_str());
+    } else {
+      if (given("--dct-block")) ParseShape("--dct-block", dct_block, 3, o.blocks.plane_block);
+      if (given("--line-block")) {
+        int shape[2];
+        ParseShape("--line-block", line_block, 2, shape);
+        o.blocks.line_block[1] = shape[0];
+        o.blocks.line_block[2] = shape[1];
+      }
+    }
+  }
+  const EncodedRun e = EncodeRun(model, o, target_bytes);
+  if (target_bytes > 0) {
+    std::printf("target %zu bytes: steps x%.4g after %d encodes, %zu bytes (%+.2f%%)\n", target_bytes, e.step_scale,
+                e.encodes, e.bytes.size(), 100.0 * (double(e.bytes.size()) / double(target_bytes) - 1.0));
+  }
+  trainer::WriteFileAtomically(output, e.bytes.data(), e.bytes.size());
+  PrintEncodeReport(stdout, e.report);
+  std::printf("wrote %s (%zu bytes)\n", output.c_str(), e.bytes.size());
   return 0;
 }
 

@@ -1,9 +1,9 @@
 // `ecrf info SCENE.ecrf [--md5]`: what a stream holds (chunks, sizes, grid, ranks, steps) and,
 // with --md5, the checksums of its decoded grids.
 #include <cstdio>
-#include <cstring>
 #include <string>
 
+#include "tools/cli.h"
 #include "tools/commands.h"
 #include "tools/decoded_scene.h"
 #include "tests/common/grid_md5.h"
@@ -40,23 +40,10 @@ std::string PrintableMetadata(const uint8_t* text, size_t size, size_t limit) {
 int RunInfo(int argc, char** argv) {
   std::string path;
   bool md5 = false;
-  for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
-      std::printf("usage: ecrf info SCENE.ecrf [--md5]\n");
-      return 0;
-    } else if (!std::strcmp(argv[i], "--md5")) {
-      md5 = true;
-    } else if (argv[i][0] == '-' || !path.empty()) {
-      std::fprintf(stderr, "usage: ecrf info SCENE.ecrf [--md5]\n");
-      return 2;
-    } else {
-      path = argv[i];
-    }
-  }
-  if (path.empty()) {
-    std::fprintf(stderr, "usage: ecrf info SCENE.ecrf [--md5]\n");
-    return 2;
-  }
+  auto app = MakeCommand("info", "what a stream holds: chunks, sizes, grid, ranks, quantization steps, metadata");
+  app->add_option("SCENE", path, "the .ecrf stream")->type_name("FILE")->required();
+  app->add_flag("--md5", md5, "also print the MD5 of each decoded grid (SPEC.md 6.5, as the conformance vectors)");
+  if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
   const LoadedScene s = LoadSceneFile(path);
   const dec::SceneInfo& in = s.info;
   const SceneHeader& h = in.header;

@@ -1,13 +1,16 @@
 // `ecrf render SCENE.ecrf (--views transforms_SPLIT.json | --orbit N) -o OUT_DIR`: PNG renders of
 // a decoded stream, and `ecrf eval SCENE.ecrf --data DIR`: PSNR / SSIM against a test split.
+// Both share the renderer's flags; eval names its view selection as `ecrf train` does
+// (--test-stride, --max-test-views, --eval-downscale), and angles are degrees as in the viewer.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
 
+#include "tools/cli.h"
 #include "tools/cli_args.h"
 #include "tools/commands.h"
 #include "tools/decoded_scene.h"
@@ -18,92 +21,86 @@ namespace ecrf {
 namespace tools {
 namespace {
 
-const char kRenderUsage[] =
-    "usage: ecrf render SCENE.ecrf (--views DIR/transforms_SPLIT.json | --orbit N) -o OUT_DIR\n"
-    "  -W N, -H N          image size for --orbit (default 400x400)\n"
-    "  --radius R          orbit radius (default 4)\n"
-    "  --elevation DEG     orbit elevation (default 30)\n"
-    "  --max-views N       render at most N views\n"
-    "  --threads N         render threads (default 1; 0 = all cores)\n"
-    "  --int16             keep the grids in 16-bit fixed point (half the memory)\n";
-
-const char kEvalUsage[] =
-    "usage: ecrf eval SCENE.ecrf (--data DIR | --scene builtin|capture|forward) [options]\n"
-    "  --split NAME        split to score (default test)\n"
-    "  --seed N            the procedural scene's seed (as given to train)\n"
-    "  --downscale N       score at 1/N of the image size (area filter; also for --scene)\n"
-    "  --image-scale K     render at 1/K of the size, score the bilinear upsampling to full size\n"
-    "  --stride K          every K-th view\n"
-    "  --max-views N       at most N views\n"
-    "  --threads N         render threads (default 1; 0 = all cores)\n"
-    "  --int16             16-bit fixed-point grids\n"
-    "  --json FILE         write the figures as JSON\n";
-
-// Speed knobs of the renderer (SPEC.md 7.8), shared by render and eval.
-const char kRenderKnobUsage[] =
-    "speed knobs (SPEC.md 7.8; defaults give the reference image up to early termination):\n"
-    "  --no-skip           do not skip empty space (same image, slower)\n"
-    "  --early-stop T      stop a ray when its transmittance is below T (default 1e-4; 0 = off)\n"
-    "  --samples N         at most N samples per ray (default: the scene's)\n"
-    "  --step-scale S      S x the sample spacing, 1/S the samples (default 1)\n"
-    "  --weight-threshold W  run the MLP only for samples of weight > W (default: the scene's)\n"
-    "budgets against hostile files:\n"
-    "  --max-memory-mb N   refuse scenes whose decoded grids, mask and MLP need more (default 256)\n"
-    "  --sample-budget N   refuse scenes whose rays take more samples (default 16384; 0 = no limit)\n";
-
-void PrintUsage(FILE* out, const char* usage) {
-  std::fputs(usage, out);
-  std::fputs(kRenderKnobUsage, out);
-}
-
 struct CommonArgs {
   std::string scene;
-  int threads = 1;
+  int threads = 0;  // 0: all cores
   bool int16 = false;
-  int max_views = 0;
-  uint64_t max_memory_bytes = dec::kDefaultDecodeMemoryBudget;
+  int max_memory_mb = int(dec::kDefaultDecodeMemoryBudget >> 20);
   dec::RenderOptions render;
 };
 
-// Consumes the flags both commands share; false if argv[i] is not one of them.
-bool ParseCommon(int argc, char** argv, int* i, CommonArgs* c) {
-  const std::string a = argv[*i];
-  auto value = [&] { return FlagValue(argc, argv, i); };
-  if (a == "--threads") {
-    c->threads = ParseInt("--threads", value());
-  } else if (a == "--int16") {
-    c->int16 = true;
-  } else if (a == "--max-views") {
-    c->max_views = ParseInt("--max-views", value());
-  } else if (a == "--no-skip") {
-    c->render.skip_empty_space = false;
-  } else if (a == "--early-stop") {
-    c->render.early_stop_transmittance = ParseFloat("--early-stop", value());
-  } else if (a == "--samples") {
-    c->render.max_samples = ParseInt("--samples", value());
-  } else if (a == "--step-scale") {
-    c->render.step_scale = ParseFloat("--step-scale", value());
-  } else if (a == "--weight-threshold") {
-    c->render.weight_threshold = ParseFloat("--weight-threshold", value());
-  } else if (a == "--max-memory-mb") {
-    const int mb = ParseInt("--max-memory-mb", value());
-    if (mb < 1) throw std::invalid_argument("--max-memory-mb must be at least 1");
-    c->max_memory_bytes = uint64_t(mb) << 20;
-  } else if (a == "--sample-budget") {
-    c->render.sample_budget = ParseInt("--sample-budget", value());
-    if (c->render.sample_budget < 0) throw std::invalid_argument("--sample-budget must be >= 0 (0: no limit)");
-  } else if (a[0] != '-' && c->scene.empty()) {
-    c->scene = a;
-  } else {
-    return false;
-  }
-  return true;
+// A choice between flags that the command line left open: the same one line as a parse error.
+int UsageError(const CLI::App& app, const std::string& message) {
+  std::fprintf(stderr, "%s: error: %s; see '%s --help'\n", app.get_name().c_str(), message.c_str(),
+               app.get_name().c_str());
+  return 2;
+}
+
+// The flags both commands share: the stream, threads, grid storage, the renderer's speed knobs
+// (SPEC.md 7.8) and the budgets against hostile files.
+void AddCommonFlags(CLI::App* app, CommonArgs* c) {
+  app->add_option("SCENE", c->scene, "the .ecrf stream")->type_name("FILE")->required();
+  CLI::Option* threads = AddThreadsFlag(app, &c->threads);
+  threads->description(threads->get_description() + "; the renderer uses at most " +
+                       std::to_string(dec::kMaxRenderThreads));
+  app->add_flag("--int16", c->int16, "keep the grids in 16-bit fixed point (half the memory)");
+  const std::string knobs =
+      "Speed knobs (SPEC.md 7.8; the defaults give the reference image up to early termination)";
+  app->add_flag_callback("--no-skip", [c] { c->render.skip_empty_space = false; },
+                         "do not skip empty space (same image, slower)")
+      ->group(knobs);
+  app->add_option("--early-stop", c->render.early_stop_transmittance,
+                  "stop a ray when its transmittance is below T (0 = off)")
+      ->type_name("T")
+      ->check(CLI::Range(0.0f, 1.0f))
+      ->capture_default_str()
+      ->group(knobs);
+  app->add_option("--samples", c->render.max_samples, "at most N samples per ray (0 = the scene's)")
+      ->type_name("N")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str()
+      ->group(knobs);
+  app->add_option("--step-scale", c->render.step_scale, "S x the sample spacing, 1/S the samples")
+      ->type_name("S")
+      ->check(CLI::Range(dec::kMinStepScale, dec::kMaxStepScale))
+      ->capture_default_str()
+      ->group(knobs);
+  app->add_option("--weight-threshold", c->render.weight_threshold,
+                  "run the MLP only for samples of weight > W")
+      ->type_name("W")
+      ->check(CLI::Range(0.0f, 1.0f))
+      ->default_str("the scene's")
+      ->group(knobs);
+  const std::string budgets = "Budgets against hostile files";
+  app->add_option("--max-memory-mb", c->max_memory_mb,
+                  "refuse scenes whose decoded grids, mask and MLP need more (megabytes)")
+      ->type_name("N")
+      ->check(CLI::Range(1, 1 << 20))
+      ->capture_default_str()
+      ->group(budgets);
+  app->add_option("--sample-budget", c->render.sample_budget,
+                  "refuse scenes whose rays take more samples (0 = no limit)")
+      ->type_name("N")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str()
+      ->group(budgets);
+}
+
+// The renderer's thread count for --threads (0: every core, up to the renderer's limit), so that
+// the figures printed name the count that ran.
+int RenderThreads(const CommonArgs& c) {
+  return std::min(c.threads > 0 ? c.threads : AllCores(), dec::kMaxRenderThreads);
 }
 
 dec::RenderOptions RenderOptionsFor(const CommonArgs& c) {
   dec::RenderOptions o = c.render;
-  o.num_threads = c.threads;
+  o.num_threads = RenderThreads(c);
   return o;
+}
+
+LoadedScene LoadScene(const CommonArgs& c) {
+  return LoadSceneFile(c.scene, c.int16 ? dec::GridStorage::kInt16 : dec::GridStorage::kFloat32,
+                       uint64_t(c.max_memory_mb) << 20);
 }
 
 // "DIR/transforms_test.json" -> DIR, "test".
@@ -119,8 +116,14 @@ void SplitViewsPath(const std::string& path, std::string* dir, std::string* spli
   *split = base.substr(prefix.size(), base.size() - prefix.size() - suffix.size());
 }
 
-trainer::Camera OrbitView(int width, int height, double azimuth, double elevation, double radius) {
-  const dec::Camera d = dec::OrbitCamera(width, height, float(azimuth), float(elevation), float(radius));
+// Degrees (what the command line takes) to the radians of dec::OrbitCamera: in float64, rounded
+// once to float32. The Python module's orbit_camera and the web viewer convert the same way, so a
+// camera given in degrees is the same to the last bit in all three.
+float OrbitRadians(double degrees) { return float(degrees * M_PI / 180.0); }
+
+trainer::Camera OrbitView(int width, int height, double azimuth_deg, double elevation_deg, double radius) {
+  const dec::Camera d =
+      dec::OrbitCamera(width, height, OrbitRadians(azimuth_deg), OrbitRadians(elevation_deg), float(radius));
   trainer::Camera c;
   c.width = width;
   c.height = height;
@@ -143,39 +146,47 @@ double Seconds(std::chrono::steady_clock::time_point start) {
 int RunRender(int argc, char** argv) {
   CommonArgs c;
   std::string views, out;
-  int orbit = 0, width = 400, height = 400;
+  int orbit = 0, width = 400, height = 400, max_views = 0;
   double radius = 4.0, elevation = 30.0;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&] { return FlagValue(argc, argv, &i); };
-    if (a == "--help" || a == "-h") {
-      PrintUsage(stdout, kRenderUsage);
-      return 0;
-    } else if (a == "--views") {
-      views = value();
-    } else if (a == "--orbit") {
-      orbit = ParseInt("--orbit", value());
-    } else if (a == "-W") {
-      width = ParseInt("-W", value());
-    } else if (a == "-H") {
-      height = ParseInt("-H", value());
-    } else if (a == "--radius") {
-      radius = ParseFloat("--radius", value());
-    } else if (a == "--elevation") {
-      elevation = ParseFloat("--elevation", value());
-    } else if (a == "-o" || a == "--out") {
-      out = value();
-    } else if (!ParseCommon(argc, argv, &i, &c)) {
-      std::fprintf(stderr, "ecrf render: unexpected argument '%s'\n", a.c_str());
-      PrintUsage(stderr, kRenderUsage);
-      return 2;
-    }
-  }
-  if (c.scene.empty() || out.empty() || (views.empty() == (orbit == 0)) || width < 1 || height < 1) {
-    std::fprintf(stderr, "ecrf render: needs SCENE.ecrf, -o OUT_DIR and one of --views / --orbit\n\n");
-    PrintUsage(stderr, kRenderUsage);
-    return 2;
-  }
+  auto app = MakeCommand("render", "PNG renders of a decoded stream: the cameras of a dataset split (--views) or "
+                                   "an orbit around the scene (--orbit), one PNG per view");
+  CLI::Option* views_flag =
+      app->add_option("--views", views, "render the cameras of this split file (DIR/transforms_SPLIT.json)")
+          ->type_name("FILE");
+  CLI::Option* orbit_flag =
+      app->add_option("--orbit", orbit, "render N views on a circle around the scene, 360/N degrees apart")
+          ->type_name("N")
+          ->check(CLI::Range(1, 1000000));
+  views_flag->excludes(orbit_flag);
+  app->add_option("-o,--out", out, "the directory for the PNGs (created)")->type_name("DIR")->required();
+  app->add_option("--max-views", max_views, "render at most N views (0 = all)")
+      ->type_name("N")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  const std::string orbit_group = "Orbit (--orbit; the camera looks at the origin, +z up)";
+  app->add_option("-W", width, "image width in pixels")
+      ->type_name("N")
+      ->check(CLI::Range(1, 65536))
+      ->capture_default_str()
+      ->group(orbit_group);
+  app->add_option("-H", height, "image height in pixels")
+      ->type_name("N")
+      ->check(CLI::Range(1, 65536))
+      ->capture_default_str()
+      ->group(orbit_group);
+  app->add_option("--radius", radius, "distance of the camera from the origin (scene units)")
+      ->type_name("R")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str()
+      ->group(orbit_group);
+  app->add_option("--elevation", elevation, "angle of the camera above the xy plane, in degrees")
+      ->type_name("DEG")
+      ->check(CLI::Range(-90.0, 90.0))
+      ->capture_default_str()
+      ->group(orbit_group);
+  AddCommonFlags(app.get(), &c);
+  if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
+  if (views.empty() && orbit == 0) return UsageError(*app, "needs --views FILE or --orbit N");
   std::vector<std::pair<std::string, trainer::Camera>> cameras;
   if (!views.empty()) {
     std::string dir, split;
@@ -191,13 +202,11 @@ int RunRender(int argc, char** argv) {
     for (int k = 0; k < orbit; ++k) {
       char name[32];
       std::snprintf(name, sizeof(name), "orbit_%03d", k);
-      cameras.emplace_back(name, OrbitView(width, height, 2.0 * M_PI * k / orbit,
-                                           elevation * M_PI / 180.0, radius));
+      cameras.emplace_back(name, OrbitView(width, height, 360.0 * k / orbit, elevation, radius));
     }
   }
-  if (c.max_views > 0 && cameras.size() > size_t(c.max_views)) cameras.resize(size_t(c.max_views));
-  const LoadedScene s = LoadSceneFile(c.scene, c.int16 ? dec::GridStorage::kInt16 : dec::GridStorage::kFloat32,
-                                      c.max_memory_bytes);
+  if (max_views > 0 && cameras.size() > size_t(max_views)) cameras.resize(size_t(max_views));
+  const LoadedScene s = LoadScene(c);
   MakeDirectory(out);
   double seconds = 0.0;
   dec::RenderStats stats;
@@ -209,8 +218,8 @@ int RunRender(int argc, char** argv) {
   }
   std::printf("rendered %zu views into %s: %.1f ms/view (%d thread%s), decode %.1f ms, "
               "%.2f M samples/view, %.2f M MLP samples/view\n",
-              cameras.size(), out.c_str(), 1e3 * seconds / std::max<size_t>(1, cameras.size()), c.threads,
-              c.threads == 1 ? "" : "s", 1e3 * s.decode_seconds,
+              cameras.size(), out.c_str(), 1e3 * seconds / std::max<size_t>(1, cameras.size()), RenderThreads(c),
+              RenderThreads(c) == 1 ? "" : "s", 1e3 * s.decode_seconds,
               stats.samples / 1e6 / std::max<size_t>(1, cameras.size()),
               stats.color_samples / 1e6 / std::max<size_t>(1, cameras.size()));
   return 0;
@@ -219,62 +228,67 @@ int RunRender(int argc, char** argv) {
 int RunEval(int argc, char** argv) {
   CommonArgs c;
   std::string data, split = "test", json_path;
-  int stride = 1, downscale = 1, image_scale = 1;
+  int test_stride = 1, max_test_views = 0, eval_downscale = 1, image_scale = 1;
   std::string procedural;  // --scene NAME
   uint32_t seed = trainer::TrainOptions().seed;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&] { return FlagValue(argc, argv, &i); };
-    if (a == "--help" || a == "-h") {
-      PrintUsage(stdout, kEvalUsage);
-      return 0;
-    } else if (a == "--data") {
-      data = value();
-    } else if (a == "--scene") {
-      procedural = value();
-      trainer::TrainOptions check;
-      trainer::SelectProceduralScene(procedural, &check);  // a bad name fails before the scene loads
-    } else if (a == "--seed") {
-      seed = uint32_t(ParseInt("--seed", value()));
-    } else if (a == "--split") {
-      split = value();
-    } else if (a == "--stride") {
-      stride = std::max(1, ParseInt("--stride", value()));
-    } else if (a == "--downscale") {
-      downscale = std::max(1, ParseInt("--downscale", value()));
-    } else if (a == "--image-scale") {
-      image_scale = std::max(1, ParseInt("--image-scale", value()));
-    } else if (a == "--json") {
-      json_path = value();
-    } else if (!ParseCommon(argc, argv, &i, &c)) {
-      std::fprintf(stderr, "ecrf eval: unexpected argument '%s'\n", a.c_str());
-      PrintUsage(stderr, kEvalUsage);
-      return 2;
-    }
-  }
-  if (c.scene.empty() || data.empty() == procedural.empty()) {
-    std::fprintf(stderr, "ecrf eval: needs SCENE.ecrf and one of --data DIR / --scene builtin|capture|forward\n\n");
-    PrintUsage(stderr, kEvalUsage);
-    return 2;
-  }
-  const LoadedScene s = LoadSceneFile(c.scene, c.int16 ? dec::GridStorage::kInt16 : dec::GridStorage::kFloat32,
-                                      c.max_memory_bytes);
-  const trainer::Dataset test = procedural.empty() ? trainer::LoadDataset(data, split, downscale)
-                                                   : trainer::DownscaleViews(ProceduralDataset(procedural, split, seed), downscale);
-  const trainer::EvalResult r = EvaluateDecoded(*s.field, test, stride, c.max_views, RenderOptionsFor(c), false, image_scale);
+  auto app = MakeCommand("eval", "PSNR and SSIM of a decoded stream against the views of a test split, "
+                                 "with the render time per view");
+  CLI::Option* data_flag =
+      app->add_option("--data", data, "the dataset directory (as given to ecrf train)")->type_name("DIR");
+  CLI::Option* scene_flag =
+      app->add_option("--scene", procedural, "a procedural scene as `ecrf train --scene NAME` makes it")
+          ->type_name("NAME")
+          ->check(CLI::IsMember({"builtin", "capture", "forward"}));
+  data_flag->excludes(scene_flag);
+  app->add_option("--split", split, "the split to score")->type_name("NAME")->capture_default_str();
+  app->add_option("--seed", seed, "the procedural scene's seed (as given to train)")
+      ->type_name("N")
+      ->capture_default_str();
+  app->add_option("--test-stride", test_stride, "score every K-th view")
+      ->type_name("K")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
+  app->add_option("--max-test-views", max_test_views, "score at most N views (0 = all)")
+      ->type_name("N")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app->add_option("--eval-downscale", eval_downscale,
+                  "score at 1/N of the image size (area filter; also for --scene), as train's --eval-downscale")
+      ->type_name("N")
+      ->check(CLI::Range(1, 1024))
+      ->capture_default_str();
+  app->add_option("--image-scale", image_scale,
+                  "render at 1/K of the size, score the bilinear upsampling to full size (what a viewer shows "
+                  "while it refines)")
+      ->type_name("K")
+      ->check(CLI::Range(1, 1024))
+      ->capture_default_str();
+  app->add_option("--json", json_path, "write the figures as JSON")->type_name("FILE");
+  AddCommonFlags(app.get(), &c);
+  AddRenamedFlag(app.get(), "--stride", "--test-stride");
+  AddRenamedFlag(app.get(), "--downscale", "--eval-downscale");
+  AddRenamedFlag(app.get(), "--max-views", "--max-test-views");
+  if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
+  if (data.empty() && procedural.empty()) return UsageError(*app, "needs --data DIR or --scene NAME");
+  const LoadedScene s = LoadScene(c);
+  const trainer::Dataset test =
+      procedural.empty() ? trainer::LoadDataset(data, split, eval_downscale)
+                         : trainer::DownscaleViews(ProceduralDataset(procedural, split, seed), eval_downscale);
+  const trainer::EvalResult r =
+      EvaluateDecoded(*s.field, test, test_stride, max_test_views, RenderOptionsFor(c), false, image_scale);
   std::printf("%s: %zu bytes, PSNR %.2f dB, SSIM %.4f over %d %s views; decode %.1f ms, render %.1f ms/view "
               "(%d thread%s, %s grids; %.1f samples, %.1f MLP samples per ray)\n",
               c.scene.c_str(), s.bytes.size(), r.psnr, r.ssim, r.views, split.c_str(), 1e3 * s.decode_seconds,
-              1e3 * r.seconds_per_view, c.threads, c.threads == 1 ? "" : "s", c.int16 ? "int16" : "float32",
-              r.samples_per_ray, r.color_samples_per_ray);
+              1e3 * r.seconds_per_view, RenderThreads(c), RenderThreads(c) == 1 ? "" : "s",
+              c.int16 ? "int16" : "float32", r.samples_per_ray, r.color_samples_per_ray);
   if (!json_path.empty()) {
     nlohmann::json j = {{"scene", c.scene},          {"bytes", s.bytes.size()},
                         {"psnr", r.psnr},            {"ssim", r.ssim},
                         {"views", r.views},          {"decode_seconds", s.decode_seconds},
                         {"render_seconds_per_view", r.seconds_per_view},
-                        {"threads", c.threads},      {"grid_storage", c.int16 ? "int16" : "float32"},
+                        {"threads", RenderThreads(c)}, {"grid_storage", c.int16 ? "int16" : "float32"},
                         {"image_scale", image_scale},
-                        {"downscale", downscale},
+                        {"downscale", eval_downscale},
                         {"samples_per_ray", r.samples_per_ray},
                         {"mlp_samples_per_ray", r.color_samples_per_ray},
                         {"render_options",

@@ -1,67 +1,38 @@
 // `ecrf report`: rate–distortion sweeps, the renderer's speed against its error, BD-rate.
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <stdexcept>
 #include <string>
 
-#include "tools/cli_args.h"
+#include "tools/cli.h"
 #include "tools/commands.h"
 #include "tools/report.h"
+#include "tools/subcommands.h"
 
 namespace ecrf {
 namespace tools {
 namespace {
 
-const char kReportUsage[] =
-    "usage: ecrf report <what> [options]\n"
-    "  sweep    train one run per lambda_e, encode, decode, score: the rate-distortion report\n"
-    "           ecrf report sweep --data DIR --lambdas 0,2e-11,1e-10,5e-10 -o REPORT [--render]\n"
-    "  render   the speed-error sweep of the renderer on one rate point: ecrf report render REPORT\n"
-    "  compare  BD-rate and BD-PSNR of B against A: ecrf report compare A B [--json FILE] [--plot FILE.png]\n"
-    "  plot     redraw the plots and index.html from REPORT/report.json: ecrf report plot REPORT\n"
-    "`ecrf report <what> --help` for the options of each.\n";
-
-const char kCompareUsage[] =
-    "usage: ecrf report compare A B [--json FILE] [--plot FILE.png]\n"
-    "  A, B            report directories or their report.json; A is the anchor\n"
-    "  --json FILE     write the result as JSON\n"
-    "  --plot FILE.png draw both curves (writes FILE.csv beside it)\n";
-
 int RunReportPlot(int argc, char** argv) {
-  if (argc != 2 || argv[1][0] == '-') {
-    const bool help = argc == 2 && (!std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h"));
-    std::fputs("usage: ecrf report plot REPORT_DIR\n", help ? stdout : stderr);
-    return help ? 0 : 2;
-  }
-  return WriteReport(argv[1], ReadReport(argv[1])) ? 0 : 1;
+  std::string dir;
+  auto app = MakeCommand("report plot", "redraw the plots and index.html of a report from its report.json");
+  app->add_option("REPORT", dir, "the report directory")->type_name("DIR")->required();
+  if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
+  return WriteReport(dir, ReadReport(dir)) ? 0 : 1;
 }
 
 }  // namespace
 
 int RunReportCompare(int argc, char** argv) {
   std::string paths[2], json_path, plot_path;
-  int given = 0;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--help" || a == "-h") {
-      std::fputs(kCompareUsage, stdout);
-      return 0;
-    } else if (a == "--json") {
-      json_path = FlagValue(argc, argv, &i);
-    } else if (a == "--plot") {
-      plot_path = FlagValue(argc, argv, &i);
-    } else if (a[0] != '-' && given < 2) {
-      paths[given++] = a;
-    } else {
-      std::fprintf(stderr, "ecrf report compare: unexpected argument '%s'\n\n%s", a.c_str(), kCompareUsage);
-      return 2;
-    }
-  }
-  if (given != 2) {
-    std::fprintf(stderr, "ecrf report compare: needs two reports\n\n%s", kCompareUsage);
-    return 2;
-  }
+  auto app = MakeCommand("report compare",
+                         "BD-rate and BD-PSNR of report B against report A (decoded-file PSNR against file bytes, "
+                         "PCHIP interpolation)");
+  app->add_option("A", paths[0], "the anchor: a report directory or its report.json")->type_name("REPORT")->required();
+  app->add_option("B", paths[1], "the report compared with A")->type_name("REPORT")->required();
+  app->add_option("--json", json_path, "write the result as JSON")->type_name("FILE");
+  app->add_option("--plot", plot_path, "draw both curves (writes FILE.csv beside it)")->type_name("FILE.png");
+  if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
   const nlohmann::json a = ReadReport(paths[0]), b = ReadReport(paths[1]);
   const BdResult r = Bjontegaard(RateDistortionCurve(a), RateDistortionCurve(b));
   if (!r.ok) throw std::runtime_error("cannot compare " + paths[0] + " and " + paths[1] + ": " + r.error);
@@ -93,17 +64,21 @@ int RunReportCompare(int argc, char** argv) {
 }
 
 int RunReport(int argc, char** argv) {
-  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
-    std::fputs(kReportUsage, argc < 2 ? stderr : stdout);
-    return argc < 2 ? 2 : 0;
-  }
-  const std::string what = argv[1];
-  if (what == "sweep") return RunReportSweep(argc - 1, argv + 1);
-  if (what == "render") return RunReportRender(argc - 1, argv + 1);
-  if (what == "compare") return RunReportCompare(argc - 1, argv + 1);
-  if (what == "plot") return RunReportPlot(argc - 1, argv + 1);
-  std::fprintf(stderr, "ecrf report: unknown report '%s'\n\n%s", what.c_str(), kReportUsage);
-  return 2;
+  static const SubcommandTable table = {
+      "ecrf report",
+      "report",
+      {
+          {"sweep", RunReportSweep,
+           "train one run per lambda_e, encode, decode, score: the rate-distortion report\n"
+           "ecrf report sweep --data DIR --lambdas 0,2e-11,1e-10,5e-10 -o REPORT [--render]"},
+          {"render", RunReportRender,
+           "the speed-error sweep of the renderer on one rate point: ecrf report render REPORT"},
+          {"compare", RunReportCompare,
+           "BD-rate and BD-PSNR of B against A: ecrf report compare A B [--json FILE] [--plot FILE.png]"},
+          {"plot", RunReportPlot, "redraw the plots and index.html from REPORT/report.json: ecrf report plot REPORT"},
+      },
+      "`ecrf report <report> --help` (or `ecrf help report <report>`) for the options of each.\n"};
+  return RunSubcommand(table, argc, argv);
 }
 
 }  // namespace tools

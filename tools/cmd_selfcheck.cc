@@ -11,6 +11,7 @@
 #include "format/float_dct.h"
 #include "format/int_idct.h"
 #include "format/range_coder.h"
+#include "tools/cli.h"
 #include "tools/commands.h"
 
 namespace ecrf {
@@ -92,7 +93,12 @@ bool CheckContainer() {
 
 }  // namespace
 
-int RunSelfCheck(int, char**) {
+int RunSelfCheck(int argc, char** argv) {
+  auto app = MakeCommand("selfcheck",
+                         "a quick end-to-end check of the normative pieces on this machine: the coefficient coder "
+                         "round-trips random sparse blocks, the integer IDCT stays within one output unit of "
+                         "float64, and the container detects damage (exit code 0 only if everything passes)");
+  if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
   std::mt19937 rng(2024);
   std::printf("ecrf selfcheck\n");
   const bool ok = CheckCoder(rng) & CheckIdct(rng) & CheckContainer();

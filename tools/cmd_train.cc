@@ -1,37 +1,39 @@
-// `ecrf train`: trains a TensoRF VM model on posed images or on the built-in scene.
+// `ecrf train`: trains a TensoRF VM model on posed images or on a procedural scene, then encodes,
+// decodes and scores the file.
 #include <cstdio>
 #include <string>
 #include <vector>
 
 #include "tools/commands.h"
+#include "tools/train_flags.h"
 #include "tools/train_run.h"
+#include "trainer/train_config.h"
 #include "trainer/trainer.h"
 
 namespace ecrf {
 namespace tools {
 
 int RunTrain(int argc, char** argv) {
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--help" || a == "-h") {
-      std::printf("usage: ecrf train (--data DIR | --scene builtin|capture|forward) [options] -o RUN_DIR\n%s", kTrainFlagsUsage);
-      return 0;
-    }
-  }
-  std::vector<int> rest;
-  trainer::TrainOptions o = TrainOptionsFromArgs(argc, argv, &rest, /*rate_point_by_default=*/true);
-  for (size_t k = 0; k < rest.size(); ++k) {
-    const std::string a = argv[rest[k]];
-    if ((a == "-o" || a == "--out") && k + 1 < rest.size() && rest[k + 1] == rest[k] + 1) {
-      o.out_dir = argv[rest[++k]];
-    } else {
-      std::fprintf(stderr, "ecrf train: unknown option '%s'\n\nusage: ecrf train (--data DIR | --scene builtin|capture|forward) "
-                   "[options] -o RUN_DIR\n%s", a.c_str(), kTrainFlagsUsage);
-      return 2;
-    }
+  auto app = MakeCommand("train",
+                         "Trains a TensoRF VM model with the ECRF rate objective, encodes RUN_DIR/scene.ecrf, decodes "
+                         "it with the embeddable decoder and scores the decoded file.\n"
+                         "usage: ecrf train (--data DIR | --scene builtin|capture|forward) [options] -o RUN_DIR\n"
+                         "The defaults below are those of this command line's --preset and --rate.");
+  TrainFlags flags;
+  flags.options = BaseTrainOptions(std::vector<std::string>(argv + 1, argv + argc));
+  AddTrainFlags(app.get(), &flags);
+  bool print_config = false;
+  app->add_option("-o,--out", flags.options.out_dir, "run directory (created with its parents)")->type_name("RUN_DIR");
+  app->add_flag("--print-config", print_config, "print the resolved configuration (config.json) and exit");
+  const int parsed = ParseCommandLine(app.get(), argc, argv);
+  if (parsed >= 0) return parsed;
+  const trainer::TrainOptions o = FinishTrainFlags(*app, &flags);
+  if (print_config) {
+    std::printf("%s\n", trainer::TrainConfigToJson(o).c_str());
+    return 0;
   }
   if (o.out_dir.empty()) {
-    std::fprintf(stderr, "ecrf train: -o RUN_DIR is required\n");
+    std::fprintf(stderr, "ecrf train: error: -o RUN_DIR is required; see 'ecrf train --help'\n");
     return 2;
   }
   try {

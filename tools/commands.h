@@ -5,6 +5,10 @@
 namespace ecrf {
 namespace tools {
 
+// The whole command line (argv[0] is the program): dispatch, `ecrf help`, --version, and
+// exceptions turned into "ecrf CMD: error: ..." with exit code 1. main() is this.
+int RunEcrf(int argc, char** argv);
+
 int RunSelfCheck(int argc, char** argv);
 int RunTrain(int argc, char** argv);
 int RunConformance(int argc, char** argv);

@@ -10,7 +10,7 @@
 #include <thread>
 #include <vector>
 
-#include "tools/cli_args.h"
+#include "tools/cli.h"
 #include "tools/decoded_scene.h"
 #include "tools/report.h"
 #include "trainer/checkpoint.h"
@@ -18,12 +18,6 @@
 namespace ecrf {
 namespace tools {
 namespace {
-
-const char kRenderReportUsage[] =
-    "usage: ecrf report render REPORT_DIR [options]\n"
-    "  --lambda X        the rate point to measure (default: the middle point of the sweep)\n"
-    "  --stride K        every K-th test view (default: twice the sweep's test stride)\n"
-    "  --max-views N     at most N views per setting\n";
 
 // A field of /proc/self/status in kB (-1 where there is no such file: not Linux).
 long ProcStatusKb(const char* field) {
@@ -214,28 +208,25 @@ void RunSpeedSweep(const std::string& dir, const SpeedSweepOptions& so, nlohmann
 int RunReportRender(int argc, char** argv) {
   std::string dir;
   SpeedSweepOptions so;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--help" || a == "-h") {
-      std::fputs(kRenderReportUsage, stdout);
-      return 0;
-    } else if (a == "--lambda") {
-      so.lambda = ParseFloat("--lambda", FlagValue(argc, argv, &i));
-    } else if (a == "--stride") {
-      so.stride = std::max(1, ParseInt("--stride", FlagValue(argc, argv, &i)));
-    } else if (a == "--max-views") {
-      so.max_views = ParseInt("--max-views", FlagValue(argc, argv, &i));
-    } else if (a[0] != '-' && dir.empty()) {
-      dir = a;
-    } else {
-      std::fprintf(stderr, "ecrf report render: unexpected argument '%s'\n\n%s", a.c_str(), kRenderReportUsage);
-      return 2;
-    }
-  }
-  if (dir.empty()) {
-    std::fprintf(stderr, "ecrf report render: needs REPORT_DIR\n\n%s", kRenderReportUsage);
-    return 2;
-  }
+  auto app = MakeCommand("report render",
+                         "the speed-error sweep of the renderer on one rate point of a report: decode time and "
+                         "memory, then the render time per view and the PSNR of the decoded file for each speed "
+                         "knob (SPEC.md 7.8), one knob at a time from the defaults");
+  app->add_option("REPORT", dir, "the report directory (from ecrf report sweep)")->type_name("DIR")->required();
+  app->add_option("--lambda", so.lambda, "the rate point to measure (its lambda_e)")
+      ->type_name("X")
+      ->check(CLI::NonNegativeNumber)
+      ->default_str("the middle point of the sweep");
+  app->add_option("--test-stride", so.stride, "every K-th test view")
+      ->type_name("K")
+      ->check(CLI::Range(1, 1000000))
+      ->default_str("twice the sweep's test stride");
+  app->add_option("--max-views", so.max_views, "at most N views per setting (0 = the sweep's --max-test-views)")
+      ->type_name("N")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  AddRenamedFlag(app.get(), "--stride", "--test-stride");
+  if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
   nlohmann::json report = ReadReport(dir);
   RunSpeedSweep(dir, so, &report);
   std::printf("report: %s/index.html (speed-error section)\n", dir.c_str());

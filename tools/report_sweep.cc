@@ -3,6 +3,7 @@
 // resumes where it stopped, and the report is rewritten after every point.
 #include <omp.h>
 
+#include <algorithm>
 #include <climits>
 #include <cstdlib>
 #include <chrono>
@@ -22,23 +23,13 @@
 #include "tools/report.h"
 #include "tools/report_speed.h"
 #include "tools/train_run.h"
+#include "tools/train_flags.h"
 #include "trainer/checkpoint.h"
+#include "trainer/train_config.h"
 
 namespace ecrf {
 namespace tools {
 namespace {
-
-const char kSweepUsage[] =
-    "usage: ecrf report sweep (--data DIR | --scene builtin|capture|forward) --lambdas L1,L2,... -o REPORT_DIR [options]\n"
-    "  --lambdas L1,L2@S,...      one run per lambda_e; L@S trains that point with steps x S\n"
-    "                             (S overrides --quant-step-scale for it; e.g. 0,2e-11@3,5e-10)\n"
-    "  --anchors FILE.json        reference points drawn on the plots (docs/reports/anchors_paper.json)\n"
-    "  --render                   also run the speed-error sweep (as `ecrf report render`)\n"
-    "  --reference REPORT_DIR     without a lambda 0 point: take the lambda = 0 float32 reference of\n"
-    "                             that earlier sweep (same data, preset, iterations, seed, stride)\n"
-    "  --test-stride K            score every K-th test view (default 10; 1 for the built-in scene)\n"
-    "  --eval-every N             training-curve interval (default iters/4)\n"
-    "every `ecrf train` option applies to each run:\n";
 
 std::string SceneName(const trainer::TrainOptions& o) {
   if (!o.procedural_scene.empty()) return o.procedural_scene;
@@ -48,18 +39,52 @@ std::string SceneName(const trainer::TrainOptions& o) {
   return slash == std::string::npos ? d : d.substr(slash + 1);
 }
 
+// One run of the sweep: a named rate point (--rate R) or a lambda_e on the sweep's base (--lambda-e
+// X, with --quant-step-scale S for "X@S"), resolved like the same `ecrf train` command line.
 struct SweepPoint {
-  double lambda;
-  float step_scale;
+  std::string rate;  // "" for a lambda point
+  double lambda = 0.0;
+  float step_scale = 0.0f;  // 0: the base's
 };
 
-// "0,2e-11@3,1e-10": lambda_e values, each with an optional step scale after '@'.
-std::vector<SweepPoint> ParsePoints(const std::string& text, float default_step_scale) {
+std::vector<std::string> PointArgs(const SweepPoint& p) {
+  if (!p.rate.empty()) return {"--rate", p.rate};
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.9g", p.lambda);
+  std::vector<std::string> args = {"--lambda-e", text};
+  if (p.step_scale > 0.f) {
+    std::snprintf(text, sizeof(text), "%.9g", double(p.step_scale));
+    args.insert(args.end(), {"--quant-step-scale", text});
+  }
+  return args;
+}
+
+std::string PointName(const SweepPoint& p, const trainer::TrainOptions& resolved) {
+  return p.rate.empty() ? LambdaText(p.lambda, resolved.quant_step_scale) : "rate_" + p.rate;
+}
+
+// "low,medium,high": named rate points.
+std::vector<SweepPoint> ParseRates(const std::string& text) {
   std::vector<SweepPoint> out;
   std::stringstream ss(text);
   std::string item;
   while (std::getline(ss, item, ',')) {
-    SweepPoint p{0.0, default_step_scale};
+    trainer::TrainOptions check;
+    trainer::ApplyRatePoint(item, &check);  // throws for unknown names
+    SweepPoint p;
+    p.rate = item;
+    out.push_back(p);
+  }
+  return out;
+}
+
+// "0,2e-11@3,1e-10": lambda_e values, each with an optional step scale after '@'.
+std::vector<SweepPoint> ParsePoints(const std::string& text) {
+  std::vector<SweepPoint> out;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    SweepPoint p;
     const size_t at = item.find('@');
     p.lambda = ParseFloat("--lambdas", item.substr(0, at).c_str());
     if (at != std::string::npos) {
@@ -67,10 +92,9 @@ std::vector<SweepPoint> ParsePoints(const std::string& text, float default_step_
       if (!(p.step_scale > 0.f)) throw std::invalid_argument("--lambdas: the step scale after @ must be > 0 in '" + item + "'");
     }
     bool seen = false;
-    for (const SweepPoint& q : out) seen |= LambdaText(q.lambda, q.step_scale) == LambdaText(p.lambda, p.step_scale);
+    for (const SweepPoint& q : out) seen |= q.lambda == p.lambda && q.step_scale == p.step_scale;
     if (!seen) out.push_back(p);
   }
-  if (out.empty()) throw std::invalid_argument("--lambdas: no values (e.g. --lambdas 0,1e-10,5e-10)");
   return out;
 }
 
@@ -101,8 +125,26 @@ bool SameData(const std::string& a, const std::string& b) {
   return realpath(a.c_str(), ra) && realpath(b.c_str(), rb) && std::strcmp(ra, rb) == 0;
 }
 
-// A finished run is reused only when it was trained as this sweep would train it.
+// A finished run is reused only when it was trained as this sweep would train it: by its
+// config.json when it has one (every setting), else by the metrics older runs recorded.
 void CheckReusable(const nlohmann::json& m, const trainer::TrainOptions& o, const std::string& path) {
+  const std::string dir = path.substr(0, path.find_last_of('/'));
+  if (FileExists(dir + "/config.json")) {
+    const trainer::TrainOptions had =
+        trainer::TrainConfigFromJson(ReadJsonFile(dir + "/config.json").dump(), dir + "/config.json");
+    std::vector<std::string> changed = trainer::ChangedSettings(had, o);
+    // The same data under another relative path is the same run.
+    changed.erase(std::remove_if(changed.begin(), changed.end(),
+                                 [&](const std::string& c) {
+                                   return c.rfind("data_dir:", 0) == 0 && SameData(had.data_dir, o.data_dir);
+                                 }),
+                  changed.end());
+    if (changed.empty()) return;
+    std::string list;
+    for (const std::string& c : changed) list += "\n  " + c;
+    throw std::runtime_error(dir + ": finished run has other settings than this sweep asks for:" + list +
+                             "\nremove that run directory or report into another -o");
+  }
   auto mismatch = [&](const std::string& what, const std::string& had, const std::string& want) {
     throw std::runtime_error(path + ": finished run has " + what + " " + had + ", this sweep asks for " + want +
                              "; remove that run directory or report into another -o");
@@ -156,58 +198,80 @@ std::string Minutes(double seconds) {
   return text;
 }
 
+// The arguments that are not the sweep's own: what every point's `ecrf train` line shares.
+std::vector<std::string> TrainArgs(const std::vector<std::string>& args) {
+  std::vector<std::string> out;
+  for (size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    bool with_value = false, sweep_flag = a == "--render";
+    for (const char* f : {"--lambdas", "--rates", "--anchors", "--reference", "-o", "--out"}) {
+      if (a == f) with_value = sweep_flag = true;
+      if (a.rfind(std::string(f) + "=", 0) == 0) sweep_flag = true;
+    }
+    if (with_value) ++i;
+    if (!sweep_flag) out.push_back(a);
+  }
+  return out;
+}
+
 }  // namespace
 
 int RunReportSweep(int argc, char** argv) {
-  for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
-      std::printf("%s%s", kSweepUsage, kTrainFlagsUsage);
-      return 0;
-    }
-  }
-  std::vector<int> rest;
-  trainer::TrainOptions o = TrainOptionsFromArgs(argc, argv, &rest);
-  std::string out, lambdas_text, anchors_path, reference_dir;
-  bool render = false, stride_given = false, eval_given = false;
-  for (int i = 1; i < argc; ++i) {
-    stride_given |= !std::strcmp(argv[i], "--test-stride");
-    eval_given |= !std::strcmp(argv[i], "--eval-every");
-  }
-  for (size_t k = 0; k < rest.size(); ++k) {
-    const std::string a = argv[rest[k]];
-    auto value = [&]() -> std::string {
-      if (k + 1 >= rest.size() || rest[k + 1] != rest[k] + 1) throw std::invalid_argument(a + " needs a value");
-      return argv[rest[++k]];
-    };
-    if (a == "-o" || a == "--out") {
-      out = value();
-    } else if (a == "--lambdas") {
-      lambdas_text = value();
-    } else if (a == "--anchors") {
-      anchors_path = value();
-    } else if (a == "--reference") {
-      reference_dir = value();
-    } else if (a == "--render") {
-      render = true;
-    } else {
-      std::fprintf(stderr, "ecrf report sweep: unknown option '%s'\n\n%s%s", a.c_str(), kSweepUsage,
-                   kTrainFlagsUsage);
-      return 2;
-    }
-  }
-  if (out.empty() || lambdas_text.empty() || trainer::DataSource(o).empty()) {
-    std::fprintf(stderr, "ecrf report sweep: needs --data DIR or --scene builtin|capture|forward, --lambdas and -o\n\n%s%s",
-                 kSweepUsage, kTrainFlagsUsage);
+  auto app = MakeCommand("report sweep",
+                         "One `ecrf train` run per rate point, each encoded, decoded and scored, then the "
+                         "rate-distortion report. Each point is the run `ecrf train` makes with the shared flags "
+                         "plus --rate R (for --rates) or --lambda-e X (for --lambdas, on the same base as train: "
+                         "the medium point unless --rate or --preset say otherwise), so both write the same bytes.\n"
+                         "usage: ecrf report sweep (--data DIR | --scene NAME) (--rates R,... | --lambdas L,...) "
+                         "-o REPORT_DIR [train options]");
+  const std::vector<std::string> args(argv + 1, argv + argc);
+  TrainFlags flags;
+  flags.options = BaseTrainOptions(args);
+  AddTrainFlags(app.get(), &flags);
+  std::string out, lambdas_text, rates_text, anchors_path, reference_dir;
+  bool render = false;
+  app->add_option("-o,--out", out, "report directory (runs/ holds one run per point)")->type_name("REPORT_DIR");
+  app->add_option("--rates", rates_text, "named rate points, one run each (e.g. low,medium,high; none: lambda_e 0)")
+      ->type_name("R1,R2,...");
+  app->add_option("--lambdas", lambdas_text,
+                  "one run per lambda_e on the base; L@S also sets the step scale S (e.g. 0,1e-10,5e-11@2); "
+                  "0 is the plain TensoRF reference")
+      ->type_name("L1,L2@S,...");
+  app->add_option("--anchors", anchors_path, "reference points drawn on the plots (docs/reports/anchors_paper.json)")
+      ->type_name("FILE.json");
+  app->add_flag("--render", render, "also run the speed-error sweep (as `ecrf report render`)");
+  app->add_option("--reference", reference_dir,
+                  "without a lambda_e 0 point: take the float32 reference of that earlier sweep (same data, preset, "
+                  "iterations, seed, stride)")
+      ->type_name("REPORT_DIR");
+  const int parsed = ParseCommandLine(app.get(), argc, argv);
+  if (parsed >= 0) return parsed;
+  trainer::TrainOptions o = FinishTrainFlags(*app, &flags);
+  if (out.empty() || (lambdas_text.empty() && rates_text.empty()) || trainer::DataSource(o).empty()) {
+    std::fprintf(stderr, "ecrf report sweep: error: needs --data DIR or --scene NAME, --rates or --lambdas, and -o; "
+                 "see 'ecrf report sweep --help'\n");
     return 2;
   }
-  const std::vector<SweepPoint> points = ParsePoints(lambdas_text, o.quant_step_scale);
-  std::vector<double> lambdas, step_scales;
-  for (const SweepPoint& p : points) {
-    lambdas.push_back(p.lambda);
-    step_scales.push_back(p.step_scale);
+  std::vector<SweepPoint> points = ParseRates(rates_text);
+  for (const SweepPoint& p : ParsePoints(lambdas_text)) points.push_back(p);
+  // Each point's options, resolved as `ecrf train` resolves its command line. Every point scores
+  // the float model too (the report's quantization-loss column), on every 10th test view unless
+  // told (the views of every ecrf compression figure), 1 for the small procedural scenes.
+  std::vector<std::string> train_args = TrainArgs(args);
+  if (!app->count("--test-stride")) {
+    train_args.insert(train_args.end(), {"--test-stride", o.procedural_scene.empty() ? "10" : "1"});
   }
-  if (!stride_given) o.test_view_stride = o.procedural_scene.empty() ? 10 : 1;
-  if (!eval_given) o.eval_every = std::max(1, o.iters / 4);
+  if (!app->count("--eval-every")) train_args.insert(train_args.end(), {"--eval-every", std::to_string(std::max(1, o.iters / 4))});
+  train_args.push_back("--score-float");
+  std::vector<trainer::TrainOptions> runs;
+  std::vector<std::string> names;
+  for (const SweepPoint& p : points) {
+    std::vector<std::string> point_args = train_args;
+    for (const std::string& a : PointArgs(p)) point_args.push_back(a);
+    runs.push_back(ResolveTrainOptions(point_args));
+    names.push_back(PointName(p, runs.back()));
+  }
+  o = runs.front();
   nlohmann::json anchors = nlohmann::json::array();
   if (!anchors_path.empty()) {
     const nlohmann::json a = ReadJsonFile(anchors_path);
@@ -223,13 +287,21 @@ int RunReportSweep(int argc, char** argv) {
   if (FileExists(out + "/report.json")) {
     report = ReadReport(out);  // keeps an earlier speed section
   }
+  std::vector<double> lambdas, step_scales;
+  std::vector<std::string> rate_points;
+  for (size_t k = 0; k < runs.size(); ++k) {
+    lambdas.push_back(runs[k].lambda_e);
+    step_scales.push_back(runs[k].quant_step_scale);
+    rate_points.push_back(points[k].rate.empty() ? runs[k].rate_point + " base" : points[k].rate);
+  }
   report["scene"] = SceneName(o);
   report["data"] = trainer::DataSource(o);
   report["sweep"] = {{"preset", o.preset},          {"iterations", o.iters},
-                     {"lambdas", lambdas},          {"step_scales", step_scales}, {"alpha", o.alpha},
-                     {"test_view_stride", o.test_view_stride}, {"max_test_views", o.max_test_views},
-                     {"eval_every", o.eval_every},  {"seed", o.seed},
-                     {"downscale", o.downscale},    {"threads", omp_get_max_threads()}};
+                     {"lambdas", lambdas},          {"step_scales", step_scales}, {"rate_points", rate_points},
+                     {"alpha", o.alpha},            {"test_view_stride", o.test_view_stride},
+                     {"max_test_views", o.max_test_views}, {"eval_every", o.eval_every},
+                     {"seed", o.seed},              {"downscale", o.downscale},
+                     {"threads", omp_get_max_threads()}};
   report["machine"] = {{"cpu", CpuModel()}, {"hardware_threads", std::thread::hardware_concurrency()}};
   report["ecrf_version"] = ecrf_version_string();
   report["bitstream_version"] = ecrf_bitstream_version();
@@ -243,35 +315,36 @@ int RunReportSweep(int argc, char** argv) {
 
   double trained_seconds = 0.0;
   int trained = 0;
-  for (size_t k = 0; k < points.size(); ++k) {
-    trainer::TrainOptions run = o;
-    run.lambda_e = float(points[k].lambda);
-    run.quant_step_scale = points[k].step_scale;
-    const std::string name = LambdaText(points[k].lambda, points[k].step_scale);
-    const std::string run_dir = out + "/runs/" + name;
+  for (size_t k = 0; k < runs.size(); ++k) {
+    trainer::TrainOptions run = runs[k];
+    const std::string run_dir = out + "/runs/" + names[k];
     const std::string metrics_path = run_dir + "/metrics.json";
     nlohmann::json metrics;
     if (FileExists(metrics_path)) {
       metrics = ReadJsonFile(metrics_path);
       CheckReusable(metrics, run, metrics_path);
-      std::fprintf(stderr, "report: point %zu/%zu (lambda_e %g): reusing the finished run in %s\n", k + 1,
-                   points.size(), points[k].lambda, run_dir.c_str());
+      std::fprintf(stderr, "report: point %zu/%zu (%s): reusing the finished run in %s\n", k + 1, runs.size(),
+                   names[k].c_str(), run_dir.c_str());
     } else {
       size_t left = 0;
-      for (size_t j = k; j < points.size(); ++j) {
-        left += !FileExists(out + "/runs/" + LambdaText(points[j].lambda, points[j].step_scale) + "/metrics.json");
-      }
+      for (size_t j = k; j < runs.size(); ++j) left += !FileExists(out + "/runs/" + names[j] + "/metrics.json");
       const std::string eta = trained ? "sweep ETA " + Minutes(trained_seconds / trained * left)
                                       : "sweep ETA known after the first point";
-      std::fprintf(stderr, "report: point %zu/%zu (lambda_e %g): training into %s; %zu to train, %s\n", k + 1,
-                   points.size(), points[k].lambda, run_dir.c_str(), left, eta.c_str());
+      std::fprintf(stderr, "report: point %zu/%zu (%s): training into %s; %zu to train, %s\n", k + 1, runs.size(),
+                   names[k].c_str(), run_dir.c_str(), left, eta.c_str());
       run.out_dir = run_dir;
       const auto start = std::chrono::steady_clock::now();
       metrics = TrainEncodeEvaluate(run);
       trained_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       ++trained;
     }
-    report["points"].push_back(RatePointFromMetrics(metrics, "runs/" + name));
+    nlohmann::json point = RatePointFromMetrics(metrics, "runs/" + names[k]);
+    point["rate_point"] = rate_points[k];
+    if (!points[k].rate.empty()) point["label"] = points[k].rate + " (" + point["label"].get<std::string>() + ")";
+    // The point's whole configuration: what `ecrf train` needs to write the same file.
+    point["config"] = nlohmann::json::parse(trainer::TrainConfigToJson(run, -1));
+    point["config"]["bookkeeping"].erase("out_dir");
+    report["points"].push_back(point);
     AddReferenceColumns(&report);
     WriteReport(out, report);
   }

@@ -10,13 +10,15 @@
 
 #include "trainer/checkpoint.h"
 #include "trainer/rate_state.h"
+#include "trainer/train_config.h"
 #include "trainer/trainer.h"
 
 namespace ecrf {
 namespace trainer {
 
 void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int iteration,
-                         const TrainOptions& o, const RateState* rate, const Checkpoint* train_state) {
+                         const TrainOptions& o, const RateState* rate, const Checkpoint* train_state,
+                         const TrainOptions* config) {
   Checkpoint ck;
   nlohmann::json j;
   j["format"] = "ecrf-checkpoint-1";
@@ -62,6 +64,7 @@ void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int itera
     ck.arrays.push_back({"rate.steps", {int64_t(rate->steps.size())}, rate->steps});
     ck.arrays.push_back({"rate.entropy_model", {int64_t(rate->entropy.params().size())}, rate->entropy.params()});
   }
+  if (config) j["config"] = nlohmann::json::parse(TrainConfigToJson(*config, -1));
   if (train_state) {
     j["train_state"] = nlohmann::json::parse(train_state->json);
     ck.arrays.insert(ck.arrays.end(), train_state->arrays.begin(), train_state->arrays.end());
@@ -239,6 +242,23 @@ TensorfModel LoadModelFromCheckpoint(const std::string& path, RateState* rate) {
   TensorfModel model(c);
   LoadModelCheckpoint(path, &model, rate);
   return model;
+}
+
+CheckpointRunInfo ReadCheckpointRunInfo(const std::string& path) {
+  const Checkpoint ck = ReadCheckpoint(path);
+  CheckpointRunInfo info;
+  try {
+    const nlohmann::json j = nlohmann::json::parse(ck.json);
+    info.iteration = j.value("iteration", 0);
+    info.lambda_e = j.value("lambda_e", 0.0f);
+    if (j.contains("config")) {
+      info.config = TrainConfigFromJson(j["config"].dump(), path);
+      info.has_config = true;
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error(path + ": checkpoint metadata: " + e.what());
+  }
+  return info;
 }
 
 }  // namespace trainer

@@ -23,7 +23,6 @@ TrainOptions PresetOptions(const std::string& name) {
     o.voxels_final = 180L * 180 * 180;
     o.upsample_iters = {300, 600, 900, 1200, 1500};
     o.alpha_mask_iters = {300, 900};
-    o.test_view_stride = 8;
     o.fine_grid_at_rate_points = true;
     return o;
   }
@@ -75,8 +74,17 @@ void ApplyFineGridSchedule(TrainOptions* o) {
 }
 }  // namespace
 
+int ScoredTestViewStride(const TrainOptions& o, size_t views) {
+  if (o.test_view_stride > 0) return o.test_view_stride;
+  return std::max(1, int((views + kDefaultScoredTestViews - 1) / kDefaultScoredTestViews));
+}
+
 void ApplyRatePoint(const std::string& name, TrainOptions* o) {
-  if (name == "low") {
+  if (name == "none") {
+    o->lambda_e = 0.0f;
+    o->quant_step_scale = 1.0f;
+    o->mlp_levels = 127;
+  } else if (name == "low") {
     // Coarser steps under QAT beat a larger lambda_e at the same size (chair: 182,217 B at
     // 33.76 dB against 266,445 B at 33.79 dB with steps x1). At this rate fewer appearance
     // components code better: chair with 32 instead of 48 gains 0.03-0.13 dB at equal size,
@@ -98,8 +106,9 @@ void ApplyRatePoint(const std::string& name, TrainOptions* o) {
     o->lambda_e = 2e-11f;
     o->quant_step_scale = 1.0f;
   } else {
-    throw std::invalid_argument("unknown rate point '" + name + "' (expected low, medium or high)");
+    throw std::invalid_argument("unknown rate point '" + name + "' (expected low, medium, high or none)");
   }
+  o->rate_point = name;
 }
 
 double NominalFloat32GridBytes(const TrainOptions& o) {

@@ -15,8 +15,17 @@
 namespace ecrf {
 namespace trainer {
 
+// How many test views a run scores unless told otherwise: every K-th view with the smallest K
+// that keeps at most this many (200 Synthetic-NeRF test views: every 10th, the views every
+// compression figure of ecrf is measured on).
+constexpr int kDefaultScoredTestViews = 20;
+
 struct TrainOptions {
   std::string preset = "fast";
+  // The rate point the settings started from ("none": plain TensoRF, lambda_e 0; "low",
+  // "medium", "high"; ApplyRatePoint), before flags adjusted them. Informational: the fields
+  // below are what the run uses.
+  std::string rate_point = "none";
   // Data.
   std::string data_dir;        // NeRF Blender or Instant-NGP/nerfstudio layout
   std::string procedural_scene;  // "builtin" (Blender-like), "capture" or "forward" instead of data_dir; "" = data_dir
@@ -87,11 +96,16 @@ struct TrainOptions {
   uint32_t seed = 20211202;
   int checkpoint_every = 0;  // iterations; 0 = only the final checkpoint
   bool resume = false;
+  // With resume: continue although the checkpoint's settings differ (train_config.h).
+  bool accept_config_change = false;
   // Leave after this many iterations as if killed (after the checkpoint due then, if any), by
   // throwing TrainingStopped: tests of exact resume, and a run split over sessions. 0 = never.
   int stop_after = 0;
-  int test_view_stride = 1;  // evaluate every k-th test view
+  int test_view_stride = 0;  // score every k-th test view; 0: ScoredTestViewStride's default
   int max_test_views = 0;    // 0 = all
+  // Also score the float model (before encoding) on the same views: the decoded file is always
+  // scored; the float model costs as much again (3.5 s a view on chair-400 with 2 cores).
+  bool score_float = false;
   int eval_downscale = 1;    // test views scored at 1/N of their size (area filter, cameras scaled)
   bool save_renders = false;
   int progress_every = 50;
@@ -106,6 +120,10 @@ struct TrainOptions {
   int capture_frames = 64;
 };
 
+// The stride of the scored test views: options.test_view_stride when set, else the smallest that
+// keeps at most kDefaultScoredTestViews of `views`.
+int ScoredTestViewStride(const TrainOptions& options, size_t views);
+
 // "paper": the reference TensoRF VM-192 schedule. "fast": what a CPU user should run.
 // "tiny": the built-in scene in CI. Throws std::invalid_argument for unknown names.
 TrainOptions PresetOptions(const std::string& name);
@@ -119,6 +137,8 @@ TrainOptions PresetOptions(const std::string& name);
 //            chair-400 `fast` 590,171 B, 35.34 dB decoded (43.1x at 0.00 dB against the
 //            lambda = 0 float model)
 //   "high"   lambda_e 2e-11, steps x1 (1,044,897 B, 35.19 dB before quantization-aware training)
+//   "none"   plain TensoRF: lambda_e 0, steps x1 (the 8-bit peak steps), 127 MLP levels, the
+//            preset's schedule: the float model every ratio is measured against
 // (README "Training" gives the commands.) Throws std::invalid_argument for other names.
 void ApplyRatePoint(const std::string& name, TrainOptions* options);
 

@@ -83,10 +83,21 @@ class TrainingStopped : public std::runtime_error {
 
 // Checkpoint <-> model (+ training progress).
 // `train_state` (optional, from SaveTrainState) goes into the same file: its arrays beside the
-// model's, its JSON object under "train_state".
+// model's, its JSON object under "train_state". `config` (optional): the run's resolved options
+// (train_config.h), stored under "config" for `ecrf encode RUN` and `--resume`; `options` holds
+// the live values (lambda_e under rate control).
 void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int iteration,
                          const TrainOptions& options, const RateState* rate = nullptr,
-                         const Checkpoint* train_state = nullptr);
+                         const Checkpoint* train_state = nullptr, const TrainOptions* config = nullptr);
+// The configuration a checkpoint was trained with (train_config.h), and its iteration and live
+// lambda_e; false when it predates stored configurations. Throws on unreadable files.
+struct CheckpointRunInfo {
+  bool has_config = false;
+  TrainOptions config;
+  int iteration = 0;
+  float lambda_e = 0.0f;  // where rate control left it
+};
+CheckpointRunInfo ReadCheckpointRunInfo(const std::string& path);
 // A model of the checkpoint's own configuration (ranks, render parameters, head), loaded from it:
 // what the encoder starts from. `rate` (optional) receives the rate state.
 TensorfModel LoadModelFromCheckpoint(const std::string& path, RateState* rate = nullptr);

@@ -4,6 +4,7 @@ The module is found on PYTHONPATH (scripts/test-install.sh points it at an insta
 ECRF_SOURCE_DIR overrides where tests/conformance is looked for.
 """
 import json
+import math
 import os
 import struct
 import threading
@@ -179,17 +180,37 @@ class RenderTest(unittest.TestCase):
                 self.assertTrue(psnr >= 40 or within >= 0.99, "PSNR %.2f dB, %.4f within 2" % (psnr, within))
 
     def test_orbit_camera_is_the_reference_one(self):
-        # The manifest camera of scene_builtin is OrbitCamera(64, 64, az, el, 4): same intrinsics.
+        # The manifest camera of scene_builtin is OrbitCamera(64, 64, 0.3f, 0.45f, 4) (radians, in
+        # float32). orbit_camera takes degrees, as `ecrf render` and the viewer do; these degrees
+        # convert back to exactly those float32 radians, and the camera must match to the last bit.
         _, c2w, (fx, fy, cx, cy), width, height = manifest_camera("scene_builtin.ecrf")
-        m, ofx, ofy, ocx, ocy = ecrf.orbit_camera(width, height, 0.3, 0.5, 4.0)
+        az, el = (math.degrees(float(np.float32(r))) for r in (0.3, 0.45))
+        m, ofx, ofy, ocx, ocy = ecrf.orbit_camera(width, height, az, el, 4.0)
         self.assertEqual(m.shape, (3, 4))
-        self.assertEqual((ocx, ocy), (cx, cy))
-        self.assertAlmostEqual(ofx, fx, places=3)
-        self.assertAlmostEqual(float(np.linalg.norm(m[:, 3])), 4.0, places=5)
+        self.assertEqual(m.dtype, np.float32)
+        self.assertEqual((ofx, ofy, ocx, ocy), (fx, fy, cx, cy))
+        self.assertTrue(np.array_equal(m, c2w), "%r\n%r" % (m, c2w))
+
+    def test_orbit_camera_matches_the_cli_bit_for_bit(self):
+        # Frame 5 of `ecrf render --orbit 7 --elevation 33.3 --radius 4.2 -W 40 -H 30` as the tool
+        # computes it (dec::OrbitCamera in binary32 without fused multiply-adds, SPEC.md 7.1). A
+        # module built with FMA contraction gets c2w[2][1] one unit in the last place off.
+        expected = ["0x1.f329cp-1", "0x1.f4679ap-4", "-0x1.7ce58cp-3", "-0x1.8ff104p-1",
+                    "-0x1.c7b91ap-3", "0x1.120d4ap-1", "-0x1.a13444p-1", "-0x1.b6107ap+1",
+                    "0x0p+0", "0x1.abeef2p-1", "0x1.191984p-1", "0x1.272796p+1"]
+        m, fx, fy, cx, cy = ecrf.orbit_camera(40, 30, 360.0 * 5 / 7, 33.3, 4.2)
+        self.assertEqual([float(v).hex() for v in m.flatten()], [float.fromhex(v).hex() for v in expected])
+        self.assertEqual((fx, fy, cx, cy), (float.fromhex("0x1.bc71c6p+5"),) * 2 + (20.0, 15.0))
+
+    def test_orbit_camera_takes_degrees(self):
+        # Azimuth 90, elevation 30 degrees at radius 2: on the +y side, 1 above the xy plane.
+        m = ecrf.orbit_camera(width=32, height=32, azimuth_deg=90.0, elevation_deg=30.0, radius=2.0)[0]
+        np.testing.assert_allclose(m[:, 3], [0.0, math.sqrt(3.0), 1.0], atol=1e-6)
+        self.assertIn("degrees", ecrf.orbit_camera.__doc__)
 
     def test_rgb_and_options(self):
         s = ecrf.decode(SCENE)
-        cam = ecrf.orbit_camera(32, 24, 0.3, 0.5, 4.0)
+        cam = ecrf.orbit_camera(32, 24, 17.0, 29.0, 4.0)
         rgb = s.render(*cam, 32, 24, rgb=True, threads=2)
         self.assertEqual(rgb.shape, (24, 32, 3))
         self.assertEqual(rgb.dtype, np.float32)
@@ -203,7 +224,7 @@ class RenderTest(unittest.TestCase):
 
     def test_render_releases_the_gil(self):
         s = ecrf.decode(SCENE)
-        cam = ecrf.orbit_camera(128, 128, 0.3, 0.5, 4.0)
+        cam = ecrf.orbit_camera(128, 128, 17.0, 29.0, 4.0)
         done = threading.Event()
         ticks = [0]
 

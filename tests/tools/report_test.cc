@@ -69,7 +69,9 @@ void RatePointsAreWhatEvalMeasuresOnTheSameFiles() {
     const nlohmann::json& p = r["points"][k];
     const std::string file = dir_ + "/" + p["run_dir"].get<std::string>() + "/scene.ecrf";
     const std::string json = root_ + "/eval.json";
-    ASSERT_EQ(Invoke(RunEval, {"eval", file, "--scene", "builtin", "--seed", "7", "--max-views", "4", "--threads", "2", "--json", json}), 0);
+    ASSERT_EQ(Invoke(RunEval, {"eval", file, "--scene", "builtin", "--seed", "7", "--max-test-views", "4",
+                               "--threads", "2", "--json", json}),
+              0);
     const nlohmann::json e = ReadJson(json);
     EXPECT_EQ(e["bytes"], p["file_bytes"]);
     EXPECT_DOUBLE_EQ(e["psnr"].get<double>(), p["decoded_psnr"].get<double>());
@@ -146,7 +148,8 @@ void SweepResumesFromFinishedRunsAndRefusesIncompatibleOnes() {
                     "--max-test-views", "4", "--seed", "7", "-o", dir_});
     ADD_FAILURE() << "an incompatible finished run was reused";
   } catch (const std::exception& e) {
-    EXPECT_NE(std::string(e.what()).find("iterations"), std::string::npos) << e.what();
+    // The run's config.json against the sweep's settings, named as config.json names them.
+    EXPECT_NE(std::string(e.what()).find("iters: 150 -> 151"), std::string::npos) << e.what();
   }
 }
 
@@ -167,7 +170,7 @@ TEST(Report, BuiltinSweepMatchesEvalResumesAndCompares) {
   ASSERT_EQ(Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "--lambdas", "0,1e-8@2", "--iters", "150",
                                "--max-test-views", "4", "--seed", "7", "--threads", "2", "-o", dir_}),
             0);
-  ASSERT_EQ(Invoke(RunReport, {"report", "render", dir_, "--stride", "1"}), 0);
+  ASSERT_EQ(Invoke(RunReport, {"report", "render", dir_, "--test-stride", "1"}), 0);
   {
     SCOPED_TRACE("files");
     WritesEveryFile();

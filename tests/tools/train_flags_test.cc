@@ -1,12 +1,13 @@
-// The training flags as `ecrf train` reads them: the scene model and rate-phase flags this issue
-// added, their ranges, and flags left for the caller.
+// The training flags as `ecrf train` resolves them: preset, then rate point, then every flag;
+// ranges, unknown flags and sizes without units.
 #include <gtest/gtest.h>
 
 #include <stdexcept>
 #include <string>
 #include <vector>
 
-#include "tools/train_run.h"
+#include "tools/train_flags.h"
+#include "trainer/train_config.h"
 #include "trainer/dataset.h"
 #include "trainer/scene_fit.h"
 #include "trainer/trainer.h"
@@ -15,18 +16,11 @@ namespace ecrf {
 namespace tools {
 namespace {
 
-trainer::TrainOptions Parse(std::vector<std::string> args, std::vector<int>* rest = nullptr,
-                            bool rate_point_by_default = false) {
-  args.insert(args.begin(), "train");
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  std::vector<int> ignored;
-  return TrainOptionsFromArgs(int(argv.size()), argv.data(), rest ? rest : &ignored, rate_point_by_default);
-}
+trainer::TrainOptions Parse(std::vector<std::string> args) { return ResolveTrainOptions(args); }
 
 TEST(TrainFlags, RateStartAndSceneTypeAreReadAndChecked) {
   const trainer::TrainOptions defaults = Parse({"--scene", "forward"});
-  EXPECT_FLOAT_EQ(defaults.rate_start, 16000.f / 30000.f);
+  EXPECT_FLOAT_EQ(defaults.rate_start, 16000.f / 30000.f);  // tiny keeps its schedule at medium
   EXPECT_EQ(defaults.procedural_scene, "forward");
   EXPECT_EQ(defaults.scene_type, "auto");
   const trainer::TrainOptions o = Parse({"--scene", "forward", "--rate-start", "0.8", "--scene-type", "forward"});
@@ -36,10 +30,29 @@ TEST(TrainFlags, RateStartAndSceneTypeAreReadAndChecked) {
   EXPECT_THROW(Parse({"--rate-start", "-0.1"}), std::invalid_argument);
   EXPECT_THROW(Parse({"--scene-type", "ndc"}), std::invalid_argument);
   EXPECT_THROW(Parse({"--scene", "sideways"}), std::invalid_argument);
-  std::vector<int> rest;
-  Parse({"--scene", "forward", "--not-a-training-flag"}, &rest);
-  ASSERT_EQ(rest.size(), 1u);
-  EXPECT_EQ(rest[0], 3);
+}
+
+TEST(TrainFlags, UnknownFlagsAndBareSizesGiveShortErrorsWithTheFix) {
+  auto error = [](std::vector<std::string> args) -> std::string {
+    try {
+      Parse(std::move(args));
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "";
+  };
+  const std::string unknown = error({"--scene", "builtin", "--lamda-e", "1e-10"});
+  EXPECT_NE(unknown.find("unknown option '--lamda-e'"), std::string::npos) << unknown;
+  EXPECT_NE(unknown.find("did you mean --lambda-e?"), std::string::npos) << unknown;
+  EXPECT_NE(unknown.find("ecrf train --help"), std::string::npos) << unknown;
+  EXPECT_EQ(unknown.find('\n'), std::string::npos) << "one line: " << unknown;
+  const std::string bare = error({"--target-size", "500"});
+  EXPECT_NE(bare.find("has no unit"), std::string::npos) << bare;
+  EXPECT_NE(bare.find("500KB"), std::string::npos) << bare;
+  EXPECT_EQ(Parse({"--target-size", "500KB"}).target_bytes, 500000u);
+  EXPECT_EQ(Parse({"--target-size", "2KiB"}).target_bytes, 2048u);
+  EXPECT_EQ(Parse({"--target-size=1.2MB"}).target_bytes, 1200000u);
+  EXPECT_NE(error({"--target-size", "5parsecs"}).find("unknown unit"), std::string::npos);
 }
 
 TEST(TrainFlags, RanksSetDensityAndAppearanceComponents) {
@@ -102,19 +115,69 @@ TEST(TrainFlags, ARatePointIsADefaultThatOtherFlagsOverrideInAnyOrder) {
   for (const std::vector<std::string>& args :
        {std::vector<std::string>{"--rate", "low", "--final-grid", "200", "--rate-start", "0.8", "--lambda-e", "3e-10"},
         std::vector<std::string>{"--final-grid", "200", "--rate-start", "0.8", "--lambda-e", "3e-10", "--rate", "low"}}) {
-    const trainer::TrainOptions o = Parse(args, nullptr, /*rate_point_by_default=*/true);
+    const trainer::TrainOptions o = Parse(args);
     EXPECT_EQ(o.voxels_final, 200L * 200 * 200);
     EXPECT_FLOAT_EQ(o.rate_start, 0.8f);
     EXPECT_FLOAT_EQ(o.lambda_e, 3e-10f);
     EXPECT_EQ(o.quant_step_scale, 4.0f);  // the point's, not given
     EXPECT_EQ(o.mlp_levels, 15);
   }
-  // Without a rate flag the medium point applies; --lambda-e alone keeps the preset's steps.
-  EXPECT_FLOAT_EQ(Parse({}, nullptr, true).lambda_e, 3e-11f);
-  EXPECT_EQ(Parse({}, nullptr, true).quant_step_scale, 3.0f);
-  EXPECT_EQ(Parse({"--lambda-e", "0"}, nullptr, true).quant_step_scale, 1.0f);
   EXPECT_THROW(Parse({"--rate", "extreme"}), std::invalid_argument);
   EXPECT_THROW(Parse({"--rate"}), std::invalid_argument);
+}
+
+TEST(TrainFlags, LambdaEAloneAdjustsTheDefaultPointAndZeroIsPlainTensorf) {
+  trainer::TrainOptions medium = trainer::PresetOptions("fast");
+  trainer::ApplyRatePoint("medium", &medium);
+  const trainer::TrainOptions defaults = Parse({});
+  EXPECT_TRUE(trainer::ChangedSettings(medium, defaults).empty());
+  EXPECT_EQ(defaults.rate_point, "medium");
+  // --lambda-e at the default's value is the default run, setting for setting.
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.9g", double(medium.lambda_e));
+  EXPECT_TRUE(trainer::ChangedSettings(defaults, Parse({"--lambda-e", text})).empty());
+  // Another value changes lambda_e alone: the steps, levels and schedule stay the point's.
+  const std::vector<std::string> changed = trainer::ChangedSettings(defaults, Parse({"--lambda-e", "1e-10"}));
+  ASSERT_EQ(changed.size(), 1u);
+  EXPECT_EQ(changed[0].rfind("lambda_e:", 0), 0u) << changed[0];
+  // 0 is plain TensoRF: the "none" point, the preset's schedule and the peak steps.
+  trainer::TrainOptions plain = trainer::PresetOptions("fast");
+  trainer::ApplyRatePoint("none", &plain);
+  EXPECT_TRUE(trainer::ChangedSettings(plain, Parse({"--lambda-e", "0"})).empty());
+  EXPECT_TRUE(trainer::ChangedSettings(plain, Parse({"--rate", "none"})).empty());
+  EXPECT_EQ(plain.quant_step_scale, 1.0f);
+  EXPECT_EQ(plain.voxels_final, trainer::PresetOptions("fast").voxels_final);
+  // --target-size picks its own settings by the target's share.
+  trainer::TrainOptions target = trainer::PresetOptions("fast");
+  target.target_bytes = 600000;
+  trainer::ApplyTargetSizeDefaults(&target, trainer::TargetSizeFlagsGiven());
+  EXPECT_TRUE(trainer::ChangedSettings(target, Parse({"--target-size", "600KB"})).empty());
+}
+
+TEST(TrainFlags, ConfigJsonRoundTripsEverySetting) {
+  const trainer::TrainOptions o =
+      Parse({"--scene", "capture", "--rate", "low", "--lambda-e", "1.5e-10", "--dct-block", "8x16x16", "--ranks", "8,20",
+             "--upsample-at", "100,200", "--target-size", "123KB", "--test-stride", "3", "-o", "run/x"});
+  const std::string text = trainer::TrainConfigToJson(o);
+  const trainer::TrainOptions back = trainer::TrainConfigFromJson(text, "test");
+  EXPECT_TRUE(trainer::ChangedSettings(o, back).empty());
+  EXPECT_EQ(trainer::TrainConfigToJson(back), text);
+  EXPECT_EQ(back.lambda_e, 1.5e-10f);  // bit for bit, through the shortest decimal
+  EXPECT_NE(text.find("\"lambda_e\": 1.5e-10"), std::string::npos) << text;
+  EXPECT_EQ(back.test_view_stride, 3);
+  EXPECT_EQ(back.out_dir, "run/x");
+  EXPECT_THROW(trainer::TrainConfigFromJson("{\"config_version\": 99, \"settings\": {}}", "x"), std::runtime_error);
+  EXPECT_THROW(trainer::TrainConfigFromJson("[1, 2]", "x"), std::runtime_error);
+  EXPECT_THROW(trainer::TrainConfigFromJson("{\"settings\": {\"iters\": \"many\"}}", "x"), std::runtime_error);
+}
+
+TEST(TrainFlags, DefaultScoringIsAtMostTwentyEvenlySpacedViews) {
+  trainer::TrainOptions o;
+  EXPECT_EQ(trainer::ScoredTestViewStride(o, 200), 10);  // Synthetic-NeRF: every 10th
+  EXPECT_EQ(trainer::ScoredTestViewStride(o, 15), 1);
+  EXPECT_EQ(trainer::ScoredTestViewStride(o, 21), 2);
+  o.test_view_stride = 1;
+  EXPECT_EQ(trainer::ScoredTestViewStride(o, 200), 1);
 }
 
 }  // namespace

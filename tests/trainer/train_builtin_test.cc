@@ -29,6 +29,7 @@ TrainOptions SmallRun() {
   o.iters = 400;
   o.batch_rays = 1024;
   o.progress_every = 100;
+  o.score_float = true;  // the tests compare the decoded file and the checkpoint with the float model
   return o;
 }
 

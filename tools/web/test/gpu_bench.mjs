@@ -5,7 +5,7 @@
 // it (warm-up frame, then timed frames with finish) and the PSNR between them is printed.
 //
 //   node tools/web/test/gpu_bench.mjs [SCENE.ecrf] [--sizes 400,800] [--frames 2 (0: first only)] [--band 50]
-//                                     [--deferred] [--ecrf build-test/tools/ecrf]
+//                                     [--deferred] [--ecrf build/tools/ecrf]
 import {execFileSync} from 'node:child_process';
 import {mkdtempSync, readFileSync, rmSync} from 'node:fs';
 import {tmpdir} from 'node:os';
@@ -19,7 +19,7 @@ const flag = (name) => { const i = args.indexOf(name); return i >= 0 ? (args.spl
 const sizes = opt('--sizes', '400,800').split(',').map(Number);
 const frames = Number(opt('--frames', '2'));
 const band = Number(opt('--band', '50'));
-const ecrf = opt('--ecrf', join(root, 'build-test/tools/ecrf'));
+const ecrf = opt('--ecrf', join(root, 'build/tools/ecrf'));
 const deferred = flag('--deferred');
 const scene = args[0] || '/work/sweeps/chair_v2/runs/lambda_2e-10_steps4/scene.ecrf';
 const elevation = 30, radius = 4;

@@ -1,0 +1,178 @@
+// One resolved configuration per run: `ecrf encode RUN` rebuilds the file `ecrf train` wrote,
+// --lambda-e at the default's value is the default run, a sweep point is the `ecrf train` run of
+// its settings, --resume refuses changed settings, and --help shows each rate point's values.
+// Small runs of the built-in scene (a few seconds each); every comparison is byte for byte.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "tests/common/invoke.h"
+#include "tools/cli_args.h"
+#include "tools/commands.h"
+#include "tools/report.h"
+#include "tools/train_flags.h"
+#include "trainer/checkpoint.h"
+#include "trainer/train_config.h"
+
+namespace ecrf {
+namespace tools {
+namespace {
+
+using testing_cli::Invoke;
+
+// Short runs that still pass through every phase (upsampling, mask, rate phase, QAT).
+const std::vector<std::string> kSmallRun = {"--scene", "builtin", "--iters", "160", "--batch", "512",
+                                            "--final-grid", "48", "--threads", "2"};
+
+class RunConfigTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    char tmpl[] = "/tmp/ecrf_run_config_XXXXXX";
+    ASSERT_NE(mkdtemp(tmpl), nullptr);
+    root_ = tmpl;
+  }
+  void TearDown() override { std::system(("rm -rf '" + root_ + "'").c_str()); }
+
+  // Trains kSmallRun plus args into root_/name; returns the run directory.
+  std::string Train(const std::string& name, std::vector<std::string> args) {
+    const std::string dir = root_ + "/" + name;
+    std::vector<std::string> argv = {"train"};
+    argv.insert(argv.end(), kSmallRun.begin(), kSmallRun.end());
+    argv.insert(argv.end(), args.begin(), args.end());
+    argv.insert(argv.end(), {"-o", dir});
+    EXPECT_EQ(Invoke(RunTrain, argv), 0) << name;
+    return dir;
+  }
+  static std::vector<uint8_t> Bytes(const std::string& path) { return trainer::ReadWholeFile(path); }
+
+  std::string root_;
+};
+
+TEST_F(RunConfigTest, EncodeRunRebuildsTheFileTrainWroteForEveryRatePoint) {
+  for (const char* rate : {"low", "medium", "high", "none"}) {
+    const std::string run = Train(rate, {"--rate", rate});
+    const std::string again = run + "/again.ecrf";
+    ASSERT_EQ(Invoke(RunEncode, {"encode", run, "-o", again}), 0);
+    EXPECT_EQ(Bytes(again), Bytes(run + "/scene.ecrf")) << "rate point " << rate;
+    // The run's configuration is there for every later command, and reads back as the run's.
+    const trainer::TrainOptions stored = trainer::TrainConfigFromJson(
+        std::string(reinterpret_cast<const char*>(Bytes(run + "/config.json").data()), Bytes(run + "/config.json").size()),
+        run);
+    EXPECT_EQ(stored.rate_point, rate);
+    std::vector<std::string> args = kSmallRun;
+    args.insert(args.end(), {"--rate", rate, "-o", run});
+    EXPECT_TRUE(trainer::ChangedSettings(stored, ResolveTrainOptions(args)).empty());
+  }
+  // A flag that changes a setting changes the file (the run trained 15 levels at the low point).
+  const std::string low = root_ + "/low";
+  ASSERT_EQ(Invoke(RunEncode, {"encode", low, "-o", low + "/f16.ecrf", "--mlp-levels", "0"}), 0);
+  EXPECT_GT(Bytes(low + "/f16.ecrf").size(), Bytes(low + "/scene.ecrf").size());
+}
+
+TEST_F(RunConfigTest, EncodeRunKeepsTheTargetSize) {
+  const std::string run = Train("target", {"--target-size", "50KB"});
+  ASSERT_EQ(Invoke(RunEncode, {"encode", run, "-o", run + "/again.ecrf"}), 0);
+  EXPECT_EQ(Bytes(run + "/again.ecrf"), Bytes(run + "/scene.ecrf"));
+  EXPECT_LE(Bytes(run + "/scene.ecrf").size(), 50000u);
+}
+
+TEST_F(RunConfigTest, LambdaEAtTheDefaultValueWritesTheDefaultRunsBytes) {
+  const std::string plain = Train("default", {});
+  trainer::TrainOptions medium = trainer::PresetOptions("tiny");
+  trainer::ApplyRatePoint("medium", &medium);
+  char lambda[32];
+  std::snprintf(lambda, sizeof(lambda), "%.9g", double(medium.lambda_e));
+  const std::string adjusted = Train("lambda", {"--lambda-e", lambda});
+  EXPECT_EQ(Bytes(adjusted + "/scene.ecrf"), Bytes(plain + "/scene.ecrf"));
+}
+
+TEST_F(RunConfigTest, ASweepPointWritesTheBytesOfTheTrainRunOfItsSettings) {
+  std::vector<std::string> sweep = {"report", "sweep"};
+  sweep.insert(sweep.end(), kSmallRun.begin(), kSmallRun.end());
+  sweep.insert(sweep.end(), {"--rates", "high", "--lambdas", "1e-10", "-o", root_ + "/report"});
+  ASSERT_EQ(Invoke(RunReportSweep, std::vector<std::string>(sweep.begin() + 1, sweep.end())), 0);
+  const std::string high = Train("high", {"--rate", "high"});
+  const std::string lambda = Train("lambda", {"--lambda-e", "1e-10"});
+  EXPECT_EQ(Bytes(root_ + "/report/runs/rate_high/scene.ecrf"), Bytes(high + "/scene.ecrf"));
+  EXPECT_EQ(Bytes(root_ + "/report/runs/lambda_1e-10_steps3/scene.ecrf"), Bytes(lambda + "/scene.ecrf"));
+  // report.json records each point's configuration and rate point.
+  const nlohmann::json report = ReadReport(root_ + "/report");
+  ASSERT_EQ(report["points"].size(), 2u);
+  for (const nlohmann::json& p : report["points"]) {
+    ASSERT_TRUE(p.contains("config"));
+    const trainer::TrainOptions c = trainer::TrainConfigFromJson(p["config"].dump(), "report.json");
+    EXPECT_EQ(p["rate_point"], c.rate_point == "medium" ? "medium base" : c.rate_point);
+    EXPECT_FLOAT_EQ(float(p["lambda_e"].get<double>()), c.lambda_e);
+  }
+}
+
+TEST_F(RunConfigTest, ResumeRefusesChangedSettingsUnlessAccepted) {
+  const std::string run = Train("stopped", {"--stop-after", "40"});
+  std::vector<std::string> resume = {"train"};
+  resume.insert(resume.end(), kSmallRun.begin(), kSmallRun.end());
+  resume.insert(resume.end(), {"--resume", "--lambda-e", "1e-10", "-o", run});
+  std::string error;
+  try {
+    Invoke(RunTrain, resume);
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  EXPECT_NE(error.find("lambda_e"), std::string::npos) << error;
+  EXPECT_NE(error.find("--accept-config-change"), std::string::npos) << error;
+  EXPECT_FALSE(FileExists(run + "/scene.ecrf"));
+  resume.push_back("--accept-config-change");
+  EXPECT_EQ(Invoke(RunTrain, resume), 0);
+  EXPECT_TRUE(FileExists(run + "/scene.ecrf"));
+}
+
+// What CLI11 prints as a default: operator<< of the value.
+template <class T>
+std::string Shown(const T& v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+TEST(TrainHelp, ShowsTheResolvedDefaultsOfEachRatePoint) {
+  for (const char* rate : {"low", "medium", "high", "none"}) {
+    const trainer::TrainOptions o = ResolveTrainOptions({"--rate", rate});
+    testing::internal::CaptureStdout();
+    EXPECT_EQ(Invoke(RunTrain, {"train", "--rate", rate, "--help"}), 0);
+    std::string help = testing::internal::GetCapturedStdout();
+    // The sweep trains each point as `ecrf train` does: its help shows the same values.
+    testing::internal::CaptureStdout();
+    EXPECT_EQ(Invoke(RunReportSweep, {"sweep", "--rate", rate, "--help"}), 0);
+    help += testing::internal::GetCapturedStdout();
+    for (const std::string& shown :
+         {"--lambda-e X:NONNEGATIVE=" + Shown(o.lambda_e), "--quant-step-scale S=" + Shown(o.quant_step_scale),
+          "--mlp-levels L:INT in [0 - 32767]=" + Shown(o.mlp_levels), "--rate-start F=" + Shown(o.rate_start),
+          "--iters N:INT in [1 - 100000000]=" + Shown(o.iters), "--rate TEXT:{low,medium,high,none}=" + o.rate_point}) {
+      const size_t first = help.find(shown);
+      EXPECT_NE(first, std::string::npos) << rate << ": help lacks '" << shown << "'";
+      EXPECT_NE(help.find(shown, first + 1), std::string::npos) << rate << ": sweep help lacks '" << shown << "'";
+    }
+  }
+  // The encoder's help is help, not a run.
+  testing::internal::CaptureStdout();
+  EXPECT_EQ(Invoke(RunEncode, {"encode", "--help"}), 0);
+  EXPECT_NE(testing::internal::GetCapturedStdout().find("--target-size"), std::string::npos);
+}
+
+TEST(TrainHelp, UnknownFlagIsOneShortLineWithASuggestion) {
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(Invoke(RunTrain, {"train", "--scene", "builtin", "--test-strid", "3", "-o", "/tmp/never"}), 2);
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(err, "ecrf train: error: unknown option '--test-strid' (did you mean --test-stride?); see 'ecrf train "
+                 "--help'\n");
+  EXPECT_FALSE(FileExists("/tmp/never"));
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(Invoke(RunEncode, {"encode", "run", "-o", "x.ecrf", "--target-size", "500"}), 2);
+  EXPECT_NE(testing::internal::GetCapturedStderr().find("has no unit"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace tools
+}  // namespace ecrf

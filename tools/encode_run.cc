@@ -1,0 +1,39 @@
+#include "tools/encode_run.h"
+
+#include <nlohmann/json.hpp>
+#include <utility>
+
+#include "trainer/trainer.h"
+
+namespace ecrf {
+namespace tools {
+
+trainer::EncodeOptions TrainedRunEncodeOptions(const trainer::TrainOptions& o, const trainer::RateState& rate,
+                                               int iterations, float final_lambda_e) {
+  trainer::EncodeOptions eo = trainer::RunEncodeOptions(o, rate);
+  eo.metadata_json = nlohmann::json{{"encoder", "ecrf"},
+                                    {"data", trainer::DataSource(o)},
+                                    {"preset", o.preset},
+                                    {"iterations", iterations},
+                                    {"lambda_e", final_lambda_e},
+                                    {"alpha", o.alpha}}
+                         .dump();
+  return eo;
+}
+
+EncodedRun EncodeRun(const trainer::TensorfModel& model, const trainer::EncodeOptions& options, size_t target_bytes) {
+  EncodedRun e;
+  if (target_bytes > 0) {
+    trainer::TargetSizeResult t = trainer::EncodeToTargetSize(model, options, target_bytes);
+    e.bytes = std::move(t.bytes);
+    e.report = t.report;
+    e.step_scale = t.step_scale;
+    e.encodes = t.encodes;
+  } else {
+    e.bytes = trainer::EncodeScene(model, options, &e.report);
+  }
+  return e;
+}
+
+}  // namespace tools
+}  // namespace ecrf
