@@ -106,6 +106,12 @@ int ParseCommandLine(CLI::App* app, int argc, char** argv) {
   }
 }
 
+int UsageError(const CLI::App& app, const std::string& message) {
+  std::fprintf(stderr, "%s: error: %s; see '%s --help'\n", app.get_name().c_str(), message.c_str(),
+               app.get_name().c_str());
+  return 2;
+}
+
 size_t ParseSizeWithUnit(const std::string& flag, const std::string& text) {
   char* end = nullptr;
   const double v = std::strtod(text.c_str(), &end);

@@ -23,6 +23,10 @@ std::unique_ptr<CLI::App> MakeCommand(const std::string& name, const std::string
 // the exit code after printing: 0 after --help, 2 after an error (one short line on stderr).
 int ParseCommandLine(CLI::App* app, int argc, char** argv);
 
+// A usage error found after parsing (a value out of range, a size without a unit): the same one
+// line as a parse error, exit code 2.
+int UsageError(const CLI::App& app, const std::string& message);
+
 // The same on a list of arguments (without the command's name), for commands that resolve a
 // command line more than once (the sweep) and for tests. Throws std::invalid_argument with the
 // short message on errors; returns false after --help (help printed to stdout).

@@ -29,13 +29,6 @@ struct CommonArgs {
   dec::RenderOptions render;
 };
 
-// A choice between flags that the command line left open: the same one line as a parse error.
-int UsageError(const CLI::App& app, const std::string& message) {
-  std::fprintf(stderr, "%s: error: %s; see '%s --help'\n", app.get_name().c_str(), message.c_str(),
-               app.get_name().c_str());
-  return 2;
-}
-
 // The flags both commands share: the stream, threads, grid storage, the renderer's speed knobs
 // (SPEC.md 7.8) and the budgets against hostile files.
 void AddCommonFlags(CLI::App* app, CommonArgs* c) {

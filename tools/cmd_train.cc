@@ -1,6 +1,7 @@
 // `ecrf train`: trains a TensoRF VM model on posed images or on a procedural scene, then encodes,
 // decodes and scores the file.
 #include <cstdio>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -27,7 +28,12 @@ int RunTrain(int argc, char** argv) {
   app->add_flag("--print-config", print_config, "print the resolved configuration (config.json) and exit");
   const int parsed = ParseCommandLine(app.get(), argc, argv);
   if (parsed >= 0) return parsed;
-  const trainer::TrainOptions o = FinishTrainFlags(*app, &flags);
+  trainer::TrainOptions o;
+  try {
+    o = FinishTrainFlags(*app, &flags);
+  } catch (const std::invalid_argument& e) {
+    return UsageError(*app, e.what());
+  }
   if (print_config) {
     std::printf("%s\n", trainer::TrainConfigToJson(o).c_str());
     return 0;

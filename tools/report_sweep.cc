@@ -246,7 +246,12 @@ int RunReportSweep(int argc, char** argv) {
       ->type_name("REPORT_DIR");
   const int parsed = ParseCommandLine(app.get(), argc, argv);
   if (parsed >= 0) return parsed;
-  trainer::TrainOptions o = FinishTrainFlags(*app, &flags);
+  trainer::TrainOptions o;
+  try {
+    o = FinishTrainFlags(*app, &flags);
+  } catch (const std::invalid_argument& e) {
+    return UsageError(*app, e.what());
+  }
   if (out.empty() || (lambdas_text.empty() && rates_text.empty()) || trainer::DataSource(o).empty()) {
     std::fprintf(stderr, "ecrf report sweep: error: needs --data DIR or --scene NAME, --rates or --lambdas, and -o; "
                  "see 'ecrf report sweep --help'\n");

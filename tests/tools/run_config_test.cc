@@ -168,9 +168,17 @@ TEST(TrainHelp, UnknownFlagIsOneShortLineWithASuggestion) {
   EXPECT_EQ(err, "ecrf train: error: unknown option '--test-strid' (did you mean --test-stride?); see 'ecrf train "
                  "--help'\n");
   EXPECT_FALSE(FileExists("/tmp/never"));
-  testing::internal::CaptureStderr();
-  EXPECT_EQ(Invoke(RunEncode, {"encode", "run", "-o", "x.ecrf", "--target-size", "500"}), 2);
-  EXPECT_NE(testing::internal::GetCapturedStderr().find("has no unit"), std::string::npos);
+  for (auto command : {RunTrain, RunEncode}) {
+    testing::internal::CaptureStderr();
+    const std::vector<std::string> args =
+        command == RunTrain ? std::vector<std::string>{"train", "--scene", "builtin", "--target-size", "500", "-o", "/tmp/never"}
+                            : std::vector<std::string>{"encode", "run", "-o", "/tmp/never.ecrf", "--target-size", "500"};
+    EXPECT_EQ(Invoke(command, args), 2) << args[0];
+    const std::string err = testing::internal::GetCapturedStderr();
+    EXPECT_NE(err.find("'500' has no unit: write 500B for bytes or 500KB"), std::string::npos) << err;
+    EXPECT_EQ(err.find('\n'), err.size() - 1) << "one line: " << err;
+  }
+  EXPECT_FALSE(FileExists("/tmp/never"));
 }
 
 }  // namespace
