@@ -26,14 +26,8 @@ int RunTrain(int argc, char** argv) {
   bool print_config = false;
   app->add_option("-o,--out", flags.options.out_dir, "run directory (created with its parents)")->type_name("RUN_DIR");
   app->add_flag("--print-config", print_config, "print the resolved configuration (config.json) and exit");
-  const int parsed = ParseCommandLine(app.get(), argc, argv);
-  if (parsed >= 0) return parsed;
   trainer::TrainOptions o;
-  try {
-    o = FinishTrainFlags(*app, &flags);
-  } catch (const std::invalid_argument& e) {
-    return UsageError(*app, e.what());
-  }
+  if (const int rc = ParseTrainCommandLine(app.get(), &flags, argc, argv, &o); rc >= 0) return rc;
   if (print_config) {
     std::printf("%s\n", trainer::TrainConfigToJson(o).c_str());
     return 0;

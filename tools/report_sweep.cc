@@ -244,14 +244,8 @@ int RunReportSweep(int argc, char** argv) {
                   "without a lambda_e 0 point: take the float32 reference of that earlier sweep (same data, preset, "
                   "iterations, seed, stride)")
       ->type_name("REPORT_DIR");
-  const int parsed = ParseCommandLine(app.get(), argc, argv);
-  if (parsed >= 0) return parsed;
   trainer::TrainOptions o;
-  try {
-    o = FinishTrainFlags(*app, &flags);
-  } catch (const std::invalid_argument& e) {
-    return UsageError(*app, e.what());
-  }
+  if (const int rc = ParseTrainCommandLine(app.get(), &flags, argc, argv, &o); rc >= 0) return rc;
   if (out.empty() || (lambdas_text.empty() && rates_text.empty()) || trainer::DataSource(o).empty()) {
     std::fprintf(stderr, "ecrf report sweep: error: needs --data DIR or --scene NAME, --rates or --lambdas, and -o; "
                  "see 'ecrf report sweep --help'\n");

@@ -242,6 +242,16 @@ trainer::TrainOptions FinishTrainFlags(const CLI::App& app, TrainFlags* f) {
   return o;
 }
 
+int ParseTrainCommandLine(CLI::App* app, TrainFlags* flags, int argc, char** argv, trainer::TrainOptions* options) {
+  if (const int rc = ParseCommandLine(app, argc, argv); rc >= 0) return rc;
+  try {
+    *options = FinishTrainFlags(*app, flags);
+  } catch (const std::invalid_argument& e) {
+    return UsageError(*app, e.what());
+  }
+  return -1;
+}
+
 trainer::TrainOptions ResolveTrainOptions(const std::vector<std::string>& args) {
   auto app = MakeCommand("train", "train a model");
   TrainFlags flags;
