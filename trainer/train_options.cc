@@ -14,7 +14,7 @@ TrainOptions PresetOptions(const std::string& name) {
   if (name == "fast") {
     // The CPU preset: TensoRF's schedule compressed 10x (3k iterations) with a 180^3 final grid.
     // On chair-400 with 2 cores it passes 32.4 dB test PSNR after 3.1 minutes of training and
-    // ends at 35.1 dB after 6.4 minutes (10 test views; README "Measured"). The small early grid
+    // ends at 35.1 dB after 6.4 minutes (10 test views; docs/results.md). The small early grid
     // and the early alpha mask matter most: after the shrink at iteration 300 a batch costs
     // 0.13 M density samples instead of 0.49 M.
     o.iters = 3000;
@@ -64,7 +64,7 @@ constexpr int kLowRateMaxAppearanceRank = 32;
 // the last at 1000 instead of 1500), so that the rate phase starts that much earlier. On chair
 // the two together gain about 0.3 dB at equal size at the low point, each alone 0.08-0.11 dB;
 // at the medium point the file grows from 550 KB to 644 KB and the decoded PSNR from 34.94 to
-// 35.43 dB, above the lambda = 0 float model (README "Measured").
+// 35.43 dB, above the lambda = 0 float model (docs/results.md).
 void ApplyFineGridSchedule(TrainOptions* o) {
   if (!o->fine_grid_at_rate_points) return;
   constexpr double kGridScale = 11.0 / 9.0;
@@ -88,7 +88,7 @@ void ApplyRatePoint(const std::string& name, TrainOptions* o) {
     // Coarser steps under QAT beat a larger lambda_e at the same size (chair: 182,217 B at
     // 33.76 dB against 266,445 B at 33.79 dB with steps x1). At this rate fewer appearance
     // components code better: chair with 32 instead of 48 gains 0.03-0.13 dB at equal size,
-    // while a 64-unit head or 8 density components cost 0.3-0.4 dB (README "Measured").
+    // while a 64-unit head or 8 density components cost 0.3-0.4 dB (docs/results.md).
     o->lambda_e = 2e-10f;
     o->quant_step_scale = 4.0f;
     o->mlp_levels = kLowRateMlpLevels;

@@ -77,14 +77,15 @@ struct TrainOptions {
   // never; < 0: from the start of the rate phase when the rate objective is on, else never),
   // the quantization error refreshed every qat_refresh iterations. The steps are frozen when it
   // starts (with lambda_e = 0 too). On by default: on chair it lifted the decoded file by
-  // 0.12 dB at lambda_e 1e-10 and 0.37 dB at 5e-10 for the same size (README).
+  // 0.12 dB at lambda_e 1e-10 and 0.37 dB at 5e-10 for the same size (docs/results.md).
   float qat_start = -1.0f;
   // The coefficient quantizer's rounding offset (trainer/coef_quantizer.h), in the encoder and in
   // quantization-aware training alike: 0.5 rounds to nearest.
   float rounding_offset = 0.5f;
   int qat_refresh = 1;
   // How `ecrf train` codes the basis and MLP: > 0 integer levels (at most this many per row,
-  // MLPW precision 2); 0 binary16. 127 cost no measurable PSNR on chair (README) and halves MLPW.
+  // MLPW precision 2); 0 binary16. 127 cost no measurable PSNR on chair (docs/results.md) and
+  // halves MLPW.
   int mlp_levels = 127;
   // > 0: lambda_e adapts during the rate phase so that the file lands at this size
   // (trainer/train_rate_control.h), re-measured by encoding every rate_control_every iterations;
@@ -140,7 +141,7 @@ TrainOptions PresetOptions(const std::string& name);
 //   "high"   lambda_e 2e-11, steps x1 (1,044,897 B, 35.19 dB before quantization-aware training)
 //   "none"   plain TensoRF: lambda_e 0, steps x1 (the 8-bit peak steps), 127 MLP levels, the
 //            preset's schedule: the float model every ratio is measured against
-// (README "Training" gives the commands.) Throws std::invalid_argument for other names.
+// (docs/user-guide.md gives the commands.) Throws std::invalid_argument for other names.
 void ApplyRatePoint(const std::string& name, TrainOptions* options);
 
 // The float32 size of the grids a run of these options ends with, before the box shrinks
