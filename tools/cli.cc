@@ -3,10 +3,12 @@
 #include <omp.h>
 
 #include <algorithm>
-#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <stdexcept>
 #include <thread>
+
+#include "trainer/encode_rate_control.h"
 
 namespace ecrf {
 namespace tools {
@@ -113,27 +115,20 @@ int UsageError(const CLI::App& app, const std::string& message) {
 }
 
 size_t ParseSizeWithUnit(const std::string& flag, const std::string& text) {
+  // The number and units are trainer::ParseByteSize's; the command line adds one rule: a bare
+  // number is ambiguous to a reader (bytes or kilobytes?), so it needs a unit.
   char* end = nullptr;
-  const double v = std::strtod(text.c_str(), &end);
-  const std::string unit = end ? std::string(end) : "";
-  if (end == text.c_str()) {
-    throw std::invalid_argument(flag + ": '" + text + "' is not a size (e.g. 500KB, 1.2MB, 300000B)");
-  }
-  if (unit.empty()) {
+  std::strtod(text.c_str(), &end);
+  if (end != text.c_str() && *end == '\0') {
     throw std::invalid_argument(flag + ": '" + text + "' has no unit: write " + text + "B for bytes or " + text +
                                 "KB for kilobytes (units: B, KB, MB, KiB, MiB)");
   }
-  double mult = 0;
-  if (unit == "B") mult = 1;
-  else if (unit == "KB" || unit == "kB") mult = 1e3;
-  else if (unit == "MB") mult = 1e6;
-  else if (unit == "KiB") mult = 1024;
-  else if (unit == "MiB") mult = 1024.0 * 1024;
-  if (mult == 0) throw std::invalid_argument(flag + ": '" + text + "': unknown unit '" + unit + "' (B, KB, MB, KiB, MiB)");
-  if (!(v > 0) || !std::isfinite(v) || v * mult > 1e12) {
-    throw std::invalid_argument(flag + ": '" + text + "' is not a size between 1B and 1000GB");
+  try {
+    return trainer::ParseByteSize(text);
+  } catch (const std::invalid_argument&) {
+    throw std::invalid_argument(flag + ": '" + text + "': unknown unit or not a size (e.g. 500KB, 1.2MB, 300000B; "
+                                "units: B, KB, MB, KiB, MiB)");
   }
-  return size_t(std::llround(v * mult));
 }
 
 void AddRenamedFlag(CLI::App* app, const std::string& old_name, const std::string& new_name) {

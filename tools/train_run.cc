@@ -14,6 +14,7 @@
 #include "tools/encode_report.h"
 #include "trainer/checkpoint.h"
 #include "trainer/encode_rate_control.h"
+#include "trainer/eval_progress.h"
 #include "trainer/image_io.h"
 #include "trainer/scene_encoder.h"
 #include "trainer/train_config.h"
@@ -73,8 +74,7 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
       trainer::DownscaleViews(trainer::LoadTrainingViews(options, "test"), options.eval_downscale);
   trainer::TrainOptions o = options;
   o.test_view_stride = trainer::ScoredTestViewStride(options, test.views.size());
-  const int scored = int((test.views.size() + size_t(o.test_view_stride) - 1) / size_t(o.test_view_stride));
-  const int scored_views = o.max_test_views > 0 ? std::min(scored, o.max_test_views) : scored;
+  const int scored_views = trainer::EvalViewCount(test.views.size(), o.test_view_stride, o.max_test_views);
   std::fprintf(stderr, "data: %zu train views, %zu test views (%dx%d, scored at %dx%d)\n", train.views.size(),
                test.views.size(), train.views[0].rgb.width, train.views[0].rgb.height,
                test.views.empty() ? 0 : test.views[0].rgb.width, test.views.empty() ? 0 : test.views[0].rgb.height);

@@ -104,7 +104,7 @@ size_t ParseByteSize(const std::string& text) {
   else if (unit == "KiB") mult = 1024;
   else if (unit == "MiB") mult = 1024.0 * 1024;
   if (mult == 0 || !(v > 0) || !std::isfinite(v) || v * mult > 1e12) {
-    throw std::invalid_argument("'" + text + "' is not a size (e.g. 500KB, 1.2MB, 300000)");
+    throw std::invalid_argument("'" + text + "' is not a size (e.g. 500KB, 1.2MB, 300000B)");
   }
   return size_t(std::llround(v * mult));
 }
