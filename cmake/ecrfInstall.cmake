@@ -2,6 +2,19 @@
 include(CMakePackageConfigHelpers)
 set(ECRF_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/ecrf)
 
+if(ECRF_BUILD_TRAINER)
+  # ecrf::trainer is an interface over the trainer's and the encoder's static libraries; they are
+  # installed with it. Their headers include decoder/ and format/ internals and are installed
+  # beside them under include/ecrf-trainer (not a stable API, unlike ecrf/decoder.h).
+  get_property(ECRF_TRAINER_LIBRARIES GLOBAL PROPERTY ECRF_TRAINER_LIBRARIES)
+  install(TARGETS ecrf_trainer ${ECRF_TRAINER_LIBRARIES} ecrf_format_encoder EXPORT ecrfTargets
+          ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR})
+  foreach(dir trainer/data trainer/scenes trainer/model trainer/rate trainer/train encoder decoder format)
+    file(GLOB headers ${PROJECT_SOURCE_DIR}/${dir}/*.h)
+    install(FILES ${headers} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/ecrf-trainer/${dir})
+  endforeach()
+endif()
+
 install(EXPORT ecrfTargets NAMESPACE ecrf:: DESTINATION ${ECRF_CMAKE_DIR})
 configure_package_config_file(${CMAKE_CURRENT_LIST_DIR}/ecrfConfig.cmake.in
                               ${PROJECT_BINARY_DIR}/ecrfConfig.cmake

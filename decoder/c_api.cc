@@ -1,4 +1,4 @@
-// The C API of decoder/include/ecrf/decoder.h over SceneDecoder and RayMarcher.
+// The C API of include/ecrf/decoder.h over SceneDecoder and RayMarcher.
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>

@@ -1,6 +1,6 @@
 // SceneField: the in-memory model of one decoded TensoRF VM scene, as the renderer consumes it.
 //
-// Conventions mirror the trainer (trainer/vm_grid.h, trainer/alpha_mask.h) without including it:
+// Conventions mirror the trainer (trainer/model/vm_grid.h, trainer/model/alpha_mask.h) without including it:
 //   matMode = [[0,1],[0,2],[1,2]], vecMode = [2,1,0]; plane m spans u = matMode[m][0] (columns)
 //   and v = matMode[m][1] (rows), line m spans w = vecMode[m]; channels-last storage:
 //   plane m [res[v]][res[u]][rank[m]], line m [res[w]][rank[m]]. Ranks may be 0.

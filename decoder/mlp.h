@@ -54,7 +54,7 @@ class AppearanceMlp {
   bool initialized() const { return weights_ != nullptr; }
   const MlpConfig& config() const { return config_; }
 
-  // Number of floats in the trainer's flat layout (trainer/appearance_head.h): basis [F x P],
+  // Number of floats in the trainer's flat layout (trainer/model/appearance_head.h): basis [F x P],
   // W1 [H x in], b1 [H], W2 [H x H], b2 [H], W3 [3 x H], b3 [3]; row-major (out x in).
   size_t num_params() const;
   // Loads weights from that layout (count must equal num_params()); rejects non-finite values.

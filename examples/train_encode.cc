@@ -11,7 +11,7 @@
 #include <exception>
 #include <vector>
 
-#include "trainer/trainer.h"
+#include "trainer/train/trainer.h"
 
 namespace tr = ecrf::trainer;
 

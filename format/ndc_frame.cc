@@ -4,13 +4,6 @@
 
 namespace ecrf {
 
-void WriteNdcFrame(const NdcFrame& f, ByteWriter* out) {
-  for (float v : f.world_to_ref) out->F32(v);
-  out->F32(f.scale[0]);
-  out->F32(f.scale[1]);
-  out->F32(f.near_plane);
-}
-
 Status ParseNdcFrame(const uint8_t* payload, size_t size, NdcFrame* f) {
   ECRF_CHECK_OR_RETURN(size == kNdcFrameBytes, kErrCorrupt, "NDCP: payload is %zu bytes, must be %zu", size,
                        kNdcFrameBytes);

@@ -2,6 +2,16 @@
 
 namespace ecrf {
 
+// Both coders start every adaptive CDF here; it lives with the decoder half, which the
+// embeddable decoder has on its own.
+void InitUniformCdf(uint16_t* cdf, int num_symbols) {
+  for (int i = 0; i < num_symbols; ++i) {
+    cdf[i] = static_cast<uint16_t>(kCdfProbTop * static_cast<uint32_t>(num_symbols - 1 - i) /
+                                   static_cast<uint32_t>(num_symbols));
+  }
+  cdf[num_symbols] = 0;
+}
+
 RangeDecoder::RangeDecoder(const uint8_t* data, size_t size)
     : pos_(data),
       end_(data == nullptr ? data : data + size),

@@ -4,14 +4,6 @@
 
 namespace ecrf {
 
-void InitUniformCdf(uint16_t* cdf, int num_symbols) {
-  for (int i = 0; i < num_symbols; ++i) {
-    cdf[i] = static_cast<uint16_t>(kCdfProbTop * static_cast<uint32_t>(num_symbols - 1 - i) /
-                                   static_cast<uint32_t>(num_symbols));
-  }
-  cdf[num_symbols] = 0;
-}
-
 void RangeEncoder::EncodeSymbol(int symbol, uint16_t* cdf, int num_symbols) {
   assert(symbol >= 0 && symbol < num_symbols && num_symbols >= 2 && num_symbols <= kMaxSymbols);
   const uint32_t upper =

@@ -263,7 +263,7 @@ py::array Render(Scene& s, const py::array_t<float, py::array::c_style | py::arr
 
 // Degrees, as `ecrf render --elevation` and the web viewer take them, to the radians of the
 // orbit: in float64, rounded once to float32, exactly as tools/cmd_render.cc (OrbitRadians) and
-// tools/web/camera_controls.js convert, so that the same degrees give the same camera bit for bit.
+// web/camera_controls.js convert, so that the same degrees give the same camera bit for bit.
 float OrbitRadians(double degrees) { return static_cast<float>(degrees * M_PI / 180.0); }
 
 // SPEC.md 7.1 (informative): the reference tools' orbit, in binary32 with the C library's

@@ -8,15 +8,16 @@
 # interrupted run continues; the committed runs/*/{config,metrics}.json let it resume without the
 # checkpoints.
 #
-#   bash scripts/baseline-reports.sh [chair mic]      # DATA_ROOT=../shared/data/nerf_synthetic_400
+#   bash scripts/baseline-reports.sh [chair mic]   # DATA_ROOT=../shared/data/nerf_synthetic_400, ECRF=build/tools/ecrf
 set -euo pipefail
 cd "$(dirname "$0")/.."
+ecrf="${ECRF:-build/tools/ecrf}"
 data_root="${DATA_ROOT:-../shared/data/nerf_synthetic_400}"
 scenes=("$@")
 [ ${#scenes[@]} -gt 0 ] || scenes=(chair mic)
 for scene in "${scenes[@]}"; do
   out="docs/reports/baseline_2026_11/$scene"
-  build/tools/ecrf report sweep --data "$data_root/$scene" --rates none,low,medium,high --lambdas 1e-10,6e-11 \
+  "$ecrf" report sweep --data "$data_root/$scene" --rates none,low,medium,high --lambdas 1e-10,6e-11 \
     --eval-every 0 --anchors docs/reports/anchors_paper.json -o "$out"
   # Keep what describes each run (settings and scores), not the checkpoints and files.
   find "$out/runs" -type f ! -name config.json ! -name metrics.json -delete

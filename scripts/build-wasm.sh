@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
-# Builds the embeddable decoder (format/ + decoder/, nothing else) to WebAssembly with Emscripten:
-# build-wasm/ecrf_decoder.js + build-wasm/ecrf_decoder.wasm, for tools/web/ (the viewer and its
+# Builds the embeddable decoder (the decoder halves of format/ + decoder/, nothing else) to WebAssembly with Emscripten:
+# build-wasm/ecrf_decoder.js + build-wasm/ecrf_decoder.wasm, for web/ (the viewer and its
 # node smoke test). Optional: not part of scripts/build.sh, the CMake build or CI.
 #
 #   apt-get install -y emscripten      # Debian's emscripten 3.1.6
 #   bash scripts/build-wasm.sh         # ECRF_WASM_OPT=-O2 to change the optimisation level
-#   node tools/web/smoke_test.mjs      # checks it against tests/conformance, prints timings
+#   node web/smoke_test.mjs      # checks it against tests/conformance, prints timings
 #
 # No pthreads: the page renders with num_threads = 1, so the decoder never creates a std::thread.
 set -euo pipefail
@@ -27,14 +27,16 @@ if [ "${ECRF_WASM_SIMD:-1}" != 0 ]; then SIMD=(-msimd128); fi
 OUT=build-wasm
 mkdir -p "$OUT/obj"
 
-CXXFLAGS=(-std=c++17 "$OPT" "${SIMD[@]}" -fno-exceptions -fno-rtti -ffp-contract=off -Wall -Wextra -I. -Idecoder/include)
+CXXFLAGS=(-std=c++17 "$OPT" "${SIMD[@]}" -fno-exceptions -fno-rtti -ffp-contract=off -Wall -Wextra -I. -Iinclude)
 # Objects are reused while the flags and sources are unchanged.
 if [ "$(cat "$OUT/obj/flags" 2>/dev/null)" != "${CXXFLAGS[*]}" ]; then
   rm -f "$OUT"/obj/*.o
   echo "${CXXFLAGS[*]}" > "$OUT/obj/flags"
 fi
 objs=()
-for src in format/*.cc decoder/*.cc; do
+# Exactly the embeddable decoder's sources (the list libecrf_decoder is built from): no encoder code.
+mapfile -t sources < <(grep -v '^#' cmake/decoder_sources.txt | sed '/^$/d')
+for src in "${sources[@]}"; do
   obj="$OUT/obj/$(echo "${src%.cc}" | tr / _).o"
   if [ ! -f "$obj" ] || [ "$src" -nt "$obj" ] || [ -n "$(find format decoder -name '*.h' -newer "$obj" -print -quit)" ]; then
     echo "emcc $src"

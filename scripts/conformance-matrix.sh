@@ -15,8 +15,9 @@ cd "$(dirname "$0")/.."
 OUT=build-matrix
 mkdir -p "$OUT"
 jobs="$(nproc)"
-sources=(format/*.cc decoder/*.cc tests/decoder/conformance_checksums.cc)
-common=(-std=c++17 -fno-exceptions -fno-rtti -ffp-contract=off -Wall -Wextra -Werror -I. -Idecoder/include)
+mapfile -t sources < <(grep -v '^#' cmake/decoder_sources.txt | sed '/^$/d')
+sources+=(tests/decoder/conformance_checksums.cc)
+common=(-std=c++17 -fno-exceptions -fno-rtti -ffp-contract=off -Wall -Wextra -Werror -I. -Iinclude)
 
 # build NAME COMPILER EXECUTABLE FLAGS...: compiles every source in parallel, links
 # $OUT/NAME/EXECUTABLE with the flags and LINK_EXTRA.

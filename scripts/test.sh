@@ -35,10 +35,10 @@ bash scripts/conformance-matrix.sh
 
 echo "== web viewer: WebAssembly build, node smoke test, headless chromium (GPU and CPU paths, UI)"
 bash scripts/build-wasm.sh
-node tools/web/smoke_test.mjs
-(cd tools/web/test && npm ci --no-audit --no-fund --loglevel=error)
-node tools/web/test/gpu_test.mjs
-node tools/web/test/viewer_test.mjs
+node web/smoke_test.mjs
+(cd web/test && npm ci --no-audit --no-fund --loglevel=error)
+node web/test/gpu_test.mjs
+node web/test/viewer_test.mjs
 
 echo "== fuzz targets, 10 s each (ASan + UBSan, every finding aborts; longer: bash scripts/fuzz.sh 600)"
 bash scripts/fuzz.sh 10

@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <thread>
 
-#include "trainer/encode_rate_control.h"
+#include "encoder/encode_rate_control.h"
 
 namespace ecrf {
 namespace tools {

@@ -25,10 +25,10 @@
 #include "tools/commands.h"
 #include "tools/conformance_manifest.h"
 #include "tools/decoded_scene.h"
-#include "trainer/checkpoint.h"
-#include "trainer/image_io.h"
-#include "trainer/scene_encoder.h"
-#include "trainer/trainer.h"
+#include "trainer/train/checkpoint.h"
+#include "trainer/data/image_io.h"
+#include "encoder/scene_encoder.h"
+#include "trainer/train/trainer.h"
 
 namespace ecrf {
 namespace tools {

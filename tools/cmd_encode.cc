@@ -1,6 +1,6 @@
 // `ecrf encode RUN_DIR -o scene.ecrf`: a trained run -> an .ecrf stream.
 //
-// A run's checkpoint stores its resolved configuration (trainer/train_config.h): the encoder
+// A run's checkpoint stores its resolved configuration (trainer/train/train_config.h): the encoder
 // settings come from it, so `encode RUN` writes the bytes `ecrf train` wrote unless a flag changes
 // a setting, and then it says which.
 #include <cstdio>
@@ -13,9 +13,9 @@
 #include "tools/commands.h"
 #include "tools/encode_report.h"
 #include "tools/encode_run.h"
-#include "trainer/checkpoint.h"
-#include "trainer/train_config.h"
-#include "trainer/trainer.h"
+#include "trainer/train/checkpoint.h"
+#include "trainer/train/train_config.h"
+#include "trainer/train/trainer.h"
 
 namespace ecrf {
 namespace tools {

@@ -7,7 +7,7 @@
 #include "tools/commands.h"
 #include "tools/decoded_scene.h"
 #include "tests/common/grid_md5.h"
-#include "trainer/rate_state.h"
+#include "trainer/train/rate_state.h"
 
 namespace ecrf {
 namespace tools {

@@ -14,8 +14,8 @@
 #include "tools/cli_args.h"
 #include "tools/commands.h"
 #include "tools/decoded_scene.h"
-#include "trainer/camera.h"
-#include "trainer/checkpoint.h"
+#include "trainer/data/camera.h"
+#include "trainer/train/checkpoint.h"
 
 namespace ecrf {
 namespace tools {

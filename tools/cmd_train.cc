@@ -8,8 +8,8 @@
 #include "tools/commands.h"
 #include "tools/train_flags.h"
 #include "tools/train_run.h"
-#include "trainer/train_config.h"
-#include "trainer/trainer.h"
+#include "trainer/train/train_config.h"
+#include "trainer/train/trainer.h"
 
 namespace ecrf {
 namespace tools {

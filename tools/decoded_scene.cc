@@ -5,10 +5,10 @@
 #include <cstdio>
 #include <stdexcept>
 
-#include "trainer/camera.h"
-#include "trainer/checkpoint.h"
-#include "trainer/eval_progress.h"
-#include "trainer/image_metrics.h"
+#include "trainer/data/camera.h"
+#include "trainer/train/checkpoint.h"
+#include "trainer/train/eval_progress.h"
+#include "trainer/data/image_metrics.h"
 
 namespace ecrf {
 namespace tools {

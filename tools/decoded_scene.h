@@ -10,9 +10,9 @@
 
 #include "decoder/ray_marcher.h"
 #include "decoder/scene_decoder.h"
-#include "trainer/dataset.h"
-#include "trainer/image_io.h"
-#include "trainer/trainer.h"
+#include "trainer/data/dataset.h"
+#include "trainer/data/image_io.h"
+#include "trainer/train/trainer.h"
 
 namespace ecrf {
 namespace tools {

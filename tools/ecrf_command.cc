@@ -5,10 +5,10 @@
 #include <string>
 
 #include "ecrf/decoder.h"
-#include "tools/benches.h"
+#include "tools/bench/benches.h"
 #include "tools/cli.h"
 #include "tools/commands.h"
-#include "tools/report.h"
+#include "tools/report/report.h"
 #include "tools/subcommands.h"
 
 namespace ecrf {

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "trainer/rate_state.h"
+#include "trainer/train/rate_state.h"
 
 namespace ecrf {
 namespace tools {

@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
-#include "trainer/scene_encoder.h"
+#include "encoder/scene_encoder.h"
 
 namespace ecrf {
 namespace tools {

@@ -3,7 +3,7 @@
 #include <nlohmann/json.hpp>
 #include <utility>
 
-#include "trainer/trainer.h"
+#include "trainer/train/trainer.h"
 
 namespace ecrf {
 namespace tools {

@@ -8,11 +8,11 @@
 #include <cstdint>
 #include <vector>
 
-#include "trainer/encode_rate_control.h"
-#include "trainer/rate_state.h"
-#include "trainer/scene_encoder.h"
-#include "trainer/tensorf_model.h"
-#include "trainer/train_options.h"
+#include "encoder/encode_rate_control.h"
+#include "trainer/train/rate_state.h"
+#include "encoder/scene_encoder.h"
+#include "trainer/model/tensorf_model.h"
+#include "trainer/train/train_options.h"
 
 namespace ecrf {
 namespace tools {

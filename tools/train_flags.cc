@@ -6,8 +6,8 @@
 #include <stdexcept>
 
 #include "tools/cli_args.h"
-#include "trainer/scene_fit.h"
-#include "trainer/train_options.h"
+#include "trainer/data/scene_fit.h"
+#include "trainer/train/train_options.h"
 
 namespace ecrf {
 namespace tools {

@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "tools/cli.h"
-#include "trainer/train_options.h"
+#include "trainer/train/train_options.h"
 
 namespace ecrf {
 namespace tools {

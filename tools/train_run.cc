@@ -12,13 +12,13 @@
 #include "tools/train_flags.h"
 #include "tools/decoded_scene.h"
 #include "tools/encode_report.h"
-#include "trainer/checkpoint.h"
-#include "trainer/encode_rate_control.h"
-#include "trainer/eval_progress.h"
-#include "trainer/image_io.h"
-#include "trainer/scene_encoder.h"
-#include "trainer/train_config.h"
-#include "trainer/trainer.h"
+#include "trainer/train/checkpoint.h"
+#include "encoder/encode_rate_control.h"
+#include "trainer/train/eval_progress.h"
+#include "trainer/data/image_io.h"
+#include "encoder/scene_encoder.h"
+#include "trainer/train/train_config.h"
+#include "trainer/train/trainer.h"
 
 namespace ecrf {
 namespace tools {

@@ -6,7 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "trainer/train_options.h"
+#include "trainer/train/train_options.h"
 
 namespace ecrf {
 namespace tools {

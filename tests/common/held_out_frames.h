@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <string>
 
-#include "trainer/dataset.h"
+#include "trainer/data/dataset.h"
 
 namespace ecrf::trainer {
 

@@ -12,8 +12,8 @@
 
 #include "decoder/ray_marcher.h"
 #include "decoder/scene_decoder.h"
-#include "trainer/tensorf_model.h"
-#include "trainer/volume_render.h"
+#include "trainer/model/tensorf_model.h"
+#include "trainer/model/volume_render.h"
 
 namespace ecrf {
 namespace trainer {

@@ -17,11 +17,11 @@
 #include "decoder/scene_decoder.h"
 #include "ecrf/decoder.h"
 #include "tests/common/invoke.h"
-#include "tools/benches.h"
+#include "tools/bench/benches.h"
 #include "tools/cli.h"
 #include "tools/commands.h"
-#include "tools/report.h"
-#include "trainer/train_options.h"
+#include "tools/report/report.h"
+#include "trainer/train/train_options.h"
 
 namespace ecrf {
 namespace tools {

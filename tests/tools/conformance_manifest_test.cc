@@ -14,8 +14,8 @@
 #include "tests/common/scene_vectors.h"
 #include "tools/conformance_manifest.h"
 #include "tools/decoded_scene.h"
-#include "trainer/checkpoint.h"
-#include "trainer/image_io.h"
+#include "trainer/train/checkpoint.h"
+#include "trainer/data/image_io.h"
 
 namespace ecrf {
 namespace tools {

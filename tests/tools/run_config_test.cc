@@ -12,10 +12,10 @@
 #include "tests/common/invoke.h"
 #include "tools/cli_args.h"
 #include "tools/commands.h"
-#include "tools/report.h"
+#include "tools/report/report.h"
 #include "tools/train_flags.h"
-#include "trainer/checkpoint.h"
-#include "trainer/train_config.h"
+#include "trainer/train/checkpoint.h"
+#include "trainer/train/train_config.h"
 
 namespace ecrf {
 namespace tools {

@@ -7,10 +7,10 @@
 #include <vector>
 
 #include "tools/train_flags.h"
-#include "trainer/train_config.h"
-#include "trainer/dataset.h"
-#include "trainer/scene_fit.h"
-#include "trainer/trainer.h"
+#include "trainer/train/train_config.h"
+#include "trainer/data/dataset.h"
+#include "trainer/data/scene_fit.h"
+#include "trainer/train/trainer.h"
 
 namespace ecrf {
 namespace tools {

@@ -1,0 +1,29 @@
+// The encoder's scalar quantizer of grid DCT coefficients, shared by the encoder and by
+// quantization-aware training so that training sees exactly the levels the file will carry.
+//
+// level = sign(c) * floor(|c| / step + offset). offset 0.5 is rounding to nearest (half away from
+// zero); a smaller offset widens the dead zone around zero and pulls every level toward it, as
+// video encoders do (HEVC's reference encoder: 1/3 intra, 1/6 inter): the levels it drops or
+// shrinks cost more bits than their share of the distortion. The decoder is unchanged
+// (reconstruction is level * step either way).
+#ifndef ECRF_ENCODER_COEF_QUANTIZER_H_
+#define ECRF_ENCODER_COEF_QUANTIZER_H_
+
+#include <cmath>
+
+namespace ecrf {
+namespace trainer {
+
+inline constexpr float kRoundToNearest = 0.5f;
+
+inline double QuantizeLevel(double coefficient, double step, double offset) {
+  // std::round exactly (floor(x + 0.5) differs for the double just below 0.5).
+  if (offset == 0.5) return std::round(coefficient / step);
+  const double magnitude = std::floor(std::fabs(coefficient) / step + offset);
+  return coefficient < 0.0 ? -magnitude : magnitude;
+}
+
+}  // namespace trainer
+}  // namespace ecrf
+
+#endif  // ECRF_ENCODER_COEF_QUANTIZER_H_

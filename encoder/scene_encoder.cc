@@ -1,0 +1,384 @@
+#include "encoder/scene_encoder.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "decoder/scene_decoder.h"
+#include "format/byte_io.h"
+#include "format/coef_coder.h"
+#include "format/container.h"
+#include "format/half_float.h"
+#include "format/mlp_coder.h"
+#include "format/ndc_frame.h"
+#include "format/occupancy_coder.h"
+#include "format/scene_header.h"
+#include "encoder/coef_quantizer.h"
+#include "encoder/grid_dct.h"
+#include "encoder/coded_tensors.h"
+
+namespace ecrf {
+namespace trainer {
+namespace {
+
+// The model as the stream sees it: explicit ranks (possibly 0), channels-last tensors.
+struct SceneTensors {
+  SceneHeader header;
+  NdcFrame ndc;  // forward-facing scenes only
+  std::vector<float> tensors[2][6];  // planes [res[v]][res[u]][rank], lines [res[w]][rank]
+  std::vector<float> head_params;    // trainer layout, P = appearance total rank
+  const AlphaMask* mask = nullptr;
+};
+
+SceneTensors FromModel(const TensorfModel& model) {
+  SceneTensors s;
+  SceneHeader& h = s.header;
+  const TensorfConfig& c = model.config();
+  // Unbounded: HEAD carries the region of interest; the grids span the contracted cube.
+  const Aabb& box = model.unbounded() ? c.roi : model.aabb();
+  h.scene_model = static_cast<uint8_t>(c.scene_model);
+  s.ndc = c.ndc;
+  for (int a = 0; a < 3; ++a) {
+    h.aabb_min[a] = box.min[a];
+    h.aabb_max[a] = box.max[a];
+    h.res[a] = static_cast<uint16_t>(model.res()[a]);
+  }
+  const VmGrid* grids[2] = {&model.density(), &model.appearance()};
+  for (int g = 0; g < 2; ++g) {
+    for (int m = 0; m < 3; ++m) {
+      h.ranks[g][m] = static_cast<uint16_t>(grids[g]->ranks()[m]);
+      s.tensors[g][m].assign(grids[g]->plane(m), grids[g]->plane(m) + grids[g]->plane_size(m));
+      s.tensors[g][3 + m].assign(grids[g]->line(m), grids[g]->line(m) + grids[g]->line_size(m));
+    }
+  }
+  h.density_shift = c.density_shift;
+  h.distance_scale = c.distance_scale;
+  h.step_size = model.step_size();
+  h.num_samples = static_cast<uint32_t>(std::max(1, model.n_samples()));
+  h.weight_threshold = c.weight_threshold;
+  h.near_far[0] = c.near;
+  h.near_far[1] = c.far;
+  for (float& b : h.background) b = c.white_background ? 1.f : 0.f;
+  const AppearanceHeadConfig& hc = model.head().config();
+  h.feature_dim = static_cast<uint16_t>(hc.feature_dim);
+  h.feature_pe_freqs = static_cast<uint8_t>(hc.feature_pe_freqs);
+  h.viewdir_pe_freqs = static_cast<uint8_t>(hc.viewdir_pe_freqs);
+  h.hidden = static_cast<uint16_t>(hc.hidden);
+  s.head_params = model.head().params();
+  s.mask = model.alpha_mask();
+  return s;
+}
+
+// Keeps the components with keep[g][m][r] != 0 (and, for appearance, their basis columns).
+SceneTensors DropComponents(const SceneTensors& in, const std::vector<uint8_t> keep[2][3]) {
+  SceneTensors out = in;
+  const SceneHeader& h = in.header;
+  for (int g = 0; g < 2; ++g) {
+    for (int m = 0; m < 3; ++m) {
+      const int rank = h.ranks[g][m];
+      std::vector<int> kept;
+      for (int r = 0; r < rank; ++r) {
+        if (keep[g][m][r]) kept.push_back(r);
+      }
+      const int nk = static_cast<int>(kept.size());
+      out.header.ranks[g][m] = static_cast<uint16_t>(nk);
+      const size_t plane_cells = size_t(h.res[kMatMode[m][0]]) * h.res[kMatMode[m][1]];
+      const size_t line_cells = h.res[kVecMode[m]];
+      for (int kind = 0; kind < 2; ++kind) {
+        const size_t cells = kind == 0 ? plane_cells : line_cells;
+        const std::vector<float>& src = in.tensors[g][kind * 3 + m];
+        std::vector<float>& dst = out.tensors[g][kind * 3 + m];
+        dst.assign(cells * nk, 0.f);
+        for (size_t i = 0; i < cells; ++i) {
+          for (int k = 0; k < nk; ++k) dst[i * nk + k] = src[i * rank + kept[k]];
+        }
+      }
+    }
+  }
+  // Basis [F x P]: keep the columns of the kept appearance products.
+  const int F = h.feature_dim;
+  const int P = h.total_rank(1);
+  std::vector<int> columns;
+  for (int m = 0, offset = 0; m < 3; offset += h.ranks[1][m], ++m) {
+    for (int r = 0; r < h.ranks[1][m]; ++r) {
+      if (keep[1][m][r]) columns.push_back(offset + r);
+    }
+  }
+  const size_t basis_size = size_t(F) * P;
+  std::vector<float> params;
+  params.reserve(in.head_params.size());
+  for (int f = 0; f < F; ++f) {
+    for (int col : columns) params.push_back(in.head_params[size_t(f) * P + col]);
+  }
+  params.insert(params.end(), in.head_params.begin() + static_cast<long>(basis_size),
+                in.head_params.end());
+  out.head_params = std::move(params);
+  return out;
+}
+
+// The lowest minor version of the features used, wide contexts aside: 1.1 for the quantized MLP,
+// 1.2 unbounded, 1.3 forward-facing.
+uint8_t FeatureVersionMinor(const SceneHeader& h, const EncodeOptions& o) {
+  return std::max<uint8_t>(o.mlp_max_level > 0 ? 1 : 0, kSceneModelMinVersionMinor[h.scene_model]);
+}
+
+std::vector<uint8_t> CodeLevels(const std::vector<int32_t>& levels, const GridBlockLayout& layout,
+                                CoefContextSet set) {
+  CoefContexts contexts;
+  const Status st = contexts.Init(BlockShape{layout.block[0], layout.block[1], layout.block[2]}, set);
+  if (!st.ok()) throw std::invalid_argument(st.message());
+  RangeEncoder enc;
+  const size_t volume = size_t(layout.block_volume());
+  for (int b = 0; b < layout.num_blocks(); ++b) EncodeCoefBlock(enc, contexts, &levels[size_t(b) * volume]);
+  return enc.Finish();
+}
+
+GridBlockLayout LayoutOf(const SceneHeader& h, int g, int t, const RateConfig& blocks) {
+  const std::array<int, 3> res = {h.res[0], h.res[1], h.res[2]};
+  const int rank = h.ranks[g][t % 3];
+  return t < 3 ? PlaneBlockLayout(res, rank, t, blocks.plane_block)
+               : LineBlockLayout(res, rank, t - 3, blocks.line_block);
+}
+
+std::vector<uint8_t> EncodeCoefficients(const SceneTensors& s, int g, int t, float step,
+                                        const EncodeOptions& o, EncodeReport* report) {
+  const GridBlockLayout layout = LayoutOf(s.header, g, t, o.blocks);
+  std::vector<float> coeffs(layout.num_coeffs());
+  ForwardBlocks(s.tensors[g][t].data(), layout, coeffs.data());
+  const int32_t max_abs = o.coef_bits == 16 ? 32767 : 127;
+  const int volume = layout.block_volume();
+  std::vector<int32_t> levels(coeffs.size(), 0);
+  const int index = g * 6 + t;
+  for (int b = 0; b < layout.num_blocks(); ++b) {
+    bool zero = true;
+    int32_t* q = &levels[size_t(b) * volume];
+    for (int i = 0; i < volume; ++i) {
+      const double level = QuantizeLevel(double(coeffs[size_t(b) * volume + i]), step, o.rounding_offset);
+      if (std::fabs(level) > max_abs) ++report->clipped_coefficients;
+      q[i] = int32_t(std::max<double>(-max_abs, std::min<double>(max_abs, level)));
+      zero &= q[i] == 0;
+    }
+    report->tensor_zero_blocks[index] += zero;
+  }
+  // Both context sets code the same levels; the chunk keeps the shorter code (the wide set
+  // only where 1.4 is allowed), so no tensor ever grows over its 1.3 size.
+  std::vector<uint8_t> code = CodeLevels(levels, layout, CoefContextSet::kNarrow);
+  CoefContextSet set = CoefContextSet::kNarrow;
+  if (o.max_version_minor >= 4) {
+    std::vector<uint8_t> wide = CodeLevels(levels, layout, CoefContextSet::kWide);
+    if (wide.size() < code.size()) {
+      code = std::move(wide);
+      set = CoefContextSet::kWide;
+    }
+  }
+  report->tensor_blocks[index] = size_t(layout.num_blocks());
+  report->tensor_coeffs[index] = layout.num_coeffs();
+  ByteWriter w;
+  w.U8(uint8_t(g));
+  w.U8(uint8_t(t));
+  w.U8(uint8_t(o.coef_bits));
+  w.U8(static_cast<uint8_t>(set));
+  for (int a = 0; a < 3; ++a) w.U8(uint8_t(layout.block[a]));
+  w.U8(0);
+  w.F32(step);
+  w.Bytes(code);
+  return std::move(w.bytes());
+}
+
+std::vector<uint8_t> EncodeOccupancyChunk(const AlphaMask& mask) {
+  ByteWriter w;
+  for (float v : mask.aabb().min) w.F32(v);
+  for (float v : mask.aabb().max) w.F32(v);
+  for (int r : mask.res()) w.U16(uint16_t(r));
+  w.U16(0);
+  const int res[3] = {mask.res()[0], mask.res()[1], mask.res()[2]};
+  w.Bytes(EncodeOccupancy(mask.occupancy().data(), res));
+  return std::move(w.bytes());
+}
+
+std::vector<uint8_t> EncodeMlpChunk(const SceneHeader& h, const std::vector<float>& params, bool float32,
+                                    int max_level) {
+  ByteWriter w;
+  w.U8(max_level > 0 ? kMlpPrecisionQuantized : float32 ? kMlpPrecisionFloat32 : kMlpPrecisionFloat16);
+  w.U8(0);
+  w.U8(0);
+  w.U8(0);
+  if (max_level > 0) {
+    const MlpLayout layout =
+        MakeMlpLayout(h.feature_dim, h.total_rank(1), h.hidden, h.feature_pe_freqs, h.viewdir_pe_freqs);
+    w.Bytes(EncodeQuantizedMlp(layout, params.data(), max_level, nullptr));
+    return std::move(w.bytes());
+  }
+  for (float v : params) {
+    if (float32) {
+      w.F32(v);
+    } else {
+      w.U16(FloatToHalf(v));
+    }
+  }
+  return std::move(w.bytes());
+}
+
+std::vector<uint8_t> Assemble(const SceneTensors& s, const std::vector<float>& steps,
+                              const EncodeOptions& o, EncodeReport* report) {
+  *report = EncodeReport{};
+  SceneHeader h = s.header;
+  const uint8_t feature_minor = FeatureVersionMinor(h, o);
+  if (feature_minor > o.max_version_minor) {
+    throw std::invalid_argument("this scene needs stream version 1." + std::to_string(feature_minor) + " (" +
+                                SceneModelName(static_cast<SceneModel>(h.scene_model)) + " model, MLP levels " +
+                                std::to_string(o.mlp_max_level) + "), above the asked 1." +
+                                std::to_string(o.max_version_minor));
+  }
+  std::vector<uint8_t> coef_chunks[2][6];
+  bool wide_contexts = false;
+  for (int g = 0; g < 2; ++g) {
+    for (int t = 0; t < 6; ++t) {
+      if (h.ranks[g][t % 3] == 0) continue;
+      coef_chunks[g][t] = EncodeCoefficients(s, g, t, steps[g * 6 + t], o, report);
+      wide_contexts |= coef_chunks[g][t][3] == static_cast<uint8_t>(CoefContextSet::kWide);
+    }
+  }
+  // 1.4 when a chunk uses the wide contexts, else the lowest version of the other features.
+  ContainerWriter writer(wide_contexts ? uint8_t{4} : feature_minor);
+  h.has_occupancy = (o.include_occupancy && s.mask) ? 1 : 0;
+  ByteWriter head;
+  WriteSceneHeader(h, &head);
+  writer.AddChunk(kChunkHead, head.bytes());
+  report->head_bytes = head.size();
+  size_t chunks = 2 + h.has_occupancy;  // HEAD, DONE, OCCU
+  if (h.scene_model == static_cast<uint8_t>(SceneModel::kForward)) {
+    ByteWriter ndc;
+    WriteNdcFrame(s.ndc, &ndc);
+    writer.AddChunk(kChunkNdcFrame, ndc.bytes());
+    report->head_bytes += ndc.size();
+    ++chunks;
+  }
+  if (h.has_occupancy) {
+    const std::vector<uint8_t> occ = EncodeOccupancyChunk(*s.mask);
+    writer.AddChunk(kChunkOccupancy, occ);
+    report->occupancy_bytes = occ.size();
+  }
+  for (int g = 0; g < 2; ++g) {
+    for (int t = 0; t < 6; ++t) {
+      report->steps[g * 6 + t] = steps[g * 6 + t];
+      if (h.ranks[g][t % 3] == 0) continue;
+      const std::vector<uint8_t>& coef = coef_chunks[g][t];
+      writer.AddChunk(kChunkCoefficients, coef);
+      report->tensor_bytes[g * 6 + t] = coef.size();
+      ++chunks;
+    }
+  }
+  const std::vector<uint8_t> mlp = EncodeMlpChunk(h, s.head_params, o.mlp_float32, o.mlp_max_level);
+  writer.AddChunk(kChunkMlpWeights, mlp);
+  report->mlp_bytes = mlp.size();
+  ++chunks;
+  if (!o.metadata_json.empty()) {
+    writer.AddChunk(kChunkMetadata, reinterpret_cast<const uint8_t*>(o.metadata_json.data()),
+                    o.metadata_json.size());
+    report->metadata_bytes = o.metadata_json.size();
+    ++chunks;
+  }
+  std::vector<uint8_t> bytes = writer.Finish();
+  report->total_bytes = bytes.size();
+  report->container_bytes = kFileHeaderBytes + chunks * kChunkOverheadBytes;
+  for (int g = 0; g < 2; ++g) {
+    for (int m = 0; m < 3; ++m) report->ranks_out[g][m] = h.ranks[g][m];
+  }
+  return bytes;
+}
+
+void Decode(const std::vector<uint8_t>& bytes, dec::SceneField* field) {
+  dec::DecodeOptions options;
+  options.max_memory_bytes = ~uint64_t{0};  // our own stream: no budget
+  const Status s = dec::DecodeScene(bytes.data(), bytes.size(), options, field, nullptr);
+  if (!s.ok()) {
+    throw std::runtime_error(std::string("encoder self-check: the stream does not decode: ") +
+                             s.message());
+  }
+}
+
+// A component is dead when its decoded plane or its decoded line is zero everywhere.
+bool DecodedSliceIsZero(const float* data, size_t cells, int rank, int r) {
+  for (size_t i = 0; i < cells; ++i) {
+    if (data[i * rank + r] != 0.f) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+std::vector<uint8_t> EncodeScene(const TensorfModel& model, const EncodeOptions& o,
+                                 EncodeReport* report_out) {
+  if (o.coef_bits != 8 && o.coef_bits != 16) {
+    throw std::invalid_argument("coefficient bits must be 8 or 16, not " + std::to_string(o.coef_bits));
+  }
+  if (!(o.rounding_offset > 0.f && o.rounding_offset <= 0.5f)) {
+    throw std::invalid_argument("rounding offset " + std::to_string(o.rounding_offset) + " outside (0, 0.5]");
+  }
+  if (!o.steps.empty() && o.steps.size() != 12) {
+    throw std::invalid_argument("EncodeScene: expected 12 quantization steps, got " +
+                                std::to_string(o.steps.size()));
+  }
+  std::vector<float> steps =
+      o.steps.empty() ? ChooseQuantSteps(model, o.blocks, o.coef_bits) : o.steps;
+  for (float& s : steps) {
+    if (!(s > 0.f && s <= 0x1p64f)) {
+      throw std::invalid_argument("quantization step " + std::to_string(s) + " outside (0, 2^64]");
+    }
+    // The stream's smallest step; a tensor this small codes as zeros either way.
+    s = std::max(s, 0x1p-64f);
+  }
+  EncodeReport report;
+  const SceneTensors full = FromModel(model);
+  std::vector<uint8_t> bytes = Assemble(full, steps, o, &report);
+  dec::SceneField decoded;
+  Decode(bytes, &decoded);
+
+  if (o.drop_zero_components) {
+    std::vector<uint8_t> keep[2][3];
+    bool any_dropped = false;
+    const dec::VmGrid* grids[2] = {&decoded.density, &decoded.appearance};
+    for (int g = 0; g < 2; ++g) {
+      for (int m = 0; m < 3; ++m) {
+        const dec::VmGrid& dg = *grids[g];
+        const int rank = dg.ranks[m];
+        keep[g][m].assign(size_t(rank), 1);
+        const size_t plane_cells = rank ? dg.plane_count(m) / rank : 0;
+        const size_t line_cells = rank ? dg.line_count(m) / rank : 0;
+        for (int r = 0; r < rank; ++r) {
+          if (DecodedSliceIsZero(dg.plane_f32[m].data(), plane_cells, rank, r) ||
+              DecodedSliceIsZero(dg.line_f32[m].data(), line_cells, rank, r)) {
+            keep[g][m][r] = 0;
+            any_dropped = true;
+          }
+        }
+      }
+    }
+    // The MLP needs at least one appearance product.
+    if (any_dropped) {
+      bool app_left = false;
+      for (int m = 0; m < 3; ++m) {
+        for (uint8_t k : keep[1][m]) app_left |= k != 0;
+      }
+      for (int m = 0; m < 3 && !app_left; ++m) {
+        if (!keep[1][m].empty()) {
+          keep[1][m][0] = 1;
+          app_left = true;
+        }
+      }
+      const SceneTensors reduced = DropComponents(full, keep);
+      bytes = Assemble(reduced, steps, o, &report);
+      Decode(bytes, &decoded);
+    }
+  }
+  for (int g = 0; g < 2; ++g) {
+    for (int m = 0; m < 3; ++m) report.ranks_in[g][m] = full.header.ranks[g][m];
+  }
+  if (report_out) *report_out = report;
+  return bytes;
+}
+
+}  // namespace trainer
+}  // namespace ecrf

@@ -1,0 +1,230 @@
+// `ecrf report` end to end on the built-in scene: a two-point sweep with the speed-error sweep,
+// checked against `ecrf eval` on the same files, resumed, refused when incompatible, compared.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "tests/common/invoke.h"
+#include "tools/commands.h"
+#include "tools/report/report.h"
+
+namespace ecrf {
+namespace tools {
+namespace {
+
+using testing_cli::Invoke;
+
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+nlohmann::json ReadJson(const std::string& path) { return nlohmann::json::parse(ReadText(path)); }
+
+std::vector<std::vector<std::string>> ReadCsv(const std::string& path) {
+  std::vector<std::vector<std::string>> rows;
+  std::ifstream in(path);
+  std::string line;
+  while (std::getline(in, line)) {
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    std::string cell;
+    while (std::getline(ss, cell, ',')) cells.push_back(cell);
+    if (!line.empty() && line.back() == ',') cells.push_back("");
+    rows.push_back(cells);
+  }
+  return rows;
+}
+
+// One sweep (two trainings) serves every check: ctest runs each TEST in its own process.
+std::string root_, dir_;
+
+void WritesEveryFile() {
+  for (const char* f : {"report.json", "rd.csv", "chunks.csv", "curve.csv", "speed.csv", "index.html",
+                        "runs/lambda_0/scene.ecrf", "runs/lambda_1e-08_steps2/scene.ecrf"}) {
+    EXPECT_FALSE(ReadText(dir_ + "/" + f).empty()) << f;
+  }
+  const std::string html = ReadText(dir_ + "/index.html");
+  EXPECT_NE(html.find("lambda=1e-08"), std::string::npos);
+  EXPECT_NE(html.find("Speed against error"), std::string::npos);
+  EXPECT_NE(html.find("</html>"), std::string::npos);
+}
+
+void RatePointsAreWhatEvalMeasuresOnTheSameFiles() {
+  const nlohmann::json r = ReadJson(dir_ + "/report.json");
+  ASSERT_EQ(r["points"].size(), 2u);
+  const auto rd = ReadCsv(dir_ + "/rd.csv");
+  ASSERT_EQ(rd.size(), 3u);
+  ASSERT_EQ(rd[0][2], "file_bytes");
+  ASSERT_EQ(rd[0][3], "decoded_psnr");
+  for (size_t k = 0; k < 2; ++k) {
+    const nlohmann::json& p = r["points"][k];
+    const std::string file = dir_ + "/" + p["run_dir"].get<std::string>() + "/scene.ecrf";
+    const std::string json = root_ + "/eval.json";
+    ASSERT_EQ(Invoke(RunEval, {"eval", file, "--scene", "builtin", "--seed", "7", "--max-test-views", "4",
+                               "--threads", "2", "--json", json}),
+              0);
+    const nlohmann::json e = ReadJson(json);
+    EXPECT_EQ(e["bytes"], p["file_bytes"]);
+    EXPECT_DOUBLE_EQ(e["psnr"].get<double>(), p["decoded_psnr"].get<double>());
+    EXPECT_DOUBLE_EQ(e["ssim"].get<double>(), p["decoded_ssim"].get<double>());
+    EXPECT_EQ(e["views"], 4);
+    // The CSV row says the same as report.json.
+    EXPECT_EQ(std::stod(rd[k + 1][2]), p["file_bytes"].get<double>());
+    EXPECT_NEAR(std::stod(rd[k + 1][3]), p["decoded_psnr"].get<double>(), 1e-8);
+    // The chunk breakdown adds up to the file.
+    double sum = 0;
+    for (const auto& [name, bytes] : p["chunks"].items()) sum += bytes.get<double>();
+    EXPECT_EQ(sum, p["file_bytes"].get<double>());
+    // Against the lambda = 0 float32 model.
+    const nlohmann::json& ref = r["reference"];
+    EXPECT_DOUBLE_EQ(p["ratio"].get<double>(), ref["float32_bytes"].get<double>() / p["file_bytes"].get<double>());
+    EXPECT_DOUBLE_EQ(p["psnr_loss_db"].get<double>(),
+                     p["decoded_psnr"].get<double>() - ref["float_psnr"].get<double>());
+    EXPECT_FALSE(p["curve"].empty());
+  }
+  EXPECT_EQ(ReadCsv(dir_ + "/chunks.csv").size(), 1 + 2 * r["points"][0]["chunks"].size());
+}
+
+void SpeedRowsObeyWhatTheSpecPromises() {
+  const nlohmann::json r = ReadJson(dir_ + "/report.json");
+  const nlohmann::json& speed = r["speed"];
+  ASSERT_TRUE(speed.is_object());
+  // The middle point of a two-point sweep is the second.
+  EXPECT_EQ(speed["point"], "lambda=1e-08 steps x2");
+  const double default_psnr = r["points"][1]["decoded_psnr"].get<double>();
+  auto row = [&](const std::string& knob, const std::string& setting) {
+    for (const nlohmann::json& x : speed["rows"]) {
+      if (x["knob"] == knob && x["setting"] == setting) return x;
+    }
+    ADD_FAILURE() << "no row " << knob << " " << setting;
+    return nlohmann::json();
+  };
+  // Same views and options as the rate point: the same PSNR to the bit.
+  EXPECT_DOUBLE_EQ(row("default", "default")["psnr"].get<double>(), default_psnr);
+  // Thread count and empty-space skipping never change a pixel (SPEC.md 7.8).
+  EXPECT_DOUBLE_EQ(row("threads", "1")["psnr"].get<double>(), default_psnr);
+  EXPECT_DOUBLE_EQ(row("skip_empty_space", "off")["psnr"].get<double>(), default_psnr);
+  // Early termination at 1e-4 moves a channel by less than 1e-4: PSNR within 0.01 dB of the reference.
+  EXPECT_NEAR(row("early_stop", "0")["psnr"].get<double>(), default_psnr, 0.01);
+  EXPECT_GE(row("early_stop", "0")["samples_per_ray"].get<double>(), row("default", "default")["samples_per_ray"].get<double>());
+  // Half the samples per ray.
+  EXPECT_NEAR(row("step_scale", "2")["samples_per_ray"].get<double>(),
+              row("default", "default")["samples_per_ray"].get<double>() / 2, 0.15 * row("default", "default")["samples_per_ray"].get<double>());
+  // A higher weight threshold runs the MLP less often.
+  EXPECT_LT(row("weight_threshold", "0.01")["mlp_samples_per_ray"].get<double>(),
+            row("default", "default")["mlp_samples_per_ray"].get<double>());
+  EXPECT_EQ(row("image_scale", "1/2")["width"], 32);
+  EXPECT_GT(speed["decode"]["float32_grid_bytes"].get<double>(), speed["decode"]["int16_grid_bytes"].get<double>());
+  EXPECT_EQ(ReadCsv(dir_ + "/speed.csv").size(), 1 + speed["rows"].size());
+}
+
+void SweepResumesFromFinishedRunsAndRefusesIncompatibleOnes() {
+  const nlohmann::json before = ReadJson(dir_ + "/report.json");
+  // Same sweep again: nothing is trained (the runs' metrics are reused), the points are the same.
+  ASSERT_EQ(Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "--lambdas", "0,1e-8@2", "--iters", "150",
+                            "--max-test-views", "4", "--seed", "7", "-o", dir_}),
+            0);
+  const nlohmann::json after = ReadJson(dir_ + "/report.json");
+  EXPECT_EQ(after["points"], before["points"]);
+  // A point's own step scale names its run and labels it.
+  ASSERT_EQ(after["points"].size(), 2u);
+  EXPECT_EQ(after["points"][1]["run_dir"], "runs/lambda_1e-08_steps2");
+  EXPECT_EQ(after["points"][1]["label"], "lambda=1e-08 steps x2");
+  EXPECT_EQ(after["points"][1]["quant_step_scale"], 2.0);
+  EXPECT_EQ(after["points"][0]["quant_step_scale"], 1.0);
+  EXPECT_TRUE(after.contains("speed"));
+  // Other iterations: the finished runs no longer match, and the sweep says so.
+  try {
+    Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "--lambdas", "0", "--iters", "151",
+                    "--max-test-views", "4", "--seed", "7", "-o", dir_});
+    ADD_FAILURE() << "an incompatible finished run was reused";
+  } catch (const std::exception& e) {
+    // The run's config.json against the sweep's settings, named as config.json names them.
+    EXPECT_NE(std::string(e.what()).find("iters: 150 -> 151"), std::string::npos) << e.what();
+  }
+}
+
+void CompareAgainstItselfIsZero() {
+  const std::string json = root_ + "/compare.json";
+  ASSERT_EQ(Invoke(RunReport, {"report", "compare", dir_, dir_ + "/report.json", "--json", json}), 0);
+  const nlohmann::json c = ReadJson(json);
+  EXPECT_NEAR(c["bd_rate_percent"].get<double>(), 0.0, 1e-9);
+  EXPECT_NEAR(c["bd_psnr_db"].get<double>(), 0.0, 1e-9);
+}
+
+TEST(Report, BuiltinSweepMatchesEvalResumesAndCompares) {
+  char tmpl[] = "/tmp/ecrf_report_test_XXXXXX";
+  ASSERT_NE(mkdtemp(tmpl), nullptr);
+  root_ = tmpl;
+  dir_ = root_ + "/nested/report";  // parents do not exist yet
+  // Plots are drawn when matplotlib is installed; the checks below read the tables either way.
+  ASSERT_EQ(Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "--lambdas", "0,1e-8@2", "--iters", "150",
+                               "--max-test-views", "4", "--seed", "7", "--threads", "2", "-o", dir_}),
+            0);
+  ASSERT_EQ(Invoke(RunReport, {"report", "render", dir_, "--test-stride", "1"}), 0);
+  {
+    SCOPED_TRACE("files");
+    WritesEveryFile();
+  }
+  {
+    SCOPED_TRACE("rate points vs ecrf eval");
+    RatePointsAreWhatEvalMeasuresOnTheSameFiles();
+  }
+  {
+    SCOPED_TRACE("speed rows");
+    SpeedRowsObeyWhatTheSpecPromises();
+  }
+  {
+    SCOPED_TRACE("compare");
+    CompareAgainstItselfIsZero();
+  }
+  {
+    SCOPED_TRACE("resume");
+    SweepResumesFromFinishedRunsAndRefusesIncompatibleOnes();
+  }
+  std::system(("rm -rf '" + root_ + "'").c_str());
+}
+
+TEST(ReportCli, HelpExitsZeroAndBadUsageTwo) {
+  EXPECT_EQ(Invoke(RunReport, {"report", "--help"}), 0);
+  EXPECT_EQ(Invoke(RunReport, {"report", "sweep", "--help"}), 0);
+  EXPECT_EQ(Invoke(RunReport, {"report", "render", "--help"}), 0);
+  EXPECT_EQ(Invoke(RunReport, {"report", "compare", "--help"}), 0);
+  EXPECT_EQ(Invoke(RunReport, {"report", "nonsense"}), 2);
+  EXPECT_EQ(Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "-o", "/tmp/x"}), 2);  // no --lambdas
+  EXPECT_THROW(Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "--lambdas", "1e-8@0", "-o", "/tmp/x"}),
+               std::invalid_argument);
+  EXPECT_EQ(Invoke(RunInfo, {"info", "--help"}), 0);
+  EXPECT_EQ(Invoke(RunConformance, {"conformance", "--help"}), 0);
+  EXPECT_EQ(Invoke(RunTrain, {"train", "--help"}), 0);
+  EXPECT_EQ(Invoke(RunEval, {"eval", "--help"}), 0);
+  EXPECT_EQ(Invoke(RunRender, {"render", "--help"}), 0);
+}
+
+TEST(ReportCli, UnwritableOutputFailsBeforeTraining) {
+  // A path below a regular file can never be created: the sweep must say so at once.
+  char tmpl[] = "/tmp/ecrf_report_file_XXXXXX";
+  const int fd = mkstemp(tmpl);
+  ASSERT_GE(fd, 0);
+  close(fd);
+  try {
+    Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "--lambdas", "0", "-o", std::string(tmpl) + "/r"});
+    ADD_FAILURE() << "no error";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot create directory"), std::string::npos) << e.what();
+  }
+  std::remove(tmpl);
+}
+
+}  // namespace
+}  // namespace tools
+}  // namespace ecrf

@@ -1,0 +1,493 @@
+#include "trainer/data/dataset.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <stdexcept>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "tests/common/error_of.h"
+#include "trainer/data/camera.h"
+#include "trainer/data/image_io.h"
+
+namespace ecrf::trainer {
+namespace {
+
+using testing_errors::ErrorOf;
+using testing_errors::Contains;
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+constexpr double kAngleX = 0.6911112070083618;  // chair's camera_angle_x
+
+json Translation(double x, double y, double z) {
+  return json::array({json::array({1, 0, 0, x}), json::array({0, 1, 0, y}), json::array({0, 0, 1, z}),
+                      json::array({0, 0, 0, 1})});
+}
+
+class DatasetTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() / ("ecrf_dataset_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string Dir() const { return dir_.string(); }
+  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+
+  void WriteJson(const std::string& name, const json& value) const {
+    std::ofstream(dir_ / name) << value.dump(2);
+  }
+
+  // An RGBA image whose left half is transparent and right half opaque `shade` red.
+  void WriteRgba(const std::string& name, int width, int height, float shade) const {
+    fs::create_directories((dir_ / name).parent_path());
+    Image image = MakeImage(width, height, 4);
+    for (int y = 0; y < height; ++y) {
+      for (int x = width / 2; x < width; ++x) {
+        image.at(x, y, 0) = shade;
+        image.at(x, y, 3) = 1.0f;
+      }
+    }
+    SavePng(Path(name), image);
+  }
+
+  // Blender layout with three 8x6 frames; frame 2's file_path carries its extension.
+  json WriteBlender() const {
+    json root;
+    root["camera_angle_x"] = kAngleX;
+    root["frames"] = json::array();
+    for (int i = 0; i < 3; ++i) {
+      const std::string stem = "train/r_" + std::to_string(i);
+      WriteRgba(stem + ".png", 8, 6, 0.2f * (i + 1));
+      json frame;
+      frame["file_path"] = "./" + stem + (i == 2 ? ".png" : "");
+      frame["transform_matrix"] = Translation(i, 0, 4);
+      root["frames"].push_back(frame);
+    }
+    WriteJson("transforms_train.json", root);
+    return root;
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(DatasetTest, LoadsBlenderLayout) {
+  WriteBlender();
+  const Dataset dataset = LoadDataset(Dir(), "train", 1);
+  ASSERT_EQ(dataset.views.size(), 3u);
+  EXPECT_TRUE(dataset.white_background);
+  EXPECT_EQ(dataset.near, 2.0);
+  EXPECT_EQ(dataset.far, 6.0);
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_EQ(dataset.scene_aabb[0][a], -1.5);
+    EXPECT_EQ(dataset.scene_aabb[1][a], 1.5);
+  }
+  const View& view = dataset.views[1];
+  EXPECT_EQ(view.name, "train/r_1");
+  EXPECT_EQ(dataset.views[2].name, "train/r_2");
+  EXPECT_EQ(view.camera.width, 8);
+  EXPECT_EQ(view.camera.height, 6);
+  EXPECT_DOUBLE_EQ(view.camera.fx, 0.5 * 8 / std::tan(0.5 * kAngleX));
+  EXPECT_DOUBLE_EQ(view.camera.fy, view.camera.fx);
+  EXPECT_EQ(view.camera.cx, 4.0);
+  EXPECT_EQ(view.camera.cy, 3.0);
+  EXPECT_EQ(view.camera.c2w[0][3], 1.0);
+  EXPECT_EQ(view.camera.c2w[2][3], 4.0);
+  EXPECT_FALSE(view.camera.HasDistortion());
+  ASSERT_EQ(view.rgb.channels, 3);
+  // Transparent left half composited to white, opaque right half keeps its colour.
+  EXPECT_EQ(view.rgb.at(0, 0, 1), 1.0f);
+  EXPECT_NEAR(view.rgb.at(7, 5, 0), 0.4f, 1.0 / 255);
+  EXPECT_EQ(view.rgb.at(7, 5, 1), 0.0f);
+}
+
+TEST_F(DatasetTest, DownscalesImagesAndIntrinsicsTogether) {
+  WriteBlender();
+  const Dataset full = LoadDataset(Dir(), "train", 1);
+  const Dataset half = LoadDataset(Dir(), "train", 2);
+  const View& view = half.views[0];
+  EXPECT_EQ(view.rgb.width, 4);
+  EXPECT_EQ(view.rgb.height, 3);
+  EXPECT_EQ(view.camera.width, 4);
+  EXPECT_DOUBLE_EQ(view.camera.fx, full.views[0].camera.fx / 2);
+  EXPECT_DOUBLE_EQ(view.camera.cx, 2.0);
+  // The same world ray through a half-resolution pixel centre and the matching full-res point.
+  float o1[3], d1[3], o2[3], d2[3];
+  GenerateRay(view.camera, 1, 2, o1, d1);
+  GenerateRay(full.views[0].camera, 2.5, 4.5, o2, d2);
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(d1[a], d2[a], 1e-6);
+  EXPECT_THROW(LoadDataset(Dir(), "train", 0), std::runtime_error);
+}
+
+TEST_F(DatasetTest, ManifestDoesNotDecodeImages) {
+  WriteBlender();
+  const DatasetManifest manifest = ReadDatasetManifest(Dir(), "train");
+  ASSERT_EQ(manifest.views.size(), 3u);
+  EXPECT_EQ(manifest.views[0].image_path, (dir_ / "train/r_0.png").string());
+  EXPECT_EQ(manifest.views[2].image_path, (dir_ / "train/r_2.png").string());
+  const std::vector<View> views = LoadViews(manifest.views, 1);
+  EXPECT_EQ(views.size(), 3u);
+}
+
+TEST_F(DatasetTest, BlenderErrorsNameFileFrameAndField) {
+  json root = WriteBlender();
+  const std::string file = Path("transforms_train.json");
+  auto error_for = [&](const json& broken) {
+    WriteJson("transforms_train.json", broken);
+    return ErrorOf([&] { LoadDataset(Dir(), "train", 1); });
+  };
+
+  json no_matrix = root;
+  no_matrix["frames"][1].erase("transform_matrix");
+  std::string error = error_for(no_matrix);
+  EXPECT_TRUE(Contains(error, file) && Contains(error, "frame 1") && Contains(error, "'transform_matrix'")) << error;
+
+  json bad_matrix = root;
+  bad_matrix["frames"][2]["transform_matrix"] = json::array({json::array({1, 2, 3})});
+  error = error_for(bad_matrix);
+  EXPECT_TRUE(Contains(error, "frame 2") && Contains(error, "not a 4x4 array")) << error;
+
+  json no_focal = root;
+  no_focal.erase("camera_angle_x");
+  error = error_for(no_focal);
+  EXPECT_TRUE(Contains(error, file) && Contains(error, "camera_angle_x")) << error;
+
+  json bad_type = root;
+  bad_type["camera_angle_x"] = "wide";
+  error = error_for(bad_type);
+  EXPECT_TRUE(Contains(error, "'camera_angle_x' must be a number")) << error;
+
+  json no_path = root;
+  no_path["frames"][0].erase("file_path");
+  EXPECT_TRUE(Contains(error_for(no_path), "frame 0: missing 'file_path'"));
+
+  json no_frames = root;
+  no_frames.erase("frames");
+  EXPECT_TRUE(Contains(error_for(no_frames), "missing 'frames'"));
+
+  std::ofstream(file) << "{\"frames\": [";
+  error = ErrorOf([&] { LoadDataset(Dir(), "train", 1); });
+  EXPECT_TRUE(Contains(error, file) && Contains(error, "invalid JSON")) << error;
+
+  // A number beyond binary64 is a JSON error of that file, not an anonymous exception.
+  std::ofstream(file) << "{\"camera_angle_x\": 1e999, \"frames\": []}";
+  error = ErrorOf([&] { LoadDataset(Dir(), "train", 1); });
+  EXPECT_TRUE(Contains(error, file) && Contains(error, "invalid JSON")) << error;
+}
+
+// Degenerate poses train NaN models (rays of NaN direction), so the loader refuses them.
+TEST_F(DatasetTest, RefusesDegenerateAndMirroredPoses) {
+  json root = WriteBlender();
+  const std::string file = Path("transforms_train.json");
+  auto error_for = [&](const json& broken) {
+    WriteJson("transforms_train.json", broken);
+    return ErrorOf([&] { LoadDataset(Dir(), "train", 1); });
+  };
+  const json zero = json::array({json::array({0, 0, 0, 0}), json::array({0, 0, 0, 0}), json::array({0, 0, 0, 0}),
+                                 json::array({0, 0, 0, 1})});
+  json zeros = root;
+  zeros["frames"][1]["transform_matrix"] = zero;
+  std::string error = error_for(zeros);
+  EXPECT_TRUE(Contains(error, file) && Contains(error, "frame 1 ('") && Contains(error, "not orthonormal")) << error;
+
+  json scaled = root;  // a rotation scaled by 1.01 is not a rotation
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) scaled["frames"][0]["transform_matrix"][r][c] = (r == c) ? 1.01 : 0.0;
+  }
+  EXPECT_TRUE(Contains(error_for(scaled), "not orthonormal"));
+
+  json mirrored = root;
+  mirrored["frames"][2]["transform_matrix"][0][0] = -1.0;
+  error = error_for(mirrored);
+  EXPECT_TRUE(Contains(error, "frame 2") && Contains(error, "reflection")) << error;
+
+  json slightly_off = root;  // rounding in written poses stays accepted
+  slightly_off["frames"][0]["transform_matrix"][0][0] = 1.0 + 2e-5;
+  WriteJson("transforms_train.json", slightly_off);
+  EXPECT_NO_THROW(LoadDataset(Dir(), "train", 1));
+}
+
+TEST_F(DatasetTest, MissingBlenderImageIsAnError) {
+  WriteBlender();
+  fs::remove(dir_ / "train/r_1.png");
+  const std::string error = ErrorOf([&] { LoadDataset(Dir(), "train", 1); });
+  EXPECT_TRUE(Contains(error, (dir_ / "train/r_1.png").string())) << error;
+}
+
+TEST_F(DatasetTest, ReportsMissingDirectoryFileAndSplit) {
+  EXPECT_TRUE(Contains(ErrorOf([&] { LoadDataset(Path("nothing"), "train", 1); }), "not a directory"));
+  EXPECT_TRUE(Contains(ErrorOf([&] { LoadDataset(Dir(), "train", 1); }), "transforms_train.json nor transforms.json"));
+  WriteBlender();
+  EXPECT_TRUE(Contains(ErrorOf([&] { LoadDataset(Dir(), "training", 1); }), "unknown split 'training'"));
+}
+
+// Instant-NGP layout: ten JPEG frames written out of order, shared intrinsics with distortion,
+// one frame overriding its focal length, one frame's image missing.
+class NgpDatasetTest : public DatasetTest {
+ protected:
+  void WriteNgp(bool drop_image_3) {
+    json root;
+    root["fl_x"] = 20.0;
+    root["fl_y"] = 21.0;
+    root["cx"] = 7.5;
+    root["cy"] = 5.0;
+    root["w"] = 16;
+    root["h"] = 12;
+    root["k1"] = -0.1;
+    root["k2"] = 0.01;
+    root["p1"] = 0.001;
+    root["p2"] = -0.002;
+    root["aabb_scale"] = 2;
+    root["frames"] = json::array();
+    for (int i = 9; i >= 0; --i) {
+      const std::string name = "images/frame_" + std::to_string(i) + ".jpg";
+      if (!(drop_image_3 && i == 3)) {
+        fs::create_directories(dir_ / "images");
+        // SavePng output under a .jpg name is fine: the loader sniffs the format.
+        SavePng(Path(name), MakeImage(16, 12, 3, 0.5f));
+      }
+      json frame;
+      frame["file_path"] = name;
+      frame["transform_matrix"] = Translation(0, 0, 4 + i);
+      if (i == 5) frame["fl_x"] = 30.0;
+      root["frames"].push_back(frame);
+    }
+    WriteJson("transforms.json", root);
+  }
+};
+
+TEST_F(NgpDatasetTest, SplitsEveryEighthFrameForTest) {
+  WriteNgp(false);
+  const Dataset train = LoadDataset(Dir(), "train", 1);
+  const Dataset test = LoadDataset(Dir(), "test", 1);
+  ASSERT_EQ(test.views.size(), 2u);
+  ASSERT_EQ(train.views.size(), 8u);
+  EXPECT_EQ(test.views[0].name, "images/frame_0");
+  EXPECT_EQ(test.views[1].name, "images/frame_8");  // sorted by path: 0 1 2 3 4 5 6 7 8 9
+  EXPECT_EQ(LoadDataset(Dir(), "val", 1).views.size(), 2u);
+  EXPECT_FALSE(train.white_background);  // RGB images, nothing composited
+}
+
+TEST_F(NgpDatasetTest, ReadsIntrinsicsDistortionAndBounds) {
+  WriteNgp(false);
+  const DatasetManifest manifest = ReadDatasetManifest(Dir(), "train");
+  const ViewSource* five = nullptr;
+  for (const ViewSource& view : manifest.views) {
+    if (view.name == "images/frame_5") five = &view;
+  }
+  ASSERT_NE(five, nullptr);
+  const Camera& camera = manifest.views[0].camera;
+  EXPECT_EQ(camera.width, 16);
+  EXPECT_EQ(camera.height, 12);
+  EXPECT_EQ(camera.fx, 20.0);
+  EXPECT_EQ(camera.fy, 21.0);
+  EXPECT_EQ(camera.cx, 7.5);
+  EXPECT_EQ(camera.cy, 5.0);
+  EXPECT_EQ(camera.k1, -0.1);
+  EXPECT_EQ(camera.k2, 0.01);
+  EXPECT_EQ(camera.p1, 0.001);
+  EXPECT_EQ(camera.p2, -0.002);
+  EXPECT_EQ(five->camera.fx, 30.0);  // per-frame override
+  EXPECT_EQ(five->camera.fy, 21.0);
+  // aabb_scale 2 with the default NGP scale 0.33: half extent 0.5 * 2 / 0.33 about the origin.
+  const double half = 0.5 * 2 / 0.33;
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_NEAR(manifest.scene_aabb[0][a], -half, 1e-12);
+    EXPECT_NEAR(manifest.scene_aabb[1][a], half, 1e-12);
+  }
+  // Cameras at z = 4..13 on the axis: nearest is 4 - half from the box top, farthest corner
+  // from z = 13 is sqrt(2 half^2 + (13 + half)^2); computed over all frames, not the split.
+  EXPECT_NEAR(manifest.near, 4 - half, 1e-9);
+  EXPECT_NEAR(manifest.far, std::sqrt(2 * half * half + (13 + half) * (13 + half)), 1e-9);
+  EXPECT_EQ(ReadDatasetManifest(Dir(), "test").near, manifest.near);
+}
+
+TEST_F(NgpDatasetTest, CameraInsideTheBoxKeepsNearPositive) {
+  WriteJson("transforms.json", {{"fl_x", 10},
+                                {"w", 4},
+                                {"h", 4},
+                                {"frames", json::array({{{"file_path", "a.png"}, {"transform_matrix", Translation(0, 0, 0)}}})}});
+  SavePng(Path("a.png"), MakeImage(4, 4, 3));
+  const DatasetManifest manifest = ReadDatasetManifest(Dir(), "test");
+  const double diagonal = std::sqrt(3.0) / 0.33;
+  EXPECT_NEAR(manifest.near, 0.01 * diagonal, 1e-12);
+  EXPECT_NEAR(manifest.far, diagonal / 2, 1e-12);
+}
+
+TEST_F(NgpDatasetTest, SkipsFramesWithMissingImages) {
+  WriteNgp(true);
+  ::testing::internal::CaptureStderr();
+  const Dataset train = LoadDataset(Dir(), "train", 1);
+  const std::string warnings = ::testing::internal::GetCapturedStderr();
+  EXPECT_EQ(train.views.size(), 7u);
+  EXPECT_TRUE(Contains(warnings, "frame_3.jpg")) << warnings;
+  for (const View& view : train.views) EXPECT_NE(view.name, "images/frame_3");
+}
+
+TEST_F(NgpDatasetTest, NoRemainingFrameIsAnError) {
+  WriteNgp(false);
+  fs::remove(dir_ / "images/frame_0.jpg");
+  fs::remove(dir_ / "images/frame_8.jpg");
+  ::testing::internal::CaptureStderr();
+  const std::string error = ErrorOf([&] { LoadDataset(Dir(), "test", 1); });
+  ::testing::internal::GetCapturedStderr();
+  EXPECT_TRUE(Contains(error, Path("transforms.json")) && Contains(error, "2 skipped")) << error;
+}
+
+TEST_F(NgpDatasetTest, RejectsUnsupportedCameraModels) {
+  WriteJson("transforms.json", {{"camera_model", "OPENCV_FISHEYE"},
+                                {"fl_x", 10},
+                                {"w", 4},
+                                {"h", 4},
+                                {"frames", json::array()}});
+  EXPECT_TRUE(Contains(ErrorOf([&] { LoadDataset(Dir(), "train", 1); }), "OPENCV_FISHEYE"));
+  WriteJson("transforms.json", {{"k3", 0.1}, {"frames", json::array()}});
+  EXPECT_TRUE(Contains(ErrorOf([&] { LoadDataset(Dir(), "train", 1); }), "'k3' is not supported"));
+}
+
+// ---- Rays
+
+Camera BlenderCamera(int width, int height) {
+  Camera camera;
+  camera.width = width;
+  camera.height = height;
+  camera.fx = camera.fy = FocalFromFieldOfView(width, kAngleX);
+  camera.cx = width / 2.0;
+  camera.cy = height / 2.0;
+  return camera;
+}
+
+double AngleBetween(const float a[3], const double b[3]) {
+  double dot = 0, nb = 0;
+  for (int i = 0; i < 3; ++i) {
+    dot += a[i] * b[i];
+    nb += b[i] * b[i];
+  }
+  return std::acos(std::clamp(dot / std::sqrt(nb), -1.0, 1.0));
+}
+
+TEST(GenerateRay, CentrePixelLooksDownRotatedMinusZ) {
+  Camera camera = BlenderCamera(4, 4);
+  // Rotation by 90 degrees about +y: camera -z becomes world -x.
+  const double c2w[3][4] = {{0, 0, 1, 5}, {0, 1, 0, 6}, {-1, 0, 0, 7}};
+  std::copy(&c2w[0][0], &c2w[0][0] + 12, &camera.c2w[0][0]);
+  float origin[3], dir[3];
+  GenerateRay(camera, 1.5, 1.5, origin, dir);  // pixel-centre coordinate 2.0 = cx
+  EXPECT_FLOAT_EQ(origin[0], 5);
+  EXPECT_FLOAT_EQ(origin[1], 6);
+  EXPECT_FLOAT_EQ(origin[2], 7);
+  EXPECT_NEAR(dir[0], -1, 1e-7);
+  EXPECT_NEAR(dir[1], 0, 1e-7);
+  EXPECT_NEAR(dir[2], 0, 1e-7);
+}
+
+TEST(GenerateRay, ImageEdgesSpanCameraAngleX) {
+  const Camera camera = BlenderCamera(400, 300);
+  const double forward[3] = {0, 0, -1};
+  float origin[3], left[3], right[3], top[3];
+  // px = -0.5 is the left edge of pixel 0 (px + 0.5 = 0); px = 399.5 the right edge.
+  GenerateRay(camera, -0.5, 149.5, origin, left);
+  GenerateRay(camera, 399.5, 149.5, origin, right);
+  EXPECT_NEAR(AngleBetween(left, forward), kAngleX / 2, 1e-6);
+  EXPECT_NEAR(AngleBetween(right, forward), kAngleX / 2, 1e-6);
+  EXPECT_LT(left[0], 0);
+  EXPECT_GT(right[0], 0);
+  GenerateRay(camera, 199.5, -0.5, origin, top);
+  EXPECT_GT(top[1], 0);  // row 0 is the top of the image: +y in OpenGL camera space
+  EXPECT_NEAR(std::atan2(top[1], -top[2]), std::atan(150.0 / camera.fy), 1e-6);
+  // Pixel (0, 0) itself is sampled at its centre, half a pixel inside the corner.
+  float corner[3];
+  GenerateRay(camera, 0, 0, origin, corner);
+  EXPECT_NEAR(corner[0] / -corner[2], (0.5 - 200) / camera.fx, 1e-6);
+  EXPECT_NEAR(corner[1] / -corner[2], (150 - 0.5) / camera.fy, 1e-6);
+}
+
+TEST(GenerateRay, DirectionsAreUnitLength) {
+  Camera camera = BlenderCamera(64, 48);
+  camera.k1 = -0.2;
+  for (int j = 0; j < 48; j += 7) {
+    for (int i = 0; i < 64; i += 9) {
+      float origin[3], dir[3];
+      GenerateRay(camera, i, j, origin, dir);
+      EXPECT_NEAR(std::sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]), 1.0, 1e-6);
+    }
+  }
+}
+
+TEST(Distortion, UndistortInvertsDistortToNanometres) {
+  Camera camera = BlenderCamera(64, 64);
+  camera.k1 = -0.25;
+  camera.k2 = 0.06;
+  camera.p1 = 0.0015;
+  camera.p2 = -0.002;
+  for (double y = -0.6; y <= 0.6; y += 0.1) {
+    for (double x = -0.6; x <= 0.6; x += 0.1) {
+      double xd, yd, xu, yu;
+      DistortNormalized(camera, x, y, &xd, &yd);
+      UndistortNormalized(camera, xd, yd, &xu, &yu);
+      EXPECT_NEAR(xu, x, 1e-9);
+      EXPECT_NEAR(yu, y, 1e-9);
+    }
+  }
+}
+
+TEST(Distortion, RayThroughDistortedPixelFollowsUndistortedDirection) {
+  Camera camera = BlenderCamera(64, 64);
+  camera.k1 = -0.2;
+  camera.p2 = 0.003;
+  const double x = 0.3, y = -0.2;  // OpenCV normalised, y down
+  double xd, yd;
+  DistortNormalized(camera, x, y, &xd, &yd);
+  EXPECT_GT(std::abs(xd - x), 1e-3);  // the lens does move the point
+  float origin[3], dir[3];
+  GenerateRay(camera, xd * camera.fx + camera.cx - 0.5, yd * camera.fy + camera.cy - 0.5, origin, dir);
+  EXPECT_NEAR(dir[0] / -dir[2], x, 1e-6);
+  EXPECT_NEAR(dir[1] / -dir[2], -y, 1e-6);
+}
+
+TEST(ScaledCamera, DividesIntrinsicsAndKeepsPose) {
+  Camera camera = BlenderCamera(401, 300);
+  camera.k1 = 0.1;
+  camera.c2w[0][3] = 2;
+  const Camera half = ScaledCamera(camera, 2);
+  EXPECT_EQ(half.width, 200);
+  EXPECT_EQ(half.height, 150);
+  EXPECT_DOUBLE_EQ(half.fx, camera.fx / 2);
+  EXPECT_DOUBLE_EQ(half.cx, camera.cx / 2);
+  EXPECT_EQ(half.k1, 0.1);
+  EXPECT_EQ(half.c2w[0][3], 2);
+  EXPECT_THROW(ScaledCamera(camera, 0), std::runtime_error);
+}
+
+// Runs only where the real scenes are checked out next to the project (not in CI).
+TEST(RealData, ChairTestRaysThroughImageCentrePassNearOrigin) {
+  const std::string dir = std::string(ECRF_SOURCE_DIR) + "/../shared/data/nerf_synthetic_400/chair";
+  if (!fs::exists(dir + "/transforms_test.json")) GTEST_SKIP() << "no " << dir;
+  const DatasetManifest manifest = ReadDatasetManifest(dir, "test");
+  ASSERT_EQ(manifest.views.size(), 200u);
+  for (const ViewSource& view : manifest.views) {
+    ASSERT_EQ(view.camera.width, 400);
+    float origin[3], dir3[3];
+    GenerateRay(view.camera, 199.5, 199.5, origin, dir3);
+    // Distance from the origin to the ray's line.
+    double t = -(origin[0] * dir3[0] + origin[1] * dir3[1] + origin[2] * dir3[2]);
+    double miss = 0;
+    for (int a = 0; a < 3; ++a) miss += std::pow(origin[a] + t * dir3[a], 2);
+    EXPECT_LT(std::sqrt(miss), 0.05) << view.name;
+  }
+}
+
+}  // namespace
+}  // namespace ecrf::trainer

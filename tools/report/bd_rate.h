@@ -1,0 +1,47 @@
+// Bjøntegaard delta rate and delta PSNR between two rate–distortion curves (VCEG-M33), with
+// piecewise cubic Hermite interpolation (PCHIP, Fritsch–Carlson slopes) as current codec test
+// conditions use instead of the original single cubic fit: it follows the measured points
+// without overshoot and works from two points on.
+#ifndef ECRF_TOOLS_REPORT_BD_RATE_H_
+#define ECRF_TOOLS_REPORT_BD_RATE_H_
+
+#include <string>
+#include <vector>
+
+namespace ecrf {
+namespace tools {
+
+struct RdPoint {
+  double rate = 0.0;  // bytes (any positive unit; only ratios matter)
+  double psnr = 0.0;  // dB
+};
+
+struct BdResult {
+  bool ok = false;
+  std::string error;        // why not, when !ok
+  double bd_rate = 0.0;     // percent: mean rate change of test against anchor at equal PSNR
+  double bd_psnr = 0.0;     // dB: mean PSNR change of test against anchor at equal rate
+  double psnr_range[2] = {0.0, 0.0};  // the overlap BD-rate integrates over
+  double rate_range[2] = {0.0, 0.0};  // the overlap BD-PSNR integrates over
+};
+
+// Needs >= 2 points per curve with distinct positive rates and distinct PSNRs, and overlapping
+// PSNR and rate ranges. Points may come in any order.
+BdResult Bjontegaard(const std::vector<RdPoint>& anchor, const std::vector<RdPoint>& test);
+
+// Monotone piecewise cubic Hermite interpolant through (x[i], y[i]), x strictly increasing.
+class Pchip {
+ public:
+  Pchip(std::vector<double> x, std::vector<double> y);
+  double operator()(double x) const;
+  // Exact integral of the interpolant over [a, b] within [x.front(), x.back()].
+  double Integral(double a, double b) const;
+
+ private:
+  std::vector<double> x_, y_, d_;  // d_: slopes at the knots
+};
+
+}  // namespace tools
+}  // namespace ecrf
+
+#endif  // ECRF_TOOLS_REPORT_BD_RATE_H_

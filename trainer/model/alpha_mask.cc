@@ -1,0 +1,103 @@
+#include "trainer/model/alpha_mask.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+
+namespace ecrf {
+namespace trainer {
+
+AlphaMask::AlphaMask(const Aabb& aabb, const std::array<int, 3>& res,
+                     std::vector<uint8_t> occupancy)
+    : aabb_(aabb), res_(res), occ_(std::move(occupancy)) {
+  for (int a = 0; a < 3; ++a) {
+    if (res[a] < 2) throw std::runtime_error("AlphaMask: resolution must be >= 2 per axis");
+    if (!(aabb.max[a] > aabb.min[a])) throw std::runtime_error("AlphaMask: empty aabb");
+    inv_size_[a] = 1.0f / (aabb.max[a] - aabb.min[a]) * 2.f;
+  }
+  const size_t X = res[0], Y = res[1], Z = res[2];
+  if (occ_.size() != X * Y * Z) throw std::runtime_error("AlphaMask: occupancy size mismatch");
+  count_ = 0;
+  for (uint8_t v : occ_) {
+    if (v > 1) throw std::runtime_error("AlphaMask: occupancy must be 0/1");
+    count_ += v;
+  }
+  cell_any_.assign((X - 1) * (Y - 1) * (Z - 1), 0);
+  for (size_t z = 0; z + 1 < Z; ++z)
+    for (size_t y = 0; y + 1 < Y; ++y)
+      for (size_t x = 0; x + 1 < X; ++x) {
+        uint8_t any = 0;
+        for (int c = 0; c < 8; ++c)
+          any |= occ_[((z + (c >> 2)) * Y + y + ((c >> 1) & 1)) * X + x + (c & 1)];
+        cell_any_[(z * (Y - 1) + y) * (X - 1) + x] = any;
+      }
+}
+
+float AlphaMask::Sample(const float xyz[3]) const {
+  if (occ_.empty()) return 0.f;
+  float idx[3];
+  for (int a = 0; a < 3; ++a) {
+    const float c = (xyz[a] - aabb_.min[a]) * inv_size_[a] - 1.f;
+    idx[a] = (c + 1.f) / 2.f * static_cast<float>(res_[a] - 1);
+  }
+  int i0[3];
+  float f[3];
+  for (int a = 0; a < 3; ++a) {
+    const float fl = std::floor(idx[a]);
+    if (!(fl > -2.f && fl < static_cast<float>(res_[a]))) return 0.f;
+    i0[a] = static_cast<int>(fl);
+    f[a] = idx[a] - fl;
+  }
+  float value = 0.f;
+  for (int c = 0; c < 8; ++c) {
+    const int x = i0[0] + (c & 1), y = i0[1] + ((c >> 1) & 1), z = i0[2] + (c >> 2);
+    if (x < 0 || y < 0 || z < 0 || x >= res_[0] || y >= res_[1] || z >= res_[2]) continue;
+    const float w = ((c & 1) ? f[0] : 1.f - f[0]) * (((c >> 1) & 1) ? f[1] : 1.f - f[1]) *
+                    ((c >> 2) ? f[2] : 1.f - f[2]);
+    value += w * occ_[(static_cast<size_t>(z) * res_[1] + y) * res_[0] + x];
+  }
+  return value;
+}
+
+bool AlphaMask::OccupiedSlow(const float idx[3]) const {
+  int lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    const float fl = std::floor(idx[a]);
+    if (!(fl > -2.f && fl < static_cast<float>(res_[a]))) return false;
+    const int i = static_cast<int>(fl);
+    lo[a] = i;
+    hi[a] = idx[a] > fl ? i + 1 : i;  // the upper corner only has weight when f > 0
+    if (lo[a] < 0) lo[a] = 0;
+    if (hi[a] > res_[a] - 1) hi[a] = res_[a] - 1;
+    if (lo[a] > hi[a]) return false;
+  }
+  for (int z = lo[2]; z <= hi[2]; ++z)
+    for (int y = lo[1]; y <= hi[1]; ++y)
+      for (int x = lo[0]; x <= hi[0]; ++x)
+        if (occ_[(static_cast<size_t>(z) * res_[1] + y) * res_[0] + x]) return true;
+  return false;
+}
+
+bool AlphaMask::Occupied(const float xyz[3]) const {
+  if (count_ == 0) return false;
+  float idx[3];
+  int i0[3];
+  bool interior = true;
+  for (int a = 0; a < 3; ++a) {
+    const float c = (xyz[a] - aabb_.min[a]) * inv_size_[a] - 1.f;
+    idx[a] = (c + 1.f) / 2.f * static_cast<float>(res_[a] - 1);
+    // Strictly inside a cell: both corners along this axis carry weight.
+    if (!(idx[a] > 0.f && idx[a] < static_cast<float>(res_[a] - 1))) {
+      interior = false;
+      continue;
+    }
+    i0[a] = static_cast<int>(idx[a]);
+    if (static_cast<float>(i0[a]) == idx[a]) interior = false;
+  }
+  if (!interior) return OccupiedSlow(idx);
+  return cell_any_[(static_cast<size_t>(i0[2]) * (res_[1] - 1) + i0[1]) * (res_[0] - 1) + i0[0]] !=
+         0;
+}
+
+}  // namespace trainer
+}  // namespace ecrf

@@ -1,0 +1,535 @@
+#include "trainer/model/volume_render.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <stdexcept>
+#include <vector>
+
+#include "decoder/contraction.h"
+#include "decoder/ndc.h"
+
+namespace ecrf {
+namespace trainer {
+namespace {
+
+constexpr int kMinParallelRays = 64;  // smaller batches run on one thread (no fork/join cost)
+
+uint64_t SplitMix64(uint64_t x) {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+
+// One evaluated sample of a ray (inside the aabb and the alpha mask).
+struct SampleRec {
+  GridPoint gp;  // kept so the gather and scatter passes need not locate the sample again
+  float t;
+  float dscale;  // dist * distance_scale of this sample's interval
+  float feat;   // density feature + shift; after the composite pass: dL/d(feature)
+  float alpha;
+  float trans;  // transmittance before this sample
+  int app;      // row in the batch's appearance matrix, or -1
+};
+
+// A sample inside the aabb and the mask, before its density is known.
+struct Candidate {
+  float t;
+  float dscale;
+  GridPoint gp;
+};
+
+constexpr int kPrefetchDistance = 4;  // samples ahead
+
+inline bool SameCell(const GridPoint& a, const GridPoint& b) {
+  return a.i0[0] == b.i0[0] && a.i0[1] == b.i0[1] && a.i0[2] == b.i0[2];
+}
+
+// Grows v to at least n elements and never shrinks it: a shrink followed by a regrow would
+// zero-fill the regrown part again (the chunks of one batch have different sizes).
+inline void EnsureSize(std::vector<float>& v, size_t n) {
+  if (v.size() < n) v.resize(n);
+}
+
+struct RayRec {
+  int tid;         // thread whose sample buffer holds the samples
+  int count;
+  size_t offset;   // into that buffer
+  int64_t app_start;
+  int app_count;
+};
+
+// One thread's sample buffers. Cache-line aligned: every push_back writes the vector's end
+// pointer, and two threads' vector headers on one line made marching scale 1.3x on 2 threads.
+struct alignas(64) ThreadSamples {
+  std::vector<SampleRec> samples;
+  std::vector<Candidate> candidates;  // one ray at a time
+};
+
+// Scratch of one batch; reused across steps so steady-state steps do not allocate.
+struct Workspace {
+  std::vector<ThreadSamples> per_thread;
+  std::vector<RayRec> rays;
+  std::vector<float> products, viewdirs, rgb, dl_drgb, dl_dproducts;
+  ModeGradScatter scatter[6];  // per (grid, mode) task: density modes 0-2, appearance modes 0-2
+
+  void Prepare(int n_rays, int threads) {
+    if (static_cast<int>(per_thread.size()) < threads) per_thread.resize(threads);
+    for (auto& t : per_thread) t.samples.clear();
+    rays.resize(n_rays);
+  }
+  const SampleRec* SamplesOf(const RayRec& rr) const {
+    return per_thread[rr.tid].samples.data() + rr.offset;
+  }
+  SampleRec* SamplesOf(const RayRec& rr) { return per_thread[rr.tid].samples.data() + rr.offset; }
+};
+
+struct MarchParams {
+  Aabb box;
+  std::array<float, 3> inv_size;
+  std::array<int, 3> res;
+  float near, far, step, dscale, shift, weight_threshold, early_stop;
+  int n_samples;
+  const AlphaMask* mask;
+  const VmGrid* density;
+  // Unbounded scene model (SPEC.md 7.2.1): box is the contracted cube, these normalise world
+  // points by the region of interest.
+  bool unbounded;
+  float distance_scale;
+  float roi_min[3], roi_scale[3];
+  // Forward-facing scene model (SPEC.md 7.2.2): box is in the NDC of this frame.
+  bool forward;
+  NdcFrame ndc;
+};
+
+MarchParams MakeMarchParams(const TensorfModel& model) {
+  MarchParams p;
+  const TensorfConfig& c = model.config();
+  p.box = model.aabb();
+  for (int a = 0; a < 3; ++a) p.inv_size[a] = 2.0f / (p.box.max[a] - p.box.min[a]);
+  p.res = model.res();
+  p.near = c.near;
+  p.far = c.far;
+  p.step = model.step_size();
+  p.dscale = model.step_size() * c.distance_scale;
+  p.shift = c.density_shift;
+  p.weight_threshold = c.weight_threshold;
+  p.early_stop = c.early_stop_transmittance;
+  p.n_samples = model.n_samples();
+  p.mask = model.alpha_mask();
+  p.density = &model.density();
+  p.unbounded = c.scene_model == SceneModel::kUnbounded;
+  p.forward = c.scene_model == SceneModel::kForward;
+  p.ndc = c.ndc;
+  p.distance_scale = c.distance_scale;
+  for (int a = 0; a < 3; ++a) {
+    p.roi_min[a] = c.roi.min[a];
+    p.roi_scale[a] = 1.0f / (c.roi.max[a] - c.roi.min[a]) * 2.f;
+  }
+  if (p.n_samples < 1) throw std::runtime_error("volume render: model has no samples per ray");
+  if (model.res()[0] < 2) throw std::runtime_error("volume render: model is not initialized");
+  return p;
+}
+
+inline void PointAt(const float* o, const float* d, float t, float x[3]) {
+  x[0] = o[0] + d[0] * t;
+  x[1] = o[1] + d[1] * t;
+  x[2] = o[2] + d[2] * t;
+}
+
+inline void ToGridPoint(const MarchParams& p, const float x[3], GridPoint* gp) {
+  float c[3];
+  for (int a = 0; a < 3; ++a) c[a] = (x[a] - p.box.min[a]) * p.inv_size[a] - 1.f;
+  LocateGridPoint(c, p.res, gp);
+}
+
+// Candidates of an unbounded scene (SPEC.md 7.2.1, the decoder's MarchRayUnbounded): from near
+// on (shifted by jitter times the first interval in training), spaced `step` in contracted
+// distance. The last sample (dist 0) never contributes and is left out.
+void UnboundedCandidates(const MarchParams& p, const float* o, const float* d, float jitter,
+                         std::vector<Candidate>& cand) {
+  const ContractedRay ray(o, d, p.roi_min, p.roi_scale, p.step);
+  float q[3], x[3];
+  float t = p.near;
+  if (jitter > 0.f) {
+    ray.At(t, q, x);
+    const float first = ray.Increment(q);
+    if (std::isfinite(first)) t = t + jitter * first;
+  }
+  for (int i = 0; i + 1 < p.n_samples; ++i) {
+    ray.At(t, q, x);
+    const float next = t + ray.Increment(q);
+    if (!std::isfinite(next)) break;
+    if (!p.mask || p.mask->Occupied(x)) {
+      Candidate c;
+      c.t = t;
+      c.dscale = (next - t) * p.distance_scale;
+      ToGridPoint(p, x, &c.gp);
+      cand.push_back(c);
+    }
+    t = next;
+  }
+}
+
+// Samples inside the aabb and the alpha mask (no feature lookups) of an object scene.
+void ObjectCandidates(const MarchParams& p, const float* o, const float* d, float jitter,
+                      std::vector<Candidate>& cand) {
+  float t_enter, t_exit;
+  RayAabb(p.box, o, d, &t_enter, &t_exit);
+  const float t_min = std::min(std::max(t_enter, p.near), p.far);
+  // Index range that can be inside the box (with a margin; the exact test follows). The last
+  // sample (dist 0, alpha 0) never contributes and is skipped.
+  const double a = (static_cast<double>(t_enter) - t_min) / p.step - jitter;
+  const double b = (static_cast<double>(t_exit) - t_min) / p.step - jitter;
+  if (!(b >= -2.0)) return;
+  const int last = p.n_samples - 1;
+  const int i_lo = a > 0 ? static_cast<int>(std::min<double>(std::floor(a) - 1, last)) : 0;
+  const int i_hi = static_cast<int>(std::min<double>(std::ceil(b) + 2, last));
+  for (int i = std::max(i_lo, 0); i < i_hi; ++i) {
+    const float ri = static_cast<float>(i) + jitter;
+    const float t = t_min + p.step * ri;
+    float x[3];
+    PointAt(o, d, t, x);
+    if (x[0] < p.box.min[0] || x[0] > p.box.max[0] || x[1] < p.box.min[1] ||
+        x[1] > p.box.max[1] || x[2] < p.box.min[2] || x[2] > p.box.max[2])
+      continue;
+    if (p.mask && !p.mask->Occupied(x)) continue;
+    Candidate c;
+    c.t = t;
+    c.dscale = p.dscale;
+    ToGridPoint(p, x, &c.gp);
+    cand.push_back(c);
+  }
+}
+
+// Marches one ray: appends its evaluated samples to buf, returns the number of appearance
+// samples (their `app` field holds the local index 0..k-1 until offset by the caller).
+int MarchRay(const MarchParams& p, const float* o, const float* d, float jitter,
+             std::vector<Candidate>& cand, std::vector<SampleRec>& buf, int* count) {
+  *count = 0;
+  // Pass 1: the samples to evaluate (no feature lookups).
+  cand.clear();
+  if (p.unbounded) {
+    UnboundedCandidates(p, o, d, jitter, cand);
+  } else if (p.forward) {
+    float ndc_o[3], ndc_d[3];
+    if (NdcRay(p.ndc, o, d, ndc_o, ndc_d)) ObjectCandidates(p, ndc_o, ndc_d, jitter, cand);
+  } else {
+    ObjectCandidates(p, o, d, jitter, cand);
+  }
+  // Pass 2: density, alpha, transmittance (prefetching the grid a few samples ahead).
+  float trans = 1.f;
+  int n_app = 0;
+  const size_t start = buf.size();
+  const int nc = static_cast<int>(cand.size());
+  for (int k = 0; k < std::min(nc, kPrefetchDistance); ++k) p.density->Prefetch(cand[k].gp);
+  for (int k = 0; k < nc; ++k) {
+    if (k + kPrefetchDistance < nc &&
+        !SameCell(cand[k + kPrefetchDistance].gp, cand[k + kPrefetchDistance - 1].gp))
+      p.density->Prefetch(cand[k + kPrefetchDistance].gp);
+    const float feat = p.density->Density(cand[k].gp) + p.shift;
+    const float sigma = Softplus(feat);
+    const float alpha = 1.f - std::exp(-sigma * cand[k].dscale);
+    const float w = alpha * trans;
+    SampleRec rec;
+    rec.gp = cand[k].gp;
+    rec.t = cand[k].t;
+    rec.dscale = cand[k].dscale;
+    rec.feat = feat;
+    rec.alpha = alpha;
+    rec.trans = trans;
+    rec.app = w > p.weight_threshold ? n_app++ : -1;
+    buf.push_back(rec);
+    trans *= (1.f - alpha) + 1e-10f;
+    if (trans < p.early_stop) break;
+  }
+  *count = static_cast<int>(buf.size() - start);
+  return n_app;
+}
+
+// Phase 1: march all rays, assign appearance rows; returns the number of appearance samples.
+int64_t MarchBatch(const MarchParams& p, Workspace& ws, int n_rays, const float* origins,
+                   const float* dirs, bool train, uint64_t seed) {
+#pragma omp parallel if (n_rays >= kMinParallelRays)
+  {
+    const int tid = omp_get_thread_num();
+    std::vector<SampleRec>& buf = ws.per_thread[tid].samples;
+    std::vector<Candidate>& cand = ws.per_thread[tid].candidates;
+#pragma omp for schedule(dynamic, 16)
+    for (int r = 0; r < n_rays; ++r) {
+      const float jitter = train ? RayJitter(seed, r) : 0.f;
+      RayRec& rr = ws.rays[r];
+      rr.tid = tid;
+      rr.offset = buf.size();
+      rr.app_count = MarchRay(p, origins + 3 * r, dirs + 3 * r, jitter, cand, buf, &rr.count);
+    }
+  }
+  int64_t n_app = 0;
+  for (int r = 0; r < n_rays; ++r) {
+    ws.rays[r].app_start = n_app;
+    n_app += ws.rays[r].app_count;
+  }
+  return n_app;
+}
+
+// Appearance products and view directions of the appearance samples of rays [r0, r1), into
+// rows 0..rows-1 (row = app_start - base + local index).
+void GatherAppearance(const VmGrid& app, Workspace& ws, int r0, int r1, const float* dirs,
+                      int64_t base, int64_t rows) {
+  const int P = app.total_rank();
+  EnsureSize(ws.products, static_cast<size_t>(rows) * P);
+  EnsureSize(ws.viewdirs, static_cast<size_t>(rows) * 3);
+#pragma omp parallel for schedule(dynamic, 16) if (r1 - r0 >= kMinParallelRays)
+  for (int r = r0; r < r1; ++r) {
+    const RayRec& rr = ws.rays[r];
+    if (rr.app_count == 0) continue;
+    const SampleRec* s = ws.SamplesOf(rr);
+    const float* d = dirs + 3 * r;
+    for (int k = 0; k < rr.count; ++k) {
+      if (s[k].app < 0) continue;
+      const int64_t row = rr.app_start - base + s[k].app;
+      app.Products(s[k].gp, ws.products.data() + static_cast<size_t>(row) * P);
+      float* vd = ws.viewdirs.data() + static_cast<size_t>(row) * 3;
+      vd[0] = d[0];
+      vd[1] = d[1];
+      vd[2] = d[2];
+    }
+  }
+}
+
+}  // namespace
+
+float RayJitter(uint64_t seed, int64_t ray) {
+  const uint64_t h = SplitMix64(SplitMix64(seed) ^ (static_cast<uint64_t>(ray) * 0xD1B54A32D192ED03ull));
+  return static_cast<float>(h >> 40) * (1.0f / 16777216.0f);
+}
+
+std::vector<RaySampleInfo> TraceRay(const TensorfModel& model, const float o[3], const float d[3],
+                                    float jitter) {
+  const MarchParams p = MakeMarchParams(model);
+  std::vector<SampleRec> buf;
+  std::vector<Candidate> cand;
+  int count = 0;
+  MarchRay(p, o, d, jitter, cand, buf, &count);
+  std::vector<RaySampleInfo> out(buf.size());
+  for (size_t k = 0; k < buf.size(); ++k) {
+    out[k].t = buf[k].t;
+    out[k].sigma = Softplus(buf[k].feat);
+    out[k].alpha = buf[k].alpha;
+    out[k].weight = buf[k].alpha * buf[k].trans;
+    out[k].colour = buf[k].app >= 0;
+  }
+  return out;
+}
+
+TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, const float* dirs,
+                         const float* target_rgb, uint64_t rng_seed) {
+  TrainStepStats stats;
+  stats.rays = n_rays;
+  if (n_rays <= 0) return stats;
+  if (!model.train_workspace) model.train_workspace = std::make_shared<Workspace>();
+  Workspace& ws = *static_cast<Workspace*>(model.train_workspace.get());
+  const int threads = omp_get_max_threads();
+  ws.Prepare(n_rays, threads);
+  const MarchParams p = MakeMarchParams(model);
+  const TensorfConfig& cfg = model.config();
+  const bool white = cfg.white_background ||
+                     (SplitMix64(rng_seed ^ 0x5DEECE66Dull) >> 63) != 0;  // rand < 0.5
+
+  double clock = omp_get_wtime();
+  auto lap = [&clock]() {
+    const double now = omp_get_wtime();
+    const double dt = now - clock;
+    clock = now;
+    return dt;
+  };
+  // Phase 1: march all rays (sampling, mask, density forward).
+  const int64_t n_app = MarchBatch(p, ws, n_rays, origins, dirs, /*train=*/true, rng_seed);
+  stats.t_march = lap();
+  stats.appearance_samples = n_app;
+
+  const int P = model.appearance().total_rank();
+  VmGrid& density = model.density();
+  VmGrid& appearance = model.appearance();
+  AppearanceHead& head = model.head();
+  const float grad_scale = 2.f / (3.f * static_cast<float>(n_rays));
+  const int64_t max_rows = std::max(1, cfg.head_chunk_rows);
+  // Each chunk's ws.products stays untouched until its head.Backward, so the head need not copy it.
+  head.set_borrow_products(true);
+  double sse = 0.0;
+  long n_density = 0;
+
+  // The rest runs per chunk of consecutive rays holding at most head_chunk_rows appearance
+  // samples (the loss is a sum over rays), bounding the head's activation memory.
+  for (int r0 = 0; r0 < n_rays;) {
+    int r1 = r0 + 1;
+    while (r1 < n_rays && ws.rays[r1].app_start + ws.rays[r1].app_count - ws.rays[r0].app_start <= max_rows)
+      ++r1;
+    const int nr = r1 - r0;
+    const int64_t base = ws.rays[r0].app_start;
+    const int64_t rows = ws.rays[r1 - 1].app_start + ws.rays[r1 - 1].app_count - base;
+
+    // Appearance inputs + head forward.
+    GatherAppearance(appearance, ws, r0, r1, dirs, base, rows);
+    EnsureSize(ws.rgb, static_cast<size_t>(rows) * 3);
+    EnsureSize(ws.dl_drgb, static_cast<size_t>(rows) * 3);
+    stats.t_march += lap();
+    if (rows > 0) head.Forward(static_cast<int>(rows), ws.products.data(), ws.viewdirs.data(), ws.rgb.data());
+    stats.t_head += lap();
+
+    // Compositing forward, loss, compositing backward (dL/dfeature, dL/drgb).
+#pragma omp parallel for schedule(dynamic, 16) reduction(+ : sse, n_density) \
+    if (nr >= kMinParallelRays)
+    for (int r = r0; r < r1; ++r) {
+      const RayRec& rr = ws.rays[r];
+      SampleRec* s = ws.SamplesOf(rr);
+      const int64_t row0 = rr.app_start - base;
+      n_density += rr.count;
+      float c[3] = {0.f, 0.f, 0.f};
+      float acc = 0.f;
+      for (int k = 0; k < rr.count; ++k) {
+        const float w = s[k].alpha * s[k].trans;
+        acc += w;
+        if (s[k].app >= 0) {
+          const float* rgb = ws.rgb.data() + 3 * (row0 + s[k].app);
+          c[0] += w * rgb[0];
+          c[1] += w * rgb[1];
+          c[2] += w * rgb[2];
+        }
+      }
+      float g[3];
+      for (int ch = 0; ch < 3; ++ch) {
+        if (white) c[ch] += 1.f - acc;
+        const bool in_range = c[ch] >= 0.f && c[ch] <= 1.f;
+        const float cc = std::min(std::max(c[ch], 0.f), 1.f);
+        const float diff = cc - target_rgb[3 * r + ch];
+        sse += static_cast<double>(diff) * diff;
+        g[ch] = in_range ? grad_scale * diff : 0.f;
+      }
+      const float bg_dot = white ? g[0] + g[1] + g[2] : 0.f;
+      float suffix = 0.f;
+      for (int k = rr.count - 1; k >= 0; --k) {
+        SampleRec& sk = s[k];
+        const float w = sk.alpha * sk.trans;
+        float e = -bg_dot;
+        if (sk.app >= 0) {
+          const int64_t row = row0 + sk.app;
+          const float* rgb = ws.rgb.data() + 3 * row;
+          e += g[0] * rgb[0] + g[1] * rgb[1] + g[2] * rgb[2];
+          float* dr = ws.dl_drgb.data() + 3 * row;
+          dr[0] = w * g[0];
+          dr[1] = w * g[1];
+          dr[2] = w * g[2];
+        }
+        const float f = (1.f - sk.alpha) + 1e-10f;
+        const float dl_dalpha = e * sk.trans - suffix / f;
+        suffix += e * w;
+        const float dl_dsigma = dl_dalpha * (1.f - sk.alpha) * sk.dscale;
+        sk.feat = dl_dsigma * SoftplusGrad(sk.feat);
+      }
+    }
+    stats.t_composite += lap();
+
+    // Head backward.
+    EnsureSize(ws.dl_dproducts, static_cast<size_t>(rows) * P);
+    if (rows > 0) head.Backward(static_cast<int>(rows), ws.dl_drgb.data(), ws.dl_dproducts.data());
+    stats.t_head += lap();
+
+    // Scatter grid gradients: one task per (grid, mode), each the only writer of its plane and
+    // line (no atomics; the sums are the same for every thread count).
+#pragma omp parallel for schedule(dynamic, 1) if (nr >= kMinParallelRays)
+    for (int task = 0; task < 6; ++task) {
+      const bool is_density = task < 3;
+      const int m = task % 3;
+      VmGrid& grid = is_density ? density : appearance;
+      ModeGradScatter& sc = ws.scatter[task];
+      sc.Bind(&grid, m);
+      const int mode_offset = appearance.rank_offset(m);
+      for (int r = r0; r < r1; ++r) {
+        const RayRec& rr = ws.rays[r];
+        if (!is_density && rr.app_count == 0) continue;
+        const SampleRec* s = ws.SamplesOf(rr);
+        const float* dprod =
+            ws.dl_dproducts.data() + static_cast<size_t>(rr.app_start - base) * P + mode_offset;
+        for (int k = 0; k < std::min(rr.count, kPrefetchDistance); ++k) {
+          grid.PrefetchMode(s[k].gp, m, false);
+          grid.PrefetchMode(s[k].gp, m, true);
+        }
+        for (int k = 0; k < rr.count; ++k) {
+          // Prefetch only when the sample ahead enters a new cell (otherwise it is cached).
+          const int ahead = k + kPrefetchDistance;
+          if (ahead < rr.count && !SameCell(s[ahead].gp, s[ahead - 1].gp) &&
+              (is_density || s[ahead].app >= 0 || s[ahead - 1].app >= 0)) {
+            grid.PrefetchMode(s[ahead].gp, m, false);
+            grid.PrefetchMode(s[ahead].gp, m, true);
+          }
+          if (is_density) {
+            if (s[k].feat != 0.f) sc.AddDensity(s[k].gp, s[k].feat);
+          } else if (s[k].app >= 0) {
+            sc.AddProducts(s[k].gp, dprod + static_cast<size_t>(s[k].app) * P);
+          }
+        }
+      }
+      sc.Flush();
+    }
+    stats.t_scatter += lap();
+    r0 = r1;
+  }
+  stats.mse = sse / (3.0 * n_rays);
+  stats.loss = stats.mse;
+  stats.density_samples = n_density;
+  return stats;
+}
+
+void RenderRays(const TensorfModel& model, int n_rays, const float* origins, const float* dirs,
+                float* rgb_out, float* depth_or_null) {
+  if (n_rays <= 0) return;
+  const MarchParams p = MakeMarchParams(model);
+  const bool white = model.config().white_background;
+  Workspace ws;
+  const int threads = omp_get_max_threads();
+  const int kChunk = 1024;
+  for (int begin = 0; begin < n_rays; begin += kChunk) {
+    const int n = std::min(kChunk, n_rays - begin);
+    const float* o = origins + 3 * static_cast<size_t>(begin);
+    const float* d = dirs + 3 * static_cast<size_t>(begin);
+    ws.Prepare(n, threads);
+    const int64_t n_app = MarchBatch(p, ws, n, o, d, /*train=*/false, 0);
+    GatherAppearance(model.appearance(), ws, 0, n, d, 0, n_app);
+    EnsureSize(ws.rgb, static_cast<size_t>(n_app) * 3);
+    if (n_app > 0)
+      model.head().Infer(static_cast<int>(n_app), ws.products.data(), ws.viewdirs.data(),
+                         ws.rgb.data());
+#pragma omp parallel for schedule(dynamic, 16) if (n >= kMinParallelRays)
+    for (int r = 0; r < n; ++r) {
+      const RayRec& rr = ws.rays[r];
+      const SampleRec* s = ws.SamplesOf(rr);
+      float c[3] = {0.f, 0.f, 0.f};
+      float acc = 0.f, depth = 0.f;
+      for (int k = 0; k < rr.count; ++k) {
+        const float w = s[k].alpha * s[k].trans;
+        acc += w;
+        depth += w * s[k].t;
+        if (s[k].app >= 0) {
+          const float* rgb = ws.rgb.data() + 3 * (rr.app_start + s[k].app);
+          c[0] += w * rgb[0];
+          c[1] += w * rgb[1];
+          c[2] += w * rgb[2];
+        }
+      }
+      float* out = rgb_out + 3 * (static_cast<size_t>(begin) + r);
+      for (int ch = 0; ch < 3; ++ch) {
+        if (white) c[ch] += 1.f - acc;
+        out[ch] = std::min(std::max(c[ch], 0.f), 1.f);
+      }
+      if (depth_or_null) depth_or_null[begin + r] = depth;
+    }
+  }
+}
+
+}  // namespace trainer
+}  // namespace ecrf

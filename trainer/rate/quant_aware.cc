@@ -1,0 +1,104 @@
+#include "trainer/rate/quant_aware.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+
+#include "encoder/coef_quantizer.h"
+#include "encoder/grid_dct.h"
+
+namespace ecrf {
+namespace trainer {
+
+void ReconstructQuantizedGrid(const VmGrid& grid, const float* steps, const RateConfig& config,
+                              std::vector<float>* out, float rounding_offset) {
+  // The six tensors tile params() and InverseBlocks writes every element of each: no copy.
+  out->resize(grid.params().size());
+  std::vector<float> coeffs;
+  for (int t = 0; t < kTensorsPerGrid; ++t) {
+    const GridBlockLayout layout = RateTensorLayout(grid, t, config);
+    coeffs.resize(layout.num_coeffs());
+    ForwardBlocks(RateTensorData(grid, t), layout, coeffs.data());
+    const float step = steps[t];
+    const long n = static_cast<long>(coeffs.size());
+#pragma omp parallel for schedule(static) if (n > 65536)
+    for (long i = 0; i < n; ++i) {
+      // The encoder's quantizer, on the double quotient.
+      coeffs[i] = static_cast<float>(QuantizeLevel(static_cast<double>(coeffs[i]), step, rounding_offset) * step);
+    }
+    const size_t offset = static_cast<size_t>(RateTensorData(grid, t) - grid.params().data());
+    InverseBlocks(coeffs.data(), layout, out->data() + offset);
+  }
+}
+
+MlpLayout HeadMlpLayout(const AppearanceHeadConfig& h) {
+  return MakeMlpLayout(h.feature_dim, h.num_products, h.hidden, h.feature_pe_freqs, h.viewdir_pe_freqs);
+}
+
+void ReconstructQuantizedHead(const TensorfModel& model, int max_level, std::vector<float>* out) {
+  const MlpLayout layout = HeadMlpLayout(model.config().head);
+  if (MlpParamCount(layout) != model.head().params().size()) {
+    throw std::logic_error("ReconstructQuantizedHead: the head's layout is not the stream's");
+  }
+  // The coder's own quantizer, so training sees exactly what the decoder will (the coded bytes
+  // are a by-product, a millisecond for a 40k-parameter head).
+  EncodeQuantizedMlp(layout, model.head().params().data(), max_level, out);
+}
+
+std::vector<float>& QuantAwareModel::Params(TensorfModel* model, int k) {
+  return k == 0 ? model->density().params() : k == 1 ? model->appearance().params() : model->head().params();
+}
+
+void QuantAwareModel::Refresh(const TensorfModel& model, const std::vector<float>& steps,
+                              const RateConfig& config, int mlp_levels, float rounding_offset) {
+  if (applied_) throw std::logic_error("QuantAwareModel::Refresh while applied");
+  if (steps.size() != 2 * kTensorsPerGrid) {
+    throw std::invalid_argument("QuantAwareModel: need 12 quantization steps");
+  }
+  ReconstructQuantizedGrid(model.density(), steps.data(), config, &error_[0], rounding_offset);
+  ReconstructQuantizedGrid(model.appearance(), steps.data() + kTensorsPerGrid, config, &error_[1], rounding_offset);
+  error_[2].clear();
+  if (mlp_levels > 0) ReconstructQuantizedHead(model, mlp_levels, &error_[2]);
+  const std::vector<float>* params[3] = {&model.density().params(), &model.appearance().params(),
+                                         &model.head().params()};
+  for (int k = 0; k < 3; ++k) {
+    if (error_[k].empty()) continue;
+    const std::vector<float>& p = *params[k];
+    const long n = static_cast<long>(p.size());
+#pragma omp parallel for schedule(static) if (n > 65536)
+    for (long i = 0; i < n; ++i) error_[k][i] -= p[i];
+  }
+}
+
+bool QuantAwareModel::fresh_for(const TensorfModel& model) const {
+  return error_[0].size() == model.density().params().size() &&
+         error_[1].size() == model.appearance().params().size() && !error_[0].empty();
+}
+
+void QuantAwareModel::Apply(TensorfModel* model) {
+  if (applied_ || !fresh_for(*model)) throw std::logic_error("QuantAwareModel::Apply: not refreshed");
+  for (int k = 0; k < 3; ++k) {
+    if (error_[k].empty()) continue;
+    std::vector<float>& p = Params(model, k);
+    held_[k].resize(p.size());
+    std::swap(held_[k], p);  // p is now scratch of the right size; held_ the float values
+    const float* src = held_[k].data();
+    const float* e = error_[k].data();
+    float* dst = p.data();
+    const long n = static_cast<long>(p.size());
+#pragma omp parallel for schedule(static) if (n > 65536)
+    for (long i = 0; i < n; ++i) dst[i] = src[i] + e[i];
+  }
+  applied_ = true;
+}
+
+void QuantAwareModel::Restore(TensorfModel* model) {
+  if (!applied_) return;
+  for (int k = 0; k < 3; ++k) {
+    if (!error_[k].empty()) std::swap(held_[k], Params(model, k));
+  }
+  applied_ = false;
+}
+
+}  // namespace trainer
+}  // namespace ecrf

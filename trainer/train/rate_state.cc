@@ -1,0 +1,44 @@
+#include "trainer/train/rate_state.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "encoder/grid_dct.h"
+
+namespace ecrf {
+namespace trainer {
+
+void RateState::Configure(const TrainOptions& o) {
+  for (int a = 0; a < 3; ++a) {
+    config.plane_block[a] = o.plane_block[a];
+    config.line_block[a] = o.line_block[a];
+  }
+}
+
+void RateState::Activate(const TensorfModel& model, const TrainOptions& o) {
+  Configure(o);
+  steps = ChooseQuantSteps(model, config, o.coef_bits);
+  if (o.quant_step_scale > 0.f) {
+    for (float& s : steps) s *= o.quant_step_scale;
+  }
+  entropy.Init(NumRateModels(2), o.seed ^ 0x5eedULL);
+  adam.Reset(entropy.params().size());
+  active = true;
+}
+
+double RateState::Step(TensorfModel& model, const TrainOptions& o, uint64_t seed) {
+  entropy.ZeroGrads();
+  const RateEstimate e = AddRateGradients({&model.density(), &model.appearance()}, steps, config,
+                                          &entropy, o.lambda_e, o.alpha * o.lambda_e, o.rate_fraction, seed);
+  adam.Step(entropy.params().data(), entropy.grads().data(), entropy.params().size(), o.entropy_lr);
+  last_bits = e.bits;
+  last_regularizer = e.regularizer;
+  return e.bits;
+}
+
+RateReport RateState::Evaluate(const TensorfModel& model) const {
+  return EvaluateRate({&model.density(), &model.appearance()}, steps, config, entropy);
+}
+
+}  // namespace trainer
+}  // namespace ecrf

@@ -1,0 +1,46 @@
+// The state of the ECRF rate objective during training: per-tensor quantization steps (frozen
+// when the rate terms switch on, so the trained rate is the rate of the file), the factorized
+// entropy model and its optimizer.
+#ifndef ECRF_TRAINER_TRAIN_RATE_STATE_H_
+#define ECRF_TRAINER_TRAIN_RATE_STATE_H_
+
+#include <vector>
+
+#include "trainer/train/adam.h"
+#include "trainer/rate/entropy_model.h"
+#include "encoder/coded_tensors.h"
+#include "trainer/rate/rate_objective.h"
+#include "trainer/model/tensorf_model.h"
+#include "trainer/train/train_options.h"
+
+namespace ecrf {
+namespace trainer {
+
+struct RateState {
+  bool active = false;
+  RateConfig config;
+  std::vector<float> steps;  // one per tensor: density planes 0..2, lines 0..2, then appearance
+  FactorizedEntropyModel entropy;
+  Adam adam;
+  // The lambda_e a checkpointed run last trained with (rate control moves it); 0 when unknown.
+  float checkpoint_lambda_e = 0.f;
+  // The coefficient quantizer's rounding offset a checkpointed run trained through.
+  float rounding_offset = 0.5f;
+  double last_bits = 0.0;         // latest unbiased estimate (bits)
+  double last_regularizer = 0.0;
+
+  // Applies the options' block shapes; does not activate.
+  void Configure(const TrainOptions& options);
+  // Freezes the steps for the model's current grids and initialises the entropy model.
+  void Activate(const TensorfModel& model, const TrainOptions& options);
+  // Adds lambda_e * dR/dG + lambda_r * d||F(G)||^2/dG to the grid gradients and steps the
+  // entropy model. Returns the estimated bits.
+  double Step(TensorfModel& model, const TrainOptions& options, uint64_t seed);
+  // Deterministic rate of the rounded coefficients under the current entropy model.
+  RateReport Evaluate(const TensorfModel& model) const;
+};
+
+}  // namespace trainer
+}  // namespace ecrf
+
+#endif  // ECRF_TRAINER_TRAIN_RATE_STATE_H_

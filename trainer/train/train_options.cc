@@ -1,0 +1,164 @@
+#include "trainer/train/train_options.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace ecrf {
+namespace trainer {
+
+TrainOptions PresetOptions(const std::string& name) {
+  TrainOptions o;
+  o.preset = name;
+  if (name == "paper") return o;
+  if (name == "fast") {
+    // The CPU preset: TensoRF's schedule compressed 10x (3k iterations) with a 180^3 final grid.
+    // On chair-400 with 2 cores it passes 32.4 dB test PSNR after 3.1 minutes of training and
+    // ends at 35.1 dB after 6.4 minutes (10 test views; docs/results.md). The small early grid
+    // and the early alpha mask matter most: after the shrink at iteration 300 a batch costs
+    // 0.13 M density samples instead of 0.49 M.
+    o.iters = 3000;
+    o.reference_iters = 3000;
+    o.voxels_init = 64L * 64 * 64;
+    o.voxels_final = 180L * 180 * 180;
+    o.upsample_iters = {300, 600, 900, 1200, 1500};
+    o.alpha_mask_iters = {300, 900};
+    o.fine_grid_at_rate_points = true;
+    return o;
+  }
+  if (name == "tiny") {
+    // The built-in scene at low resolution: a couple of minutes on 2 cores.
+    o.iters = 1500;
+    o.reference_iters = 1500;
+    o.batch_rays = 2048;
+    o.voxels_init = 32L * 32 * 32;
+    o.voxels_final = 96L * 96 * 96;
+    o.upsample_iters = {200, 400, 600, 800};
+    o.alpha_mask_iters = {300, 700};
+    o.density_rank = 8;
+    o.appearance_rank = 24;
+    o.plane_block[0] = 8;  // blocks never span more channels than a mode has
+    return o;
+  }
+  throw std::invalid_argument("unknown preset '" + name + "' (expected paper, fast or tiny)");
+}
+
+void SelectProceduralScene(const std::string& name, TrainOptions* o) {
+  if (name != "builtin" && name != "capture" && name != "forward") {
+    throw std::invalid_argument("--scene: unknown scene '" + name +
+                                "' (builtin, capture or forward; for files use --data DIR)");
+  }
+  o->procedural_scene = name;
+}
+
+namespace {
+// The low rate point's head and components, shared with --target-size's low shares.
+constexpr int kLowRateMlpLevels = 15;
+// The medium point's head: 31 levels save 10 KB of the 38 KB head at no measured cost once
+// trained through (chair: 634,085 B / 35.38 dB against 644,143 B / 35.43 dB with 127 levels).
+constexpr int kMediumRateMlpLevels = 31;
+constexpr int kLowRateMaxAppearanceRank = 32;
+
+// The low and medium rate points' grid schedule: a final grid (11/9)^3 times the preset's (fast:
+// 220^3 voxels instead of 180^3), reached by upsamplings at 2/3 of the preset's iterations (fast:
+// the last at 1000 instead of 1500), so that the rate phase starts that much earlier. On chair
+// the two together gain about 0.3 dB at equal size at the low point, each alone 0.08-0.11 dB;
+// at the medium point the file grows from 550 KB to 644 KB and the decoded PSNR from 34.94 to
+// 35.43 dB, above the lambda = 0 float model (docs/results.md).
+void ApplyFineGridSchedule(TrainOptions* o) {
+  if (!o->fine_grid_at_rate_points) return;
+  constexpr double kGridScale = 11.0 / 9.0;
+  o->voxels_final = long(std::lround(double(o->voxels_final) * kGridScale * kGridScale * kGridScale));
+  for (int& at : o->upsample_iters) at = std::max(1, int(std::lround(at * 2.0 / 3.0)));
+  o->rate_start = 0.0f;  // right after the last upsampling and mask update
+}
+}  // namespace
+
+int ScoredTestViewStride(const TrainOptions& o, size_t views) {
+  if (o.test_view_stride > 0) return o.test_view_stride;
+  return std::max(1, int((views + kDefaultScoredTestViews - 1) / kDefaultScoredTestViews));
+}
+
+void ApplyRatePoint(const std::string& name, TrainOptions* o) {
+  if (name == "none") {
+    o->lambda_e = 0.0f;
+    o->quant_step_scale = 1.0f;
+    o->mlp_levels = 127;
+  } else if (name == "low") {
+    // Coarser steps under QAT beat a larger lambda_e at the same size (chair: 182,217 B at
+    // 33.76 dB against 266,445 B at 33.79 dB with steps x1). At this rate fewer appearance
+    // components code better: chair with 32 instead of 48 gains 0.03-0.13 dB at equal size,
+    // while a 64-unit head or 8 density components cost 0.3-0.4 dB (docs/results.md).
+    o->lambda_e = 2e-10f;
+    o->quant_step_scale = 4.0f;
+    o->mlp_levels = kLowRateMlpLevels;
+    o->appearance_rank = std::min(o->appearance_rank, kLowRateMaxAppearanceRank);
+    ApplyFineGridSchedule(o);
+  } else if (name == "medium") {
+    // With the finer grid, 3e-11 instead of 2e-11 keeps the float model's PSNR at 43x (chair:
+    // 590,171 B, 35.34 dB; 2e-11: 634,085 B, 35.38 dB; the preset's grid at 2e-11 and 127
+    // levels: 550,181 B, 34.94 dB).
+    o->lambda_e = 3e-11f;
+    o->quant_step_scale = 3.0f;
+    o->mlp_levels = kMediumRateMlpLevels;
+    ApplyFineGridSchedule(o);
+  } else if (name == "high") {
+    o->lambda_e = 2e-11f;
+    o->quant_step_scale = 1.0f;
+  } else {
+    throw std::invalid_argument("unknown rate point '" + name + "' (expected low, medium, high or none)");
+  }
+  o->rate_point = name;
+}
+
+double NominalFloat32GridBytes(const TrainOptions& o) {
+  const double res = std::cbrt(double(o.voxels_final));
+  const double ranks = 3.0 * (o.density_rank + o.appearance_rank);
+  return 4.0 * ranks * (res * res + res);
+}
+
+void ApplyTargetSizeDefaults(TrainOptions* o, const TargetSizeFlagsGiven& given) {
+  if (o->target_bytes == 0) return;
+  const double share = double(o->target_bytes) / NominalFloat32GridBytes(*o);
+  // Never finer than x2: encode-time rate control can then still refine the steps (to the 8-bit
+  // peak step) when training ends below the target.
+  if (!given.step_scale) o->quant_step_scale = share < 0.016 ? 4.0f : share < 0.03 ? 3.0f : 2.0f;
+  if (share >= 0.03) return;
+  if (!given.schedule) ApplyFineGridSchedule(o);
+  if (!given.mlp_levels) o->mlp_levels = share < 0.016 ? kLowRateMlpLevels : kMediumRateMlpLevels;
+  if (share >= 0.016) return;
+  if (!given.ranks) o->appearance_rank = std::min(o->appearance_rank, kLowRateMaxAppearanceRank);
+}
+
+int ScaleMilestone(int milestone, int iters, int reference_iters) {
+  if (reference_iters <= 0 || iters == reference_iters) return milestone;
+  return int(std::lround(double(milestone) * iters / reference_iters));
+}
+
+long ResolutionForVoxels(long voxels, const double aabb_min[3], const double aabb_max[3], int res[3]) {
+  // TensoRF N_to_reso: cubic voxels of the size that gives `voxels` cells in the box.
+  double volume = 1.0;
+  for (int a = 0; a < 3; ++a) volume *= aabb_max[a] - aabb_min[a];
+  const double voxel = std::cbrt(volume / double(voxels));
+  long total = 1;
+  for (int a = 0; a < 3; ++a) {
+    res[a] = std::max(2, int((aabb_max[a] - aabb_min[a]) / voxel));
+    total *= res[a];
+  }
+  return total;
+}
+
+std::vector<long> UpsampleVoxelCounts(const TrainOptions& o) {
+  // exp(linspace(log(init), log(final), len(upsample_iters) + 1))[1:], as TensoRF.
+  std::vector<long> counts;
+  const int n = int(o.upsample_iters.size());
+  for (int i = 1; i <= n; ++i) {
+    const double t = double(i) / n;
+    counts.push_back(
+        long(std::round(std::exp(std::log(double(o.voxels_init)) * (1 - t) + std::log(double(o.voxels_final)) * t))));
+  }
+  return counts;
+}
+
+}  // namespace trainer
+}  // namespace ecrf

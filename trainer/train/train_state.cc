@@ -1,0 +1,110 @@
+#include "trainer/train/train_state.h"
+
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <stdexcept>
+
+namespace ecrf {
+namespace trainer {
+namespace {
+
+void SaveAdam(const std::string& name, const Adam& adam, Checkpoint* ck, nlohmann::json* j) {
+  ck->arrays.push_back({"adam." + name + ".m", {int64_t(adam.first_moment().size())}, adam.first_moment()});
+  ck->arrays.push_back({"adam." + name + ".v", {int64_t(adam.second_moment().size())}, adam.second_moment()});
+  (*j)["adam_steps"][name] = adam.step_count();
+}
+
+void LoadAdam(const std::string& name, const Checkpoint& ck, const nlohmann::json& j, const std::string& path,
+              size_t size, Adam* adam) {
+  const CheckpointArray* m = ck.Find("adam." + name + ".m");
+  const CheckpointArray* v = ck.Find("adam." + name + ".v");
+  if (!m || !v || m->data.size() != size || v->data.size() != size) {
+    throw std::runtime_error(path + ": training state: optimizer '" + name + "' is missing or of the wrong size");
+  }
+  adam->Reset(size);
+  adam->first_moment() = m->data;
+  adam->second_moment() = v->data;
+  adam->set_step_count(j.at("adam_steps").at(name).get<long>());
+}
+
+}  // namespace
+
+void Optimizers::Reset(TensorfModel& m) {
+  density.Reset(m.density().params().size());
+  appearance.Reset(m.appearance().params().size());
+  head.Reset(m.head().params().size());
+  lr_scale = 1.0f;  // TensoRF's lr_upsample_reset: back to the initial rates
+}
+
+void Optimizers::Step(TensorfModel& m, const TrainOptions& o) {
+  const float lr_grid = o.lr_grid * lr_scale, lr_net = o.lr_network * lr_scale;
+  density.Step(m.density().params().data(), m.density().grads().data(), m.density().params().size(), lr_grid);
+  appearance.Step(m.appearance().params().data(), m.appearance().grads().data(), m.appearance().params().size(),
+                  lr_grid);
+  head.Step(m.head().params().data(), m.head().grads().data(), m.head().params().size(), lr_net);
+}
+
+Checkpoint SaveTrainState(const Optimizers& opt, const RateState& rate, const RaySet& rays,
+                          const TrainProgress& progress) {
+  Checkpoint ck;
+  nlohmann::json j;
+  SaveAdam("density", opt.density, &ck, &j);
+  SaveAdam("appearance", opt.appearance, &ck, &j);
+  SaveAdam("head", opt.head, &ck, &j);
+  if (rate.active) SaveAdam("entropy", rate.adam, &ck, &j);
+  j["lr_scale"] = opt.lr_scale;  // a float is exact as a JSON double
+  j["l1_weight"] = progress.l1_weight;
+  j["train_seconds"] = progress.train_seconds;
+  j["psnr_curve"] = progress.psnr_curve;
+  std::ostringstream rng;
+  rng << progress.rng;
+  j["rng"] = rng.str();
+  CheckpointArray keep{"rays.keep16", {}, {}};
+  std::string shuffle_rng;
+  uint64_t cursor = 0;
+  rays.SaveState(&keep.data, &shuffle_rng, &cursor);
+  keep.shape = {int64_t(keep.data.size())};
+  ck.arrays.push_back(std::move(keep));
+  j["rays_shuffle_rng"] = shuffle_rng;
+  j["rays_cursor"] = cursor;
+  ck.json = j.dump();
+  return ck;
+}
+
+bool LoadTrainState(const Checkpoint& ck, const std::string& path, Optimizers* opt, RateState* rate, RaySet* rays,
+                    TrainProgress* progress) {
+  nlohmann::json all;
+  try {
+    all = nlohmann::json::parse(ck.json);
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error(path + ": checkpoint metadata: " + e.what());
+  }
+  if (!all.contains("train_state")) return false;
+  const nlohmann::json& j = all["train_state"];
+  try {
+    LoadAdam("density", ck, j, path, opt->density.size(), &opt->density);
+    LoadAdam("appearance", ck, j, path, opt->appearance.size(), &opt->appearance);
+    LoadAdam("head", ck, j, path, opt->head.size(), &opt->head);
+    if (rate->active) LoadAdam("entropy", ck, j, path, rate->entropy.params().size(), &rate->adam);
+    opt->lr_scale = j.at("lr_scale").get<float>();
+    progress->l1_weight = j.at("l1_weight").get<float>();
+    progress->train_seconds = j.at("train_seconds").get<double>();
+    progress->psnr_curve = j.at("psnr_curve").get<std::vector<std::pair<double, double>>>();
+    std::istringstream rng(j.at("rng").get<std::string>());
+    rng >> progress->rng;
+    if (rng.fail()) throw std::runtime_error(path + ": training state: damaged random generator state");
+    const CheckpointArray* keep = ck.Find("rays.keep16");
+    if (!keep) throw std::runtime_error(path + ": training state: the kept-ray set is missing");
+    try {
+      rays->RestoreState(keep->data, j.at("rays_shuffle_rng").get<std::string>(), j.at("rays_cursor").get<uint64_t>());
+    } catch (const std::runtime_error& e) {
+      throw std::runtime_error(path + ": " + e.what());
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error(path + ": training state: " + e.what());
+  }
+  return true;
+}
+
+}  // namespace trainer
+}  // namespace ecrf

@@ -1,0 +1,112 @@
+// The training driver: data -> TensoRF VM model, with TensoRF's schedule (coarse-to-fine
+// upsampling, alpha mask, bounding-box shrink, learning-rate decay), checkpoints, evaluation and
+// metrics.json. The per-batch math lives in volume_render.h; this file only orchestrates.
+#ifndef ECRF_TRAINER_TRAIN_TRAINER_H_
+#define ECRF_TRAINER_TRAIN_TRAINER_H_
+
+#include <functional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "trainer/train/checkpoint.h"
+#include "trainer/data/dataset.h"
+#include "trainer/data/image_io.h"
+#include "trainer/train/rate_state.h"
+#include "trainer/data/scene_fit.h"
+#include "encoder/scene_encoder.h"
+#include "trainer/model/tensorf_model.h"
+#include "trainer/train/train_options.h"
+
+namespace ecrf {
+namespace trainer {
+
+struct EvalResult {
+  double psnr = 0.0;  // mean over views
+  double ssim = 0.0;  // mean over views
+  int views = 0;
+  double seconds_per_view = 0.0;
+  // Density and MLP evaluations per ray (what bounds render time), where the renderer counts them.
+  double samples_per_ray = 0.0;
+  double color_samples_per_ray = 0.0;
+  std::vector<Image> renders;  // filled when requested
+};
+
+struct TrainResult {
+  int iterations = 0;
+  double train_seconds = 0.0;
+  double final_train_psnr = 0.0;  // from the mean MSE of the last progress interval
+  EvalResult test;
+  std::vector<std::pair<double, double>> psnr_curve;  // (minutes, test PSNR) when --eval-every
+  RateReport rate;  // bits per tensor of the rounded coefficients (when lambda_e > 0)
+  float final_lambda_e = 0.f;  // options.lambda_e, or where rate control left it
+};
+
+// How a trained run is encoded: its block shapes and frozen steps, coefficient depth and MLP
+// precision (metadata left empty).
+EncodeOptions RunEncodeOptions(const TrainOptions& options, const RateState& rate);
+
+// The datasets a run uses: the built-in procedural scene or a directory on disk.
+Dataset LoadTrainingViews(const TrainOptions& options, const std::string& split);
+
+// Model configuration for a dataset (its box, near/far, background), the options' ranks and the
+// scene model of `fit` (unbounded: the grids span the contracted cube around fit.roi).
+TensorfConfig ConfigFor(const TrainOptions& options, const Dataset& data, const SceneFit& fit);
+// The same with FitScene(options.scene_type, data).
+TensorfConfig ConfigFor(const TrainOptions& options, const Dataset& data);
+
+// Trains on `train`, evaluating on `test` at the end (and every options.eval_every iterations).
+// Writes checkpoints and metrics.json into options.out_dir when it is not empty.
+// `rate` receives the rate objective's state (steps, entropy model); it may be null.
+TrainResult Train(const TrainOptions& options, const Dataset& train, const Dataset& test,
+                  TensorfModel* model, RateState* rate = nullptr);
+
+// The iteration at which the rate terms switch on: options.rate_start of the run, but never
+// before the grid is final (after the last upsample and alpha-mask update).
+int RateStartIteration(const TrainOptions& options);
+// The iteration quantization-aware training starts at (options.iters: never); never before the
+// rate phase.
+int QatStartIteration(const TrainOptions& options);
+
+// Renders every options.test_view_stride-th view and compares it with the ground truth.
+EvalResult Evaluate(const TensorfModel& model, const Dataset& test, int stride, int max_views,
+                    bool keep_renders);
+
+Image RenderView(const TensorfModel& model, const Camera& camera);
+
+// Thrown by Train when options.stop_after is reached: the checkpoint written at that
+// iteration (if it is a checkpoint iteration) is the run's state.
+class TrainingStopped : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Checkpoint <-> model (+ training progress).
+// `train_state` (optional, from SaveTrainState) goes into the same file: its arrays beside the
+// model's, its JSON object under "train_state". `config` (optional): the run's resolved options
+// (train_config.h), stored under "config" for `ecrf encode RUN` and `--resume`; `options` holds
+// the live values (lambda_e under rate control).
+void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int iteration,
+                         const TrainOptions& options, const RateState* rate = nullptr,
+                         const Checkpoint* train_state = nullptr, const TrainOptions* config = nullptr);
+// The configuration a checkpoint was trained with (train_config.h), and its iteration and live
+// lambda_e; false when it predates stored configurations. Throws on unreadable files.
+struct CheckpointRunInfo {
+  bool has_config = false;
+  TrainOptions config;
+  int iteration = 0;
+  float lambda_e = 0.0f;  // where rate control left it
+};
+CheckpointRunInfo ReadCheckpointRunInfo(const std::string& path);
+// A model of the checkpoint's own configuration (ranks, render parameters, head), loaded from it:
+// what the encoder starts from. `rate` (optional) receives the rate state.
+TensorfModel LoadModelFromCheckpoint(const std::string& path, RateState* rate = nullptr);
+// Returns the iteration stored in the checkpoint. `rate` (optional) receives the rate state,
+// `whole` (optional) the checkpoint as read (for LoadTrainState, without reading it twice).
+int LoadModelCheckpoint(const std::string& path, TensorfModel* model, RateState* rate = nullptr,
+                        Checkpoint* whole = nullptr);
+
+}  // namespace trainer
+}  // namespace ecrf
+
+#endif  // ECRF_TRAINER_TRAIN_TRAINER_H_

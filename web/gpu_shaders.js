@@ -1,0 +1,312 @@
+// GLSL ES 3.00 sources of the WebGL2 renderer (web/gpu_renderer.js), generated per scene so
+// that every grid rank, MLP width and UBO split is a compile-time constant. The ray march follows
+// SPEC.md section 7 operation by operation (same order of float32 operations where the GPU lets
+// us choose); the sums of the MLP and of the VM products are done four lanes at a time, which only
+// reorders float additions (7.7 tolerates that, the reference render is not bit-exact anyway).
+//
+// Plain script: defines globalThis.ecrfGpuShaders = {fieldShader, displayShader, VERTEX, WT_WIDTH}.
+'use strict';
+
+(function () {
+  const VERTEX = `#version 300 es
+void main() {
+  // One triangle covering the viewport: no vertex buffer needed.
+  vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));
+  gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0);
+}`;
+
+  const displayShader = `#version 300 es
+precision highp float;
+uniform sampler2D uImage;
+uniform vec2 uCanvas;
+out vec4 outColor;
+void main() {
+  // The image is stored top row first (row 0 = image row 0), the canvas counts rows from the bottom.
+  vec2 uv = vec2(gl_FragCoord.x / uCanvas.x, 1.0 - gl_FragCoord.y / uCanvas.y);
+  outColor = vec4(texture(uImage, uv).rgb, 1.0);
+}`;
+
+  const WT_WIDTH = 2048;  // texels per row of the MLP weight texture (a power of two)
+  const f = (v) => {
+    const s = String(v);
+    return /[.eE]/.test(s) || !isFinite(v) ? s : s + '.0';
+  };
+
+  // One layer: loops over groups of 4 outputs and over input vec4s, so that the source stays small.
+  // Unrolling it (constant UBO offsets, inputs in registers) compiled for 20 s in SwiftShader and
+  // ran 3x slower there; desktop drivers unroll these constant-trip loops themselves.
+  // Rows live in layer.runs ({block, offset, o4Begin, o4End}, 4 rows of len4 vec4s per o4,
+  // row-major); out[o4] = act(bias[o4] + W in).
+  function emitLayer(layer, len4, input, outName, biasName, relu, texture) {
+    let s = '';
+    for (const r of layer.runs) {
+      const W = (i) => (texture ? `mlpW(base + ${i})` : `uW${r.block}[base + ${i}]`);
+      s += `  for (int o4 = ${r.o4Begin}; o4 < ${r.o4End}; ++o4) {
+    int base = ${r.offset} + (o4 - ${r.o4Begin}) * ${4 * len4};
+    vec4 acc = ${biasName ? `${biasName}[o4]` : 'vec4(0.0)'};
+    for (int k = 0; k < ${len4}; ++k) {
+      vec4 xv = ${input('k')};
+      acc += vec4(dot(${W('k')}, xv), dot(${W(`${len4} + k`)}, xv),
+                  dot(${W(`${2 * len4} + k`)}, xv), dot(${W(`${3 * len4} + k`)}, xv));
+    }
+    ${outName}[o4] = ${relu ? 'max(acc, vec4(0.0))' : 'acc'};
+  }\n`;
+    }
+    return s;
+  }
+
+  // The MLP of SPEC 7.6 on products pr[0..P4-1] and direction d, leaving the colour in `rgb`.
+  // The input is laid out in whole vec4s ([feat], [d, 0], sin(feat 2^q) per q, cos, sin(d 2^q) per
+  // q, cos); gpu_renderer.js permutes W1's columns to match and zeroes the padding lanes.
+  function emitMlp(cfg, pr) {
+    const {P4, F4, H4, FF, FV} = cfg;
+    const IN4 = cfg.IN4;
+    let s = `  vec4 fe[${F4}], h[${H4}], g[${H4}], o[1];\n`;
+    s += emitLayer(cfg.layers.basis, P4, (k) => `${pr}[${k}]`, 'fe', null, false, cfg.weightTexture);
+    s += `  vec4 x[${IN4}];\n`;
+    let k = 0;
+    for (let j = 0; j < F4; ++j) s += `  x[${k++}] = fe[${j}];\n`;
+    s += `  x[${k++}] = vec4(d, 0.0);\n`;
+    for (const fn of ['sin', 'cos']) {
+      for (let q = 0; q < FF; ++q) for (let j = 0; j < F4; ++j) s += `  x[${k++}] = ${fn}(fe[${j}] * ${f(2 ** q)});\n`;
+    }
+    for (const fn of ['sin', 'cos']) {
+      for (let q = 0; q < FV; ++q) s += `  x[${k++}] = vec4(${fn}(d * ${f(2 ** q)}), 0.0);\n`;
+    }
+    s += emitLayer(cfg.layers.w1, IN4, (j) => `x[${j}]`, 'h', 'uB1', true, cfg.weightTexture);
+    s += emitLayer(cfg.layers.w2, H4, (j) => `h[${j}]`, 'g', 'uB2', true, cfg.weightTexture);
+    s += emitLayer(cfg.layers.w3, H4, (j) => `g[${j}]`, 'o', 'uB3', false, cfg.weightTexture);
+    return s + `  rgb = 1.0 / (1.0 + exp(-o[0].xyz));\n`;
+  }
+
+  // cfg: {dGroups[3], aGroups[3] (rank groups of 4 per mode), aGroupOff[3], dLineRow[3], aLineRow[3]
+  //       (first row of each mode in the line textures), P4, F4, H4, IN4 (vec4 counts), FF, FV,
+  //       occupancy, blockLevels [2] (mask cells per block edge), weightTexture, blockSizes[]
+  //       (vec4s per UBO), layers: {basis, w1, w2, w3} ({runs, rows}), deferred, slots}
+  function fieldShader(cfg) {
+    const {dGroups, aGroups, aGroupOff, dLineRow, aLineRow, P4, F4, H4, IN4, FF, FV} = cfg;
+    const K = cfg.slots || 8;
+    let s = `#version 300 es
+precision highp float;
+precision highp int;
+precision highp sampler2D;
+precision highp sampler2DArray;
+precision highp usampler3D;
+`;
+    if (cfg.weightTexture) {
+      s += `uniform sampler2D uWT;\nvec4 mlpW(int i) { return texelFetch(uWT, ivec2(i & ${WT_WIDTH - 1}, i >> ${Math.log2(WT_WIDTH)}), 0); }\n`;
+    } else {
+      for (let b = 0; b < cfg.blockSizes.length; ++b) s += `uniform MlpBlock${b} { vec4 uW${b}[${cfg.blockSizes[b]}]; };\n`;
+    }
+    s += `uniform sampler2DArray uDP0, uDP1, uDP2, uAP0, uAP1, uAP2;
+uniform sampler2D uDL, uAL, uCam;
+uniform usampler3D uOcc, uBlk0, uBlk1;
+uniform vec4 uB1[${H4}], uB2[${H4}], uB3[1];
+uniform vec3 uC2W0, uC2W1, uC2W2, uOrigin;   // columns of c2w[:3,:3], and c2w[:3,3]
+uniform vec3 uMin, uMax, uInv, uRes1, uBg;
+uniform ivec3 uRes;
+uniform vec3 uOMin, uOInv, uORes1, uOScale, uEps;
+uniform ivec3 uORes;
+uniform float uNear, uFar, uStep, uShift, uDScale, uWthr, uEarly, uOne;
+uniform int uN;
+out vec4 outColor;
+
+// log1p(exp(x)) of PyTorch's softplus; log(1 + y) alone loses most digits of the small y that a
+// density shift of -10 produces, so small y use the alternating series (error < y^8 / 8).
+float softplus(float x) {
+  if (x > 20.0) return x;
+  float y = exp(x);
+  if (y < 0.1) return y * (1.0 + y * (-0.5 + y * (1.0 / 3.0 + y * (-0.25 + y * (0.2 + y * (-1.0 / 6.0 + y * (1.0 / 7.0)))))));
+  return log(1.0 + y);
+}
+`;
+    // Per-mode interpolation: plane of mode m spans u = MatMode[m][0] (columns), v = MatMode[m][1]
+    // (rows), line spans w = VecMode[m].
+    const MAT = [[0, 1], [0, 2], [1, 2]], VEC = [2, 1, 0], AX = ['x', 'y', 'z'];
+    const modeTaps = (m) => {
+      const u = AX[MAT[m][0]], v = AX[MAT[m][1]], w = AX[VEC[m]];
+      return `    ivec2 q${m} = ivec2(i0.${u}, i0.${v});
+    float w00_${m} = (1.0 - fr.${u}) * (1.0 - fr.${v}), w01_${m} = fr.${u} * (1.0 - fr.${v});
+    float w10_${m} = (1.0 - fr.${u}) * fr.${v}, w11_${m} = fr.${u} * fr.${v};
+    float wl0_${m} = 1.0 - fr.${w}, wl1_${m} = fr.${w};
+    int l${m} = i0.${w};\n`;
+    };
+    const planeLine = (tex, lines, m, k, row) => `w00_${m} * texelFetch(${tex}, ivec3(q${m}, ${k}), 0) + ` +
+        `w01_${m} * texelFetch(${tex}, ivec3(q${m}.x + 1, q${m}.y, ${k}), 0) + ` +
+        `w10_${m} * texelFetch(${tex}, ivec3(q${m}.x, q${m}.y + 1, ${k}), 0) + ` +
+        `w11_${m} * texelFetch(${tex}, ivec3(q${m} + 1, ${k}), 0)) * ` +
+        `(wl0_${m} * texelFetch(${lines}, ivec2(l${m}, ${row}), 0) + wl1_${m} * texelFetch(${lines}, ivec2(l${m} + 1, ${row}), 0)`;
+
+    s += `float densityFeature(ivec3 i0, vec3 fr) {\n  float total = 0.0;\n`;
+    for (let m = 0; m < 3; ++m) {
+      if (!dGroups[m]) continue;
+      s += `  {\n${modeTaps(m)}    float sum = 0.0;
+    for (int k = 0; k < ${dGroups[m]}; ++k) {
+      vec4 pl = (${planeLine(`uDP${m}`, 'uDL', m, 'k', `${dLineRow[m]} + k`)});
+      sum += dot(pl, vec4(1.0));
+    }
+    total += sum;\n  }\n`;
+    }
+    s += `  return total;\n}\n\n`;
+
+    // Appearance products into pr[0..P4-1], unrolled so that every texture layer is a constant.
+    const emitProducts = (pr) => {
+      let out = '';
+      for (let m = 0; m < 3; ++m) {
+        if (!aGroups[m]) continue;
+        out += modeTaps(m).replace(/^    /gm, '      ');
+        for (let k = 0; k < aGroups[m]; ++k) {
+          out += `      ${pr}[${aGroupOff[m] + k}] = (${planeLine(`uAP${m}`, 'uAL', m, k, aLineRow[m] + k)});\n`;
+        }
+      }
+      for (let k = aGroups[0] + aGroups[1] + aGroups[2]; k < P4; ++k) out += `      ${pr}[${k}] = vec4(0.0);\n`;
+      return out;
+    };
+
+    if (cfg.occupancy) {
+      s += `
+// SPEC 7.3: occupied when a corner with nonzero trilinear weight is set. Bit 0 of uOcc is the
+// voxel, bit 1 the OR of the cell's 8 corners (the usual case: every fraction nonzero).
+bool occupied(vec3 idx) {
+  vec3 lo = floor(idx);
+  ivec3 ilo = ivec3(lo);
+  ivec3 ihi = ilo + ivec3(greaterThan(idx, lo));
+  ilo = max(ilo, ivec3(0));
+  ihi = min(ihi, uORes - 1);
+  if (any(greaterThan(ilo, ihi))) return false;
+  if (all(equal(ihi - ilo, ivec3(1)))) return (texelFetch(uOcc, ilo, 0).r & 2u) != 0u;
+  for (int z = ilo.z; z <= ihi.z; ++z)
+    for (int y = ilo.y; y <= ihi.y; ++y)
+      for (int x = ilo.x; x <= ihi.x; ++x)
+        if ((texelFetch(uOcc, ivec3(x, y, z), 0).r & 1u) != 0u) return true;
+  return false;
+}
+
+// Sample i (mask index idx) in an all-empty block of mask corners: the first sample index past
+// the samples that provably stay in the block (margin uEps.x cells covers both renderers' rounding).
+int skipEmpty(int i, float t, vec3 idx, vec3 o, vec3 d, float t0) {
+  if (any(lessThan(idx, vec3(0.0))) || any(greaterThan(idx, uORes1))) return i;
+  for (int level = 0; level < 2; ++level) {
+    int B = level == 0 ? ${cfg.blockLevels[0]} : ${cfg.blockLevels[1]};
+    ivec3 dims = level == 0 ? textureSize(uBlk0, 0) : textureSize(uBlk1, 0);
+    ivec3 b = min(ivec3(idx) / B, dims - 1);
+    uint v = level == 0 ? texelFetch(uBlk0, b, 0).r : texelFetch(uBlk1, b, 0).r;
+    if (v != 0u) continue;
+    vec3 lo = vec3(b * B), hi = min(lo + float(B), uORes1);
+    float tlo = -3.0e38, thi = 3.0e38;
+    for (int a = 0; a < 3; ++a) {
+      if (d[a] == 0.0) continue;
+      float A = (o[a] - uOMin[a]) * uOScale[a], D = d[a] * uOScale[a];
+      float ta = (lo[a] + uEps.x - A) / D, tb = (hi[a] - uEps.x - A) / D;
+      tlo = max(tlo, min(ta, tb));
+      thi = min(thi, max(ta, tb));
+    }
+    if (!(t >= tlo)) return i;
+    int j = int(min(floor((thi - t0) / uStep), float(uN))) - 1;
+    return j >= i ? j + 1 : i;
+  }
+  return i;
+}
+`;
+    }
+
+    s += `
+// SPEC 7.4 locate(): grid cell i0 and fractions fr of a point of the box.
+void locate(vec3 p, out ivec3 i0, out vec3 fr) {
+  vec3 idx = ((p - uMin) * uInv - 1.0 + 1.0) * 0.5 * uRes1;
+  idx = max(idx, vec3(0.0));   // maps NaN and negatives to 0
+  idx = min(idx, uRes1);
+  i0 = min(ivec3(floor(idx)), uRes - 2);
+  fr = idx - vec3(i0);
+}
+
+void main() {
+  ivec2 px = ivec2(gl_FragCoord.xy);  // row px.y of the framebuffer holds image row px.y (top first)
+  vec2 cam = vec2(texelFetch(uCam, ivec2(px.x, 0), 0).x, texelFetch(uCam, ivec2(px.y, 0), 0).y);
+  vec3 D = (uC2W0 * cam.x + uC2W1 * cam.y) + uC2W2 * -1.0;
+  float sc = 1.0 / sqrt((D.x * D.x + D.y * D.y) + D.z * D.z);
+  vec3 d = D * sc, o = uOrigin;
+  float T = 1.0, acc = 0.0;
+  vec3 C = vec3(0.0);
+${cfg.deferred ? `  vec4 ps[${P4}];\n  for (int k = 0; k < ${P4}; ++k) ps[k] = vec4(0.0);\n  float wSum = 0.0;\n` : ''}
+  float tmin = -3.0e38;
+  float tx = 3.0e38;   // beyond tx (with a rounding margin) every sample is outside the box
+  bool miss = false;
+  for (int a = 0; a < 3; ++a) {
+    float dv = d[a] == 0.0 ? 1e-6 : d[a];
+    float ra = (uMax[a] - o[a]) / dv, rb = (uMin[a] - o[a]) / dv;
+    tmin = max(tmin, min(ra, rb));
+    if (d[a] == 0.0) {
+      miss = miss || o[a] < uMin[a] || o[a] > uMax[a];
+    } else {
+      float err = uEps.y * (abs(o[a]) + abs(uMin[a]) + abs(uMax[a]) + uFar * abs(d[a]) + 1.0) / abs(d[a]);
+      tx = min(tx, max(ra, rb) + err);
+    }
+  }
+  float t0 = min(max(tmin, uNear), uFar);
+  int i = miss ? uN : 0;
+  // Colour samples are batched: the march records up to ${K} (t, weight) pairs, then the MLP runs
+  // over them in a loop of its own, so the SIMD lanes of neighbouring rays share MLP iterations
+  // instead of each sample's MLP running whenever any lane needs one. Same sums, same order.
+  float slotT[${K}], slotW[${K}];
+  while (i < uN) {
+    int cnt = 0;
+    while (i < uN && cnt < ${K}) {
+      float t = t0 + uStep * float(i);
+      if (t > tx) { i = uN; break; }
+      // uOne (= 1.0, unknown to the compiler) keeps o + d * t from becoming one fused multiply-add:
+      // the closed box and mask tests below are discontinuous in the last bit of p.
+      vec3 p = o + (d * t) * uOne;
+      if (any(lessThan(p, uMin)) || any(greaterThan(p, uMax))) { ++i; continue; }
+${cfg.occupancy ? `      vec3 oidx = ((p - uOMin) * uOInv - 1.0 + 1.0) * 0.5 * uORes1;
+      int j = skipEmpty(i, t, oidx, o, d, t0);
+      if (j > i) { i = j; continue; }
+      if (!occupied(oidx)) { ++i; continue; }
+` : ''}      ivec3 i0;
+      vec3 fr;
+      locate(p, i0, fr);
+      float sigma = softplus(densityFeature(i0, fr) + uShift);
+      float dist = i + 1 < uN ? (t0 + uStep * float(i + 1)) - t : 0.0;
+      float alpha = 1.0 - exp(-sigma * (dist * uDScale));
+      float weight = alpha * T;
+      T = T * ((1.0 - alpha) + 1e-10);
+      acc += weight;
+      if (weight > uWthr) {
+${cfg.deferred ? `        vec4 pr[${P4}];
+${emitProducts('pr').replace(/^  /gm, '    ')}        for (int k = 0; k < ${P4}; ++k) ps[k] += weight * pr[k];
+        wSum += weight;
+` : `        slotT[cnt] = t;
+        slotW[cnt] = weight;
+        ++cnt;
+`}      }
+      ++i;
+      if (T < uEarly) i = uN;
+    }
+${cfg.deferred ? '' : `    for (int sl = 0; sl < cnt; ++sl) {
+      vec3 p = o + (d * slotT[sl]) * uOne;
+      ivec3 i0;
+      vec3 fr;
+      locate(p, i0, fr);
+      vec4 pr[${P4}];
+${emitProducts('pr')}      vec3 rgb;
+${emitMlp(cfg, 'pr').replace(/^  /gm, '      ')}      C += slotW[sl] * rgb;
+    }
+`}  }
+${cfg.deferred ? `  if (wSum > 0.0) {
+    vec4 pq[${P4}];
+    for (int k = 0; k < ${P4}; ++k) pq[k] = ps[k] / wSum;
+    vec3 rgb;
+${emitMlp(cfg, 'pq').replace(/^  /gm, '    ')}    C = wSum * rgb;
+  }
+` : ''}  vec3 v = clamp(C + (1.0 - acc) * uBg, 0.0, 1.0);
+  // The 8-bit code of SPEC 7.2, exactly representable through the RGBA8 target.
+  outColor = vec4(floor(v * 255.0 + 0.5), floor(clamp(acc, 0.0, 1.0) * 255.0 + 0.5)) / 255.0;
+}
+`;
+    return s;
+  }
+
+  const api = {fieldShader, displayShader, VERTEX, WT_WIDTH};
+  if (typeof module !== 'undefined' && module.exports) module.exports = api;
+  globalThis.ecrfGpuShaders = api;
+})();
