@@ -110,13 +110,13 @@ int ecrf_scene_tensor(const ecrf_scene* scene, int grid, int tensor, const float
   if (g.storage != ecrf::dec::GridStorage::kFloat32) return ECRF_ERR_INVALID_ARGUMENT;
   const int m = tensor % 3;
   if (tensor < 3) {
-    shape[0] = g.res[ecrf::dec::kMatMode[m][1]];
-    shape[1] = g.res[ecrf::dec::kMatMode[m][0]];
+    shape[0] = g.res[ecrf::kMatMode[m][1]];
+    shape[1] = g.res[ecrf::kMatMode[m][0]];
     shape[2] = g.ranks[m];
     *data = g.plane_f32[m].data();
     *count = g.plane_count(m);
   } else {
-    shape[0] = g.res[ecrf::dec::kVecMode[m]];
+    shape[0] = g.res[ecrf::kVecMode[m]];
     shape[1] = g.ranks[m];
     shape[2] = 1;
     *data = g.line_f32[m].data();

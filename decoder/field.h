@@ -1,8 +1,7 @@
 // SceneField: the in-memory model of one decoded TensoRF VM scene, as the renderer consumes it.
 //
-// Conventions mirror the trainer (trainer/model/vm_grid.h, trainer/model/alpha_mask.h) without including it:
-//   matMode = [[0,1],[0,2],[1,2]], vecMode = [2,1,0]; plane m spans u = matMode[m][0] (columns)
-//   and v = matMode[m][1] (rows), line m spans w = vecMode[m]; channels-last storage:
+// Conventions shared with the trainer (format/vm_modes.h): plane m spans u = kMatMode[m][0]
+//   (columns) and v = kMatMode[m][1] (rows), line m spans w = kVecMode[m]; channels-last storage:
 //   plane m [res[v]][res[u]][rank[m]], line m [res[w]][rank[m]]. Ranks may be 0.
 // Grids are float32 or int16 fixed point with one scale per tensor (value = q * scale).
 //
@@ -22,12 +21,10 @@
 #include "format/ndc_frame.h"
 #include "format/scene_header.h"
 #include "format/status.h"
+#include "format/vm_modes.h"
 
 namespace ecrf {
 namespace dec {
-
-inline constexpr int kMatMode[3][2] = {{0, 1}, {0, 2}, {1, 2}};
-inline constexpr int kVecMode[3] = {2, 1, 0};
 
 // Decoder limits (checked before allocating).
 inline constexpr int kMaxGridRes = 4096;     // per axis, grids and alpha mask

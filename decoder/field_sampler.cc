@@ -5,6 +5,7 @@
 #include <type_traits>
 
 #include "decoder/contraction.h"
+#include "decoder/occupancy_rule.h"
 
 namespace ecrf {
 namespace dec {
@@ -142,8 +143,6 @@ Status QuantizeGridInt16(const VmGrid& src, VmGrid* dst) {
   return Status::Ok();
 }
 
-float Softplus(float x) { return x > 20.f ? x : std::log1p(std::exp(x)); }
-
 // ---------------------------------------------------------------------------------------------
 // VmGrid
 
@@ -279,24 +278,7 @@ Status OccupancyMask::BuildAcceleration() {
 }
 
 bool OccupancyMask::OccupiedAtIndex(const float idx[3]) const {
-  // Corners with non-zero weight: floor(idx) always (weight 1 - f > 0 unless f == 1, impossible),
-  // floor(idx) + 1 when f > 0. Out-of-range corners are zero padding.
-  int lo[3], hi[3];
-  for (int a = 0; a < 3; ++a) {
-    const float fl = std::floor(idx[a]);
-    if (!(fl > -2.f && fl < static_cast<float>(res_[a]))) return false;
-    const int i = static_cast<int>(fl);
-    lo[a] = i;
-    hi[a] = idx[a] > fl ? i + 1 : i;
-    if (lo[a] < 0) lo[a] = 0;
-    if (hi[a] > res_[a] - 1) hi[a] = res_[a] - 1;
-    if (lo[a] > hi[a]) return false;
-  }
-  for (int z = lo[2]; z <= hi[2]; ++z)
-    for (int y = lo[1]; y <= hi[1]; ++y)
-      for (int x = lo[0]; x <= hi[0]; ++x)
-        if (Get(x, y, z)) return true;
-  return false;
+  return AnyWeightedCornerSet(idx, res_, [this](int x, int y, int z) { return Get(x, y, z); });
 }
 
 bool OccupancyMask::EmptyBlock(int level, const float idx[3], int lo[3], int hi[3]) const {

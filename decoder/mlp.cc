@@ -1,4 +1,5 @@
 #include "decoder/mlp.h"
+#include "decoder/fast_sincos.h"
 
 #include <cmath>
 #include <cstring>
@@ -127,28 +128,18 @@ bool AllFinite(const float* p, size_t n) {
 }  // namespace
 
 void FastSinCos(const float* x, int count, float* s, float* c) {
-  constexpr float kTwoOverPi = 0.636619772367581343f;
-  constexpr float kP1 = 1.5703125f;  // pi/2 in three parts (Cody-Waite)
-  constexpr float kP2 = 4.837512969970703125e-4f;
-  constexpr float kP3 = 7.54978995489188216e-8f;
-  constexpr float kMagic = 12582912.f;  // 1.5 * 2^23: round-to-nearest by addition
+  using namespace fast_sincos;  // NOLINT(google-build-using-namespace)
   constexpr float kLimit = 8192.f;
   // Float-only, select-based body so the loop vectorises (no int conversions, no branches).
   for (int i = 0; i < count; ++i) {
     const float v = x[i];  // NaN / huge give garbage here and are fixed up below
-    const float kf = (v * kTwoOverPi + kMagic) - kMagic;
-    const float k4 = ((kf - 1.5f) * 0.25f + kMagic) - kMagic;  // floor(kf / 4), no ties
-    const float q = kf - 4.f * k4;                               // kf mod 4 in {0,1,2,3}
-    float r = v - kf * kP1;
-    r -= kf * kP2;
-    r -= kf * kP3;
+    const float kf = Quadrant(v);
+    const float k4 = ((kf - 1.5f) * 0.25f + kRoundingMagic) - kRoundingMagic;  // floor(kf / 4)
+    const float q = kf - 4.f * k4;  // kf mod 4 in {0,1,2,3}
+    const float r = Reduce(v, kf);
     const float r2 = r * r;
-    const float sr =
-        r + r * r2 * (-1.6666654611e-1f + r2 * (8.3321608736e-3f + r2 * -1.9515295891e-4f));
-    const float cr = 1.f - 0.5f * r2 +
-                     r2 * r2 *
-                         (4.166664568298827e-2f +
-                          r2 * (-1.388731625493765e-3f + r2 * 2.443315711809948e-5f));
+    const float sr = SinPolynomial(r, r2);
+    const float cr = CosPolynomial(r2);
     // sin(r + q pi/2) = A sin r + B cos r, cos(r + q pi/2) = A cos r - B sin r.
     // A = cos(q pi/2), B = sin(q pi/2) as exact cubic interpolants (no compares: they would
     // keep GCC from if-converting, hence from vectorising, under -ftrapping-math).

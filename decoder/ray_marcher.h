@@ -111,34 +111,6 @@ class RayMarcher {
   Workspace* workspaces_ = nullptr;  // threads_ of them
 };
 
-// ---------------------------------------------------------------------------------------------
-// Synthetic scenes and the render benchmark (wired into `ecrf bench render`).
-
-// A res^3 scene over [-1.5,1.5]^3: density ranks 16, appearance ranks 48 (P = 144), feature 27,
-// hidden 128; random small grids (seeded) plus a separable smooth box of dense density
-// off-centre (an opaque object whose surface spans a few samples);
-// random MLP (PyTorch-like init). with_mask: alpha mask at res^3 from the density (TensoRF's
-// updateAlphaMask: alpha >= 1e-4 after a 3x3x3 max-pool).
-Status MakeBlobScene(int res, GridStorage storage, bool with_mask, uint32_t seed,
-                     SceneField* scene);
-
-// Camera at `radius` from the origin, looking at it, Blender-like field of view (0.6911 rad).
-Camera OrbitCamera(int width, int height, float azimuth_rad, float elevation_rad, float radius);
-
-struct RenderBenchResult {
-  int threads = 0;
-  int views = 0;
-  double ms_per_view = 0.0;
-  double msamples_per_s = 0.0;        // density-evaluated samples
-  double mcolor_samples_per_s = 0.0;  // MLP samples
-  uint64_t samples_per_view = 0;
-  uint64_t color_samples_per_view = 0;
-};
-
-// Renders `views` orbit views of width x height (after one warm-up view) and times them.
-Status BenchmarkRender(const SceneField& scene, int width, int height, int threads, int views,
-                       const RenderOptions& base_options, RenderBenchResult* result);
-
 }  // namespace dec
 }  // namespace ecrf
 

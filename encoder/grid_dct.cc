@@ -6,6 +6,7 @@
 
 #include "format/block_shape.h"
 #include "format/float_dct.h"
+#include "decoder/multiversion.h"
 
 namespace ecrf {
 namespace trainer {
@@ -101,13 +102,6 @@ __attribute__((always_inline)) inline void DispatchStrided(const float* in, floa
     case 32: return PassStrided<32>(in, out, outer, inner, a);
   }
 }
-
-// Compiled for AVX2+FMA and the baseline, picked at load time (the default build is SSE2-only).
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define ECRF_MULTIVERSION __attribute__((target_clones("arch=x86-64-v3", "default")))
-#else
-#define ECRF_MULTIVERSION
-#endif
 
 // Separable transform of one block; `inverse` selects M^T. Result in *result (one of buf0/buf1).
 ECRF_MULTIVERSION

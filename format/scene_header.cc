@@ -2,12 +2,10 @@
 
 #include <cmath>
 
+#include "format/vm_modes.h"
+
 namespace ecrf {
 namespace {
-
-constexpr int kMatModeU[3] = {0, 0, 1};
-constexpr int kMatModeV[3] = {1, 2, 2};
-constexpr int kVecModeW[3] = {2, 1, 0};
 
 Status ReadFinite(ByteReader* r, float* v, const char* what) {
   ECRF_RETURN_IF_ERROR(r->ReadF32(v, what));
@@ -100,8 +98,8 @@ uint64_t SceneGridValues(const SceneHeader& h) {
   uint64_t values = 0;
   for (int g = 0; g < kNumSceneGrids; ++g) {
     for (int m = 0; m < 3; ++m) {
-      const uint64_t plane = uint64_t(h.res[kMatModeU[m]]) * h.res[kMatModeV[m]];
-      values += (plane + h.res[kVecModeW[m]]) * h.ranks[g][m];
+      const uint64_t plane = uint64_t(h.res[kMatMode[m][0]]) * h.res[kMatMode[m][1]];
+      values += (plane + h.res[kVecMode[m]]) * h.ranks[g][m];
     }
   }
   return values;
@@ -112,12 +110,12 @@ void SceneTensorExtent(const SceneHeader& h, int grid, int tensor, int extent[3]
   const int rank = h.ranks[grid][m];
   if (tensor < 3) {
     extent[0] = rank;
-    extent[1] = h.res[kMatModeV[m]];
-    extent[2] = h.res[kMatModeU[m]];
+    extent[1] = h.res[kMatMode[m][1]];
+    extent[2] = h.res[kMatMode[m][0]];
   } else {
     extent[0] = 1;
     extent[1] = rank;
-    extent[2] = h.res[kVecModeW[m]];
+    extent[2] = h.res[kVecMode[m]];
   }
 }
 

@@ -4,6 +4,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <fstream>
@@ -12,6 +13,8 @@
 #include <mutex>
 #include <string>
 #include <vector>
+
+#include "decoder/orbit_camera.h"
 
 namespace py = pybind11;
 
@@ -261,33 +264,14 @@ py::array Render(Scene& s, const py::array_t<float, py::array::c_style | py::arr
   return std::move(out);
 }
 
-// Degrees, as `ecrf render --elevation` and the web viewer take them, to the radians of the
-// orbit: in float64, rounded once to float32, exactly as tools/cmd_render.cc (OrbitRadians) and
-// web/camera_controls.js convert, so that the same degrees give the same camera bit for bit.
-float OrbitRadians(double degrees) { return static_cast<float>(degrees * M_PI / 180.0); }
-
-// SPEC.md 7.1 (informative): the reference tools' orbit, in binary32 with the C library's
-// sin/cos/tan, so that it reproduces the conformance cameras.
+// The reference tools' orbit (decoder/orbit_camera.h, SPEC.md 7.1): the camera `ecrf render
+// --orbit` uses, bit for bit, as (c2w, fx, fy, cx, cy).
 py::tuple OrbitCamera(int width, int height, double azimuth_deg, double elevation_deg, float radius) {
   if (width <= 0 || height <= 0 || !(radius > 0.f)) throw py::value_error("bad orbit camera");
-  const float az = OrbitRadians(azimuth_deg), el = OrbitRadians(elevation_deg);
-  const float pos[3] = {radius * std::cos(el) * std::cos(az), radius * std::cos(el) * std::sin(az),
-                        radius * std::sin(el)};
-  const float z[3] = {pos[0] / radius, pos[1] / radius, pos[2] / radius};
-  float x[3] = {0.f * z[2] - 1.f * z[1], 1.f * z[0] - 0.f * z[2], 0.f * z[1] - 0.f * z[0]};
-  const float xn = std::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
-  for (float& v : x) v /= xn;
-  const float y[3] = {z[1] * x[2] - z[2] * x[1], z[2] * x[0] - z[0] * x[2], z[0] * x[1] - z[1] * x[0]};
+  const ecrf::dec::Camera cam = ecrf::dec::OrbitCameraDegrees(width, height, azimuth_deg, elevation_deg, radius);
   py::array_t<float> c2w({3, 4});
-  float* m = c2w.mutable_data();
-  for (int a = 0; a < 3; ++a) {
-    m[4 * a + 0] = x[a];
-    m[4 * a + 1] = y[a];
-    m[4 * a + 2] = z[a];
-    m[4 * a + 3] = pos[a];
-  }
-  const float f = 0.5f * static_cast<float>(width) / std::tan(0.5f * 0.6911112070083618f);
-  return py::make_tuple(c2w, f, f, 0.5f * static_cast<float>(width), 0.5f * static_cast<float>(height));
+  std::copy(cam.c2w, cam.c2w + 12, c2w.mutable_data());
+  return py::make_tuple(c2w, cam.fx, cam.fy, cam.cx, cam.cy);
 }
 
 }  // namespace

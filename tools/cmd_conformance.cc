@@ -29,6 +29,7 @@
 #include "trainer/data/image_io.h"
 #include "encoder/scene_encoder.h"
 #include "trainer/train/trainer.h"
+#include "trainer/data/file_io.h"
 
 namespace ecrf {
 namespace tools {

@@ -16,6 +16,7 @@
 #include "trainer/train/checkpoint.h"
 #include "trainer/train/train_config.h"
 #include "trainer/train/trainer.h"
+#include "trainer/data/file_io.h"
 
 namespace ecrf {
 namespace tools {

@@ -16,6 +16,8 @@
 #include "tools/decoded_scene.h"
 #include "trainer/data/camera.h"
 #include "trainer/train/checkpoint.h"
+#include "decoder/orbit_camera.h"
+#include "trainer/data/file_io.h"
 
 namespace ecrf {
 namespace tools {
@@ -109,14 +111,9 @@ void SplitViewsPath(const std::string& path, std::string* dir, std::string* spli
   *split = base.substr(prefix.size(), base.size() - prefix.size() - suffix.size());
 }
 
-// Degrees (what the command line takes) to the radians of dec::OrbitCamera: in float64, rounded
-// once to float32. The Python module's orbit_camera and the web viewer convert the same way, so a
-// camera given in degrees is the same to the last bit in all three.
-float OrbitRadians(double degrees) { return float(degrees * M_PI / 180.0); }
-
 trainer::Camera OrbitView(int width, int height, double azimuth_deg, double elevation_deg, double radius) {
   const dec::Camera d =
-      dec::OrbitCamera(width, height, OrbitRadians(azimuth_deg), OrbitRadians(elevation_deg), float(radius));
+      dec::OrbitCameraDegrees(width, height, azimuth_deg, elevation_deg, float(radius));
   trainer::Camera c;
   c.width = width;
   c.height = height;

@@ -9,6 +9,7 @@
 #include "trainer/train/checkpoint.h"
 #include "trainer/train/eval_progress.h"
 #include "trainer/data/image_metrics.h"
+#include "trainer/data/file_io.h"
 
 namespace ecrf {
 namespace tools {

@@ -34,6 +34,7 @@ const SubcommandTable& BenchTable() {
           {"coder", RunCoderBench, "entropy coder and coefficient coding"},
           {"idct", RunIdctBench, "integer inverse DCT"},
           {"mlp", RunMlpBench, "appearance MLP forward/backward GEMMs and Adam against the CPU's FMA peak"},
+          {"render", RunRenderBench, "the renderer on a synthetic scene: ms per view and samples per second"},
           {"train", RunTrainStepBench, "one training step at the 128^3 and 300^3 phases"},
       },
       "`ecrf bench <benchmark> --help` (or `ecrf help bench <benchmark>`) for the options of each;\n"
@@ -57,7 +58,7 @@ const SubcommandTable& EcrfTable() {
           {"eval", RunEval, "PSNR/SSIM of a stream: eval SCENE.ecrf --data DIR"},
           {"conformance", RunConformance, "rebuild (--write DIR) or check (--check DIR) the conformance vectors"},
           {"report", RunReport, "rate-distortion and speed-error reports: report sweep|render|compare|plot"},
-          {"bench", RunBench, "benchmarks: bench coder|idct|mlp|train [--json FILE]"},
+          {"bench", RunBench, "benchmarks: bench coder|idct|mlp|render|train [--json FILE]"},
       },
       "`ecrf help <command>` (or `ecrf <command> --help`) for the options of each; ecrf --version.\n"};
   return table;

@@ -19,6 +19,7 @@
 #include "encoder/scene_encoder.h"
 #include "trainer/train/train_config.h"
 #include "trainer/train/trainer.h"
+#include "trainer/data/file_io.h"
 
 namespace ecrf {
 namespace tools {

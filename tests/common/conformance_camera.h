@@ -6,6 +6,7 @@
 #include <string>
 
 #include "decoder/ray_marcher.h"
+#include "decoder/orbit_camera.h"
 
 namespace ecrf {
 namespace conformance {

@@ -19,6 +19,7 @@
 #include "format/scene_header.h"
 #include "tests/common/grid_md5.h"
 #include "tests/common/scene_vectors.h"
+#include "decoder/orbit_camera.h"
 
 namespace ecrf {
 namespace dec {

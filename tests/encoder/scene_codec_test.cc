@@ -19,6 +19,7 @@
 #include "trainer/data/image_metrics.h"
 #include "trainer/train/rate_state.h"
 #include "encoder/scene_encoder.h"
+#include "decoder/orbit_camera.h"
 
 namespace ecrf {
 namespace trainer {

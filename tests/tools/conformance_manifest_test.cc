@@ -16,6 +16,7 @@
 #include "tools/decoded_scene.h"
 #include "trainer/train/checkpoint.h"
 #include "trainer/data/image_io.h"
+#include "trainer/data/file_io.h"
 
 namespace ecrf {
 namespace tools {

@@ -4,10 +4,11 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
+#include <nlohmann/json.hpp>
 #include <stdexcept>
 
 #include "tools/cli.h"
+#include "trainer/data/file_io.h"
 
 namespace ecrf {
 namespace tools {
@@ -19,24 +20,22 @@ void BenchReport::Add(const std::string& name, double value, const std::string& 
 }
 
 bool BenchReport::WriteJson(const std::string& path) const {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp);
-    if (!out) return false;
-    out << "{\n";
-    for (size_t i = 0; i < figures_.size(); ++i) {
-      char value[64];
-      if (std::isfinite(figures_[i].second)) {
-        std::snprintf(value, sizeof(value), "%.9g", figures_[i].second);
-      } else {
-        std::snprintf(value, sizeof(value), "null");
-      }
-      out << "  \"" << figures_[i].first << "\": " << value << (i + 1 < figures_.size() ? ",\n" : "\n");
+  // In the order printed; a non-finite figure (a zero-time division) is null.
+  nlohmann::ordered_json j = nlohmann::ordered_json::object();
+  for (const auto& [name, value] : figures_) {
+    if (std::isfinite(value)) {
+      j[name] = value;
+    } else {
+      j[name] = nullptr;
     }
-    out << "}\n";
-    if (!out.good()) return false;
   }
-  return std::rename(tmp.c_str(), path.c_str()) == 0;
+  try {
+    trainer::WriteFileAtomically(path, j.dump(2) + "\n");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return false;
+  }
+  return true;
 }
 
 namespace {

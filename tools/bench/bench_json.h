@@ -16,7 +16,8 @@ class BenchReport {
  public:
   // Prints "name: value unit" and records it for JSON.
   void Add(const std::string& name, double value, const std::string& unit);
-  // Writes {"name": value, ...} to path via a temp file and rename. Returns false on error.
+  // Writes {"name": value, ...} to path (nlohmann-json, atomically). Returns false on error,
+  // after printing it.
   bool WriteJson(const std::string& path) const;
 
  private:

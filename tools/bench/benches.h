@@ -12,6 +12,7 @@ int RunBench(int argc, char** argv);
 int RunCoderBench(int argc, char** argv);
 int RunIdctBench(int argc, char** argv);
 int RunMlpBench(int argc, char** argv);
+int RunRenderBench(int argc, char** argv);
 int RunTrainStepBench(int argc, char** argv);
 
 }  // namespace tools

@@ -12,6 +12,7 @@
 #include "tools/cli_args.h"
 #include "tools/report/report.h"
 #include "trainer/train/checkpoint.h"
+#include "trainer/data/file_io.h"
 
 namespace ecrf {
 namespace tools {

@@ -7,6 +7,7 @@
 
 #include "tools/report/report.h"
 #include "trainer/train/checkpoint.h"
+#include "trainer/data/file_io.h"
 
 namespace ecrf {
 namespace tools {

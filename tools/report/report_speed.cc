@@ -14,6 +14,7 @@
 #include "tools/decoded_scene.h"
 #include "tools/report/report.h"
 #include "trainer/train/checkpoint.h"
+#include "trainer/data/file_io.h"
 
 namespace ecrf {
 namespace tools {

@@ -21,6 +21,8 @@
 #include <stdexcept>
 #include <unistd.h>
 
+#include "trainer/data/file_io.h"
+
 namespace ecrf::trainer {
 namespace {
 
@@ -309,31 +311,6 @@ bool EncodePngRaw(const Image& image, int bit_depth, const std::vector<png_bytep
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
   return true;
-}
-
-void WriteFileAtomically(const std::string& path, const std::vector<uint8_t>& bytes) {
-  // A unique sibling name keeps concurrent writers (threads or processes) from sharing a temp
-  // file, and rename() within one directory is atomic.
-  static std::atomic<unsigned> counter{0};
-  const std::string temp =
-      path + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter.fetch_add(1));
-  FILE* file = std::fopen(temp.c_str(), "wbx");
-  if (!file) Fail(path, std::string("cannot create temporary file ") + temp + ": " + std::strerror(errno));
-  bool ok = std::fwrite(bytes.data(), 1, bytes.size(), file) == bytes.size();
-  int saved_errno = errno;
-  if (std::fclose(file) != 0 && ok) {
-    ok = false;
-    saved_errno = errno;
-  }
-  if (ok && std::rename(temp.c_str(), path.c_str()) != 0) {
-    saved_errno = errno;
-    std::remove(temp.c_str());
-    Fail(path, std::string("cannot rename temporary file into place: ") + std::strerror(saved_errno));
-  }
-  if (!ok) {
-    std::remove(temp.c_str());
-    Fail(path, std::string("write error: ") + std::strerror(saved_errno));
-  }
 }
 
 }  // namespace

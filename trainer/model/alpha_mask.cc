@@ -1,4 +1,5 @@
 #include "trainer/model/alpha_mask.h"
+#include "decoder/occupancy_rule.h"
 
 #include <cmath>
 #include <stdexcept>
@@ -60,22 +61,9 @@ float AlphaMask::Sample(const float xyz[3]) const {
 }
 
 bool AlphaMask::OccupiedSlow(const float idx[3]) const {
-  int lo[3], hi[3];
-  for (int a = 0; a < 3; ++a) {
-    const float fl = std::floor(idx[a]);
-    if (!(fl > -2.f && fl < static_cast<float>(res_[a]))) return false;
-    const int i = static_cast<int>(fl);
-    lo[a] = i;
-    hi[a] = idx[a] > fl ? i + 1 : i;  // the upper corner only has weight when f > 0
-    if (lo[a] < 0) lo[a] = 0;
-    if (hi[a] > res_[a] - 1) hi[a] = res_[a] - 1;
-    if (lo[a] > hi[a]) return false;
-  }
-  for (int z = lo[2]; z <= hi[2]; ++z)
-    for (int y = lo[1]; y <= hi[1]; ++y)
-      for (int x = lo[0]; x <= hi[0]; ++x)
-        if (occ_[(static_cast<size_t>(z) * res_[1] + y) * res_[0] + x]) return true;
-  return false;
+  return AnyWeightedCornerSet(idx, res_.data(), [this](int x, int y, int z) {
+    return occ_[(static_cast<size_t>(z) * res_[1] + y) * res_[0] + x] != 0;
+  });
 }
 
 bool AlphaMask::Occupied(const float xyz[3]) const {

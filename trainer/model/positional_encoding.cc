@@ -4,6 +4,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "decoder/fast_sincos.h"
+
 namespace ecrf {
 namespace trainer {
 namespace {
@@ -13,27 +15,15 @@ constexpr float kFastLimit = 1.0e4f;
 
 void SinCosKernel(const float* __restrict x, int count, float* __restrict s,
                   float* __restrict c) {
-  constexpr float kTwoOverPi = 0.636619772367581343f;
-  // pi/2 split in three parts (Cephes' pi/4 split times 2): k * kPio2A is exact for k < 2^16.
-  constexpr float kPio2A = 1.5703125f;
-  constexpr float kPio2B = 4.837512969970703125e-4f;
-  constexpr float kPio2C = 7.54978995489188216e-8f;
-  constexpr float kRound = 12582912.0f;  // 1.5 * 2^23: adding and subtracting rounds to integer
+  using namespace fast_sincos;  // NOLINT(google-build-using-namespace)
   for (int i = 0; i < count; ++i) {
     const float v = x[i];
-    const float k = (v * kTwoOverPi + kRound) - kRound;
+    const float k = Quadrant(v);
     const int32_t q = static_cast<int32_t>(k);
-    float r = v - k * kPio2A;
-    r = r - k * kPio2B;
-    r = r - k * kPio2C;
+    const float r = Reduce(v, k);
     const float z = r * r;
-    // Cephes sinf / cosf minimax polynomials on [-pi/4, pi/4].
-    const float ps =
-        r + r * z * (-1.6666654611e-1f + z * (8.3321608736e-3f + z * -1.9515295891e-4f));
-    const float pc = 1.0f - 0.5f * z +
-                     z * z *
-                         (4.166664568298827e-2f +
-                          z * (-1.388731625493765e-3f + z * 2.443315711809948e-5f));
+    const float ps = SinPolynomial(r, z);
+    const float pc = CosPolynomial(z);
     const bool swap = (q & 1) != 0;
     const float sv = swap ? pc : ps;
     const float cv = swap ? ps : pc;

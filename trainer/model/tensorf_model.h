@@ -19,6 +19,7 @@
 #include "trainer/model/alpha_mask.h"
 #include "trainer/model/appearance_head.h"
 #include "trainer/model/vm_grid.h"
+#include "decoder/softplus.h"
 
 namespace ecrf {
 namespace trainer {
@@ -184,7 +185,6 @@ class TensorfModel {
 };
 
 // softplus with PyTorch's threshold 20, and its derivative.
-inline float Softplus(float x) { return x > 20.f ? x : std::log1p(std::exp(x)); }
 inline float SoftplusGrad(float x) {
   if (x > 20.f) return 1.f;
   const float z = std::exp(x);

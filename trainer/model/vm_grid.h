@@ -20,32 +20,11 @@
 #include <cstdint>
 #include <vector>
 
+#include "decoder/grid_point.h"
+#include "format/vm_modes.h"
+
 namespace ecrf {
 namespace trainer {
-
-inline constexpr int kMatMode[3][2] = {{0, 1}, {0, 2}, {1, 2}};
-inline constexpr int kVecMode[3] = {2, 1, 0};
-
-// Lower corner index and upper-corner weight per axis of one sample point; shared by the density
-// and appearance grids (they always have the same resolution).
-struct GridPoint {
-  int i0[3];
-  float f[3];
-};
-
-// c: normalized coordinates in [-1,1]^3. res[a] >= 2. i0[a] in [0, res[a]-2], f[a] in [0,1].
-inline void LocateGridPoint(const float c[3], const std::array<int, 3>& res, GridPoint* gp) {
-  for (int a = 0; a < 3; ++a) {
-    const int n = res[a];
-    float idx = (c[a] + 1.f) / 2.f * static_cast<float>(n - 1);
-    if (!(idx > 0.f)) idx = 0.f;  // also maps NaN to 0
-    if (idx > static_cast<float>(n - 1)) idx = static_cast<float>(n - 1);
-    int i = static_cast<int>(idx);
-    if (i > n - 2) i = n - 2;
-    gp->i0[a] = i;
-    gp->f[a] = idx - static_cast<float>(i);
-  }
-}
 
 class VmGrid {
  public:

@@ -3,6 +3,7 @@
 #pragma GCC optimize("no-trapping-math")
 
 #include "trainer/rate/entropy_model.h"
+#include "decoder/multiversion.h"
 
 #include <omp.h>
 
@@ -282,14 +283,6 @@ void AddParamGrads(const ModelView<T>& mv, const ChunkGrad<T>& cg, double* out) 
     }
   }
 }
-
-// The float work item, compiled twice (AVX2+FMA and the baseline) and picked at load time; the
-// default build targets baseline x86-64 (SSE2), which halves the throughput of this loop.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define ECRF_MULTIVERSION __attribute__((target_clones("arch=x86-64-v3", "default")))
-#else
-#define ECRF_MULTIVERSION
-#endif
 
 ECRF_MULTIVERSION
 double RunItemFloat(const ModelView<float>& mv, const EntropyModelOptions& opt, const float* x,

@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <unistd.h>
 
+#include "trainer/data/file_io.h"
+
 namespace ecrf {
 namespace trainer {
 namespace {
@@ -60,36 +62,6 @@ const CheckpointArray* Checkpoint::Find(const std::string& name) const {
     if (a.name == name) return &a;
   }
   return nullptr;
-}
-
-void WriteFileAtomically(const std::string& path, const void* bytes, size_t size) {
-  const std::string tmp = path + ".tmp." + std::to_string(getpid());
-  FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (!f) throw std::runtime_error(tmp + ": cannot create: " + std::strerror(errno));
-  const bool written = std::fwrite(bytes, 1, size, f) == size;
-  const bool flushed = std::fflush(f) == 0 && fsync(fileno(f)) == 0;
-  const bool closed = std::fclose(f) == 0;
-  if (!written || !flushed || !closed) {
-    std::remove(tmp.c_str());
-    throw std::runtime_error(tmp + ": write failed: " + std::strerror(errno));
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw std::runtime_error(path + ": cannot replace: " + std::strerror(errno));
-  }
-}
-
-std::vector<uint8_t> ReadWholeFile(const std::string& path) {
-  FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
-  std::vector<uint8_t> bytes;
-  uint8_t buffer[1 << 16];
-  size_t n;
-  while ((n = std::fread(buffer, 1, sizeof(buffer), f)) > 0) bytes.insert(bytes.end(), buffer, buffer + n);
-  const bool failed = std::ferror(f);
-  std::fclose(f);
-  if (failed) throw std::runtime_error(path + ": read error");
-  return bytes;
 }
 
 void WriteCheckpoint(const std::string& path, const Checkpoint& checkpoint, int zstd_level) {

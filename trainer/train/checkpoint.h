@@ -27,10 +27,6 @@ struct Checkpoint {
 void WriteCheckpoint(const std::string& path, const Checkpoint& checkpoint, int zstd_level = 3);
 Checkpoint ReadCheckpoint(const std::string& path);
 
-// Atomically replaces `path` with `bytes` (temp file in the same directory, then rename).
-void WriteFileAtomically(const std::string& path, const void* bytes, size_t size);
-std::vector<uint8_t> ReadWholeFile(const std::string& path);
-
 }  // namespace trainer
 }  // namespace ecrf
 

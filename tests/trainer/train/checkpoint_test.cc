@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "trainer/data/file_io.h"
+
 namespace ecrf {
 namespace trainer {
 namespace {
