@@ -135,7 +135,8 @@ int ecrf_scene_model(const ecrf_scene* scene) {
 }
 
 int ecrf_scene_ndc_frame(const ecrf_scene* scene, float frame[15]) {
-  if (!scene || !frame || !scene->decoded || scene->field.scene_model != ecrf::SceneModel::kForward) {
+  if (!scene || !frame || !scene->decoded ||
+      scene->field.scene_model != ecrf::SceneModel::kForward) {
     return ECRF_ERR_INVALID_ARGUMENT;
   }
   const ecrf::NdcFrame& f = scene->field.ndc;

@@ -38,7 +38,8 @@ struct ContractedRay {
   float roi_min[3], roi_scale[3];
   float step;  // distance between samples in contracted coordinates
 
-  ContractedRay(const float* origin, const float* dir, const float* min, const float* scale, float sample_step)
+  ContractedRay(const float* origin, const float* dir, const float* min, const float* scale,
+                float sample_step)
       : step(sample_step) {
     for (int a = 0; a < 3; ++a) {
       o[a] = origin[a];

@@ -27,8 +27,8 @@ namespace ecrf {
 namespace dec {
 
 // Decoder limits (checked before allocating).
-inline constexpr int kMaxGridRes = 4096;     // per axis, grids and alpha mask
-inline constexpr int kMaxRank = 1024;        // per mode
+inline constexpr int kMaxGridRes = 4096;                        // per axis, grids and alpha mask
+inline constexpr int kMaxRank = 1024;                           // per mode
 inline constexpr size_t kMaxAllocationBytes = size_t{1} << 30;  // one array
 
 // *out = a * b; false on size_t overflow.
@@ -205,11 +205,11 @@ struct SceneField {
   NdcFrame ndc;
   float aabb_min[3] = {-1.5f, -1.5f, -1.5f};
   float aabb_max[3] = {1.5f, 1.5f, 1.5f};
-  int res[3] = {0, 0, 0};  // grid resolution (density and appearance)
-  float density_shift = -10.f;    // sigma = softplus(feature + density_shift)
-  float distance_scale = 25.f;    // alpha = 1 - exp(-sigma * dist * distance_scale)
+  int res[3] = {0, 0, 0};       // grid resolution (density and appearance)
+  float density_shift = -10.f;  // sigma = softplus(feature + density_shift)
+  float distance_scale = 25.f;  // alpha = 1 - exp(-sigma * dist * distance_scale)
   float step_ratio = 0.5f;
-  float weight_threshold = 1e-4f; // colour only where weight > this
+  float weight_threshold = 1e-4f;  // colour only where weight > this
   float near_far[2] = {2.f, 6.f};
   float background[3] = {1.f, 1.f, 1.f};
   // 0: derived as TensoRF does (step = mean((max-min)/(res-1)) * step_ratio,

@@ -26,15 +26,23 @@ struct ModeTaps {
 template <typename T>
 inline const T* PlaneData(const VmGrid& g, int m);
 template <>
-inline const float* PlaneData<float>(const VmGrid& g, int m) { return g.plane_f32[m].data(); }
+inline const float* PlaneData<float>(const VmGrid& g, int m) {
+  return g.plane_f32[m].data();
+}
 template <>
-inline const int16_t* PlaneData<int16_t>(const VmGrid& g, int m) { return g.plane_i16[m].data(); }
+inline const int16_t* PlaneData<int16_t>(const VmGrid& g, int m) {
+  return g.plane_i16[m].data();
+}
 template <typename T>
 inline const T* LineData(const VmGrid& g, int m);
 template <>
-inline const float* LineData<float>(const VmGrid& g, int m) { return g.line_f32[m].data(); }
+inline const float* LineData<float>(const VmGrid& g, int m) {
+  return g.line_f32[m].data();
+}
 template <>
-inline const int16_t* LineData<int16_t>(const VmGrid& g, int m) { return g.line_i16[m].data(); }
+inline const int16_t* LineData<int16_t>(const VmGrid& g, int m) {
+  return g.line_i16[m].data();
+}
 
 template <typename T>
 inline ModeTaps<T> Taps(const VmGrid& g, const GridPoint& gp, int m) {
@@ -168,12 +176,12 @@ Status VmGrid::Allocate(const int res_in[3], const int ranks_in[3], GridStorage 
   storage = storage_in;
   for (int m = 0; m < 3; ++m) {
     size_t pc = 0, lc = 0;
-    ECRF_CHECK_OR_RETURN(CheckedMul(static_cast<size_t>(res[kMatMode[m][1]]),
-                                    static_cast<size_t>(res[kMatMode[m][0]]), &pc) &&
-                             CheckedMul(pc, static_cast<size_t>(ranks[m]), &pc) &&
-                             CheckedMul(static_cast<size_t>(res[kVecMode[m]]),
-                                        static_cast<size_t>(ranks[m]), &lc),
-                         kErrLimit, "grid mode %d size overflows", m);
+    ECRF_CHECK_OR_RETURN(
+        CheckedMul(static_cast<size_t>(res[kMatMode[m][1]]),
+                   static_cast<size_t>(res[kMatMode[m][0]]), &pc) &&
+            CheckedMul(pc, static_cast<size_t>(ranks[m]), &pc) &&
+            CheckedMul(static_cast<size_t>(res[kVecMode[m]]), static_cast<size_t>(ranks[m]), &lc),
+        kErrLimit, "grid mode %d size overflows", m);
     if (storage == GridStorage::kFloat32) {
       ECRF_RETURN_IF_ERROR(plane_f32[m].Allocate(pc));
       ECRF_RETURN_IF_ERROR(line_f32[m].Allocate(lc));
@@ -187,16 +195,17 @@ Status VmGrid::Allocate(const int res_in[3], const int ranks_in[3], GridStorage 
 
 Status VmGrid::Validate(const char* what, bool check_values) const {
   for (int m = 0; m < 3; ++m) {
-    ECRF_CHECK_OR_RETURN(res[m] >= 2 && res[m] <= kMaxGridRes && ranks[m] >= 0 &&
-                             ranks[m] <= kMaxRank,
-                         kErrInvalidArgument, "%s grid: bad shape on axis/mode %d", what, m);
+    ECRF_CHECK_OR_RETURN(
+        res[m] >= 2 && res[m] <= kMaxGridRes && ranks[m] >= 0 && ranks[m] <= kMaxRank,
+        kErrInvalidArgument, "%s grid: bad shape on axis/mode %d", what, m);
   }
   for (int m = 0; m < 3; ++m) {
     const size_t pc = plane_count(m), lc = line_count(m);
     if (storage == GridStorage::kFloat32) {
       ECRF_CHECK_OR_RETURN(plane_f32[m].size() == pc && line_f32[m].size() == lc,
                            kErrInvalidArgument, "%s grid: mode %d tensors not allocated", what, m);
-      ECRF_CHECK_OR_RETURN(!check_values || (AllFinite(plane_f32[m].data(), pc) && AllFinite(line_f32[m].data(), lc)),
+      ECRF_CHECK_OR_RETURN(!check_values || (AllFinite(plane_f32[m].data(), pc) &&
+                                             AllFinite(line_f32[m].data(), lc)),
                            kErrCorrupt, "%s grid: mode %d has non-finite values", what, m);
     } else if (storage == GridStorage::kInt16) {
       ECRF_CHECK_OR_RETURN(plane_i16[m].size() == pc && line_i16[m].size() == lc,
@@ -221,9 +230,9 @@ Status OccupancyMask::Init(const float aabb_min[3], const float aabb_max[3], con
     ECRF_CHECK_OR_RETURN(res[a] >= 2 && res[a] <= kMaxGridRes, kErrLimit,
                          "alpha mask resolution %d on axis %d out of range [2, %d]", res[a], a,
                          kMaxGridRes);
-    ECRF_CHECK_OR_RETURN(std::isfinite(aabb_min[a]) && std::isfinite(aabb_max[a]) &&
-                             aabb_max[a] > aabb_min[a],
-                         kErrInvalidArgument, "alpha mask: empty or non-finite aabb on axis %d", a);
+    ECRF_CHECK_OR_RETURN(
+        std::isfinite(aabb_min[a]) && std::isfinite(aabb_max[a]) && aabb_max[a] > aabb_min[a],
+        kErrInvalidArgument, "alpha mask: empty or non-finite aabb on axis %d", a);
     min_[a] = aabb_min[a];
     max_[a] = aabb_max[a];
     inv_size_[a] = 1.0f / (aabb_max[a] - aabb_min[a]) * 2.f;
@@ -303,8 +312,8 @@ float SceneField::StepSize() const {
   if (step_size > 0.f) return step_size;
   float mean = 0.f;
   for (int a = 0; a < 3; ++a) {
-    const float extent = scene_model == SceneModel::kUnbounded ? 2.f * kContractedExtent
-                                                               : aabb_max[a] - aabb_min[a];
+    const float extent =
+        scene_model == SceneModel::kUnbounded ? 2.f * kContractedExtent : aabb_max[a] - aabb_min[a];
     mean += extent / static_cast<float>(res[a] - 1);
   }
   return mean / 3.f * step_ratio;
@@ -312,30 +321,34 @@ float SceneField::StepSize() const {
 
 int SceneField::NumSamples() const {
   if (n_samples > 0) return n_samples;
-  const double norm = std::sqrt(static_cast<double>(res[0]) * res[0] +
-                                static_cast<double>(res[1]) * res[1] +
-                                static_cast<double>(res[2]) * res[2]);
+  const double norm =
+      std::sqrt(static_cast<double>(res[0]) * res[0] + static_cast<double>(res[1]) * res[1] +
+                static_cast<double>(res[2]) * res[2]);
   const double n = norm / static_cast<double>(step_ratio);
   return n >= 1e9 ? 1000000000 : static_cast<int>(n);
 }
 
 Status SceneField::Validate() const {
-  ECRF_CHECK_OR_RETURN(scene_model == SceneModel::kObject || scene_model == SceneModel::kUnbounded ||
-                           scene_model == SceneModel::kForward,
-                       kErrInvalidArgument, "scene: unknown scene model %d", static_cast<int>(scene_model));
-  ECRF_CHECK_OR_RETURN(scene_model != SceneModel::kUnbounded || near_far[0] >= 0.f, kErrInvalidArgument,
-                       "scene: near is negative in an unbounded scene");
+  ECRF_CHECK_OR_RETURN(
+      scene_model == SceneModel::kObject || scene_model == SceneModel::kUnbounded ||
+          scene_model == SceneModel::kForward,
+      kErrInvalidArgument, "scene: unknown scene model %d", static_cast<int>(scene_model));
+  ECRF_CHECK_OR_RETURN(scene_model != SceneModel::kUnbounded || near_far[0] >= 0.f,
+                       kErrInvalidArgument, "scene: near is negative in an unbounded scene");
   if (scene_model == SceneModel::kForward) {
     bool finite = true;
     for (float v : ndc.world_to_ref) finite = finite && std::isfinite(v);
-    ECRF_CHECK_OR_RETURN(finite && std::isfinite(ndc.scale[0]) && ndc.scale[0] > 0.f && std::isfinite(ndc.scale[1]) &&
-                             ndc.scale[1] > 0.f && std::isfinite(ndc.near_plane) && ndc.near_plane > 0.f,
-                         kErrInvalidArgument, "scene: the NDC frame of a forward-facing scene is not finite and positive");
+    ECRF_CHECK_OR_RETURN(
+        finite && std::isfinite(ndc.scale[0]) && ndc.scale[0] > 0.f &&
+            std::isfinite(ndc.scale[1]) && ndc.scale[1] > 0.f && std::isfinite(ndc.near_plane) &&
+            ndc.near_plane > 0.f,
+        kErrInvalidArgument,
+        "scene: the NDC frame of a forward-facing scene is not finite and positive");
   }
   for (int a = 0; a < 3; ++a) {
-    ECRF_CHECK_OR_RETURN(std::isfinite(aabb_min[a]) && std::isfinite(aabb_max[a]) &&
-                             aabb_max[a] > aabb_min[a],
-                         kErrInvalidArgument, "scene: empty or non-finite aabb on axis %d", a);
+    ECRF_CHECK_OR_RETURN(
+        std::isfinite(aabb_min[a]) && std::isfinite(aabb_max[a]) && aabb_max[a] > aabb_min[a],
+        kErrInvalidArgument, "scene: empty or non-finite aabb on axis %d", a);
     ECRF_CHECK_OR_RETURN(res[a] >= 2 && res[a] <= kMaxGridRes, kErrInvalidArgument,
                          "scene: grid resolution %d on axis %d out of range", res[a], a);
     ECRF_CHECK_OR_RETURN(density.res[a] == res[a] && appearance.res[a] == res[a],

@@ -8,7 +8,7 @@ namespace ecrf {
 namespace dec {
 namespace {
 
-constexpr int kPad = 8;   // output widths of the hidden layers / basis are padded to this
+constexpr int kPad = 8;  // output widths of the hidden layers / basis are padded to this
 constexpr int kOutPad = 8;
 static_assert(kPad % 8 == 0 && kOutPad % 8 == 0, "Gemm4 writes columns in runs of 8");
 
@@ -108,8 +108,8 @@ void Gemm4(const float* x0, const float* x1, const float* x2, const float* x3, i
 #endif
 
 // rows (multiple of 4) x K times wt, rows contiguous with strides ldx / ldy.
-void GemmRows(int rows, const float* x, int ldx, int K, const float* wt, int ldw,
-              const float* bias, bool relu, float* y, int ldy) {
+void GemmRows(int rows, const float* x, int ldx, int K, const float* wt, int ldw, const float* bias,
+              bool relu, float* y, int ldy) {
   for (int r = 0; r < rows; r += 4) {
     const float* xr = x + static_cast<size_t>(r) * ldx;
     float* yr = y + static_cast<size_t>(r) * ldy;
@@ -165,7 +165,9 @@ void FastSinCos(const float* x, int count, float* s, float* c) {
 
 AppearanceMlp::~AppearanceMlp() { Release(); }
 
-AppearanceMlp::AppearanceMlp(AppearanceMlp&& o) noexcept { *this = static_cast<AppearanceMlp&&>(o); }
+AppearanceMlp::AppearanceMlp(AppearanceMlp&& o) noexcept {
+  *this = static_cast<AppearanceMlp&&>(o);
+}
 
 AppearanceMlp& AppearanceMlp::operator=(AppearanceMlp&& o) noexcept {
   if (this == &o) return *this;
@@ -199,8 +201,8 @@ void AppearanceMlp::Release() {
 Status AppearanceMlp::Init(const MlpConfig& config) {
   Release();
   ECRF_CHECK_OR_RETURN(config.num_products >= 0 && config.num_products <= kMaxMlpProducts,
-                       kErrLimit, "mlp: num_products %d out of range [0, %d]",
-                       config.num_products, kMaxMlpProducts);
+                       kErrLimit, "mlp: num_products %d out of range [0, %d]", config.num_products,
+                       kMaxMlpProducts);
   ECRF_CHECK_OR_RETURN(config.feature_dim >= 1 && config.feature_dim <= kMaxMlpFeatureDim,
                        kErrLimit, "mlp: feature_dim %d out of range [1, %d]", config.feature_dim,
                        kMaxMlpFeatureDim);
@@ -259,7 +261,8 @@ Status AppearanceMlp::SetParams(const float* params, size_t count) {
   const float* p = params;
   auto transpose = [&](int out, int k_in, float* dst, int ldw) {
     for (int o = 0; o < out; ++o) {
-      for (int k = 0; k < k_in; ++k) dst[static_cast<size_t>(k) * ldw + o] = p[static_cast<size_t>(o) * k_in + k];
+      for (int k = 0; k < k_in; ++k)
+        dst[static_cast<size_t>(k) * ldw + o] = p[static_cast<size_t>(o) * k_in + k];
     }
     p += static_cast<size_t>(out) * k_in;
   };
@@ -283,7 +286,8 @@ Status AppearanceMlp::GetParams(float* params, size_t count) const {
   float* p = params;
   auto untranspose = [&](int out, int k_in, const float* src, int ldw) {
     for (int o = 0; o < out; ++o) {
-      for (int k = 0; k < k_in; ++k) p[static_cast<size_t>(o) * k_in + k] = src[static_cast<size_t>(k) * ldw + o];
+      for (int k = 0; k < k_in; ++k)
+        p[static_cast<size_t>(o) * k_in + k] = src[static_cast<size_t>(k) * ldw + o];
     }
     p += static_cast<size_t>(out) * k_in;
   };
@@ -374,10 +378,8 @@ void AppearanceMlp::Infer(int rows, const float* products, size_t products_strid
     }
     GemmRows(n4, in, in_stride_, in_dim_, weights_ + o_w1_, hid_pad_, weights_ + o_b1_, true, h1,
              hid_pad_);
-    GemmRows(n4, h1, hid_pad_, H, weights_ + o_w2_, hid_pad_, weights_ + o_b2_, true, h2,
-             hid_pad_);
-    GemmRows(n4, h2, hid_pad_, H, weights_ + o_w3_, kOutPad, weights_ + o_b3_, false, out,
-             kOutPad);
+    GemmRows(n4, h1, hid_pad_, H, weights_ + o_w2_, hid_pad_, weights_ + o_b2_, true, h2, hid_pad_);
+    GemmRows(n4, h2, hid_pad_, H, weights_ + o_w3_, kOutPad, weights_ + o_b3_, false, out, kOutPad);
     for (int r = 0; r < n; ++r) {
       for (int c = 0; c < 3; ++c) {
         rgb[static_cast<size_t>(r0 + r) * 3 + c] =

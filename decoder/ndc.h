@@ -17,7 +17,8 @@ namespace ecrf {
 // The NDC origin `ndc_o` (on the near plane, NDC z = -1) and unit direction `ndc_d` of the world
 // ray (o, d). False, with the outputs unspecified, for a ray that does not travel towards the
 // reference camera's far side (it never reaches NDC z = 1) or whose NDC ray is not finite.
-inline bool NdcRay(const NdcFrame& f, const float o[3], const float d[3], float ndc_o[3], float ndc_d[3]) {
+inline bool NdcRay(const NdcFrame& f, const float o[3], const float d[3], float ndc_o[3],
+                   float ndc_d[3]) {
   const float* m = f.world_to_ref;
   float ro[3], rd[3];
   for (int a = 0; a < 3; ++a) {

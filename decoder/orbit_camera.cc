@@ -12,10 +12,12 @@ Camera OrbitCamera(int width, int height, float azimuth_rad, float elevation_rad
                         radius * std::sin(elevation_rad)};
   float z[3] = {pos[0] / radius, pos[1] / radius, pos[2] / radius};  // camera +z (backwards)
   const float up[3] = {0.f, 0.f, 1.f};
-  float x[3] = {up[1] * z[2] - up[2] * z[1], up[2] * z[0] - up[0] * z[2], up[0] * z[1] - up[1] * z[0]};
+  float x[3] = {up[1] * z[2] - up[2] * z[1], up[2] * z[0] - up[0] * z[2],
+                up[0] * z[1] - up[1] * z[0]};
   const float xn = std::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
   for (float& v : x) v /= xn;
-  const float y[3] = {z[1] * x[2] - z[2] * x[1], z[2] * x[0] - z[0] * x[2], z[0] * x[1] - z[1] * x[0]};
+  const float y[3] = {z[1] * x[2] - z[2] * x[1], z[2] * x[0] - z[0] * x[2],
+                      z[0] * x[1] - z[1] * x[0]};
   for (int a = 0; a < 3; ++a) {
     cam.c2w[4 * a + 0] = x[a];
     cam.c2w[4 * a + 1] = y[a];
@@ -30,9 +32,12 @@ Camera OrbitCamera(int width, int height, float azimuth_rad, float elevation_rad
   return cam;
 }
 
-float OrbitRadians(double degrees) { return static_cast<float>(degrees * 3.14159265358979323846 / 180.0); }
+float OrbitRadians(double degrees) {
+  return static_cast<float>(degrees * 3.14159265358979323846 / 180.0);
+}
 
-Camera OrbitCameraDegrees(int width, int height, double azimuth_deg, double elevation_deg, float radius) {
+Camera OrbitCameraDegrees(int width, int height, double azimuth_deg, double elevation_deg,
+                          float radius) {
   return OrbitCamera(width, height, OrbitRadians(azimuth_deg), OrbitRadians(elevation_deg), radius);
 }
 

@@ -20,7 +20,8 @@ float OrbitRadians(double degrees);
 
 // OrbitCamera with angles in degrees: frame k of `ecrf render --orbit N` is
 // OrbitCameraDegrees(W, H, 360.0 * k / N, elevation, radius).
-Camera OrbitCameraDegrees(int width, int height, double azimuth_deg, double elevation_deg, float radius);
+Camera OrbitCameraDegrees(int width, int height, double azimuth_deg, double elevation_deg,
+                          float radius);
 
 }  // namespace dec
 }  // namespace ecrf

@@ -62,10 +62,10 @@ struct Ctx {
   float shift, dscale, wthr, early;
   const OccupancyMask* mask;  // null: no mask
   bool skip;
-  bool unbounded;                       // SPEC.md 7.2.1; min/max/inv then span the contracted cube
-  bool forward;                         // SPEC.md 7.2.2; min/max/inv are in NDC
-  float roi_min[3], roi_scale[3];       // unbounded: the HEAD box, (1 / (max - min)) * 2
-  double mask_scale[3];  // (res - 1) / (max - min) of the mask
+  bool unbounded;                  // SPEC.md 7.2.1; min/max/inv then span the contracted cube
+  bool forward;                    // SPEC.md 7.2.2; min/max/inv are in NDC
+  float roi_min[3], roi_scale[3];  // unbounded: the HEAD box, (1 / (max - min)) * 2
+  double mask_scale[3];            // (res - 1) / (max - min) of the mask
   int tile_size;
   int tile_rays;
 };
@@ -111,8 +111,10 @@ int SkipEmpty(const Ctx& c, const float o[3], const float d[3], float t0, int i,
       const double A = (static_cast<double>(o[a]) - mask.aabb_min()[a]) * S;
       const double D = static_cast<double>(d[a]) * S;
       const double m = 1e-4 + 2e-6 * res[a] +
-                       1e-6 * (std::fabs(o[a]) + std::fabs(d[a]) * tspan +
-                               std::fabs(mask.aabb_min()[a]) + std::fabs(mask.aabb_max()[a])) * S;
+                       1e-6 *
+                           (std::fabs(o[a]) + std::fabs(d[a]) * tspan +
+                            std::fabs(mask.aabb_min()[a]) + std::fabs(mask.aabb_max()[a])) *
+                           S;
       double ta = (lo[a] + m - A) / D, tb = (hi[a] - m - A) / D;
       if (ta > tb) std::swap(ta, tb);
       tlo = std::max(tlo, ta);
@@ -155,8 +157,8 @@ void Flush(const Ctx& c, RayMarcher::Workspace& ws) {
 // Evaluates the sample at grid-box point p (world for the object model, contracted for the
 // unbounded one) with interval `dist` and composites it (7.2, 7.5). False once the ray may stop
 // early (T below the early-termination threshold).
-bool CompositeSample(const Ctx& c, RayMarcher::Workspace& ws, int slot, const float p[3], float dist,
-                     float* T, float* acc) {
+bool CompositeSample(const Ctx& c, RayMarcher::Workspace& ws, int slot, const float p[3],
+                     float dist, float* T, float* acc) {
   ++ws.stats.samples;
   float cn[3];
   for (int a = 0; a < 3; ++a) cn[a] = (p[a] - c.min[a]) * c.inv[a] - 1.f;
@@ -179,7 +181,8 @@ bool CompositeSample(const Ctx& c, RayMarcher::Workspace& ws, int slot, const fl
 
 // SPEC.md 7.2: the straight line o + d t through the box (world for the object model, NDC for
 // the forward-facing one); the colour samples take their view direction from ws.ray_d[slot].
-void MarchStraight(const Ctx& c, RayMarcher::Workspace& ws, int slot, const float* o, const float* d) {
+void MarchStraight(const Ctx& c, RayMarcher::Workspace& ws, int slot, const float* o,
+                   const float* d) {
   ws.ray_acc[slot] = 0.f;
   for (int a = 0; a < 3; ++a) {
     if (!std::isfinite(o[a]) || !std::isfinite(d[a])) return;
@@ -207,10 +210,10 @@ void MarchStraight(const Ctx& c, RayMarcher::Workspace& ws, int slot, const floa
     double t1 = (static_cast<double>(c.min[a]) - o[a]) / d[a];
     double t2 = (static_cast<double>(c.max[a]) - o[a]) / d[a];
     if (t1 > t2) std::swap(t1, t2);
-    const double err = 1e-6 *
-                       (std::fabs(o[a]) + std::fabs(d[a]) * tspan + std::fabs(c.min[a]) +
-                        std::fabs(c.max[a])) /
-                       std::fabs(d[a]);
+    const double err =
+        1e-6 *
+        (std::fabs(o[a]) + std::fabs(d[a]) * tspan + std::fabs(c.min[a]) + std::fabs(c.max[a])) /
+        std::fabs(d[a]);
     te = std::max(te, t1 - err);
     tx = std::min(tx, t2 + err);
   }
@@ -272,7 +275,8 @@ void MarchRayForward(const Ctx& c, RayMarcher::Workspace& ws, int slot) {
 // empty space is skipped only sample by sample here (the output is the same).
 void MarchRayUnbounded(const Ctx& c, RayMarcher::Workspace& ws, int slot) {
   const ContractedRay ray(ws.ray_o.data() + static_cast<size_t>(slot) * 3,
-                          ws.ray_d.data() + static_cast<size_t>(slot) * 3, c.roi_min, c.roi_scale, c.step);
+                          ws.ray_d.data() + static_cast<size_t>(slot) * 3, c.roi_min, c.roi_scale,
+                          c.step);
   ws.ray_acc[slot] = 0.f;
   for (int a = 0; a < 3; ++a) {
     if (!std::isfinite(ray.o[a]) || !std::isfinite(ray.d[a])) return;
@@ -328,9 +332,7 @@ void ProcessRays(const Ctx& c, RayMarcher::Workspace& ws, int nrays) {
   ws.stats.rays += static_cast<uint64_t>(nrays);
 }
 
-uint8_t ToByte(float v) {
-  return static_cast<uint8_t>(ClipUnit(v) * 255.f + 0.5f);
-}
+uint8_t ToByte(float v) { return static_cast<uint8_t>(ClipUnit(v) * 255.f + 0.5f); }
 
 }  // namespace
 
@@ -354,7 +356,8 @@ namespace {
 int SamplesPerRay(const SceneField& s, const RenderOptions& options) {
   int n = s.NumSamples();
   if (options.step_scale != 1.f) {
-    const double scaled = std::ceil(static_cast<double>(n) / static_cast<double>(options.step_scale));
+    const double scaled =
+        std::ceil(static_cast<double>(n) / static_cast<double>(options.step_scale));
     n = scaled >= 1e9 ? 1000000000 : static_cast<int>(scaled);
   }
   if (options.max_samples > 0 && options.max_samples < n) n = options.max_samples;
@@ -376,33 +379,35 @@ Status RayMarcher::Init(const SceneField* scene, const RenderOptions& options) {
                        options.num_threads, kMaxRenderThreads);
   ECRF_CHECK_OR_RETURN(options.tile_size >= 1 && options.tile_size <= 64, kErrInvalidArgument,
                        "render: tile_size %d out of range [1, 64]", options.tile_size);
-  ECRF_CHECK_OR_RETURN(options.batch_rows >= 1 && options.batch_rows <= 65536,
-                       kErrInvalidArgument, "render: batch_rows %d out of range [1, 65536]",
-                       options.batch_rows);
+  ECRF_CHECK_OR_RETURN(options.batch_rows >= 1 && options.batch_rows <= 65536, kErrInvalidArgument,
+                       "render: batch_rows %d out of range [1, 65536]", options.batch_rows);
   ECRF_CHECK_OR_RETURN(options.max_samples >= 0, kErrInvalidArgument,
                        "render: negative max_samples");
-  ECRF_CHECK_OR_RETURN(options.early_stop_transmittance >= 0.f &&
-                           options.early_stop_transmittance <= 1.f,
-                       kErrInvalidArgument, "render: early_stop_transmittance not in [0, 1]");
+  ECRF_CHECK_OR_RETURN(
+      options.early_stop_transmittance >= 0.f && options.early_stop_transmittance <= 1.f,
+      kErrInvalidArgument, "render: early_stop_transmittance not in [0, 1]");
   ECRF_CHECK_OR_RETURN(options.step_scale >= kMinStepScale && options.step_scale <= kMaxStepScale,
                        kErrInvalidArgument, "render: step_scale %g not in [1/16, 64]",
                        static_cast<double>(options.step_scale));
   ECRF_CHECK_OR_RETURN(!(options.weight_threshold > 1.f) && !std::isnan(options.weight_threshold),
                        kErrInvalidArgument, "render: weight_threshold %g above 1",
                        static_cast<double>(options.weight_threshold));
-  ECRF_CHECK_OR_RETURN(options.sample_budget >= 0, kErrInvalidArgument, "render: negative sample_budget");
+  ECRF_CHECK_OR_RETURN(options.sample_budget >= 0, kErrInvalidArgument,
+                       "render: negative sample_budget");
   if (options.sample_budget > 0) {
     const int n = SamplesPerRay(*scene, options);
-    ECRF_CHECK_OR_RETURN(n <= options.sample_budget, kErrLimit,
-                         "render: the scene asks %d samples per ray, more than the sample budget of %d "
-                         "(RenderOptions::sample_budget; ecrf --sample-budget N, or cap with --samples N)",
-                         n, options.sample_budget);
+    ECRF_CHECK_OR_RETURN(
+        n <= options.sample_budget, kErrLimit,
+        "render: the scene asks %d samples per ray, more than the sample budget of %d "
+        "(RenderOptions::sample_budget; ecrf --sample-budget N, or cap with --samples N)",
+        n, options.sample_budget);
   }
   int threads = options.num_threads;
   if (threads == 0) {
     const unsigned hw = std::thread::hardware_concurrency();
-    threads = hw == 0 ? 1 : (hw > static_cast<unsigned>(kMaxRenderThreads) ? kMaxRenderThreads
-                                                                            : static_cast<int>(hw));
+    threads = hw == 0 ? 1
+                      : (hw > static_cast<unsigned>(kMaxRenderThreads) ? kMaxRenderThreads
+                                                                       : static_cast<int>(hw));
   }
   workspaces_ = new (std::nothrow) Workspace[threads];
   ECRF_CHECK_OR_RETURN(workspaces_ != nullptr, kErrOutOfMemory, "render: out of memory");
@@ -465,10 +470,11 @@ Status RayMarcher::Run(Job* job, RenderStats* stats) {
                        "render: alpha mask acceleration not built");
   c.skip = options_.skip_empty_space && c.mask != nullptr && !c.unbounded;
   for (int a = 0; a < 3; ++a) {
-    c.mask_scale[a] = c.mask == nullptr ? 0.0
-                                        : static_cast<double>(c.mask->res()[a] - 1) /
-                                              (static_cast<double>(c.mask->aabb_max()[a]) -
-                                               c.mask->aabb_min()[a]);
+    c.mask_scale[a] =
+        c.mask == nullptr
+            ? 0.0
+            : static_cast<double>(c.mask->res()[a] - 1) /
+                  (static_cast<double>(c.mask->aabb_max()[a]) - c.mask->aabb_min()[a]);
   }
   c.tile_size = options_.tile_size;
   c.tile_rays = options_.tile_size * options_.tile_size;
@@ -480,7 +486,8 @@ Status RayMarcher::Run(Job* job, RenderStats* stats) {
     Worker(c, job, &workspaces_[0]);
   } else {
     std::thread pool[kMaxRenderThreads];
-    for (int t = 1; t < nthreads; ++t) pool[t] = std::thread(Worker, std::cref(c), job, &workspaces_[t]);
+    for (int t = 1; t < nthreads; ++t)
+      pool[t] = std::thread(Worker, std::cref(c), job, &workspaces_[t]);
     Worker(c, job, &workspaces_[0]);
     for (int t = 1; t < nthreads; ++t) pool[t].join();
   }
@@ -515,7 +522,8 @@ void Worker(const Ctx& c, RayMarcher::Job* job, RayMarcher::Workspace* ws) {
         for (int x = x0; x < x1; ++x, ++r) {
           const size_t px = static_cast<size_t>(y) * cam.width + x;
           const float* rgb = ws->ray_rgb.data() + 3 * r;
-          if (job->image_rgb != nullptr) std::memcpy(job->image_rgb + 3 * px, rgb, 3 * sizeof(float));
+          if (job->image_rgb != nullptr)
+            std::memcpy(job->image_rgb + 3 * px, rgb, 3 * sizeof(float));
           if (job->rgba8 != nullptr) {
             uint8_t* q = job->rgba8 + 4 * px;
             q[0] = ToByte(rgb[0]);
@@ -527,11 +535,15 @@ void Worker(const Ctx& c, RayMarcher::Job* job, RayMarcher::Workspace* ws) {
       }
     } else {
       const size_t first = tile * static_cast<size_t>(c.tile_rays);
-      const int nr = static_cast<int>(std::min(static_cast<size_t>(c.tile_rays), job->count - first));
-      std::memcpy(ws->ray_o.data(), job->origins + 3 * first, static_cast<size_t>(nr) * 3 * sizeof(float));
-      std::memcpy(ws->ray_d.data(), job->dirs + 3 * first, static_cast<size_t>(nr) * 3 * sizeof(float));
+      const int nr =
+          static_cast<int>(std::min(static_cast<size_t>(c.tile_rays), job->count - first));
+      std::memcpy(ws->ray_o.data(), job->origins + 3 * first,
+                  static_cast<size_t>(nr) * 3 * sizeof(float));
+      std::memcpy(ws->ray_d.data(), job->dirs + 3 * first,
+                  static_cast<size_t>(nr) * 3 * sizeof(float));
       ProcessRays(c, *ws, nr);
-      std::memcpy(job->rgb + 3 * first, ws->ray_rgb.data(), static_cast<size_t>(nr) * 3 * sizeof(float));
+      std::memcpy(job->rgb + 3 * first, ws->ray_rgb.data(),
+                  static_cast<size_t>(nr) * 3 * sizeof(float));
       if (job->acc != nullptr) {
         for (int r = 0; r < nr; ++r) {
           const float a = ws->ray_acc[r];
@@ -573,8 +585,8 @@ Status RayMarcher::RenderRays(size_t count, const float* origins, const float* d
   ECRF_CHECK_OR_RETURN(scene_ != nullptr, kErrInvalidArgument, "render: Init first");
   if (stats != nullptr) *stats = RenderStats();
   if (count == 0) return Status::Ok();
-  ECRF_CHECK_OR_RETURN(origins != nullptr && dirs != nullptr && rgb != nullptr,
-                       kErrInvalidArgument, "render: null ray or output buffer");
+  ECRF_CHECK_OR_RETURN(origins != nullptr && dirs != nullptr && rgb != nullptr, kErrInvalidArgument,
+                       "render: null ray or output buffer");
   ECRF_CHECK_OR_RETURN(count <= static_cast<size_t>(-1) / 4, kErrLimit, "render: too many rays");
   Job job;
   job.count = count;

@@ -47,8 +47,8 @@ inline constexpr float kMinStepScale = 1.f / 16, kMaxStepScale = 64.f;
 inline constexpr int kDefaultSampleBudget = 16384;
 
 struct RenderOptions {
-  int num_threads = 1;        // 0: std::thread::hardware_concurrency(); 1: no thread is created
-  int max_samples = 0;        // cap on samples per ray (0: the scene's n_samples)
+  int num_threads = 1;  // 0: std::thread::hardware_concurrency(); 1: no thread is created
+  int max_samples = 0;  // cap on samples per ray (0: the scene's n_samples)
   bool skip_empty_space = true;
   // Stop a ray once T < this (0: off, the reference). Samples past that point have weight <= T,
   // so with a value <= weight_threshold only acc changes, by < this value.
@@ -63,8 +63,8 @@ struct RenderOptions {
   // step_scale and max_samples (0: no limit). The format allows 2^20 samples per ray, which makes a
   // 32x32 view of a few-hundred-byte stream take half a minute; the default keeps that cheap.
   int sample_budget = kDefaultSampleBudget;
-  int tile_size = 8;          // image tiles are tile_size^2 pixels; RenderRays uses tile_size^2 rays
-  int batch_rows = 256;       // appearance samples per MLP batch
+  int tile_size = 8;     // image tiles are tile_size^2 pixels; RenderRays uses tile_size^2 rays
+  int batch_rows = 256;  // appearance samples per MLP batch
 };
 
 struct RenderStats {
@@ -91,7 +91,8 @@ class RayMarcher {
 
   // rgba8: width*height*4 bytes (alpha = accumulated opacity) and/or rgb: width*height*3 floats,
   // row-major from the top row; either may be null (not both).
-  Status RenderImage(const Camera& camera, uint8_t* rgba8, float* rgb, RenderStats* stats = nullptr);
+  Status RenderImage(const Camera& camera, uint8_t* rgba8, float* rgb,
+                     RenderStats* stats = nullptr);
 
   // count rays: origins / dirs count x 3 (dirs used as given for sampling and as viewdirs; pass
   // unit vectors as TensoRF does). rgb: count x 3, acc (optional): count.

@@ -4,16 +4,16 @@
 #include <cmath>
 #include <cstring>
 
+#include "decoder/field_sampler.h"
 #include "format/block_shape.h"
 #include "format/byte_io.h"
 #include "format/coef_coder.h"
 #include "format/container.h"
 #include "format/half_float.h"
+#include "format/int_idct.h"
 #include "format/mlp_coder.h"
 #include "format/ndc_frame.h"
-#include "format/int_idct.h"
 #include "format/occupancy_coder.h"
-#include "decoder/field_sampler.h"
 
 namespace ecrf {
 namespace dec {
@@ -24,11 +24,12 @@ class MemoryBudget {
  public:
   explicit MemoryBudget(uint64_t total) : total_(total), left_(total) {}
   Status Take(uint64_t bytes, const char* what) {
-    ECRF_CHECK_OR_RETURN(bytes <= left_, kErrLimit,
-                         "%s need %llu bytes, more than the %llu left of this decoder's memory budget of "
-                         "%llu bytes (DecodeOptions::max_memory_bytes; ecrf --max-memory-mb)",
-                         what, static_cast<unsigned long long>(bytes), static_cast<unsigned long long>(left_),
-                         static_cast<unsigned long long>(total_));
+    ECRF_CHECK_OR_RETURN(
+        bytes <= left_, kErrLimit,
+        "%s need %llu bytes, more than the %llu left of this decoder's memory budget of "
+        "%llu bytes (DecodeOptions::max_memory_bytes; ecrf --max-memory-mb)",
+        what, static_cast<unsigned long long>(bytes), static_cast<unsigned long long>(left_),
+        static_cast<unsigned long long>(total_));
     left_ -= bytes;
     return Status::Ok();
   }
@@ -55,9 +56,9 @@ TensorTarget TargetOf(VmGrid* grid, const SceneHeader& h, int g, int t) {
   const size_t rank = static_cast<size_t>(grid->ranks[m]);
   if (t < 3) {
     target.data = grid->plane_f32[m].data();
-    target.stride[0] = 1;                                         // channel
+    target.stride[0] = 1;                                                      // channel
     target.stride[1] = static_cast<size_t>(grid->res[kMatMode[m][0]]) * rank;  // row (v)
-    target.stride[2] = rank;                                      // column (u)
+    target.stride[2] = rank;                                                   // column (u)
   } else {
     target.data = grid->line_f32[m].data();
     target.stride[0] = 0;
@@ -89,17 +90,17 @@ Status DecodeCoefficientChunk(const ChunkView& chunk, const SceneHeader& h, int 
   ECRF_CHECK_OR_RETURN(contexts_byte == 0 || version_minor >= 4, kErrCorrupt,
                        "COEF %s %s: contexts %u in a version 1.%d stream (reserved, 0, before 1.4)",
                        kGridNames[g], kTensorNames[t], contexts_byte, version_minor);
-  ECRF_CHECK_OR_RETURN(contexts_byte <= static_cast<uint8_t>(CoefContextSet::kWide), kErrUnsupported,
-                       "COEF %s %s: unknown coefficient context set %u", kGridNames[g],
-                       kTensorNames[t], contexts_byte);
+  ECRF_CHECK_OR_RETURN(contexts_byte <= static_cast<uint8_t>(CoefContextSet::kWide),
+                       kErrUnsupported, "COEF %s %s: unknown coefficient context set %u",
+                       kGridNames[g], kTensorNames[t], contexts_byte);
   const CoefContextSet context_set = static_cast<CoefContextSet>(contexts_byte);
   ECRF_CHECK_OR_RETURN(coef_bits == 8 || coef_bits == 16, kErrUnsupported,
                        "COEF %s %s: coef_bits %u (8 or 16)", kGridNames[g], kTensorNames[t],
                        coef_bits);
   const int dims[3] = {block[0], block[1], block[2]};
   ECRF_CHECK_OR_RETURN(IsValidBlockShape(dims) && (t < 3 || dims[0] == 1), kErrCorrupt,
-                       "COEF %s %s: invalid block shape %dx%dx%d", kGridNames[g],
-                       kTensorNames[t], dims[0], dims[1], dims[2]);
+                       "COEF %s %s: invalid block shape %dx%dx%d", kGridNames[g], kTensorNames[t],
+                       dims[0], dims[1], dims[2]);
   // Steps in [2^-64, 2^64] keep step * 2^-P a normal float32, so the scale is exact.
   ECRF_CHECK_OR_RETURN(std::isfinite(step) && step >= 0x1p-64f && step <= 0x1p64f, kErrCorrupt,
                        "COEF %s %s: quantization step %g outside [2^-64, 2^64]", kGridNames[g],
@@ -191,7 +192,8 @@ Status DecodeOccupancyChunk(const ChunkView& chunk, MemoryBudget* budget, SceneF
                        static_cast<unsigned long long>(voxels),
                        static_cast<unsigned long long>(kMaxOccupancyVoxels));
   // The bits, plus one byte per 4^3 and per 16^3 cells for the acceleration levels.
-  ECRF_RETURN_IF_ERROR(budget->Take((voxels + 7) / 8 + voxels / 64 + voxels / 4096 + 2, "OCCU: the occupancy mask"));
+  ECRF_RETURN_IF_ERROR(
+      budget->Take((voxels + 7) / 8 + voxels / 64 + voxels / 4096 + 2, "OCCU: the occupancy mask"));
   ECRF_RETURN_IF_ERROR(scene->mask.Init(lo, hi, res));
   ECRF_RETURN_IF_ERROR(DecodeOccupancy(r.current(), r.remaining(), res, scene->mask.bits()));
   ECRF_RETURN_IF_ERROR(scene->mask.BuildAcceleration());
@@ -230,22 +232,23 @@ Status DecodeMlpChunk(const ChunkView& chunk, const SceneHeader& h, MemoryBudget
   HeapArray<float> params;
   ECRF_RETURN_IF_ERROR(params.Allocate(count));
   if (precision == kMlpPrecisionQuantized) {
-    const MlpLayout layout = MakeMlpLayout(h.feature_dim, config.num_products, h.hidden, h.feature_pe_freqs,
-                                          h.viewdir_pe_freqs);
+    const MlpLayout layout = MakeMlpLayout(h.feature_dim, config.num_products, h.hidden,
+                                           h.feature_pe_freqs, h.viewdir_pe_freqs);
     const Status q = DecodeQuantizedMlp(layout, r.current(), r.remaining(), params.data());
     if (!q.ok()) return Status::Error(q.code(), "MLPW: %s", q.message());
   } else {
     const size_t value_bytes = precision == kMlpPrecisionFloat16 ? 2 : 4;
     ECRF_CHECK_OR_RETURN(r.remaining() / value_bytes == count && r.remaining() % value_bytes == 0,
-                         kErrCorrupt, "MLPW: %zu bytes of weights, expected %zu values of %zu bytes",
+                         kErrCorrupt,
+                         "MLPW: %zu bytes of weights, expected %zu values of %zu bytes",
                          r.remaining(), count, value_bytes);
     const uint8_t* p = r.current();
     for (size_t i = 0; i < count; ++i, p += value_bytes) {
       if (precision == kMlpPrecisionFloat16) {
         params[i] = HalfToFloat(static_cast<uint16_t>(p[0] | (p[1] << 8)));
       } else {
-        const uint32_t u = uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 |
-                           uint32_t(p[3]) << 24;
+        const uint32_t u =
+            uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
         std::memcpy(&params[i], &u, 4);
       }
     }
@@ -254,7 +257,9 @@ Status DecodeMlpChunk(const ChunkView& chunk, const SceneHeader& h, MemoryBudget
   if (!s.ok()) return Status::Error(kErrCorrupt, "MLPW: %s", s.message());
   info->mlp_bytes = chunk.size;
   info->mlp_precision = precision;
-  info->mlp_precision_bits = precision == kMlpPrecisionFloat16 ? 16 : precision == kMlpPrecisionFloat32 ? 32 : 0;
+  info->mlp_precision_bits = precision == kMlpPrecisionFloat16   ? 16
+                             : precision == kMlpPrecisionFloat32 ? 32
+                                                                 : 0;
   return Status::Ok();
 }
 
@@ -284,9 +289,9 @@ enum class Expect { kHead, kNdcFrame, kOccupancy, kCoefficients, kMlp, kDone };
 Status DecodeScene(const uint8_t* data, size_t size, const DecodeOptions& options,
                    SceneField* scene, SceneInfo* info_out) {
   ECRF_CHECK_OR_RETURN(scene != nullptr, kErrInvalidArgument, "DecodeScene: null scene");
-  ECRF_CHECK_OR_RETURN(options.storage == GridStorage::kFloat32 ||
-                           options.storage == GridStorage::kInt16,
-                       kErrInvalidArgument, "DecodeScene: unknown grid storage");
+  ECRF_CHECK_OR_RETURN(
+      options.storage == GridStorage::kFloat32 || options.storage == GridStorage::kInt16,
+      kErrInvalidArgument, "DecodeScene: unknown grid storage");
   SceneInfo local_info;
   SceneInfo& info = info_out ? *info_out : local_info;
   info = SceneInfo();
@@ -306,8 +311,8 @@ Status DecodeScene(const uint8_t* data, size_t size, const DecodeOptions& option
                            next_tensor % kTensorsPerSceneGrid) == 0) {
       ++next_tensor;
     }
-    expect = next_tensor < kNumSceneGrids * kTensorsPerSceneGrid ? Expect::kCoefficients
-                                                                 : Expect::kMlp;
+    expect =
+        next_tensor < kNumSceneGrids * kTensorsPerSceneGrid ? Expect::kCoefficients : Expect::kMlp;
   };
   for (;;) {
     ChunkView chunk;
@@ -319,10 +324,11 @@ Status DecodeScene(const uint8_t* data, size_t size, const DecodeOptions& option
       ECRF_CHECK_OR_RETURN(expect == Expect::kDone, kErrCorrupt,
                            "DONE at offset %zu before the scene is complete (%s missing)",
                            chunk.offset,
-                           expect == Expect::kHead ? "HEAD"
-                           : expect == Expect::kNdcFrame ? "NDCP"
-                           : expect == Expect::kOccupancy ? "OCCU"
-                           : expect == Expect::kCoefficients ? "COEF" : "MLPW");
+                           expect == Expect::kHead           ? "HEAD"
+                           : expect == Expect::kNdcFrame     ? "NDCP"
+                           : expect == Expect::kOccupancy    ? "OCCU"
+                           : expect == Expect::kCoefficients ? "COEF"
+                                                             : "MLPW");
       break;
     }
     if (!IsCriticalChunk(chunk.type)) {
@@ -338,7 +344,8 @@ Status DecodeScene(const uint8_t* data, size_t size, const DecodeOptions& option
     if (chunk.type == kChunkHead && expect == Expect::kHead) {
       ECRF_RETURN_IF_ERROR(ParseSceneHeader(chunk.data, chunk.size, &h));
       // The 16-bit conversion holds both copies for a moment.
-      const uint64_t grid_bytes = SceneGridValues(h) * (options.storage == GridStorage::kInt16 ? 6 : 4);
+      const uint64_t grid_bytes =
+          SceneGridValues(h) * (options.storage == GridStorage::kInt16 ? 6 : 4);
       ECRF_RETURN_IF_ERROR(budget.Take(grid_bytes, "HEAD: the grids"));
       info.head_bytes = chunk.size;
       ApplyHeader(h, scene);
@@ -370,16 +377,17 @@ Status DecodeScene(const uint8_t* data, size_t size, const DecodeOptions& option
     } else if (chunk.type == kChunkCoefficients && expect == Expect::kCoefficients) {
       const int g = next_tensor / kTensorsPerSceneGrid, t = next_tensor % kTensorsPerSceneGrid;
       VmGrid* grid = g == 0 ? &scene->density : &scene->appearance;
-      ECRF_RETURN_IF_ERROR(DecodeCoefficientChunk(chunk, h, g, t, info.version_minor, grid,
-                                                  &info.tensors[g][t]));
+      ECRF_RETURN_IF_ERROR(
+          DecodeCoefficientChunk(chunk, h, g, t, info.version_minor, grid, &info.tensors[g][t]));
       ++next_tensor;
       advance_tensor();
     } else if (chunk.type == kChunkMlpWeights && expect == Expect::kMlp) {
       ECRF_RETURN_IF_ERROR(DecodeMlpChunk(chunk, h, &budget, scene, &info));
       expect = Expect::kDone;
     } else {
-      const bool known = chunk.type == kChunkHead || chunk.type == kChunkNdcFrame || chunk.type == kChunkOccupancy ||
-                         chunk.type == kChunkCoefficients || chunk.type == kChunkMlpWeights;
+      const bool known = chunk.type == kChunkHead || chunk.type == kChunkNdcFrame ||
+                         chunk.type == kChunkOccupancy || chunk.type == kChunkCoefficients ||
+                         chunk.type == kChunkMlpWeights;
       return Status::Error(known ? kErrCorrupt : kErrUnsupported,
                            known ? "chunk '%s' at offset %zu is out of order"
                                  : "unknown critical chunk '%s' at offset %zu",

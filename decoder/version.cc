@@ -4,7 +4,8 @@
 #include "format/status.h"
 
 static_assert(ECRF_ERR_TRUNCATED == ecrf::kErrTruncated && ECRF_ERR_CORRUPT == ecrf::kErrCorrupt &&
-                  ECRF_ERR_LIMIT == ecrf::kErrLimit && ECRF_ERR_OUT_OF_MEMORY == ecrf::kErrOutOfMemory,
+                  ECRF_ERR_LIMIT == ecrf::kErrLimit &&
+                  ECRF_ERR_OUT_OF_MEMORY == ecrf::kErrOutOfMemory,
               "C API error codes must equal the internal ones");
 
 extern "C" {

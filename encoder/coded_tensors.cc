@@ -20,10 +20,10 @@ float* RateTensorGrad(VmGrid& grid, int t) {
 }
 
 const char* RateTensorName(int t) {
-  static const char* kNames[12] = {
-      "density.plane.0",    "density.plane.1",    "density.plane.2",    "density.line.0",
-      "density.line.1",     "density.line.2",     "appearance.plane.0", "appearance.plane.1",
-      "appearance.plane.2", "appearance.line.0",  "appearance.line.1",  "appearance.line.2"};
+  static const char* kNames[12] = {"density.plane.0",    "density.plane.1",    "density.plane.2",
+                                   "density.line.0",     "density.line.1",     "density.line.2",
+                                   "appearance.plane.0", "appearance.plane.1", "appearance.plane.2",
+                                   "appearance.line.0",  "appearance.line.1",  "appearance.line.2"};
   return t >= 0 && t < 12 ? kNames[t] : "?";
 }
 
@@ -42,7 +42,8 @@ std::vector<float> PeakCoefficients(const TensorfModel& model, const RateConfig&
   return peaks;
 }
 
-std::vector<float> ChooseQuantSteps(const TensorfModel& model, const RateConfig& config, int coef_bits) {
+std::vector<float> ChooseQuantSteps(const TensorfModel& model, const RateConfig& config,
+                                    int coef_bits) {
   const float max_level = coef_bits == 16 ? 32767.f : 127.f;
   std::vector<float> steps = PeakCoefficients(model, config);
   // An all-zero tensor still needs a positive step; any value codes it as zeros.

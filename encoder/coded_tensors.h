@@ -31,7 +31,8 @@ float* RateTensorGrad(VmGrid& grid, int t);
 // Quantization step of each tensor for coef_bits-bit coefficients: the largest magnitude of its
 // block-DCT coefficients maps to the largest level (127 for 8 bits), so nothing clips. The
 // encoder uses this rule when the rate objective was off.
-std::vector<float> ChooseQuantSteps(const TensorfModel& model, const RateConfig& config, int coef_bits);
+std::vector<float> ChooseQuantSteps(const TensorfModel& model, const RateConfig& config,
+                                    int coef_bits);
 // The largest block-DCT coefficient magnitude of each tensor (0 for an all-zero tensor), in the
 // order of ChooseQuantSteps.
 std::vector<float> PeakCoefficients(const TensorfModel& model, const RateConfig& config);

@@ -28,12 +28,14 @@ Encoded EncodeWithScale(const TensorfModel& model, EncodeOptions o, const std::v
 
 }  // namespace
 
-double FinestStepScale(const TensorfModel& model, const EncodeOptions& options, const std::vector<float>& base) {
+double FinestStepScale(const TensorfModel& model, const EncodeOptions& options,
+                       const std::vector<float>& base) {
   const double max_level = options.coef_bits == 16 ? 32767.0 : 127.0;
   const std::vector<float> peaks = PeakCoefficients(model, options.blocks);
   double finest = 0.0;
   for (size_t t = 0; t < base.size() && t < peaks.size(); ++t) {
-    if (peaks[t] > 0.f && base[t] > 0.f) finest = std::max(finest, double(peaks[t]) / max_level / double(base[t]));
+    if (peaks[t] > 0.f && base[t] > 0.f)
+      finest = std::max(finest, double(peaks[t]) / max_level / double(base[t]));
   }
   return std::min(1.0, finest > 0.0 ? finest : 1.0);
 }
@@ -45,7 +47,9 @@ TargetSizeResult EncodeToTargetSize(const TensorfModel& model, const EncodeOptio
       o.steps.empty() ? ChooseQuantSteps(model, o.blocks, o.coef_bits) : o.steps;
   o.steps = base;
   TargetSizeResult r;
-  auto close_enough = [&](const Encoded& e) { return e.bytes.size() >= size_t(0.99 * double(target_bytes)); };
+  auto close_enough = [&](const Encoded& e) {
+    return e.bytes.size() >= size_t(0.99 * double(target_bytes));
+  };
   auto done = [&](Encoded e, double scale) {
     r.bytes = std::move(e.bytes);
     r.report = e.report;
@@ -71,7 +75,8 @@ TargetSizeResult EncodeToTargetSize(const TensorfModel& model, const EncodeOptio
     if (coarsest.bytes.size() > target_bytes) {
       char msg[256];
       std::snprintf(msg, sizeof(msg),
-                    "cannot reach %zu bytes by coarser quantization: the smallest file is %zu bytes (steps x%g), of "
+                    "cannot reach %zu bytes by coarser quantization: the smallest file is %zu "
+                    "bytes (steps x%g), of "
                     "which the MLP takes %zu and the occupancy mask %zu",
                     target_bytes, coarsest.bytes.size(), kMaxStepScale, coarsest.report.mlp_bytes,
                     coarsest.report.occupancy_bytes);
@@ -98,11 +103,16 @@ size_t ParseByteSize(const std::string& text) {
   const double v = std::strtod(text.c_str(), &end);
   const std::string unit = end ? std::string(end) : "";
   double mult = 0;
-  if (unit.empty() || unit == "B") mult = 1;
-  else if (unit == "KB" || unit == "kB" || unit == "K" || unit == "k") mult = 1e3;
-  else if (unit == "MB" || unit == "M") mult = 1e6;
-  else if (unit == "KiB") mult = 1024;
-  else if (unit == "MiB") mult = 1024.0 * 1024;
+  if (unit.empty() || unit == "B")
+    mult = 1;
+  else if (unit == "KB" || unit == "kB" || unit == "K" || unit == "k")
+    mult = 1e3;
+  else if (unit == "MB" || unit == "M")
+    mult = 1e6;
+  else if (unit == "KiB")
+    mult = 1024;
+  else if (unit == "MiB")
+    mult = 1024.0 * 1024;
   if (mult == 0 || !(v > 0) || !std::isfinite(v) || v * mult > 1e12) {
     throw std::invalid_argument("'" + text + "' is not a size (e.g. 500KB, 1.2MB, 300000B)");
   }

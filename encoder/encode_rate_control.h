@@ -37,7 +37,8 @@ TargetSizeResult EncodeToTargetSize(const TensorfModel& model, const EncodeOptio
 
 // The smallest factor s <= 1 that keeps every tensor's step at or above its 8-bit (or 16-bit)
 // peak step, so that no coefficient clips: 1 when the steps are already the peak steps.
-double FinestStepScale(const TensorfModel& model, const EncodeOptions& options, const std::vector<float>& base);
+double FinestStepScale(const TensorfModel& model, const EncodeOptions& options,
+                       const std::vector<float>& base);
 
 // "500KB", "1.2MB", "300000" (bytes; KB = 1000 bytes, MB = 10^6, also KiB / MiB). Throws
 // std::invalid_argument naming the text.

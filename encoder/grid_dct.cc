@@ -4,9 +4,9 @@
 #include <stdexcept>
 #include <string>
 
+#include "decoder/multiversion.h"
 #include "format/block_shape.h"
 #include "format/float_dct.h"
-#include "decoder/multiversion.h"
 
 namespace ecrf {
 namespace trainer {
@@ -44,8 +44,9 @@ const FloatDctTables& Tables() {
 // out = A in along one axis of an n0 x n1 x n2 block. a[k*n + j] = A[k][j], at = A^T.
 // Axis 2 (contiguous): out[r][k] = sum_j in[r][j] at[j][k] (axpy over k, contiguous).
 template <int N>
-__attribute__((always_inline)) inline void PassAxis2(const float* __restrict in, float* __restrict out, int rows,
-               const float* __restrict at) {
+__attribute__((always_inline)) inline void PassAxis2(const float* __restrict in,
+                                                     float* __restrict out, int rows,
+                                                     const float* __restrict at) {
   for (int r = 0; r < rows; ++r) {
     const float* x = in + r * N;
     float* y = out + r * N;
@@ -63,8 +64,9 @@ __attribute__((always_inline)) inline void PassAxis2(const float* __restrict in,
 // Axis with `outer` independent slabs, length N, inner contiguous run `inner`:
 // out[o][k][i] = sum_j a[k][j] in[o][j][i].
 template <int N>
-__attribute__((always_inline)) inline void PassStrided(const float* __restrict in, float* __restrict out, int outer, int inner,
-                 const float* __restrict a) {
+__attribute__((always_inline)) inline void PassStrided(const float* __restrict in,
+                                                       float* __restrict out, int outer, int inner,
+                                                       const float* __restrict a) {
   for (int o = 0; o < outer; ++o) {
     const float* x = in + static_cast<size_t>(o) * N * inner;
     float* y = out + static_cast<size_t>(o) * N * inner;
@@ -83,23 +85,35 @@ __attribute__((always_inline)) inline void PassStrided(const float* __restrict i
   }
 }
 
-__attribute__((always_inline)) inline void DispatchAxis2(const float* in, float* out, int rows, int n, const float* at) {
+__attribute__((always_inline)) inline void DispatchAxis2(const float* in, float* out, int rows,
+                                                         int n, const float* at) {
   switch (n) {
-    case 2: return PassAxis2<2>(in, out, rows, at);
-    case 4: return PassAxis2<4>(in, out, rows, at);
-    case 8: return PassAxis2<8>(in, out, rows, at);
-    case 16: return PassAxis2<16>(in, out, rows, at);
-    case 32: return PassAxis2<32>(in, out, rows, at);
+    case 2:
+      return PassAxis2<2>(in, out, rows, at);
+    case 4:
+      return PassAxis2<4>(in, out, rows, at);
+    case 8:
+      return PassAxis2<8>(in, out, rows, at);
+    case 16:
+      return PassAxis2<16>(in, out, rows, at);
+    case 32:
+      return PassAxis2<32>(in, out, rows, at);
   }
 }
 
-__attribute__((always_inline)) inline void DispatchStrided(const float* in, float* out, int outer, int n, int inner, const float* a) {
+__attribute__((always_inline)) inline void DispatchStrided(const float* in, float* out, int outer,
+                                                           int n, int inner, const float* a) {
   switch (n) {
-    case 2: return PassStrided<2>(in, out, outer, inner, a);
-    case 4: return PassStrided<4>(in, out, outer, inner, a);
-    case 8: return PassStrided<8>(in, out, outer, inner, a);
-    case 16: return PassStrided<16>(in, out, outer, inner, a);
-    case 32: return PassStrided<32>(in, out, outer, inner, a);
+    case 2:
+      return PassStrided<2>(in, out, outer, inner, a);
+    case 4:
+      return PassStrided<4>(in, out, outer, inner, a);
+    case 8:
+      return PassStrided<8>(in, out, outer, inner, a);
+    case 16:
+      return PassStrided<16>(in, out, outer, inner, a);
+    case 32:
+      return PassStrided<32>(in, out, outer, inner, a);
   }
 }
 
@@ -155,7 +169,7 @@ void RunBlocks(const float* src, const GridBlockLayout& L, const int* ids, int c
   const int* n = L.block;
   const int vol = L.block_volume();
   // Small jobs run serially: a parallel region costs more than a few blocks' transforms.
-#pragma omp parallel if (static_cast<long>(count) * vol > 32768)
+#pragma omp parallel if (static_cast <long>(count) * vol > 32768)
   {
     BlockBuffers buf;
     long off[3][kMaxBlockLength];
@@ -264,8 +278,8 @@ void ForwardBlockList(const float* tensor, const GridBlockLayout& layout, const 
   RunBlocks<Op::kForward>(tensor, layout, block_ids, count, coeffs);
 }
 
-void BackwardBlockList(const float* dl_dcoeffs, const GridBlockLayout& layout,
-                       const int* block_ids, int count, float* dl_dtensor) {
+void BackwardBlockList(const float* dl_dcoeffs, const GridBlockLayout& layout, const int* block_ids,
+                       int count, float* dl_dtensor) {
   CheckIds(layout, block_ids, count);
   RunBlocks<Op::kBackward>(dl_dcoeffs, layout, block_ids, count, dl_dtensor);
 }

@@ -50,8 +50,7 @@ GridBlockLayout MakeBlockLayout(const int extent[3], const long stride[3], const
 GridBlockLayout PlaneBlockLayout(const std::array<int, 3>& res, int rank, int m,
                                  const int block[3]);
 // Line m: extent {1, rank, res[w]}; block[0] must be 1.
-GridBlockLayout LineBlockLayout(const std::array<int, 3>& res, int rank, int m,
-                                const int block[3]);
+GridBlockLayout LineBlockLayout(const std::array<int, 3>& res, int rank, int m, const int block[3]);
 inline GridBlockLayout PlaneBlockLayout(const VmGrid& g, int m, const int block[3]) {
   return PlaneBlockLayout(g.res(), g.ranks()[m], m, block);
 }
@@ -71,8 +70,8 @@ void InverseBlocks(const float* coeffs, const GridBlockLayout& layout, float* te
 // count * block_volume() values in list order.
 void ForwardBlockList(const float* tensor, const GridBlockLayout& layout, const int* block_ids,
                       int count, float* coeffs);
-void BackwardBlockList(const float* dl_dcoeffs, const GridBlockLayout& layout,
-                       const int* block_ids, int count, float* dl_dtensor);
+void BackwardBlockList(const float* dl_dcoeffs, const GridBlockLayout& layout, const int* block_ids,
+                       int count, float* dl_dtensor);
 
 }  // namespace trainer
 }  // namespace ecrf

@@ -6,6 +6,9 @@
 #include <string>
 
 #include "decoder/scene_decoder.h"
+#include "encoder/coded_tensors.h"
+#include "encoder/coef_quantizer.h"
+#include "encoder/grid_dct.h"
 #include "format/byte_io.h"
 #include "format/coef_coder.h"
 #include "format/container.h"
@@ -14,9 +17,6 @@
 #include "format/ndc_frame.h"
 #include "format/occupancy_coder.h"
 #include "format/scene_header.h"
-#include "encoder/coef_quantizer.h"
-#include "encoder/grid_dct.h"
-#include "encoder/coded_tensors.h"
 
 namespace ecrf {
 namespace trainer {
@@ -25,7 +25,7 @@ namespace {
 // The model as the stream sees it: explicit ranks (possibly 0), channels-last tensors.
 struct SceneTensors {
   SceneHeader header;
-  NdcFrame ndc;  // forward-facing scenes only
+  NdcFrame ndc;                      // forward-facing scenes only
   std::vector<float> tensors[2][6];  // planes [res[v]][res[u]][rank], lines [res[w]][rank]
   std::vector<float> head_params;    // trainer layout, P = appearance total rank
   const AlphaMask* mask = nullptr;
@@ -126,11 +126,13 @@ uint8_t FeatureVersionMinor(const SceneHeader& h, const EncodeOptions& o) {
 std::vector<uint8_t> CodeLevels(const std::vector<int32_t>& levels, const GridBlockLayout& layout,
                                 CoefContextSet set) {
   CoefContexts contexts;
-  const Status st = contexts.Init(BlockShape{layout.block[0], layout.block[1], layout.block[2]}, set);
+  const Status st =
+      contexts.Init(BlockShape{layout.block[0], layout.block[1], layout.block[2]}, set);
   if (!st.ok()) throw std::invalid_argument(st.message());
   RangeEncoder enc;
   const size_t volume = size_t(layout.block_volume());
-  for (int b = 0; b < layout.num_blocks(); ++b) EncodeCoefBlock(enc, contexts, &levels[size_t(b) * volume]);
+  for (int b = 0; b < layout.num_blocks(); ++b)
+    EncodeCoefBlock(enc, contexts, &levels[size_t(b) * volume]);
   return enc.Finish();
 }
 
@@ -154,7 +156,8 @@ std::vector<uint8_t> EncodeCoefficients(const SceneTensors& s, int g, int t, flo
     bool zero = true;
     int32_t* q = &levels[size_t(b) * volume];
     for (int i = 0; i < volume; ++i) {
-      const double level = QuantizeLevel(double(coeffs[size_t(b) * volume + i]), step, o.rounding_offset);
+      const double level =
+          QuantizeLevel(double(coeffs[size_t(b) * volume + i]), step, o.rounding_offset);
       if (std::fabs(level) > max_abs) ++report->clipped_coefficients;
       q[i] = int32_t(std::max<double>(-max_abs, std::min<double>(max_abs, level)));
       zero &= q[i] == 0;
@@ -197,16 +200,18 @@ std::vector<uint8_t> EncodeOccupancyChunk(const AlphaMask& mask) {
   return std::move(w.bytes());
 }
 
-std::vector<uint8_t> EncodeMlpChunk(const SceneHeader& h, const std::vector<float>& params, bool float32,
-                                    int max_level) {
+std::vector<uint8_t> EncodeMlpChunk(const SceneHeader& h, const std::vector<float>& params,
+                                    bool float32, int max_level) {
   ByteWriter w;
-  w.U8(max_level > 0 ? kMlpPrecisionQuantized : float32 ? kMlpPrecisionFloat32 : kMlpPrecisionFloat16);
+  w.U8(max_level > 0 ? kMlpPrecisionQuantized
+       : float32     ? kMlpPrecisionFloat32
+                     : kMlpPrecisionFloat16);
   w.U8(0);
   w.U8(0);
   w.U8(0);
   if (max_level > 0) {
-    const MlpLayout layout =
-        MakeMlpLayout(h.feature_dim, h.total_rank(1), h.hidden, h.feature_pe_freqs, h.viewdir_pe_freqs);
+    const MlpLayout layout = MakeMlpLayout(h.feature_dim, h.total_rank(1), h.hidden,
+                                           h.feature_pe_freqs, h.viewdir_pe_freqs);
     w.Bytes(EncodeQuantizedMlp(layout, params.data(), max_level, nullptr));
     return std::move(w.bytes());
   }
@@ -226,10 +231,11 @@ std::vector<uint8_t> Assemble(const SceneTensors& s, const std::vector<float>& s
   SceneHeader h = s.header;
   const uint8_t feature_minor = FeatureVersionMinor(h, o);
   if (feature_minor > o.max_version_minor) {
-    throw std::invalid_argument("this scene needs stream version 1." + std::to_string(feature_minor) + " (" +
-                                SceneModelName(static_cast<SceneModel>(h.scene_model)) + " model, MLP levels " +
-                                std::to_string(o.mlp_max_level) + "), above the asked 1." +
-                                std::to_string(o.max_version_minor));
+    throw std::invalid_argument("this scene needs stream version 1." +
+                                std::to_string(feature_minor) + " (" +
+                                SceneModelName(static_cast<SceneModel>(h.scene_model)) +
+                                " model, MLP levels " + std::to_string(o.mlp_max_level) +
+                                "), above the asked 1." + std::to_string(o.max_version_minor));
   }
   std::vector<uint8_t> coef_chunks[2][6];
   bool wide_contexts = false;
@@ -312,10 +318,12 @@ bool DecodedSliceIsZero(const float* data, size_t cells, int rank, int r) {
 std::vector<uint8_t> EncodeScene(const TensorfModel& model, const EncodeOptions& o,
                                  EncodeReport* report_out) {
   if (o.coef_bits != 8 && o.coef_bits != 16) {
-    throw std::invalid_argument("coefficient bits must be 8 or 16, not " + std::to_string(o.coef_bits));
+    throw std::invalid_argument("coefficient bits must be 8 or 16, not " +
+                                std::to_string(o.coef_bits));
   }
   if (!(o.rounding_offset > 0.f && o.rounding_offset <= 0.5f)) {
-    throw std::invalid_argument("rounding offset " + std::to_string(o.rounding_offset) + " outside (0, 0.5]");
+    throw std::invalid_argument("rounding offset " + std::to_string(o.rounding_offset) +
+                                " outside (0, 0.5]");
   }
   if (!o.steps.empty() && o.steps.size() != 12) {
     throw std::invalid_argument("EncodeScene: expected 12 quantization steps, got " +

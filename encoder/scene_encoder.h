@@ -18,16 +18,16 @@
 #include <string>
 #include <vector>
 
-#include "format/container.h"
 #include "encoder/coded_tensors.h"
+#include "format/container.h"
 #include "trainer/model/tensorf_model.h"
 
 namespace ecrf {
 namespace trainer {
 
 struct EncodeOptions {
-  int coef_bits = 8;              // 8 or 16
-  bool mlp_float32 = false;       // false: float16 weights
+  int coef_bits = 8;         // 8 or 16
+  bool mlp_float32 = false;  // false: float16 weights
   // > 0: the MLP and basis as integer levels with one binary16 step per output row, the largest
   // level of a row being this (MLPW precision 2, bitstream 1.1); overrides mlp_float32.
   int mlp_max_level = 0;
@@ -40,7 +40,7 @@ struct EncodeOptions {
   // Rounding offset of the coefficient quantizer (encoder/coef_quantizer.h): 0.5 rounds to
   // nearest, smaller values widen the dead zone.
   float rounding_offset = 0.5f;
-  std::string metadata_json;      // the ancillary meta chunk (empty: none)
+  std::string metadata_json;  // the ancillary meta chunk (empty: none)
   // The newest stream version 1.x to write. From 4 on, each COEF chunk takes the shorter of its
   // narrow and wide (1.4) codes; below 4 all are narrow, so 1.3 decoders read the stream (2-3.5%
   // larger coefficient chunks). The stream carries the lowest version its chunks need.
@@ -49,16 +49,17 @@ struct EncodeOptions {
 
 struct EncodeReport {
   size_t total_bytes = 0;
-  size_t head_bytes = 0, occupancy_bytes = 0, mlp_bytes = 0, metadata_bytes = 0;  // head: HEAD and NDCP
-  size_t container_bytes = 0;  // signature, chunk headers and CRCs
-  std::array<size_t, 12> tensor_bytes{};  // COEF payload per tensor (0 when dropped)
+  size_t head_bytes = 0, occupancy_bytes = 0, mlp_bytes = 0,
+         metadata_bytes = 0;               // head: HEAD and NDCP
+  size_t container_bytes = 0;              // signature, chunk headers and CRCs
+  std::array<size_t, 12> tensor_bytes{};   // COEF payload per tensor (0 when dropped)
   std::array<size_t, 12> tensor_coeffs{};  // coefficients per tensor (padded blocks)
   std::array<size_t, 12> tensor_blocks{};
   std::array<size_t, 12> tensor_zero_blocks{};
   std::array<float, 12> steps{};
   std::array<std::array<int, 3>, 2> ranks_in{};   // before dropping
   std::array<std::array<int, 3>, 2> ranks_out{};  // coded
-  size_t clipped_coefficients = 0;  // magnitudes above the coefficient range, clamped
+  size_t clipped_coefficients = 0;                // magnitudes above the coefficient range, clamped
   size_t coefficient_bytes() const {
     size_t n = 0;
     for (size_t b : tensor_bytes) n += b;

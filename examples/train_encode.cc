@@ -61,7 +61,8 @@ int main(int argc, char** argv) {
                 r.train_seconds, r.test.psnr);
 
     tr::EncodeReport report;
-    const std::vector<uint8_t> bytes = tr::EncodeScene(model, tr::RunEncodeOptions(o, rate), &report);
+    const std::vector<uint8_t> bytes =
+        tr::EncodeScene(model, tr::RunEncodeOptions(o, rate), &report);
 
     ecrf_scene* scene = ecrf_scene_create();
     if (!scene) return 1;
@@ -74,8 +75,10 @@ int main(int argc, char** argv) {
     for (const tr::View& view : test.views) psnr += DecodedPsnr(scene, view);
     psnr /= static_cast<double>(test.views.size());
     ecrf_scene_destroy(scene);
-    std::printf("encoded %zu bytes (coefficients %zu); decoded with ecrf %s: test PSNR %.2f dB over %zu views\n",
-                bytes.size(), report.coefficient_bytes(), ecrf_version_string(), psnr, test.views.size());
+    std::printf(
+        "encoded %zu bytes (coefficients %zu); decoded with ecrf %s: test PSNR %.2f dB over %zu "
+        "views\n",
+        bytes.size(), report.coefficient_bytes(), ecrf_version_string(), psnr, test.views.size());
     return psnr > 0.0 ? 0 : 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());

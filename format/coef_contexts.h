@@ -11,12 +11,12 @@
 
 namespace ecrf {
 
-constexpr int kCodedFlagContexts = 3;  // how many of the previous two blocks were coded
-constexpr int kMaxEobClasses = 13;     // eob in [1, 4096]
-constexpr int kBaseSymbols = 4;        // base level 0, 1, 2 or >= 3
-constexpr int kLastBaseSymbols = 3;    // base level of the last coefficient: 1, 2 or >= 3
-constexpr int kRangeSymbols = 4;       // each adds 0..3; 3 means "more follows"
-constexpr int kMaxRangeSymbols = 4;    // range symbols take a level from 3 up to 15
+constexpr int kCodedFlagContexts = 3;     // how many of the previous two blocks were coded
+constexpr int kMaxEobClasses = 13;        // eob in [1, 4096]
+constexpr int kBaseSymbols = 4;           // base level 0, 1, 2 or >= 3
+constexpr int kLastBaseSymbols = 3;       // base level of the last coefficient: 1, 2 or >= 3
+constexpr int kRangeSymbols = 4;          // each adds 0..3; 3 means "more follows"
+constexpr int kMaxRangeSymbols = 4;       // range symbols take a level from 3 up to 15
 constexpr int kBaseMagContexts = 5;       // narrow set: three neighbours
 constexpr int kWideBaseMagContexts = 11;  // wide set: nine neighbours
 constexpr int kRangeMagContexts = 7;
@@ -75,8 +75,7 @@ inline int BaseContext(const uint8_t* level, const CoefContexts& contexts, int b
   mag += MinU32(level[2], kBaseLevelCap) + MinU32(level[2 * s1], kBaseLevelCap) +
          MinU32(level[2 * s0], kBaseLevelCap) + MinU32(level[s1 + 1], kBaseLevelCap) +
          MinU32(level[s0 + 1], kBaseLevelCap) + MinU32(level[s0 + s1], kBaseLevelCap);
-  return base_band * kWideBaseMagContexts +
-         static_cast<int>(MinU32(mag, kWideBaseMagContexts - 1));
+  return base_band * kWideBaseMagContexts + static_cast<int>(MinU32(mag, kWideBaseMagContexts - 1));
 }
 
 inline int RangeContext(const uint8_t* level, const ScanTable& scan, int range_band) {

@@ -23,15 +23,15 @@ constexpr uint8_t kVersionMajor = 1;
 // of the coefficient coder, in any COEF chunk whose wide code is the shorter, unless
 // EncodeOptions::max_version_minor asks for a stream older decoders read).
 constexpr uint8_t kVersionMinor = 4;
-constexpr size_t kFileHeaderBytes = 8;   // signature, major, minor, reserved u16
-constexpr size_t kChunkOverheadBytes = 12;  // type, length, crc
+constexpr size_t kFileHeaderBytes = 8;                // signature, major, minor, reserved u16
+constexpr size_t kChunkOverheadBytes = 12;            // type, length, crc
 constexpr uint32_t kMaxChunkPayloadBytes = 1u << 28;  // 256 MiB
 constexpr int kMaxChunks = 65536;
 
 // Packs "ABCD" so the bytes appear in that order in the file (little-endian u32).
 constexpr uint32_t FourCC(const char (&s)[5]) {
-  return uint32_t(uint8_t(s[0])) | uint32_t(uint8_t(s[1])) << 8 |
-         uint32_t(uint8_t(s[2])) << 16 | uint32_t(uint8_t(s[3])) << 24;
+  return uint32_t(uint8_t(s[0])) | uint32_t(uint8_t(s[1])) << 8 | uint32_t(uint8_t(s[2])) << 16 |
+         uint32_t(uint8_t(s[3])) << 24;
 }
 constexpr uint32_t kChunkDone = FourCC("DONE");
 

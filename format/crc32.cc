@@ -31,8 +31,7 @@ uint32_t Crc32Update(uint32_t crc, const uint8_t* data, size_t size) {
   while (size >= 4) {
     c ^= uint32_t(data[0]) | uint32_t(data[1]) << 8 | uint32_t(data[2]) << 16 |
          uint32_t(data[3]) << 24;
-    c = tb.t[3][c & 0xFF] ^ tb.t[2][(c >> 8) & 0xFF] ^ tb.t[1][(c >> 16) & 0xFF] ^
-        tb.t[0][c >> 24];
+    c = tb.t[3][c & 0xFF] ^ tb.t[2][(c >> 8) & 0xFF] ^ tb.t[1][(c >> 16) & 0xFF] ^ tb.t[0][c >> 24];
     data += 4;
     size -= 4;
   }

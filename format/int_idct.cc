@@ -100,12 +100,18 @@ int IdctOutputFracBits(int coef_bits) {
 
 const int32_t* IdctCosineTable(int n) {
   switch (n) {
-    case 2: return kCos2;
-    case 4: return kCos4;
-    case 8: return kCos8;
-    case 16: return kCos16;
-    case 32: return kCos32;
-    default: return nullptr;
+    case 2:
+      return kCos2;
+    case 4:
+      return kCos4;
+    case 8:
+      return kCos8;
+    case 16:
+      return kCos16;
+    case 32:
+      return kCos32;
+    default:
+      return nullptr;
   }
 }
 

@@ -34,12 +34,13 @@ constexpr int kMlpMaxClass = 24;
 constexpr int32_t kMlpMaxLevel = (1 << 24) - 1;
 constexpr int kMlpContextGroups = 7;  // B, W1 x 4 input kinds, W2, W3
 
-// The flat parameter array of 6.6: B [F][P], W1 [H][In], b1 [H], W2 [H][H], b2 [H], W3 [3][H], b3 [3].
+// The flat parameter array of 6.6: B [F][P], W1 [H][In], b1 [H], W2 [H][H], b2 [H], W3 [3][H], b3
+// [3].
 struct MlpLayout {
-  int feature_dim = 0;   // F
-  int num_products = 0;  // P
-  int hidden = 0;        // H
-  int input_dim = 0;     // In = F + 3 + feature_pe_width + 2 * 3 * Fv
+  int feature_dim = 0;       // F
+  int num_products = 0;      // P
+  int hidden = 0;            // H
+  int input_dim = 0;         // In = F + 3 + feature_pe_width + 2 * 3 * Fv
   int feature_pe_width = 0;  // 2 * F * Ff
 };
 
@@ -84,7 +85,8 @@ std::vector<uint8_t> EncodeQuantizedMlp(const MlpLayout& layout, const float* pa
 
 // Decodes that payload into params_out (MlpParamCount values). Every step and bias must be a
 // finite binary16; the level stream must end exactly where the payload ends.
-Status DecodeQuantizedMlp(const MlpLayout& layout, const uint8_t* data, size_t size, float* params_out);
+Status DecodeQuantizedMlp(const MlpLayout& layout, const uint8_t* data, size_t size,
+                          float* params_out);
 
 }  // namespace ecrf
 

@@ -3,7 +3,8 @@
 #include "format/mlp_coder.h"
 
 namespace ecrf {
-Status DecodeQuantizedMlp(const MlpLayout& layout, const uint8_t* data, size_t size, float* params_out) {
+Status DecodeQuantizedMlp(const MlpLayout& layout, const uint8_t* data, size_t size,
+                          float* params_out) {
   MlpMatrixSpan matrices[4], biases[3];
   MlpMatrices(layout, matrices, biases);
   ByteReader r(data, size);
@@ -13,7 +14,8 @@ Status DecodeQuantizedMlp(const MlpLayout& layout, const uint8_t* data, size_t s
     for (int row = 0; row < m.rows; ++row, ++row_index) {
       uint16_t half = 0;
       ECRF_RETURN_IF_ERROR(r.ReadU16(&half, "MLPW step"));
-      ECRF_CHECK_OR_RETURN(HalfIsFinite(half), kErrCorrupt, "MLPW: step of row %zu is not finite", row_index);
+      ECRF_CHECK_OR_RETURN(HalfIsFinite(half), kErrCorrupt, "MLPW: step of row %zu is not finite",
+                           row_index);
       params_out[m.offset + static_cast<size_t>(row) * m.cols] = HalfToFloat(half);
     }
   }
@@ -34,12 +36,14 @@ Status DecodeQuantizedMlp(const MlpLayout& layout, const uint8_t* data, size_t s
       const float step = values[0];
       int prev_class = 0;
       for (int c = 0; c < m.cols; ++c) {
-        uint16_t* cdf = contexts.level_class[MlpContextGroup(layout, mi, c)][MlpClassBucket(prev_class)];
+        uint16_t* cdf =
+            contexts.level_class[MlpContextGroup(layout, mi, c)][MlpClassBucket(prev_class)];
         int cls = dec.DecodeSymbol(cdf, kMlpClassEscape + 1);
         if (cls == kMlpClassEscape) {
           const uint32_t extra = dec.DecodeGolomb(0);
-          ECRF_CHECK_OR_RETURN(extra <= static_cast<uint32_t>(kMlpMaxClass - kMlpClassEscape), kErrCorrupt,
-                               "MLPW: level class %u above %d", extra + kMlpClassEscape, kMlpMaxClass);
+          ECRF_CHECK_OR_RETURN(extra <= static_cast<uint32_t>(kMlpMaxClass - kMlpClassEscape),
+                               kErrCorrupt, "MLPW: level class %u above %d",
+                               extra + kMlpClassEscape, kMlpMaxClass);
           cls += static_cast<int>(extra);
         }
         uint32_t mag = 0;

@@ -21,7 +21,8 @@ std::vector<uint8_t> EncodeQuantizedMlp(const MlpLayout& layout, const float* pa
   for (const MlpMatrixSpan& m : matrices) {
     for (int r = 0; r < m.rows; ++r) {
       float peak = 0.f;
-      for (int c = 0; c < m.cols; ++c) peak = std::fmax(peak, std::fabs(params[m.offset + size_t(r) * m.cols + c]));
+      for (int c = 0; c < m.cols; ++c)
+        peak = std::fmax(peak, std::fabs(params[m.offset + size_t(r) * m.cols + c]));
       uint16_t half = FloatToHalf(peak / static_cast<float>(max_level));
       if (!HalfIsFinite(half)) half = 0x7BFF;  // beyond binary16: the largest finite step
       head.U16(half);
@@ -45,12 +46,15 @@ std::vector<uint8_t> EncodeQuantizedMlp(const MlpLayout& layout, const float* pa
         const size_t i = m.offset + size_t(r) * m.cols + c;
         // A zero step (an all-zero row, or one too small for binary16) codes zeros.
         const double q = step > 0.f ? std::nearbyint(double(params[i]) / step) : 0.0;
-        const int32_t level = static_cast<int32_t>(std::fmax(-kMlpMaxLevel, std::fmin(kMlpMaxLevel, q)));
+        const int32_t level =
+            static_cast<int32_t>(std::fmax(-kMlpMaxLevel, std::fmin(kMlpMaxLevel, q)));
         const uint32_t mag = static_cast<uint32_t>(std::abs(level));
         const int cls = MlpLevelClass(mag);
-        uint16_t* cdf = contexts.level_class[MlpContextGroup(layout, mi, c)][MlpClassBucket(prev_class)];
+        uint16_t* cdf =
+            contexts.level_class[MlpContextGroup(layout, mi, c)][MlpClassBucket(prev_class)];
         enc.EncodeSymbol(cls < kMlpClassEscape ? cls : kMlpClassEscape, cdf, kMlpClassEscape + 1);
-        if (cls >= kMlpClassEscape) enc.EncodeGolomb(static_cast<uint32_t>(cls - kMlpClassEscape), 0);
+        if (cls >= kMlpClassEscape)
+          enc.EncodeGolomb(static_cast<uint32_t>(cls - kMlpClassEscape), 0);
         if (cls >= 2) enc.EncodeBypass(mag - (1u << (cls - 1)), cls - 1);
         if (cls != 0) enc.EncodeBypass(level < 0 ? 1u : 0u, 1);
         prev_class = cls;

@@ -5,8 +5,8 @@
 namespace ecrf {
 
 Status ParseNdcFrame(const uint8_t* payload, size_t size, NdcFrame* f) {
-  ECRF_CHECK_OR_RETURN(size == kNdcFrameBytes, kErrCorrupt, "NDCP: payload is %zu bytes, must be %zu", size,
-                       kNdcFrameBytes);
+  ECRF_CHECK_OR_RETURN(size == kNdcFrameBytes, kErrCorrupt,
+                       "NDCP: payload is %zu bytes, must be %zu", size, kNdcFrameBytes);
   ByteReader r(payload, size);
   for (float& v : f->world_to_ref) {
     ECRF_RETURN_IF_ERROR(r.ReadF32(&v, "NDCP world_to_ref"));

@@ -12,7 +12,6 @@
 namespace ecrf {
 namespace occupancy_internal {
 
-
 constexpr int kRowContexts = 4;
 constexpr int kVoxelContexts = 16;
 

@@ -22,10 +22,10 @@ Status ParseSceneHeader(const uint8_t* payload, size_t size, SceneHeader* h) {
   for (float& v : h->aabb_min) ECRF_RETURN_IF_ERROR(ReadFinite(&r, &v, "aabb_min"));
   for (float& v : h->aabb_max) ECRF_RETURN_IF_ERROR(ReadFinite(&r, &v, "aabb_max"));
   for (int a = 0; a < 3; ++a) {
-    ECRF_CHECK_OR_RETURN(h->aabb_max[a] > h->aabb_min[a] && std::isfinite(h->aabb_max[a] - h->aabb_min[a]),
-                         kErrCorrupt,
-                         "HEAD: aabb is empty or too wide on axis %d (%g, %g)", a, double(h->aabb_min[a]),
-                         double(h->aabb_max[a]));
+    ECRF_CHECK_OR_RETURN(
+        h->aabb_max[a] > h->aabb_min[a] && std::isfinite(h->aabb_max[a] - h->aabb_min[a]),
+        kErrCorrupt, "HEAD: aabb is empty or too wide on axis %d (%g, %g)", a,
+        double(h->aabb_min[a]), double(h->aabb_max[a]));
   }
   for (int a = 0; a < 3; ++a) {
     ECRF_RETURN_IF_ERROR(r.ReadU16(&h->res[a], "grid resolution"));
@@ -55,7 +55,8 @@ Status ParseSceneHeader(const uint8_t* payload, size_t size, SceneHeader* h) {
   ECRF_CHECK_OR_RETURN(h->num_samples >= 1 && h->num_samples <= kMaxSceneSamples, kErrLimit,
                        "HEAD: num_samples %u is outside [1, %u]", h->num_samples, kMaxSceneSamples);
   ECRF_RETURN_IF_ERROR(ReadFinite(&r, &h->weight_threshold, "weight_threshold"));
-  ECRF_CHECK_OR_RETURN(h->weight_threshold >= 0.f, kErrCorrupt, "HEAD: weight_threshold is negative");
+  ECRF_CHECK_OR_RETURN(h->weight_threshold >= 0.f, kErrCorrupt,
+                       "HEAD: weight_threshold is negative");
   ECRF_RETURN_IF_ERROR(ReadFinite(&r, &h->near_far[0], "near"));
   ECRF_RETURN_IF_ERROR(ReadFinite(&r, &h->near_far[1], "far"));
   ECRF_CHECK_OR_RETURN(h->near_far[0] <= h->near_far[1], kErrCorrupt, "HEAD: near > far");
@@ -70,10 +71,9 @@ Status ParseSceneHeader(const uint8_t* payload, size_t size, SceneHeader* h) {
   ECRF_CHECK_OR_RETURN(h->feature_dim >= 1 && h->feature_dim <= kMaxSceneFeatureDim, kErrLimit,
                        "HEAD: feature_dim %u is outside [1, %d]", h->feature_dim,
                        kMaxSceneFeatureDim);
-  ECRF_CHECK_OR_RETURN(h->feature_pe_freqs <= kMaxScenePeFreqs &&
-                           h->viewdir_pe_freqs <= kMaxScenePeFreqs,
-                       kErrLimit, "HEAD: positional-encoding frequencies exceed %d",
-                       kMaxScenePeFreqs);
+  ECRF_CHECK_OR_RETURN(
+      h->feature_pe_freqs <= kMaxScenePeFreqs && h->viewdir_pe_freqs <= kMaxScenePeFreqs, kErrLimit,
+      "HEAD: positional-encoding frequencies exceed %d", kMaxScenePeFreqs);
   ECRF_CHECK_OR_RETURN(h->hidden >= 1 && h->hidden <= kMaxSceneHidden, kErrLimit,
                        "HEAD: hidden width %u is outside [1, %d]", h->hidden, kMaxSceneHidden);
   ECRF_CHECK_OR_RETURN(h->total_rank(1) >= 1, kErrCorrupt,
@@ -82,15 +82,16 @@ Status ParseSceneHeader(const uint8_t* payload, size_t size, SceneHeader* h) {
   ECRF_CHECK_OR_RETURN(h->has_occupancy <= 1, kErrCorrupt, "HEAD: has_occupancy is %u",
                        h->has_occupancy);
   ECRF_RETURN_IF_ERROR(r.ReadU8(&h->scene_model, "scene_model"));
-  ECRF_CHECK_OR_RETURN(h->scene_model < kNumSceneModels, kErrUnsupported,
-                       "HEAD: scene model %u is unknown (this decoder knows 0, object, 1, unbounded, and 2, "
-                       "forward-facing; "
-                       "the stream needs a newer decoder)",
-                       h->scene_model);
+  ECRF_CHECK_OR_RETURN(
+      h->scene_model < kNumSceneModels, kErrUnsupported,
+      "HEAD: scene model %u is unknown (this decoder knows 0, object, 1, unbounded, and 2, "
+      "forward-facing; "
+      "the stream needs a newer decoder)",
+      h->scene_model);
   // The unbounded model samples from `near` on with t only growing (7.2.1).
-  ECRF_CHECK_OR_RETURN(h->scene_model != static_cast<uint8_t>(SceneModel::kUnbounded) || h->near_far[0] >= 0.f,
-                       kErrCorrupt,
-                       "HEAD: near is negative in an unbounded scene");
+  ECRF_CHECK_OR_RETURN(
+      h->scene_model != static_cast<uint8_t>(SceneModel::kUnbounded) || h->near_far[0] >= 0.f,
+      kErrCorrupt, "HEAD: near is negative in an unbounded scene");
   return Status::Ok();
 }
 

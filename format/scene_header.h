@@ -20,8 +20,8 @@ constexpr uint32_t kChunkMlpWeights = FourCC("MLPW");
 constexpr uint32_t kChunkMetadata = FourCC("meta");
 
 // Scene limits (SPEC.md section 8).
-constexpr int kMaxSceneGridRes = 4096;        // per axis, feature grids and occupancy
-constexpr int kMaxSceneRank = 1024;           // per mode and grid
+constexpr int kMaxSceneGridRes = 4096;  // per axis, feature grids and occupancy
+constexpr int kMaxSceneRank = 1024;     // per mode and grid
 constexpr uint64_t kMaxSceneGridValues = uint64_t{1} << 28;  // all planes and lines of a scene
 constexpr uint64_t kMaxOccupancyVoxels = uint64_t{1} << 31;
 constexpr uint32_t kMaxSceneSamples = 1u << 20;  // samples per ray
@@ -29,7 +29,7 @@ constexpr int kMaxSceneFeatureDim = 256;
 constexpr int kMaxScenePeFreqs = 16;
 constexpr int kMaxSceneHidden = 1024;
 
-constexpr int kNumSceneGrids = 2;     // 0: density, 1: appearance
+constexpr int kNumSceneGrids = 2;        // 0: density, 1: appearance
 constexpr int kTensorsPerSceneGrid = 6;  // planes 0..2, then lines 0..2
 
 constexpr size_t kSceneHeaderBytes = 90;
@@ -43,8 +43,10 @@ enum class SceneModel : uint8_t {
 constexpr int kNumSceneModels = 3;
 // "object", "unbounded", "forward"; "unknown" for other values.
 inline const char* SceneModelName(SceneModel m) {
-  return m == SceneModel::kObject ? "object" : m == SceneModel::kUnbounded ? "unbounded"
-         : m == SceneModel::kForward ? "forward" : "unknown";
+  return m == SceneModel::kObject      ? "object"
+         : m == SceneModel::kUnbounded ? "unbounded"
+         : m == SceneModel::kForward   ? "forward"
+                                       : "unknown";
 }
 // The container minor version a stream with this scene model needs at least (2.1).
 constexpr uint8_t kSceneModelMinVersionMinor[kNumSceneModels] = {0, 2, 3};
@@ -56,8 +58,8 @@ struct SceneHeader {
   uint16_t ranks[kNumSceneGrids][3] = {{0, 0, 0}, {0, 0, 0}};
   float density_shift = -10.f;
   float distance_scale = 25.f;
-  float step_size = 0.f;          // world units between samples
-  uint32_t num_samples = 0;       // samples per ray
+  float step_size = 0.f;     // world units between samples
+  uint32_t num_samples = 0;  // samples per ray
   float weight_threshold = 1e-4f;
   float near_far[2] = {2.f, 6.f};
   float background[3] = {1.f, 1.f, 1.f};

@@ -7,16 +7,26 @@ namespace ecrf {
 
 const char* ErrorCodeName(int code) {
   switch (code) {
-    case kOk: return "ok";
-    case kErrInvalidArgument: return "invalid argument";
-    case kErrTruncated: return "truncated";
-    case kErrCorrupt: return "corrupt";
-    case kErrUnsupported: return "unsupported";
-    case kErrLimit: return "limit exceeded";
-    case kErrChecksum: return "checksum mismatch";
-    case kErrOutOfMemory: return "out of memory";
-    case kErrIo: return "i/o error";
-    default: return "unknown error";
+    case kOk:
+      return "ok";
+    case kErrInvalidArgument:
+      return "invalid argument";
+    case kErrTruncated:
+      return "truncated";
+    case kErrCorrupt:
+      return "corrupt";
+    case kErrUnsupported:
+      return "unsupported";
+    case kErrLimit:
+      return "limit exceeded";
+    case kErrChecksum:
+      return "checksum mismatch";
+    case kErrOutOfMemory:
+      return "out of memory";
+    case kErrIo:
+      return "i/o error";
+    default:
+      return "unknown error";
   }
 }
 

@@ -17,7 +17,7 @@ enum ErrorCode : int {
   kErrLimit = -5,            // a size exceeds a decoder limit (checked before allocating)
   kErrChecksum = -6,         // a CRC did not match
   kErrOutOfMemory = -7,
-  kErrIo = -8,               // file system errors (host tools only)
+  kErrIo = -8,  // file system errors (host tools only)
 };
 
 // Short, stable name of a code ("truncated", "corrupt", ...).
@@ -46,15 +46,15 @@ class Status {
 
 }  // namespace ecrf
 
-#define ECRF_RETURN_IF_ERROR(expr)        \
-  do {                                    \
-    ::ecrf::Status ecrf_status_ = (expr); \
+#define ECRF_RETURN_IF_ERROR(expr)               \
+  do {                                           \
+    ::ecrf::Status ecrf_status_ = (expr);        \
     if (!ecrf_status_.ok()) return ecrf_status_; \
   } while (0)
 
 // Validation in the style of dav1d's validate_input: fail with a message naming the condition.
-#define ECRF_CHECK_OR_RETURN(cond, code, ...)                \
-  do {                                                       \
+#define ECRF_CHECK_OR_RETURN(cond, code, ...)                       \
+  do {                                                              \
     if (!(cond)) return ::ecrf::Status::Error((code), __VA_ARGS__); \
   } while (0)
 

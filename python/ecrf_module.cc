@@ -91,7 +91,9 @@ py::dict Info(Scene& s) {
   // "unbounded": aabb is the region of interest of a contracted scene (SPEC.md 7.2.1).
   // "forward": aabb is in the NDC of a reference camera (SPEC.md 7.2.2).
   const int model = ecrf_scene_model(s.get());
-  d["scene_model"] = model == ECRF_SCENE_UNBOUNDED ? "unbounded" : model == ECRF_SCENE_FORWARD ? "forward" : "object";
+  d["scene_model"] = model == ECRF_SCENE_UNBOUNDED ? "unbounded"
+                     : model == ECRF_SCENE_FORWARD ? "forward"
+                                                   : "object";
   float frame[15];
   if (ecrf_scene_ndc_frame(s.get(), frame) == ECRF_OK) {
     // A 3x4 world-to-reference matrix, the two NDC scales and the near plane (SPEC.md 6.2.1).
@@ -143,8 +145,9 @@ py::array Tensor(const py::object& self, int grid, int tensor) {
     rc = ecrf_scene_tensor(s.get(), grid, tensor, &data, shape, &count);
   }
   if (rc < 0) {
-    Raise(g_error, rc, "tensor: grid must be 0 (density) or 1 (appearance), tensor 0..5, and the "
-                       "scene decoded with storage='float32'");
+    Raise(g_error, rc,
+          "tensor: grid must be 0 (density) or 1 (appearance), tensor 0..5, and the "
+          "scene decoded with storage='float32'");
   }
   if (tensor < 3) return View(self, {shape[0], shape[1], shape[2]}, data);
   return View(self, {shape[0], shape[1]}, data);
@@ -175,7 +178,8 @@ py::array_t<float> MlpParams(Scene& s) {
   }
   py::array_t<float> params(static_cast<py::ssize_t>(f.mlp_params));
   float* out = params.mutable_data();
-  s.Call(g_error, "mlp_params", [&](ecrf_scene* e) { return ecrf_scene_mlp_params(e, out, f.mlp_params); });
+  s.Call(g_error, "mlp_params",
+         [&](ecrf_scene* e) { return ecrf_scene_mlp_params(e, out, f.mlp_params); });
   return params;
 }
 
@@ -222,9 +226,8 @@ std::unique_ptr<Scene> Decode(const py::object& source, const std::string& stora
     // The buffer stays exported (hence unchanged) while the GIL is released.
     const py::buffer_info buf = py::reinterpret_borrow<py::buffer>(source).request();
     const size_t size = static_cast<size_t>(buf.size * buf.itemsize);
-    scene->Call(g_decode_error, "decode", [&](ecrf_scene* e) {
-      return ecrf_scene_decode(e, buf.ptr, size, kind);
-    });
+    scene->Call(g_decode_error, "decode",
+                [&](ecrf_scene* e) { return ecrf_scene_decode(e, buf.ptr, size, kind); });
   }
   return scene;
 }
@@ -255,20 +258,24 @@ py::array Render(Scene& s, const py::array_t<float, py::array::c_style | py::arr
   if (rgb) {
     py::array_t<float> out({height, width, 3});
     float* p = out.mutable_data();
-    s.Call(g_error, "render", [&](ecrf_scene* e) { return ecrf_scene_render(e, &cam, &o, nullptr, p); });
+    s.Call(g_error, "render",
+           [&](ecrf_scene* e) { return ecrf_scene_render(e, &cam, &o, nullptr, p); });
     return std::move(out);
   }
   py::array_t<uint8_t> out({height, width, 4});
   uint8_t* p = out.mutable_data();
-  s.Call(g_error, "render", [&](ecrf_scene* e) { return ecrf_scene_render(e, &cam, &o, p, nullptr); });
+  s.Call(g_error, "render",
+         [&](ecrf_scene* e) { return ecrf_scene_render(e, &cam, &o, p, nullptr); });
   return std::move(out);
 }
 
 // The reference tools' orbit (decoder/orbit_camera.h, SPEC.md 7.1): the camera `ecrf render
 // --orbit` uses, bit for bit, as (c2w, fx, fy, cx, cy).
-py::tuple OrbitCamera(int width, int height, double azimuth_deg, double elevation_deg, float radius) {
+py::tuple OrbitCamera(int width, int height, double azimuth_deg, double elevation_deg,
+                      float radius) {
   if (width <= 0 || height <= 0 || !(radius > 0.f)) throw py::value_error("bad orbit camera");
-  const ecrf::dec::Camera cam = ecrf::dec::OrbitCameraDegrees(width, height, azimuth_deg, elevation_deg, radius);
+  const ecrf::dec::Camera cam =
+      ecrf::dec::OrbitCameraDegrees(width, height, azimuth_deg, elevation_deg, radius);
   py::array_t<float> c2w({3, 4});
   std::copy(cam.c2w, cam.c2w + 12, c2w.mutable_data());
   return py::make_tuple(c2w, cam.fx, cam.fy, cam.cx, cam.cy);
@@ -280,8 +287,9 @@ PYBIND11_MODULE(ecrf, m) {
   m.doc() = "Decoder and renderer of ecrf compressed radiance fields";
   m.attr("__version__") = ecrf_version_string();
   m.attr("bitstream_version") = ecrf_bitstream_version();
-  g_error = PyErr_NewExceptionWithDoc("ecrf.Error", "An ecrf call failed; .code is the ECRF_ERR_* code.",
-                                      PyExc_ValueError, nullptr);
+  g_error =
+      PyErr_NewExceptionWithDoc("ecrf.Error", "An ecrf call failed; .code is the ECRF_ERR_* code.",
+                                PyExc_ValueError, nullptr);
   g_decode_error = PyErr_NewExceptionWithDoc("ecrf.DecodeError", "The stream could not be decoded.",
                                              g_error, nullptr);
   m.attr("Error") = py::handle(g_error);
@@ -308,8 +316,8 @@ PYBIND11_MODULE(ecrf, m) {
            "first); None without a mask")
       .def("mlp_params", &MlpParams, "Basis and MLP parameters in MLPW order (float32 copy)")
       .def("render", &Render, py::arg("c2w"), py::arg("fx"), py::arg("fy"), py::arg("cx"),
-           py::arg("cy"), py::arg("width"), py::arg("height"), py::kw_only(), py::arg("threads") = 1,
-           py::arg("early_stop") = defaults.early_stop_transmittance,
+           py::arg("cy"), py::arg("width"), py::arg("height"), py::kw_only(),
+           py::arg("threads") = 1, py::arg("early_stop") = defaults.early_stop_transmittance,
            py::arg("step_scale") = defaults.step_scale, py::arg("weight_threshold") = py::none(),
            py::arg("skip_empty_space") = defaults.skip_empty_space != 0,
            py::arg("max_samples") = defaults.max_samples,
@@ -321,7 +329,8 @@ PYBIND11_MODULE(ecrf, m) {
         "Decodes an .ecrf stream from bytes-like data or a path; raises ecrf.DecodeError");
   m.def("orbit_camera", &OrbitCamera, py::arg("width"), py::arg("height"), py::arg("azimuth_deg"),
         py::arg("elevation_deg"), py::arg("radius"),
-        "(c2w 3x4 float32, fx, fy, cx, cy) of the reference tools' orbit camera. Angles in degrees, as "
+        "(c2w 3x4 float32, fx, fy, cx, cy) of the reference tools' orbit camera. Angles in "
+        "degrees, as "
         "`ecrf render --elevation` and the web viewer: frame k of `ecrf render --orbit N` is "
         "orbit_camera(W, H, 360.0 * k / N, elevation_deg, radius), bit for bit.");
 }

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Builds and runs every test suite: an optimised build of everything, then format/ and decoder/
-# again under AddressSanitizer + UndefinedBehaviorSanitizer (they parse untrusted bytes), then the
+# Builds and runs every test suite: the formatting and clang-tidy checks, an optimised build of
+# everything, then format/ and decoder/ again under AddressSanitizer + UndefinedBehaviorSanitizer (they parse untrusted bytes), then the
 # conformance vectors decoded by g++, clang++ and WebAssembly builds (identical checksums), the
 # installed tree (examples, ABI, Python), the web viewer in headless chromium, then a short run of
 # every fuzz target.
@@ -10,10 +10,14 @@ jobs="$(nproc)"
 
 # The same build/ as scripts/build.sh (Release, tuned for this CPU), with the Python module: after
 # this command build/tools/ecrf is there, and every command the README shows next works as written.
+echo "== formatting (.clang-format)"
+bash scripts/check-format.sh
+
 echo "== release build (build/, as scripts/build.sh) and tests"
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DECRF_NATIVE="${ECRF_NATIVE:-ON}" \
       -DECRF_BUILD_PYTHON=ON -DPython_EXECUTABLE=/usr/bin/python3 -DCMAKE_INSTALL_LIBDIR=lib >/dev/null
 cmake --build build -j"$jobs"
+bash scripts/check-tidy.sh build
 ctest --test-dir build -j"$jobs" --output-on-failure
 
 echo "== install tree: CMake package, pkg-config, C and C++ examples, ABI, Python module"

@@ -36,8 +36,8 @@ void CheckNoLeftovers(const CLI::App& app) {
     if (extra.size() > 1 && extra[0] == '-') {
       const std::string flag = extra.substr(0, extra.find('='));
       const std::string near = NearestFlag(app, flag);
-      throw std::invalid_argument("unknown option '" + flag + "'" + (near.empty() ? "" : " (did you mean " + near + "?)") +
-                                  help);
+      throw std::invalid_argument("unknown option '" + flag + "'" +
+                                  (near.empty() ? "" : " (did you mean " + near + "?)") + help);
     }
     throw std::invalid_argument("unexpected argument '" + extra + "'" + help);
   }
@@ -120,13 +120,15 @@ size_t ParseSizeWithUnit(const std::string& flag, const std::string& text) {
   char* end = nullptr;
   std::strtod(text.c_str(), &end);
   if (end != text.c_str() && *end == '\0') {
-    throw std::invalid_argument(flag + ": '" + text + "' has no unit: write " + text + "B for bytes or " + text +
+    throw std::invalid_argument(flag + ": '" + text + "' has no unit: write " + text +
+                                "B for bytes or " + text +
                                 "KB for kilobytes (units: B, KB, MB, KiB, MiB)");
   }
   try {
     return trainer::ParseByteSize(text);
   } catch (const std::invalid_argument&) {
-    throw std::invalid_argument(flag + ": '" + text + "': unknown unit or not a size (e.g. 500KB, 1.2MB, 300000B; "
+    throw std::invalid_argument(flag + ": '" + text +
+                                "': unknown unit or not a size (e.g. 500KB, 1.2MB, 300000B; "
                                 "units: B, KB, MB, KiB, MiB)");
   }
 }
@@ -140,7 +142,9 @@ void AddRenamedFlag(CLI::App* app, const std::string& old_name, const std::strin
 int AllCores() { return std::max(1, omp_get_num_procs()); }
 
 CLI::Option* AddThreadsFlag(CLI::App* app, int* threads) {
-  return app->add_option("--threads", *threads, "worker threads (0 = all cores: " + std::to_string(AllCores()) + ")")
+  return app
+      ->add_option("--threads", *threads,
+                   "worker threads (0 = all cores: " + std::to_string(AllCores()) + ")")
       ->type_name("N")
       ->check(CLI::Range(0, 4096))
       ->capture_default_str();

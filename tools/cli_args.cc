@@ -17,7 +17,8 @@ float ParseFloat(const char* flag, const char* value) {
   errno = 0;
   const float v = std::strtof(value, &end);
   if (errno || !end || *end || !(v >= 0.0f)) {
-    throw std::invalid_argument(std::string(flag) + ": '" + value + "' is not a non-negative number");
+    throw std::invalid_argument(std::string(flag) + ": '" + value +
+                                "' is not a non-negative number");
   }
   return v;
 }
@@ -29,9 +30,10 @@ void ParseShape(const char* flag, const std::string& text, int n, int* out) {
     const size_t x = text.find('x', pos);
     const std::string part = text.substr(pos, x == std::string::npos ? std::string::npos : x - pos);
     const int v = std::atoi(part.c_str());
-    if (part.empty() || v < 1 || v > 32 || (v & (v - 1)) || (i + 1 < n) == (x == std::string::npos)) {
-      throw std::invalid_argument(std::string(flag) + ": '" + text + "' is not " + std::to_string(n) +
-                                  " powers of two <= 32 joined by 'x'");
+    if (part.empty() || v < 1 || v > 32 || (v & (v - 1)) ||
+        (i + 1 < n) == (x == std::string::npos)) {
+      throw std::invalid_argument(std::string(flag) + ": '" + text + "' is not " +
+                                  std::to_string(n) + " powers of two <= 32 joined by 'x'");
     }
     out[i] = v;
     pos = x == std::string::npos ? text.size() : x + 1;
@@ -43,7 +45,8 @@ int ParseInt(const char* flag, const char* value) {
   errno = 0;
   const long v = std::strtol(value, &end, 10);
   if (errno || !end || *end || v < 0 || v > 1000000000) {
-    throw std::invalid_argument(std::string(flag) + ": '" + value + "' is not a non-negative integer");
+    throw std::invalid_argument(std::string(flag) + ": '" + value +
+                                "' is not a non-negative integer");
   }
   return int(v);
 }
@@ -60,12 +63,14 @@ bool FileExists(const std::string& path) {
 
 void MakeDirectory(const std::string& dir, std::vector<std::string>* created) {
   // Parents first, as `mkdir -p` does: "-o run/x" in an empty directory must work.
-  for (size_t slash = dir.find('/', 1); slash != std::string::npos; slash = dir.find('/', slash + 1)) {
+  for (size_t slash = dir.find('/', 1); slash != std::string::npos;
+       slash = dir.find('/', slash + 1)) {
     const std::string parent = dir.substr(0, slash);
     if (mkdir(parent.c_str(), 0755) == 0) {
       if (created) created->push_back(parent);
     } else if (errno != EEXIST) {
-      throw std::runtime_error(dir + ": cannot create directory " + parent + ": " + std::strerror(errno));
+      throw std::runtime_error(dir + ": cannot create directory " + parent + ": " +
+                               std::strerror(errno));
     }
   }
   if (mkdir(dir.c_str(), 0755) == 0) {
@@ -87,7 +92,8 @@ OutputDirectory::OutputDirectory(const std::string& dir) {
   std::remove(probe.c_str());
   if (!ok) {
     for (auto it = created_.rbegin(); it != created_.rend(); ++it) rmdir(it->c_str());
-    throw std::runtime_error(dir + ": cannot write into this directory: " + std::strerror(error ? error : EIO));
+    throw std::runtime_error(
+        dir + ": cannot write into this directory: " + std::strerror(error ? error : EIO));
   }
 }
 

@@ -11,13 +11,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <iterator>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <sstream>
 #include <string>
 
 #include "decoder/ray_marcher.h"
+#include "encoder/scene_encoder.h"
 #include "tests/common/coef_vectors.h"
 #include "tests/common/conformance_camera.h"
 #include "tests/common/scene_vectors.h"
@@ -25,11 +26,10 @@
 #include "tools/commands.h"
 #include "tools/conformance_manifest.h"
 #include "tools/decoded_scene.h"
-#include "trainer/train/checkpoint.h"
-#include "trainer/data/image_io.h"
-#include "encoder/scene_encoder.h"
-#include "trainer/train/trainer.h"
 #include "trainer/data/file_io.h"
+#include "trainer/data/image_io.h"
+#include "trainer/train/checkpoint.h"
+#include "trainer/train/trainer.h"
 
 namespace ecrf {
 namespace tools {
@@ -61,7 +61,8 @@ std::vector<uint8_t> LoadRgb8(const std::string& path) {
   const trainer::Image img = trainer::LoadImage(path);
   if (img.channels != 3) throw std::runtime_error(path + ": expected an RGB reference render");
   std::vector<uint8_t> rgb(img.pixels.size());
-  for (size_t i = 0; i < rgb.size(); ++i) rgb[i] = uint8_t(std::lround(std::clamp(img.pixels[i], 0.f, 1.f) * 255.f));
+  for (size_t i = 0; i < rgb.size(); ++i)
+    rgb[i] = uint8_t(std::lround(std::clamp(img.pixels[i], 0.f, 1.f) * 255.f));
   return rgb;
 }
 
@@ -87,8 +88,9 @@ std::vector<uint8_t> TrainBuiltinStream() {
 }
 
 bool CamerasEqual(const dec::Camera& a, const dec::Camera& b) {
-  return a.width == b.width && a.height == b.height && a.fx == b.fx && a.fy == b.fy && a.cx == b.cx &&
-         a.cy == b.cy && std::equal(std::begin(a.c2w), std::end(a.c2w), std::begin(b.c2w));
+  return a.width == b.width && a.height == b.height && a.fx == b.fx && a.fy == b.fy &&
+         a.cx == b.cx && a.cy == b.cy &&
+         std::equal(std::begin(a.c2w), std::end(a.c2w), std::begin(b.c2w));
 }
 
 const json* FindEntry(const json& list, const std::string& file) {
@@ -113,24 +115,29 @@ int CheckScene(const std::string& dir, const std::string& name, const std::vecto
   }
   const json& md5 = entry->at("md5");
   const auto listed = md5_list.find(file);
-  const bool grids_ok = sums.grids == md5.value("grids", "") && listed != md5_list.end() && listed->second == sums.grids;
+  const bool grids_ok = sums.grids == md5.value("grids", "") && listed != md5_list.end() &&
+                        listed->second == sums.grids;
   const bool occ_ok = sums.occupancy == md5.value("occupancy", "");
   const bool mlp_ok = sums.mlp == md5.value("mlp", "");
   const bool bytes_ok = builtin || stored == rebuilt;
   const dec::Camera cam = CameraFromJson(entry->at("render").at("camera"), file + " camera");
-  const RenderAgreement agree =
-      CompareRenders(RenderReference(*s.field, cam), LoadRgb8(dir + "/" + entry->at("render").value("png", "")));
-  std::printf("%-36s grids %s, occupancy %s, mlp %s, encoder output %s\n", file.c_str(), grids_ok ? "match" : "DIFFER",
-              occ_ok ? "matches" : "DIFFERS", mlp_ok ? "matches" : "DIFFERS",
-              builtin ? "not rebuilt (trained)" : bytes_ok ? "identical" : "CHANGED (format changed?)");
+  const RenderAgreement agree = CompareRenders(
+      RenderReference(*s.field, cam), LoadRgb8(dir + "/" + entry->at("render").value("png", "")));
+  std::printf("%-36s grids %s, occupancy %s, mlp %s, encoder output %s\n", file.c_str(),
+              grids_ok ? "match" : "DIFFER", occ_ok ? "matches" : "DIFFERS",
+              mlp_ok ? "matches" : "DIFFERS",
+              builtin    ? "not rebuilt (trained)"
+              : bytes_ok ? "identical"
+                         : "CHANGED (format changed?)");
   char psnr[32] = "identical";
   if (agree.max_difference > 0) std::snprintf(psnr, sizeof(psnr), "%.1f dB", agree.psnr_db);
-  std::printf("%-36s render: %zu/%zu pixels within 2 codes (largest difference %d), %s%s%s\n", "",
-              agree.within_two_codes, agree.pixels, agree.max_difference, psnr,
-              agree.Conforms() ? "" : " -- FAILS SPEC.md 7.7",
-              CamerasEqual(cam, conformance::ReferenceCamera(name))
-                  ? ""
-                  : " (this platform's OrbitCamera differs from the manifest's camera in the last bits)");
+  std::printf(
+      "%-36s render: %zu/%zu pixels within 2 codes (largest difference %d), %s%s%s\n", "",
+      agree.within_two_codes, agree.pixels, agree.max_difference, psnr,
+      agree.Conforms() ? "" : " -- FAILS SPEC.md 7.7",
+      CamerasEqual(cam, conformance::ReferenceCamera(name))
+          ? ""
+          : " (this platform's OrbitCamera differs from the manifest's camera in the last bits)");
   return !grids_ok || !occ_ok || !mlp_ok || !bytes_ok || !agree.Conforms();
 }
 
@@ -144,7 +151,8 @@ int CheckOrWriteScenes(const std::string& dir, bool write, bool retrain, json* m
     while (in >> file >> md5) md5_list[file] = md5;
   }
   std::vector<std::pair<std::string, std::vector<uint8_t>>> streams;
-  for (const auto& v : conformance::SceneVectors()) streams.emplace_back(v.name, conformance::BuildSceneVector(v));
+  for (const auto& v : conformance::SceneVectors())
+    streams.emplace_back(v.name, conformance::BuildSceneVector(v));
   // Training is slow and not bit-reproducible: keep the checked-in stream unless asked.
   const std::string builtin_path = dir + "/" + conformance::kBuiltinSceneVector + ".ecrf";
   std::vector<uint8_t> builtin_bytes;
@@ -165,10 +173,11 @@ int CheckOrWriteScenes(const std::string& dir, bool write, bool retrain, json* m
     const dec::Camera cam = conformance::ReferenceCamera(name);
     trainer::WriteFileAtomically(dir + "/" + file, bytes.data(), bytes.size());
     SaveRgbPng(dir + "/" + name + ".png", RenderReference(*s.field, cam), cam.width, cam.height);
-    manifest_scenes->push_back(SceneVectorJson(file, bytes.size(), *s.field, s.info, sums, cam, name + ".png"));
+    manifest_scenes->push_back(
+        SceneVectorJson(file, bytes.size(), *s.field, s.info, sums, cam, name + ".png"));
     md5_text << file << " " << sums.grids << "\n";
-    std::printf("wrote %s/%s (%zu bytes, grids md5 %s) and its reference render\n", dir.c_str(), file.c_str(),
-                bytes.size(), sums.grids.c_str());
+    std::printf("wrote %s/%s (%zu bytes, grids md5 %s) and its reference render\n", dir.c_str(),
+                file.c_str(), bytes.size(), sums.grids.c_str());
   }
   if (write) {
     const std::string text = md5_text.str();
@@ -182,24 +191,28 @@ int CheckOrWriteScenes(const std::string& dir, bool write, bool retrain, json* m
 int RunConformance(int argc, char** argv) {
   std::string write_dir, check_dir;
   bool retrain = false;
-  auto app = MakeCommand("conformance",
-                         "rebuild (--write DIR) or check (--check DIR) the conformance vectors of tests/conformance: "
-                         "their MD5s, that this encoder still writes them byte for byte (if not, the format "
-                         "changed), and the reference renders within the tolerance of SPEC.md 7.7");
+  auto app = MakeCommand(
+      "conformance",
+      "rebuild (--write DIR) or check (--check DIR) the conformance vectors of tests/conformance: "
+      "their MD5s, that this encoder still writes them byte for byte (if not, the format "
+      "changed), and the reference renders within the tolerance of SPEC.md 7.7");
   CLI::Option* write_flag =
-      app->add_option("--write", write_dir, "write every vector, its checksums and manifest.json into DIR")
+      app->add_option("--write", write_dir,
+                      "write every vector, its checksums and manifest.json into DIR")
           ->type_name("DIR");
   CLI::Option* check_flag =
-      app->add_option("--check", check_dir, "check the vectors in DIR against their manifest")->type_name("DIR");
+      app->add_option("--check", check_dir, "check the vectors in DIR against their manifest")
+          ->type_name("DIR");
   write_flag->excludes(check_flag);
   app->add_flag("--retrain-builtin", retrain,
-                "with --write: retrain scene_builtin.ecrf (training is not bit-reproducible across compilers, "
+                "with --write: retrain scene_builtin.ecrf (training is not bit-reproducible across "
+                "compilers, "
                 "so --write keeps the existing one otherwise)")
       ->needs(write_flag);
   if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
   if (write_dir.empty() && check_dir.empty()) {
-    std::fprintf(stderr, "%s: error: needs --write DIR or --check DIR; see '%s --help'\n", app->get_name().c_str(),
-                 app->get_name().c_str());
+    std::fprintf(stderr, "%s: error: needs --write DIR or --check DIR; see '%s --help'\n",
+                 app->get_name().c_str(), app->get_name().c_str());
     return 2;
   }
   const bool write = !write_dir.empty();
@@ -208,12 +221,15 @@ int RunConformance(int argc, char** argv) {
   if (!write) {
     const std::vector<uint8_t> text = trainer::ReadWholeFile(dir + "/manifest.json");
     stored = json::parse(text.begin(), text.end(), nullptr, /*allow_exceptions=*/false);
-    if (stored.is_discarded() || !stored.is_object()) throw std::runtime_error(dir + "/manifest.json: not a JSON object");
+    if (stored.is_discarded() || !stored.is_object())
+      throw std::runtime_error(dir + "/manifest.json: not a JSON object");
   }
-  json manifest = {{"spec", "SPEC.md 1.3"},
-                   {"note", "written by `ecrf conformance --write`; checksums as in SPEC.md 6.5, cameras exact (7.1)"},
-                   {"coefficient_vectors", json::array()},
-                   {"scene_vectors", json::array()}};
+  json manifest = {
+      {"spec", "SPEC.md 1.3"},
+      {"note",
+       "written by `ecrf conformance --write`; checksums as in SPEC.md 6.5, cameras exact (7.1)"},
+      {"coefficient_vectors", json::array()},
+      {"scene_vectors", json::array()}};
   const json stored_coefs = stored.value("coefficient_vectors", json::array());
   const json stored_scenes = stored.value("scene_vectors", json::array());
   std::ostringstream coef_md5_text;
@@ -225,13 +241,17 @@ int RunConformance(int argc, char** argv) {
     const std::string path = dir + "/" + file;
     coef_md5_text << file << " " << md5 << "\n";
     manifest["coefficient_vectors"].push_back(
-        {{"file", file}, {"block", {v.shape.n0, v.shape.n1, v.shape.n2}}, {"blocks", v.blocks},
+        {{"file", file},
+         {"block", {v.shape.n0, v.shape.n1, v.shape.n2}},
+         {"blocks", v.blocks},
          {"coef_bits", v.coef_bits},
          {"contexts", v.contexts == CoefContextSet::kWide ? "wide (1.4)" : "narrow (1.0-1.3)"},
-         {"bytes", stream.size()}, {"md5", md5}});
+         {"bytes", stream.size()},
+         {"md5", md5}});
     if (write) {
       trainer::WriteFileAtomically(path, stream.data(), stream.size());
-      std::printf("wrote %s (%zu bytes, output md5 %s)\n", path.c_str(), stream.size(), md5.c_str());
+      std::printf("wrote %s (%zu bytes, output md5 %s)\n", path.c_str(), stream.size(),
+                  md5.c_str());
       continue;
     }
     const std::vector<uint8_t> bytes = trainer::ReadWholeFile(path);
@@ -239,7 +259,8 @@ int RunConformance(int argc, char** argv) {
     const json* entry = FindEntry(stored_coefs, file);
     const bool md5_ok = stored_md5 == md5 && entry != nullptr && entry->value("md5", "") == md5;
     const bool same_bytes = bytes == stream;
-    std::printf("%-36s decode %s, encoder output %s\n", file.c_str(), md5_ok ? "matches" : "DIFFERS",
+    std::printf("%-36s decode %s, encoder output %s\n", file.c_str(),
+                md5_ok ? "matches" : "DIFFERS",
                 same_bytes ? "identical" : "CHANGED (format changed?)");
     failures += !md5_ok || !same_bytes;
   }
@@ -253,7 +274,8 @@ int RunConformance(int argc, char** argv) {
     trainer::WriteFileAtomically(dir + "/manifest.json", text.data(), text.size());
     std::printf("wrote %s/coefficients.md5, scenes.md5 and manifest.json\n", dir.c_str());
   }
-  if (!write) std::printf("%s\n", failures ? "conformance: FAILED" : "conformance: all vectors match");
+  if (!write)
+    std::printf("%s\n", failures ? "conformance: FAILED" : "conformance: all vectors match");
   return failures ? 1 : 0;
 }
 

@@ -13,49 +13,63 @@
 #include "tools/commands.h"
 #include "tools/encode_report.h"
 #include "tools/encode_run.h"
+#include "trainer/data/file_io.h"
 #include "trainer/train/checkpoint.h"
 #include "trainer/train/train_config.h"
 #include "trainer/train/trainer.h"
-#include "trainer/data/file_io.h"
 
 namespace ecrf {
 namespace tools {
 
 int RunEncode(int argc, char** argv) {
-  auto app = MakeCommand("encode",
-                         "Encodes a trained run (its checkpoint) into an .ecrf file, with the settings the run was "
-                         "trained with; the flags below change them.\n"
-                         "usage: ecrf encode RUN_DIR|CHECKPOINT -o SCENE.ecrf [options]");
+  auto app = MakeCommand(
+      "encode",
+      "Encodes a trained run (its checkpoint) into an .ecrf file, with the settings the run was "
+      "trained with; the flags below change them.\n"
+      "usage: ecrf encode RUN_DIR|CHECKPOINT -o SCENE.ecrf [options]");
   std::string input, output, target_size, dct_block, line_block, max_version;
   trainer::EncodeOptions defaults;
   int coef_bits = defaults.coef_bits, mlp_levels = 0;
   float rounding_offset = defaults.rounding_offset;
   bool mlp_f32 = false, no_drop = false, no_occupancy = false;
-  app->add_option("run", input, "run directory (or its checkpoint.ckpt)")->required()->type_name("RUN_DIR");
-  app->add_option("-o,--out", output, "the .ecrf file to write (atomically)")->required()->type_name("SCENE.ecrf");
+  app->add_option("run", input, "run directory (or its checkpoint.ckpt)")
+      ->required()
+      ->type_name("RUN_DIR");
+  app->add_option("-o,--out", output, "the .ecrf file to write (atomically)")
+      ->required()
+      ->type_name("SCENE.ecrf");
   app->add_option("--target-size", target_size,
-                  "the largest file of at most SIZE (units B, KB, MB, KiB, MiB) by scaling every quantization step "
+                  "the largest file of at most SIZE (units B, KB, MB, KiB, MiB) by scaling every "
+                  "quantization step "
                   "by one factor (searched); default: the run's --target-size, if any")
       ->type_name("SIZE");
   app->add_option("--mlp-levels", mlp_levels,
-                  "code the basis and MLP as integer levels, at most L per row (0 = binary16); default: the run's")
-      ->type_name("L")->check(CLI::Range(0, 32767));
+                  "code the basis and MLP as integer levels, at most L per row (0 = binary16); "
+                  "default: the run's")
+      ->type_name("L")
+      ->check(CLI::Range(0, 32767));
   app->add_flag("--mlp-f32", mlp_f32, "store the basis and MLP as float32 (with --mlp-levels 0)");
-  app->add_option("--coef-bits", coef_bits, "coefficient depth (16: the 16-bit peak steps, not the trained ones)")
-      ->check(CLI::IsMember({8, 16}))->capture_default_str();
+  app->add_option("--coef-bits", coef_bits,
+                  "coefficient depth (16: the 16-bit peak steps, not the trained ones)")
+      ->check(CLI::IsMember({8, 16}))
+      ->capture_default_str();
   app->add_option("--rounding-offset", rounding_offset,
-                  "coefficient quantizer floor(|c| / step + X), 0 < X <= 0.5; default: the one the run trained "
+                  "coefficient quantizer floor(|c| / step + X), 0 < X <= 0.5; default: the one the "
+                  "run trained "
                   "through")
       ->type_name("X");
-  app->add_option("--max-version", max_version,
-                  "write a stream decoders of 1.N read (default 1." + std::to_string(kVersionMinor) +
-                      "; 1.0-1.3 use the older coefficient contexts, 2-3.5% more coefficient bytes)")
+  app->add_option(
+         "--max-version", max_version,
+         "write a stream decoders of 1.N read (default 1." + std::to_string(kVersionMinor) +
+             "; 1.0-1.3 use the older coefficient contexts, 2-3.5% more coefficient bytes)")
       ->type_name("1.N");
   app->add_flag("--no-drop", no_drop, "keep rank components that decode to zero");
   app->add_flag("--no-occupancy", no_occupancy, "leave the alpha mask out");
-  app->add_option("--dct-block", dct_block, "plane blocks of a run without a trained rate (default 16x16x16)")
+  app->add_option("--dct-block", dct_block,
+                  "plane blocks of a run without a trained rate (default 16x16x16)")
       ->type_name("CxHxW");
-  app->add_option("--line-block", line_block, "line blocks of such a run (default 8x8)")->type_name("CxL");
+  app->add_option("--line-block", line_block, "line blocks of such a run (default 8x8)")
+      ->type_name("CxL");
   const int parsed = ParseCommandLine(app.get(), argc, argv);
   if (parsed >= 0) return parsed;
   auto given = [&](const char* flag) { return app->count(flag) > 0; };
@@ -90,8 +104,11 @@ int RunEncode(int argc, char** argv) {
     if (!rate.active) o.steps.clear();  // a run without the rate objective: the peak steps
   } else {
     // A checkpoint of an ecrf older than stored configurations: the flags and defaults alone.
-    std::fprintf(stderr, "note: %s stores no configuration (an older ecrf wrote it): encoding with the flags' "
-                 "settings, which may differ from what that run's `ecrf train` wrote\n", ckpt.c_str());
+    std::fprintf(
+        stderr,
+        "note: %s stores no configuration (an older ecrf wrote it): encoding with the flags' "
+        "settings, which may differ from what that run's `ecrf train` wrote\n",
+        ckpt.c_str());
     o.blocks = rate.config;
     if (rate.active) {
       o.steps = rate.steps;
@@ -117,8 +134,10 @@ int RunEncode(int argc, char** argv) {
     const std::string& v = max_version;
     const size_t dot = v.find('.');
     const std::string minor = dot == std::string::npos ? "" : v.substr(dot + 1);
-    if (v.substr(0, dot) != "1" || minor.size() != 1 || minor[0] < '0' || minor[0] > '0' + kVersionMinor) {
-      throw std::invalid_argument("--max-version '" + v + "' is not 1.0 .. 1." + std::to_string(kVersionMinor));
+    if (v.substr(0, dot) != "1" || minor.size() != 1 || minor[0] < '0' ||
+        minor[0] > '0' + kVersionMinor) {
+      throw std::invalid_argument("--max-version '" + v + "' is not 1.0 .. 1." +
+                                  std::to_string(kVersionMinor));
     }
     o.max_version_minor = minor[0] - '0';
   }
@@ -137,8 +156,9 @@ int RunEncode(int argc, char** argv) {
   }
   const EncodedRun e = EncodeRun(model, o, target_bytes);
   if (target_bytes > 0) {
-    std::printf("target %zu bytes: steps x%.4g after %d encodes, %zu bytes (%+.2f%%)\n", target_bytes, e.step_scale,
-                e.encodes, e.bytes.size(), 100.0 * (double(e.bytes.size()) / double(target_bytes) - 1.0));
+    std::printf("target %zu bytes: steps x%.4g after %d encodes, %zu bytes (%+.2f%%)\n",
+                target_bytes, e.step_scale, e.encodes, e.bytes.size(),
+                100.0 * (double(e.bytes.size()) / double(target_bytes) - 1.0));
   }
   trainer::WriteFileAtomically(output, e.bytes.data(), e.bytes.size());
   PrintEncodeReport(stdout, e.report);

@@ -3,10 +3,10 @@
 #include <cstdio>
 #include <string>
 
+#include "tests/common/grid_md5.h"
 #include "tools/cli.h"
 #include "tools/commands.h"
 #include "tools/decoded_scene.h"
-#include "tests/common/grid_md5.h"
 #include "trainer/train/rate_state.h"
 
 namespace ecrf {
@@ -40,9 +40,12 @@ std::string PrintableMetadata(const uint8_t* text, size_t size, size_t limit) {
 int RunInfo(int argc, char** argv) {
   std::string path;
   bool md5 = false;
-  auto app = MakeCommand("info", "what a stream holds: chunks, sizes, grid, ranks, quantization steps, metadata");
+  auto app = MakeCommand(
+      "info", "what a stream holds: chunks, sizes, grid, ranks, quantization steps, metadata");
   app->add_option("SCENE", path, "the .ecrf stream")->type_name("FILE")->required();
-  app->add_flag("--md5", md5, "also print the MD5 of each decoded grid (SPEC.md 6.5, as the conformance vectors)");
+  app->add_flag(
+      "--md5", md5,
+      "also print the MD5 of each decoded grid (SPEC.md 6.5, as the conformance vectors)");
   if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
   const LoadedScene s = LoadSceneFile(path);
   const dec::SceneInfo& in = s.info;
@@ -53,26 +56,30 @@ int RunInfo(int argc, char** argv) {
   const bool forward = h.scene_model == static_cast<uint8_t>(SceneModel::kForward);
   std::printf("box      [%g %g %g] - [%g %g %g]%s\n", h.aabb_min[0], h.aabb_min[1], h.aabb_min[2],
               h.aabb_max[0], h.aabb_max[1], h.aabb_max[2],
-              unbounded ? " (unbounded scene: the region of interest; space beyond it is contracted)"
+              unbounded
+                  ? " (unbounded scene: the region of interest; space beyond it is contracted)"
               : forward ? " (forward-facing scene: in the NDC of the reference camera)"
                         : "");
   if (forward) {
     const NdcFrame& f = s.field->ndc;
     const float* m = f.world_to_ref;
-    std::printf("ndc      near plane %g, scale %g %g, world to reference [%g %g %g %g; %g %g %g %g; %g %g %g %g] (%u bytes)\n",
-                f.near_plane, f.scale[0], f.scale[1], m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8], m[9],
-                m[10], m[11], in.ndc_bytes);
+    std::printf(
+        "ndc      near plane %g, scale %g %g, world to reference [%g %g %g %g; %g %g %g %g; %g %g "
+        "%g %g] (%u bytes)\n",
+        f.near_plane, f.scale[0], f.scale[1], m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8],
+        m[9], m[10], m[11], in.ndc_bytes);
   }
-  std::printf("grid     %u x %u x %u; density ranks %u %u %u; appearance ranks %u %u %u\n", h.res[0],
-              h.res[1], h.res[2], h.ranks[0][0], h.ranks[0][1], h.ranks[0][2], h.ranks[1][0],
-              h.ranks[1][1], h.ranks[1][2]);
-  std::printf("render   %u samples/ray, step %g, near %g, far %g, background %g %g %g\n", h.num_samples,
-              h.step_size, h.near_far[0], h.near_far[1], h.background[0], h.background[1],
-              h.background[2]);
+  std::printf("grid     %u x %u x %u; density ranks %u %u %u; appearance ranks %u %u %u\n",
+              h.res[0], h.res[1], h.res[2], h.ranks[0][0], h.ranks[0][1], h.ranks[0][2],
+              h.ranks[1][0], h.ranks[1][1], h.ranks[1][2]);
+  std::printf("render   %u samples/ray, step %g, near %g, far %g, background %g %g %g\n",
+              h.num_samples, h.step_size, h.near_far[0], h.near_far[1], h.background[0],
+              h.background[1], h.background[2]);
   std::printf("mlp      features %u, PE %u/%u, hidden %u, %s\n", h.feature_dim, h.feature_pe_freqs,
               h.viewdir_pe_freqs, h.hidden,
-              in.mlp_precision_bits == 16 ? "float16" : in.mlp_precision_bits == 32 ? "float32"
-                                                                                   : "quantized (levels x row steps)");
+              in.mlp_precision_bits == 16   ? "float16"
+              : in.mlp_precision_bits == 32 ? "float32"
+                                            : "quantized (levels x row steps)");
   std::printf("\n%-20s %10s %8s %10s %10s %12s %8s%s\n", "chunk", "bytes", "bits", "block", "step",
               "coded blocks", "contexts", md5 ? "  md5 of decoded float32 values" : "");
   std::printf("%-20s %10u\n", "HEAD", in.head_bytes);
@@ -94,7 +101,9 @@ int RunInfo(int argc, char** argv) {
                   ti.payload_bytes, ti.coef_bits, block, double(ti.step), coded,
                   ti.contexts == 1 ? "wide" : "narrow");
       if (md5) {
-        std::printf("  %s", conformance::TensorMd5(g == 0 ? s.field->density : s.field->appearance, t).c_str());
+        std::printf(
+            "  %s",
+            conformance::TensorMd5(g == 0 ? s.field->density : s.field->appearance, t).c_str());
       }
       std::printf("\n");
     }

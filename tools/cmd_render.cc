@@ -10,14 +10,14 @@
 #include <stdexcept>
 #include <string>
 
+#include "decoder/orbit_camera.h"
 #include "tools/cli.h"
 #include "tools/cli_args.h"
 #include "tools/commands.h"
 #include "tools/decoded_scene.h"
 #include "trainer/data/camera.h"
-#include "trainer/train/checkpoint.h"
-#include "decoder/orbit_camera.h"
 #include "trainer/data/file_io.h"
+#include "trainer/train/checkpoint.h"
 
 namespace ecrf {
 namespace tools {
@@ -41,8 +41,9 @@ void AddCommonFlags(CLI::App* app, CommonArgs* c) {
   app->add_flag("--int16", c->int16, "keep the grids in 16-bit fixed point (half the memory)");
   const std::string knobs =
       "Speed knobs (SPEC.md 7.8; the defaults give the reference image up to early termination)";
-  app->add_flag_callback("--no-skip", [c] { c->render.skip_empty_space = false; },
-                         "do not skip empty space (same image, slower)")
+  app->add_flag_callback(
+         "--no-skip", [c] { c->render.skip_empty_space = false; },
+         "do not skip empty space (same image, slower)")
       ->group(knobs);
   app->add_option("--early-stop", c->render.early_stop_transmittance,
                   "stop a ray when its transmittance is below T (0 = off)")
@@ -111,7 +112,8 @@ void SplitViewsPath(const std::string& path, std::string* dir, std::string* spli
   *split = base.substr(prefix.size(), base.size() - prefix.size() - suffix.size());
 }
 
-trainer::Camera OrbitView(int width, int height, double azimuth_deg, double elevation_deg, double radius) {
+trainer::Camera OrbitView(int width, int height, double azimuth_deg, double elevation_deg,
+                          double radius) {
   const dec::Camera d =
       dec::OrbitCameraDegrees(width, height, azimuth_deg, elevation_deg, float(radius));
   trainer::Camera c;
@@ -138,17 +140,23 @@ int RunRender(int argc, char** argv) {
   std::string views, out;
   int orbit = 0, width = 400, height = 400, max_views = 0;
   double radius = 4.0, elevation = 30.0;
-  auto app = MakeCommand("render", "PNG renders of a decoded stream: the cameras of a dataset split (--views) or "
-                                   "an orbit around the scene (--orbit), one PNG per view");
+  auto app =
+      MakeCommand("render",
+                  "PNG renders of a decoded stream: the cameras of a dataset split (--views) or "
+                  "an orbit around the scene (--orbit), one PNG per view");
   CLI::Option* views_flag =
-      app->add_option("--views", views, "render the cameras of this split file (DIR/transforms_SPLIT.json)")
+      app->add_option("--views", views,
+                      "render the cameras of this split file (DIR/transforms_SPLIT.json)")
           ->type_name("FILE");
   CLI::Option* orbit_flag =
-      app->add_option("--orbit", orbit, "render N views on a circle around the scene, 360/N degrees apart")
+      app->add_option("--orbit", orbit,
+                      "render N views on a circle around the scene, 360/N degrees apart")
           ->type_name("N")
           ->check(CLI::Range(1, 1000000));
   views_flag->excludes(orbit_flag);
-  app->add_option("-o,--out", out, "the directory for the PNGs (created)")->type_name("DIR")->required();
+  app->add_option("-o,--out", out, "the directory for the PNGs (created)")
+      ->type_name("DIR")
+      ->required();
   app->add_option("--max-views", max_views, "render at most N views (0 = all)")
       ->type_name("N")
       ->check(CLI::NonNegativeNumber)
@@ -206,12 +214,13 @@ int RunRender(int argc, char** argv) {
     seconds += Seconds(start);
     trainer::SavePng(out + "/" + name + ".png", img);
   }
-  std::printf("rendered %zu views into %s: %.1f ms/view (%d thread%s), decode %.1f ms, "
-              "%.2f M samples/view, %.2f M MLP samples/view\n",
-              cameras.size(), out.c_str(), 1e3 * seconds / std::max<size_t>(1, cameras.size()), RenderThreads(c),
-              RenderThreads(c) == 1 ? "" : "s", 1e3 * s.decode_seconds,
-              stats.samples / 1e6 / std::max<size_t>(1, cameras.size()),
-              stats.color_samples / 1e6 / std::max<size_t>(1, cameras.size()));
+  std::printf(
+      "rendered %zu views into %s: %.1f ms/view (%d thread%s), decode %.1f ms, "
+      "%.2f M samples/view, %.2f M MLP samples/view\n",
+      cameras.size(), out.c_str(), 1e3 * seconds / std::max<size_t>(1, cameras.size()),
+      RenderThreads(c), RenderThreads(c) == 1 ? "" : "s", 1e3 * s.decode_seconds,
+      stats.samples / 1e6 / std::max<size_t>(1, cameras.size()),
+      stats.color_samples / 1e6 / std::max<size_t>(1, cameras.size()));
   return 0;
 }
 
@@ -221,12 +230,15 @@ int RunEval(int argc, char** argv) {
   int test_stride = 1, max_test_views = 0, eval_downscale = 1, image_scale = 1;
   std::string procedural;  // --scene NAME
   uint32_t seed = trainer::TrainOptions().seed;
-  auto app = MakeCommand("eval", "PSNR and SSIM of a decoded stream against the views of a test split, "
-                                 "with the render time per view");
+  auto app = MakeCommand("eval",
+                         "PSNR and SSIM of a decoded stream against the views of a test split, "
+                         "with the render time per view");
   CLI::Option* data_flag =
-      app->add_option("--data", data, "the dataset directory (as given to ecrf train)")->type_name("DIR");
+      app->add_option("--data", data, "the dataset directory (as given to ecrf train)")
+          ->type_name("DIR");
   CLI::Option* scene_flag =
-      app->add_option("--scene", procedural, "a procedural scene as `ecrf train --scene NAME` makes it")
+      app->add_option("--scene", procedural,
+                      "a procedural scene as `ecrf train --scene NAME` makes it")
           ->type_name("NAME")
           ->check(CLI::IsMember({"builtin", "capture", "forward"}));
   data_flag->excludes(scene_flag);
@@ -243,12 +255,14 @@ int RunEval(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   app->add_option("--eval-downscale", eval_downscale,
-                  "score at 1/N of the image size (area filter; also for --scene), as train's --eval-downscale")
+                  "score at 1/N of the image size (area filter; also for --scene), as train's "
+                  "--eval-downscale")
       ->type_name("N")
       ->check(CLI::Range(1, 1024))
       ->capture_default_str();
   app->add_option("--image-scale", image_scale,
-                  "render at 1/K of the size, score the bilinear upsampling to full size (what a viewer shows "
+                  "render at 1/K of the size, score the bilinear upsampling to full size (what a "
+                  "viewer shows "
                   "while it refines)")
       ->type_name("K")
       ->check(CLI::Range(1, 1024))
@@ -259,24 +273,33 @@ int RunEval(int argc, char** argv) {
   AddRenamedFlag(app.get(), "--downscale", "--eval-downscale");
   AddRenamedFlag(app.get(), "--max-views", "--max-test-views");
   if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
-  if (data.empty() && procedural.empty()) return UsageError(*app, "needs --data DIR or --scene NAME");
+  if (data.empty() && procedural.empty())
+    return UsageError(*app, "needs --data DIR or --scene NAME");
   const LoadedScene s = LoadScene(c);
   const trainer::Dataset test =
-      procedural.empty() ? trainer::LoadDataset(data, split, eval_downscale)
-                         : trainer::DownscaleViews(ProceduralDataset(procedural, split, seed), eval_downscale);
-  const trainer::EvalResult r =
-      EvaluateDecoded(*s.field, test, test_stride, max_test_views, RenderOptionsFor(c), false, image_scale);
-  std::printf("%s: %zu bytes, PSNR %.2f dB, SSIM %.4f over %d %s views; decode %.1f ms, render %.1f ms/view "
-              "(%d thread%s, %s grids; %.1f samples, %.1f MLP samples per ray)\n",
-              c.scene.c_str(), s.bytes.size(), r.psnr, r.ssim, r.views, split.c_str(), 1e3 * s.decode_seconds,
-              1e3 * r.seconds_per_view, RenderThreads(c), RenderThreads(c) == 1 ? "" : "s",
-              c.int16 ? "int16" : "float32", r.samples_per_ray, r.color_samples_per_ray);
+      procedural.empty()
+          ? trainer::LoadDataset(data, split, eval_downscale)
+          : trainer::DownscaleViews(ProceduralDataset(procedural, split, seed), eval_downscale);
+  const trainer::EvalResult r = EvaluateDecoded(*s.field, test, test_stride, max_test_views,
+                                                RenderOptionsFor(c), false, image_scale);
+  std::printf(
+      "%s: %zu bytes, PSNR %.2f dB, SSIM %.4f over %d %s views; decode %.1f ms, render %.1f "
+      "ms/view "
+      "(%d thread%s, %s grids; %.1f samples, %.1f MLP samples per ray)\n",
+      c.scene.c_str(), s.bytes.size(), r.psnr, r.ssim, r.views, split.c_str(),
+      1e3 * s.decode_seconds, 1e3 * r.seconds_per_view, RenderThreads(c),
+      RenderThreads(c) == 1 ? "" : "s", c.int16 ? "int16" : "float32", r.samples_per_ray,
+      r.color_samples_per_ray);
   if (!json_path.empty()) {
-    nlohmann::json j = {{"scene", c.scene},          {"bytes", s.bytes.size()},
-                        {"psnr", r.psnr},            {"ssim", r.ssim},
-                        {"views", r.views},          {"decode_seconds", s.decode_seconds},
+    nlohmann::json j = {{"scene", c.scene},
+                        {"bytes", s.bytes.size()},
+                        {"psnr", r.psnr},
+                        {"ssim", r.ssim},
+                        {"views", r.views},
+                        {"decode_seconds", s.decode_seconds},
                         {"render_seconds_per_view", r.seconds_per_view},
-                        {"threads", RenderThreads(c)}, {"grid_storage", c.int16 ? "int16" : "float32"},
+                        {"threads", RenderThreads(c)},
+                        {"grid_storage", c.int16 ? "int16" : "float32"},
                         {"image_scale", image_scale},
                         {"downscale", eval_downscale},
                         {"samples_per_ray", r.samples_per_ray},

@@ -52,8 +52,9 @@ bool CheckCoder(std::mt19937& rng) {
     coefficients += long(volume) * blocks;
     bytes += stream.size();
   }
-  std::printf("  coefficient coder: %ld coefficients round-trip in %zu bytes (%.3f bits/coefficient)\n",
-              coefficients, bytes, 8.0 * bytes / coefficients);
+  std::printf(
+      "  coefficient coder: %ld coefficients round-trip in %zu bytes (%.3f bits/coefficient)\n",
+      coefficients, bytes, 8.0 * bytes / coefficients);
   return true;
 }
 
@@ -94,10 +95,11 @@ bool CheckContainer() {
 }  // namespace
 
 int RunSelfCheck(int argc, char** argv) {
-  auto app = MakeCommand("selfcheck",
-                         "a quick end-to-end check of the normative pieces on this machine: the coefficient coder "
-                         "round-trips random sparse blocks, the integer IDCT stays within one output unit of "
-                         "float64, and the container detects damage (exit code 0 only if everything passes)");
+  auto app = MakeCommand(
+      "selfcheck",
+      "a quick end-to-end check of the normative pieces on this machine: the coefficient coder "
+      "round-trips random sparse blocks, the integer IDCT stays within one output unit of "
+      "float64, and the container detects damage (exit code 0 only if everything passes)");
   if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
   std::mt19937 rng(2024);
   std::printf("ecrf selfcheck\n");

@@ -15,17 +15,20 @@ namespace ecrf {
 namespace tools {
 
 int RunTrain(int argc, char** argv) {
-  auto app = MakeCommand("train",
-                         "Trains a TensoRF VM model with the ECRF rate objective, encodes RUN_DIR/scene.ecrf, decodes "
-                         "it with the embeddable decoder and scores the decoded file.\n"
-                         "usage: ecrf train (--data DIR | --scene builtin|capture|forward) [options] -o RUN_DIR\n"
-                         "The defaults below are those of this command line's --preset and --rate.");
+  auto app = MakeCommand(
+      "train",
+      "Trains a TensoRF VM model with the ECRF rate objective, encodes RUN_DIR/scene.ecrf, decodes "
+      "it with the embeddable decoder and scores the decoded file.\n"
+      "usage: ecrf train (--data DIR | --scene builtin|capture|forward) [options] -o RUN_DIR\n"
+      "The defaults below are those of this command line's --preset and --rate.");
   TrainFlags flags;
   flags.options = BaseTrainOptions(std::vector<std::string>(argv + 1, argv + argc));
   AddTrainFlags(app.get(), &flags);
   bool print_config = false;
-  app->add_option("-o,--out", flags.options.out_dir, "run directory (created with its parents)")->type_name("RUN_DIR");
-  app->add_flag("--print-config", print_config, "print the resolved configuration (config.json) and exit");
+  app->add_option("-o,--out", flags.options.out_dir, "run directory (created with its parents)")
+      ->type_name("RUN_DIR");
+  app->add_flag("--print-config", print_config,
+                "print the resolved configuration (config.json) and exit");
   trainer::TrainOptions o;
   if (const int rc = ParseTrainCommandLine(app.get(), &flags, argc, argv, &o); rc >= 0) return rc;
   if (print_config) {

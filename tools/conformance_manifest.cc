@@ -1,9 +1,9 @@
 #include "tools/conformance_manifest.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
-#include <algorithm>
 #include <cstdlib>
 #include <stdexcept>
 
@@ -27,7 +27,8 @@ float ParseExactFloat(const std::string& text, const std::string& what) {
   const float f = static_cast<float>(d);
   if (text.empty() || end != text.c_str() + text.size() || errno != 0 || !std::isfinite(d) ||
       static_cast<double>(f) != d) {
-    throw std::runtime_error(what + ": \"" + text + "\" is not a finite binary32 value written exactly");
+    throw std::runtime_error(what + ": \"" + text +
+                             "\" is not a finite binary32 value written exactly");
   }
   return f;
 }
@@ -35,15 +36,20 @@ float ParseExactFloat(const std::string& text, const std::string& what) {
 json CameraJson(const dec::Camera& camera) {
   json c2w = json::array();
   for (float v : camera.c2w) c2w.push_back(HexFloat(v));
-  return json{{"width", camera.width}, {"height", camera.height}, {"fx", HexFloat(camera.fx)},
-              {"fy", HexFloat(camera.fy)}, {"cx", HexFloat(camera.cx)}, {"cy", HexFloat(camera.cy)},
+  return json{{"width", camera.width},
+              {"height", camera.height},
+              {"fx", HexFloat(camera.fx)},
+              {"fy", HexFloat(camera.fy)},
+              {"cx", HexFloat(camera.cx)},
+              {"cy", HexFloat(camera.cy)},
               {"c2w", c2w}};
 }
 
 dec::Camera CameraFromJson(const json& j, const std::string& what) {
   dec::Camera cam;
   if (!j.is_object() || !j.contains("c2w") || !j["c2w"].is_array() || j["c2w"].size() != 12) {
-    throw std::runtime_error(what + ": a camera needs width, height, fx, fy, cx, cy and 12 c2w entries");
+    throw std::runtime_error(what +
+                             ": a camera needs width, height, fx, fy, cx, cy and 12 c2w entries");
   }
   cam.width = j.at("width").get<int>();
   cam.height = j.at("height").get<int>();
@@ -52,7 +58,8 @@ dec::Camera CameraFromJson(const json& j, const std::string& what) {
   cam.cx = ParseExactFloat(j.at("cx").get<std::string>(), what + ".cx");
   cam.cy = ParseExactFloat(j.at("cy").get<std::string>(), what + ".cy");
   for (int i = 0; i < 12; ++i) {
-    cam.c2w[i] = ParseExactFloat(j["c2w"][i].get<std::string>(), what + ".c2w[" + std::to_string(i) + "]");
+    cam.c2w[i] =
+        ParseExactFloat(j["c2w"][i].get<std::string>(), what + ".c2w[" + std::to_string(i) + "]");
   }
   if (cam.width < 1 || cam.height < 1 || cam.width > 4096 || cam.height > 4096) {
     throw std::runtime_error(what + ": image size out of range");
@@ -61,7 +68,8 @@ dec::Camera CameraFromJson(const json& j, const std::string& what) {
 }
 
 SceneChecksums ComputeSceneChecksums(const dec::SceneField& field) {
-  return {conformance::SceneGridMd5(field), conformance::OccupancyMd5(field), conformance::MlpMd5(field)};
+  return {conformance::SceneGridMd5(field), conformance::OccupancyMd5(field),
+          conformance::MlpMd5(field)};
 }
 
 namespace {
@@ -75,7 +83,8 @@ json BlockShapes(const dec::SceneInfo& info) {
     for (int t = 0; t < kTensorsPerSceneGrid; ++t) {
       const dec::TensorChunkInfo& ti = info.tensors[g][t];
       const char* kind = t < 3 ? "plane" : "line";
-      if (ti.present && !shapes.contains(kind)) shapes[kind] = {ti.block[0], ti.block[1], ti.block[2]};
+      if (ti.present && !shapes.contains(kind))
+        shapes[kind] = {ti.block[0], ti.block[1], ti.block[2]};
     }
   }
   return shapes;
@@ -95,31 +104,37 @@ int CoefBits(const dec::SceneInfo& info) {
 json SceneVectorJson(const std::string& file, size_t bytes, const dec::SceneField& field,
                      const dec::SceneInfo& info, const SceneChecksums& checksums,
                      const dec::Camera& camera, const std::string& png) {
-  const char* mlp = info.mlp_precision == 2 ? "quantized" : info.mlp_precision == 1 ? "float32" : "float16";
+  const char* mlp = info.mlp_precision == 2   ? "quantized"
+                    : info.mlp_precision == 1 ? "float32"
+                                              : "float16";
   json occupancy = nullptr;
   if (field.has_mask) occupancy = {field.mask.res()[0], field.mask.res()[1], field.mask.res()[2]};
-  json entry{{"file", file},
-              {"bytes", bytes},
-              {"version", std::to_string(info.version_major) + "." + std::to_string(info.version_minor)},
-              {"grid", Triple(info.header.res)},
-              {"ranks", {{"density", Triple(info.header.ranks[0])}, {"appearance", Triple(info.header.ranks[1])}}},
-              {"blocks", BlockShapes(info)},
-              {"coef_bits", CoefBits(info)},
-              {"mlp", mlp},
-              {"occupancy", occupancy},
-              {"md5", {{"grids", checksums.grids}, {"occupancy", checksums.occupancy}, {"mlp", checksums.mlp}}},
-              {"render", {{"png", png}, {"camera", CameraJson(camera)}}}};
+  json entry{
+      {"file", file},
+      {"bytes", bytes},
+      {"version", std::to_string(info.version_major) + "." + std::to_string(info.version_minor)},
+      {"grid", Triple(info.header.res)},
+      {"ranks",
+       {{"density", Triple(info.header.ranks[0])}, {"appearance", Triple(info.header.ranks[1])}}},
+      {"blocks", BlockShapes(info)},
+      {"coef_bits", CoefBits(info)},
+      {"mlp", mlp},
+      {"occupancy", occupancy},
+      {"md5",
+       {{"grids", checksums.grids}, {"occupancy", checksums.occupancy}, {"mlp", checksums.mlp}}},
+      {"render", {{"png", png}, {"camera", CameraJson(camera)}}}};
   // Object scenes (every vector before bitstream 1.2) leave the key out.
-  if (field.scene_model != SceneModel::kObject) entry["scene_model"] = SceneModelName(field.scene_model);
+  if (field.scene_model != SceneModel::kObject)
+    entry["scene_model"] = SceneModelName(field.scene_model);
   return entry;
 }
 
 namespace {
 
 void AppendPretty(const json& j, int indent, std::string* out) {
-  const bool flat = !j.is_structured() || (j.is_array() && std::none_of(j.begin(), j.end(), [](const json& e) {
-                                             return e.is_structured();
-                                           }));
+  const bool flat = !j.is_structured() ||
+                    (j.is_array() && std::none_of(j.begin(), j.end(),
+                                                  [](const json& e) { return e.is_structured(); }));
   if (flat) {
     *out += j.dump();
     return;
@@ -144,7 +159,8 @@ std::string ManifestText(const json& manifest) {
   return out + "\n";
 }
 
-RenderAgreement CompareRenders(const std::vector<uint8_t>& rgba8, const std::vector<uint8_t>& reference_rgb8) {
+RenderAgreement CompareRenders(const std::vector<uint8_t>& rgba8,
+                               const std::vector<uint8_t>& reference_rgb8) {
   RenderAgreement a;
   a.pixels = reference_rgb8.size() / 3;
   if (rgba8.size() != a.pixels * 4) throw std::runtime_error("CompareRenders: image sizes differ");

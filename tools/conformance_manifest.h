@@ -49,7 +49,8 @@ struct RenderAgreement {
   bool Conforms() const { return within_two_codes * 100 >= pixels * 99; }
 };
 // rgba8: width*height*4 bytes of the render; reference: width*height*3 bytes.
-RenderAgreement CompareRenders(const std::vector<uint8_t>& rgba8, const std::vector<uint8_t>& reference_rgb8);
+RenderAgreement CompareRenders(const std::vector<uint8_t>& rgba8,
+                               const std::vector<uint8_t>& reference_rgb8);
 
 }  // namespace tools
 }  // namespace ecrf

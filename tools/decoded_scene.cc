@@ -6,10 +6,10 @@
 #include <stdexcept>
 
 #include "trainer/data/camera.h"
+#include "trainer/data/file_io.h"
+#include "trainer/data/image_metrics.h"
 #include "trainer/train/checkpoint.h"
 #include "trainer/train/eval_progress.h"
-#include "trainer/data/image_metrics.h"
-#include "trainer/data/file_io.h"
 
 namespace ecrf {
 namespace tools {
@@ -30,15 +30,18 @@ LoadedScene DecodeSceneBytes(std::vector<uint8_t> bytes, const std::string& name
   options.storage = storage;
   options.max_memory_bytes = max_memory_bytes;
   const auto start = std::chrono::steady_clock::now();
-  const Status st = dec::DecodeScene(s.bytes.data(), s.bytes.size(), options, s.field.get(), &s.info);
+  const Status st =
+      dec::DecodeScene(s.bytes.data(), s.bytes.size(), options, s.field.get(), &s.info);
   s.decode_seconds = SecondsSince(start);
   if (!st.ok()) {
-    throw std::runtime_error(name + ": cannot decode (" + ErrorCodeName(st.code()) + "): " + st.message());
+    throw std::runtime_error(name + ": cannot decode (" + ErrorCodeName(st.code()) +
+                             "): " + st.message());
   }
   return s;
 }
 
-LoadedScene LoadSceneFile(const std::string& path, dec::GridStorage storage, uint64_t max_memory_bytes) {
+LoadedScene LoadSceneFile(const std::string& path, dec::GridStorage storage,
+                          uint64_t max_memory_bytes) {
   return DecodeSceneBytes(trainer::ReadWholeFile(path), path, storage, max_memory_bytes);
 }
 
@@ -67,7 +70,8 @@ trainer::Image RenderDecoded(const dec::SceneField& scene, const trainer::Camera
   return img;
 }
 
-trainer::Dataset ProceduralDataset(const std::string& scene, const std::string& split, uint32_t seed) {
+trainer::Dataset ProceduralDataset(const std::string& scene, const std::string& split,
+                                   uint32_t seed) {
   trainer::TrainOptions o = trainer::PresetOptions("tiny");
   trainer::SelectProceduralScene(scene, &o);
   o.seed = seed;
@@ -87,7 +91,9 @@ trainer::Image ResizeBilinear(const trainer::Image& image, int width, int height
       const int x0 = int(fx), x1 = std::min(x0 + 1, image.width - 1);
       const float wx = fx - x0;
       for (int k = 0; k < c; ++k) {
-        auto at = [&](int yy, int xx) { return image.pixels[(size_t(yy) * image.width + xx) * c + k]; };
+        auto at = [&](int yy, int xx) {
+          return image.pixels[(size_t(yy) * image.width + xx) * c + k];
+        };
         const float top = at(y0, x0) + (at(y0, x1) - at(y0, x0)) * wx;
         const float bottom = at(y1, x0) + (at(y1, x1) - at(y1, x0)) * wx;
         out.pixels[(size_t(y) * width + x) * c + k] = top + (bottom - top) * wy;
@@ -105,7 +111,8 @@ trainer::EvalResult EvaluateDecoded(const dec::SceneField& scene, const trainer:
   stride = std::max(1, stride);
   image_scale = std::max(1, image_scale);
   dec::RenderStats all;
-  trainer::EvalProgress progress("evaluating the decoded file", trainer::EvalViewCount(test.views.size(), stride, max_views));
+  trainer::EvalProgress progress("evaluating the decoded file",
+                                 trainer::EvalViewCount(test.views.size(), stride, max_views));
   for (size_t v = 0; v < test.views.size(); v += size_t(stride)) {
     if (max_views > 0 && r.views >= max_views) break;
     trainer::Camera camera = test.views[v].camera;
@@ -122,7 +129,8 @@ trainer::EvalResult EvaluateDecoded(const dec::SceneField& scene, const trainer:
     const auto start = std::chrono::steady_clock::now();
     trainer::Image img = RenderDecoded(scene, camera, options, &all);
     render_seconds += SecondsSince(start);
-    if (image_scale > 1) img = ResizeBilinear(img, test.views[v].rgb.width, test.views[v].rgb.height);
+    if (image_scale > 1)
+      img = ResizeBilinear(img, test.views[v].rgb.width, test.views[v].rgb.height);
     r.psnr += std::min(100.0, trainer::Psnr(img, test.views[v].rgb));
     r.ssim += trainer::Ssim(img, test.views[v].rgb);
     ++r.views;

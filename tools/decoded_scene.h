@@ -31,7 +31,8 @@ inline constexpr uint64_t kUnlimitedMemory = ~uint64_t{0};
 LoadedScene DecodeSceneBytes(std::vector<uint8_t> bytes, const std::string& name,
                              dec::GridStorage storage = dec::GridStorage::kFloat32,
                              uint64_t max_memory_bytes = dec::kDefaultDecodeMemoryBudget);
-LoadedScene LoadSceneFile(const std::string& path, dec::GridStorage storage = dec::GridStorage::kFloat32,
+LoadedScene LoadSceneFile(const std::string& path,
+                          dec::GridStorage storage = dec::GridStorage::kFloat32,
                           uint64_t max_memory_bytes = dec::kDefaultDecodeMemoryBudget);
 
 // RGB render of one camera; stats accumulate when given.
@@ -48,7 +49,8 @@ trainer::EvalResult EvaluateDecoded(const dec::SceneField& scene, const trainer:
 
 // A procedural scene's split as `ecrf train --scene NAME --seed seed` makes it (NAME builtin or
 // capture; throws std::invalid_argument for others).
-trainer::Dataset ProceduralDataset(const std::string& scene, const std::string& split, uint32_t seed);
+trainer::Dataset ProceduralDataset(const std::string& scene, const std::string& split,
+                                   uint32_t seed);
 
 // Bilinear resampling with pixel centres aligned (as OpenGL's texture filtering).
 trainer::Image ResizeBilinear(const trainer::Image& image, int width, int height);

@@ -20,7 +20,8 @@ void PrintVersion() {
 }
 
 int RunVersion(int argc, char** argv) {
-  auto app = MakeCommand("version", "print the library and bitstream versions (also ecrf --version, ecrf -V)");
+  auto app = MakeCommand("version",
+                         "print the library and bitstream versions (also ecrf --version, ecrf -V)");
   if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
   PrintVersion();
   return 0;
@@ -33,11 +34,14 @@ const SubcommandTable& BenchTable() {
       {
           {"coder", RunCoderBench, "entropy coder and coefficient coding"},
           {"idct", RunIdctBench, "integer inverse DCT"},
-          {"mlp", RunMlpBench, "appearance MLP forward/backward GEMMs and Adam against the CPU's FMA peak"},
-          {"render", RunRenderBench, "the renderer on a synthetic scene: ms per view and samples per second"},
+          {"mlp", RunMlpBench,
+           "appearance MLP forward/backward GEMMs and Adam against the CPU's FMA peak"},
+          {"render", RunRenderBench,
+           "the renderer on a synthetic scene: ms per view and samples per second"},
           {"train", RunTrainStepBench, "one training step at the 128^3 and 300^3 phases"},
       },
-      "`ecrf bench <benchmark> --help` (or `ecrf help bench <benchmark>`) for the options of each;\n"
+      "`ecrf bench <benchmark> --help` (or `ecrf help bench <benchmark>`) for the options of "
+      "each;\n"
       "each can write its figures as JSON (--json FILE).\n"};
   return table;
 }
@@ -48,7 +52,8 @@ const SubcommandTable& EcrfTable() {
       "command",
       {
           {"version", RunVersion, "print the library and bitstream versions"},
-          {"selfcheck", RunSelfCheck, "round-trip the entropy coder and check the integer IDCT against float64"},
+          {"selfcheck", RunSelfCheck,
+           "round-trip the entropy coder and check the integer IDCT against float64"},
           {"train", RunTrain,
            "train a TensoRF VM model: train --data DIR|--scene builtin|capture|forward -o RUN"},
           {"encode", RunEncode, "encode a trained run: encode RUN_DIR -o SCENE.ecrf"},
@@ -56,11 +61,14 @@ const SubcommandTable& EcrfTable() {
           {"render", RunRender,
            "render a stream: render SCENE.ecrf --views transforms_test.json|--orbit N -o OUT_DIR"},
           {"eval", RunEval, "PSNR/SSIM of a stream: eval SCENE.ecrf --data DIR"},
-          {"conformance", RunConformance, "rebuild (--write DIR) or check (--check DIR) the conformance vectors"},
-          {"report", RunReport, "rate-distortion and speed-error reports: report sweep|render|compare|plot"},
+          {"conformance", RunConformance,
+           "rebuild (--write DIR) or check (--check DIR) the conformance vectors"},
+          {"report", RunReport,
+           "rate-distortion and speed-error reports: report sweep|render|compare|plot"},
           {"bench", RunBench, "benchmarks: bench coder|idct|mlp|render|train [--json FILE]"},
       },
-      "`ecrf help <command>` (or `ecrf <command> --help`) for the options of each; ecrf --version.\n"};
+      "`ecrf help <command>` (or `ecrf <command> --help`) for the options of each; ecrf "
+      "--version.\n"};
   return table;
 }
 
@@ -75,11 +83,13 @@ int RunEcrf(int argc, char** argv) {
   }
   // The command an error belongs to: `ecrf help CMD` runs CMD too.
   const int named = argc > 2 && std::string(argv[1]) == "help" ? 2 : 1;
-  const std::string command = argc > named && FindSubcommand(EcrfTable(), argv[named]) ? argv[named] : "";
+  const std::string command =
+      argc > named && FindSubcommand(EcrfTable(), argv[named]) ? argv[named] : "";
   try {
     return RunSubcommand(EcrfTable(), argc, argv);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "ecrf%s%s: error: %s\n", command.empty() ? "" : " ", command.c_str(), e.what());
+    std::fprintf(stderr, "ecrf%s%s: error: %s\n", command.empty() ? "" : " ", command.c_str(),
+                 e.what());
     return 1;
   }
 }

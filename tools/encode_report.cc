@@ -17,19 +17,22 @@ void PrintEncodeReport(FILE* out, const trainer::EncodeReport& r) {
     char rank[32];
     std::snprintf(rank, sizeof(rank), "%d/%d", r.ranks_out[g][m], r.ranks_in[g][m]);
     if (r.tensor_bytes[t] == 0) {
-      std::fprintf(out, "%-20s %10s %9s %12s %8s\n", trainer::RateTensorName(t), "dropped", "", "", rank);
+      std::fprintf(out, "%-20s %10s %9s %12s %8s\n", trainer::RateTensorName(t), "dropped", "", "",
+                   rank);
       continue;
     }
     char zero[32];
     std::snprintf(zero, sizeof(zero), "%zu/%zu", r.tensor_zero_blocks[t], r.tensor_blocks[t]);
-    std::fprintf(out, "%-20s %10zu %9.4f %12s %8s %10.3g\n", trainer::RateTensorName(t), r.tensor_bytes[t],
+    std::fprintf(out, "%-20s %10zu %9.4f %12s %8s %10.3g\n", trainer::RateTensorName(t),
+                 r.tensor_bytes[t],
                  8.0 * r.tensor_bytes[t] / std::max<size_t>(1, r.tensor_coeffs[t]), zero, rank,
                  double(r.steps[t]));
   }
   std::fprintf(out, "%-20s %10zu\n", "MLPW", r.mlp_bytes);
   if (r.metadata_bytes) std::fprintf(out, "%-20s %10zu\n", "meta", r.metadata_bytes);
   std::fprintf(out, "%-20s %10zu\n", "container", r.container_bytes);
-  std::fprintf(out, "%-20s %10zu  (coefficients %zu)\n", "total", r.total_bytes, r.coefficient_bytes());
+  std::fprintf(out, "%-20s %10zu  (coefficients %zu)\n", "total", r.total_bytes,
+               r.coefficient_bytes());
   if (r.clipped_coefficients) {
     std::fprintf(out, "warning: %zu coefficients exceeded the coefficient range and were clamped\n",
                  r.clipped_coefficients);

@@ -8,20 +8,19 @@
 namespace ecrf {
 namespace tools {
 
-trainer::EncodeOptions TrainedRunEncodeOptions(const trainer::TrainOptions& o, const trainer::RateState& rate,
-                                               int iterations, float final_lambda_e) {
+trainer::EncodeOptions TrainedRunEncodeOptions(const trainer::TrainOptions& o,
+                                               const trainer::RateState& rate, int iterations,
+                                               float final_lambda_e) {
   trainer::EncodeOptions eo = trainer::RunEncodeOptions(o, rate);
-  eo.metadata_json = nlohmann::json{{"encoder", "ecrf"},
-                                    {"data", trainer::DataSource(o)},
-                                    {"preset", o.preset},
-                                    {"iterations", iterations},
-                                    {"lambda_e", final_lambda_e},
-                                    {"alpha", o.alpha}}
+  eo.metadata_json = nlohmann::json{{"encoder", "ecrf"},          {"data", trainer::DataSource(o)},
+                                    {"preset", o.preset},         {"iterations", iterations},
+                                    {"lambda_e", final_lambda_e}, {"alpha", o.alpha}}
                          .dump();
   return eo;
 }
 
-EncodedRun EncodeRun(const trainer::TensorfModel& model, const trainer::EncodeOptions& options, size_t target_bytes) {
+EncodedRun EncodeRun(const trainer::TensorfModel& model, const trainer::EncodeOptions& options,
+                     size_t target_bytes) {
   EncodedRun e;
   if (target_bytes > 0) {
     trainer::TargetSizeResult t = trainer::EncodeToTargetSize(model, options, target_bytes);

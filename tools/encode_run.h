@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "encoder/encode_rate_control.h"
-#include "trainer/train/rate_state.h"
 #include "encoder/scene_encoder.h"
 #include "trainer/model/tensorf_model.h"
+#include "trainer/train/rate_state.h"
 #include "trainer/train/train_options.h"
 
 namespace ecrf {
@@ -19,8 +19,9 @@ namespace tools {
 
 // The encoder settings of a run: its block shapes and frozen steps, coefficient depth, MLP levels
 // and rounding offset, and the metadata chunk (data, preset, iterations, final lambda_e, alpha).
-trainer::EncodeOptions TrainedRunEncodeOptions(const trainer::TrainOptions& config, const trainer::RateState& rate,
-                                               int iterations, float final_lambda_e);
+trainer::EncodeOptions TrainedRunEncodeOptions(const trainer::TrainOptions& config,
+                                               const trainer::RateState& rate, int iterations,
+                                               float final_lambda_e);
 
 struct EncodedRun {
   std::vector<uint8_t> bytes;
@@ -31,7 +32,8 @@ struct EncodedRun {
 
 // Encodes once, or with target_bytes > 0 searches the step scale for the largest file of at
 // most that size (trainer::EncodeToTargetSize).
-EncodedRun EncodeRun(const trainer::TensorfModel& model, const trainer::EncodeOptions& options, size_t target_bytes);
+EncodedRun EncodeRun(const trainer::TensorfModel& model, const trainer::EncodeOptions& options,
+                     size_t target_bytes);
 
 }  // namespace tools
 }  // namespace ecrf

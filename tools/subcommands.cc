@@ -18,20 +18,22 @@ int UnknownSubcommand(const SubcommandTable& table, const std::string& name) {
   const std::string nearest = NearestName(name, names);
   const std::string what = !name.empty() && name[0] == '-' ? "option" : table.kind;
   const std::string suggestion = nearest.empty() ? "" : " (did you mean " + nearest + "?)";
-  std::fprintf(stderr, "%s: error: unknown %s '%s'%s; see '%s --help'\n", table.command.c_str(), what.c_str(),
-               name.c_str(), suggestion.c_str(), table.command.c_str());
+  std::fprintf(stderr, "%s: error: unknown %s '%s'%s; see '%s --help'\n", table.command.c_str(),
+               what.c_str(), name.c_str(), suggestion.c_str(), table.command.c_str());
   return 2;
 }
 
 }  // namespace
 
 std::string SubcommandUsage(const SubcommandTable& table) {
-  std::string text = "usage: " + table.command + " <" + table.kind + "> [options]\n\n" + table.kind + "s:\n";
+  std::string text =
+      "usage: " + table.command + " <" + table.kind + "> [options]\n\n" + table.kind + "s:\n";
   size_t width = 0;
   for (const Subcommand& s : table.subcommands) width = std::max(width, s.name.size());
   for (const Subcommand& s : table.subcommands) {
     text += "  " + s.name + std::string(width - s.name.size() + 2, ' ');
-    for (char c : s.summary) text += c == '\n' ? "\n" + std::string(width + 4, ' ') : std::string(1, c);
+    for (char c : s.summary)
+      text += c == '\n' ? "\n" + std::string(width + 4, ' ') : std::string(1, c);
     text += "\n";
   }
   return text + "\n" + table.footer;

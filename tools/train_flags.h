@@ -42,7 +42,8 @@ trainer::TrainOptions FinishTrainFlags(const CLI::App& app, TrainFlags* flags);
 
 // ParseCommandLine, then FinishTrainFlags into *options: -1 when the command should run, else
 // its exit code (0 after --help, 2 after a usage error, printed as one line).
-int ParseTrainCommandLine(CLI::App* app, TrainFlags* flags, int argc, char** argv, trainer::TrainOptions* options);
+int ParseTrainCommandLine(CLI::App* app, TrainFlags* flags, int argc, char** argv,
+                          trainer::TrainOptions* options);
 
 // The whole resolution of a training command line, with -o RUN_DIR: what `ecrf train ARGS`
 // would run. Throws std::invalid_argument on any error (unknown flags included).

@@ -7,19 +7,19 @@
 #include <stdexcept>
 #include <string>
 
+#include "encoder/encode_rate_control.h"
+#include "encoder/scene_encoder.h"
 #include "tools/cli_args.h"
-#include "tools/encode_run.h"
-#include "tools/train_flags.h"
 #include "tools/decoded_scene.h"
 #include "tools/encode_report.h"
-#include "trainer/train/checkpoint.h"
-#include "encoder/encode_rate_control.h"
-#include "trainer/train/eval_progress.h"
+#include "tools/encode_run.h"
+#include "tools/train_flags.h"
+#include "trainer/data/file_io.h"
 #include "trainer/data/image_io.h"
-#include "encoder/scene_encoder.h"
+#include "trainer/train/checkpoint.h"
+#include "trainer/train/eval_progress.h"
 #include "trainer/train/train_config.h"
 #include "trainer/train/trainer.h"
-#include "trainer/data/file_io.h"
 
 namespace ecrf {
 namespace tools {
@@ -38,8 +38,10 @@ void CheckResumedSettings(const trainer::TrainOptions& o) {
   const std::string path = o.out_dir + "/checkpoint.ckpt";
   const trainer::CheckpointRunInfo info = trainer::ReadCheckpointRunInfo(path);
   if (!info.has_config) {
-    std::fprintf(stderr, "warning: %s stores no configuration (an older ecrf wrote it): settings not checked\n",
-                 path.c_str());
+    std::fprintf(
+        stderr,
+        "warning: %s stores no configuration (an older ecrf wrote it): settings not checked\n",
+        path.c_str());
     return;
   }
   const std::vector<std::string> changed = trainer::ChangedSettings(info.config, o);
@@ -47,11 +49,13 @@ void CheckResumedSettings(const trainer::TrainOptions& o) {
   std::string list;
   for (const std::string& c : changed) list += "\n  " + c;
   if (!o.accept_config_change) {
-    throw std::invalid_argument("--resume: these settings differ from the checkpoint's (" + path + "):" + list +
-                                "\nresume with the run's settings (see " + o.out_dir +
-                                "/config.json), or add --accept-config-change to continue with the new ones");
+    throw std::invalid_argument(
+        "--resume: these settings differ from the checkpoint's (" + path + "):" + list +
+        "\nresume with the run's settings (see " + o.out_dir +
+        "/config.json), or add --accept-config-change to continue with the new ones");
   }
-  std::fprintf(stderr, "--resume with changed settings (--accept-config-change):%s\n", list.c_str());
+  std::fprintf(stderr, "--resume with changed settings (--accept-config-change):%s\n",
+               list.c_str());
 }
 
 }  // namespace
@@ -75,31 +79,41 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
       trainer::DownscaleViews(trainer::LoadTrainingViews(options, "test"), options.eval_downscale);
   trainer::TrainOptions o = options;
   o.test_view_stride = trainer::ScoredTestViewStride(options, test.views.size());
-  const int scored_views = trainer::EvalViewCount(test.views.size(), o.test_view_stride, o.max_test_views);
-  std::fprintf(stderr, "data: %zu train views, %zu test views (%dx%d, scored at %dx%d)\n", train.views.size(),
-               test.views.size(), train.views[0].rgb.width, train.views[0].rgb.height,
-               test.views.empty() ? 0 : test.views[0].rgb.width, test.views.empty() ? 0 : test.views[0].rgb.height);
-  const std::string rule = options.test_view_stride > 0
-                               ? ""
-                               : ", evenly spaced, at most " + std::to_string(trainer::kDefaultScoredTestViews);
-  std::fprintf(stderr, "scoring %d of %zu test views (every %d%s%s; --test-stride 1 scores all)%s\n", scored_views,
-               test.views.size(), o.test_view_stride, o.test_view_stride == 1 ? "st" : "th", rule.c_str(),
+  const int scored_views =
+      trainer::EvalViewCount(test.views.size(), o.test_view_stride, o.max_test_views);
+  std::fprintf(stderr, "data: %zu train views, %zu test views (%dx%d, scored at %dx%d)\n",
+               train.views.size(), test.views.size(), train.views[0].rgb.width,
+               train.views[0].rgb.height, test.views.empty() ? 0 : test.views[0].rgb.width,
+               test.views.empty() ? 0 : test.views[0].rgb.height);
+  const std::string rule =
+      options.test_view_stride > 0
+          ? ""
+          : ", evenly spaced, at most " + std::to_string(trainer::kDefaultScoredTestViews);
+  std::fprintf(stderr,
+               "scoring %d of %zu test views (every %d%s%s; --test-stride 1 scores all)%s\n",
+               scored_views, test.views.size(), o.test_view_stride,
+               o.test_view_stride == 1 ? "st" : "th", rule.c_str(),
                o.score_float ? "; the float model too (--score-float)" : "; the decoded file only");
   // Written once the data has loaded: a run that fails before that leaves no directory behind.
   const std::string config = trainer::TrainConfigToJson(options) + "\n";
   trainer::WriteFileAtomically(options.out_dir + "/config.json", config.data(), config.size());
-  std::fprintf(stderr, "configuration: %s/config.json (--print-config prints it without training)\n",
+  std::fprintf(stderr,
+               "configuration: %s/config.json (--print-config prints it without training)\n",
                options.out_dir.c_str());
   const trainer::SceneFit fit = trainer::FitScene(o.scene_type, train);
   if (fit.model == SceneModel::kForward) {
-    std::fprintf(stderr, "scene model: forward (%s); NDC box [%.3g %.3g %.3g] - [%.3g %.3g %.3g], near plane %.3g\n",
-                 fit.reason.c_str(), fit.roi.min[0], fit.roi.min[1], fit.roi.min[2], fit.roi.max[0], fit.roi.max[1],
-                 fit.roi.max[2], fit.ndc.near_plane);
+    std::fprintf(
+        stderr,
+        "scene model: forward (%s); NDC box [%.3g %.3g %.3g] - [%.3g %.3g %.3g], near plane %.3g\n",
+        fit.reason.c_str(), fit.roi.min[0], fit.roi.min[1], fit.roi.min[2], fit.roi.max[0],
+        fit.roi.max[1], fit.roi.max[2], fit.ndc.near_plane);
   } else {
-    std::fprintf(stderr, "scene model: %s (%s); fitted region of interest [%.3g %.3g %.3g] - [%.3g %.3g %.3g], "
-                 "%.2f%% of the dataset box's volume\n",
-                 SceneModelName(fit.model), fit.reason.c_str(), fit.roi.min[0], fit.roi.min[1], fit.roi.min[2],
-                 fit.roi.max[0], fit.roi.max[1], fit.roi.max[2], 100 * fit.roi_share);
+    std::fprintf(
+        stderr,
+        "scene model: %s (%s); fitted region of interest [%.3g %.3g %.3g] - [%.3g %.3g %.3g], "
+        "%.2f%% of the dataset box's volume\n",
+        SceneModelName(fit.model), fit.reason.c_str(), fit.roi.min[0], fit.roi.min[1],
+        fit.roi.min[2], fit.roi.max[0], fit.roi.max[1], fit.roi.max[2], 100 * fit.roi_share);
   }
   trainer::TensorfModel model(trainer::ConfigFor(o, train, fit));
   trainer::RateState rate;
@@ -109,37 +123,46 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
   for (const auto& a : model.NamedParameters()) float_bytes += a.size * sizeof(float);
   // Close the loop: encode, decode with the embeddable decoder, and score the decoded stream.
   const auto encode_start = std::chrono::steady_clock::now();
-  EncodedRun encoded =
-      EncodeRun(model, TrainedRunEncodeOptions(o, rate, r.iterations, r.final_lambda_e), o.target_bytes);
+  EncodedRun encoded = EncodeRun(
+      model, TrainedRunEncodeOptions(o, rate, r.iterations, r.final_lambda_e), o.target_bytes);
   std::vector<uint8_t> bytes = std::move(encoded.bytes);
   const trainer::EncodeReport& report = encoded.report;
   const double step_scale = encoded.step_scale;
   if (o.target_bytes > 0) {
-    std::printf("target %zu bytes: lambda_e ended at %g, steps x%.4g at encode time, %zu bytes (%+.2f%%)\n",
-                o.target_bytes, r.final_lambda_e, step_scale, bytes.size(),
-                100.0 * (double(bytes.size()) / double(o.target_bytes) - 1.0));
+    std::printf(
+        "target %zu bytes: lambda_e ended at %g, steps x%.4g at encode time, %zu bytes (%+.2f%%)\n",
+        o.target_bytes, r.final_lambda_e, step_scale, bytes.size(),
+        100.0 * (double(bytes.size()) / double(o.target_bytes) - 1.0));
   }
   const double encode_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - encode_start).count();
   trainer::WriteFileAtomically(o.out_dir + "/scene.ecrf", bytes.data(), bytes.size());
   const LoadedScene decoded = DecodeSceneBytes(std::move(bytes), o.out_dir + "/scene.ecrf",
-                                                dec::GridStorage::kFloat32, kUnlimitedMemory);
+                                               dec::GridStorage::kFloat32, kUnlimitedMemory);
   dec::RenderOptions ro;
   ro.num_threads = 0;
-  const trainer::EvalResult d = EvaluateDecoded(*decoded.field, test, o.test_view_stride, o.max_test_views, ro, o.save_renders);
+  const trainer::EvalResult d = EvaluateDecoded(*decoded.field, test, o.test_view_stride,
+                                                o.max_test_views, ro, o.save_renders);
 
-  std::printf("trained %d iterations in %.1f s (%.3f s/it); float32 model %.2f MB; estimated coded grids %.3f MB\n",
-              r.iterations, r.train_seconds, r.train_seconds / std::max(1, r.iterations), float_bytes / 1e6,
-              r.rate.total_bits / 8e6);
+  std::printf(
+      "trained %d iterations in %.1f s (%.3f s/it); float32 model %.2f MB; estimated coded grids "
+      "%.3f MB\n",
+      r.iterations, r.train_seconds, r.train_seconds / std::max(1, r.iterations), float_bytes / 1e6,
+      r.rate.total_bits / 8e6);
   if (o.score_float) {
-    std::printf("float model: test PSNR %.2f dB, SSIM %.4f over %d views\n", r.test.psnr, r.test.ssim, r.test.views);
+    std::printf("float model: test PSNR %.2f dB, SSIM %.4f over %d views\n", r.test.psnr,
+                r.test.ssim, r.test.views);
   }
-  const std::string versus = o.score_float ? " (" + FormatDb(d.psnr - r.test.psnr) + " against the float model)" : "";
-  std::printf("encoded %s/scene.ecrf: %zu bytes (%.1fx smaller than float32); decoded file: test PSNR %.2f dB%s, "
-              "SSIM %.4f over %d views; decode %.0f ms, render %.0f ms/view (%.1f samples, %.1f MLP samples per ray)\n",
-              o.out_dir.c_str(), decoded.bytes.size(), double(float_bytes) / decoded.bytes.size(), d.psnr,
-              versus.c_str(), d.ssim, d.views, 1e3 * decoded.decode_seconds, 1e3 * d.seconds_per_view,
-              d.samples_per_ray, d.color_samples_per_ray);
+  const std::string versus =
+      o.score_float ? " (" + FormatDb(d.psnr - r.test.psnr) + " against the float model)" : "";
+  std::printf(
+      "encoded %s/scene.ecrf: %zu bytes (%.1fx smaller than float32); decoded file: test PSNR %.2f "
+      "dB%s, "
+      "SSIM %.4f over %d views; decode %.0f ms, render %.0f ms/view (%.1f samples, %.1f MLP "
+      "samples per ray)\n",
+      o.out_dir.c_str(), decoded.bytes.size(), double(float_bytes) / decoded.bytes.size(), d.psnr,
+      versus.c_str(), d.ssim, d.views, 1e3 * decoded.decode_seconds, 1e3 * d.seconds_per_view,
+      d.samples_per_ray, d.color_samples_per_ray);
 
   nlohmann::json m;
   m["preset"] = o.preset;
@@ -155,7 +178,8 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
   m["test_psnr"] = o.score_float ? nlohmann::json(r.test.psnr) : nlohmann::json();
   m["test_ssim"] = o.score_float ? nlohmann::json(r.test.ssim) : nlohmann::json();
   m["test_views"] = d.views;
-  m["render_seconds_per_view"] = o.score_float ? nlohmann::json(r.test.seconds_per_view) : nlohmann::json();
+  m["render_seconds_per_view"] =
+      o.score_float ? nlohmann::json(r.test.seconds_per_view) : nlohmann::json();
   m["rate_point"] = o.rate_point;
   m["grid_res"] = model.res();
   m["aabb_min"] = model.aabb().min;
@@ -191,17 +215,20 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
   m["decoded_mlp_samples_per_ray"] = d.color_samples_per_ray;
   m["encode_seconds"] = encode_seconds;
   m["encode"] = EncodeReportJson(report);
-  m["coded_to_estimated_grid_bytes"] = r.rate.total_bits > 0 ? report.coefficient_bytes() * 8.0 / r.rate.total_bits : 0.0;
+  m["coded_to_estimated_grid_bytes"] =
+      r.rate.total_bits > 0 ? report.coefficient_bytes() * 8.0 / r.rate.total_bits : 0.0;
   m["estimated_grid_bits"] = r.rate.total_bits;
   m["estimated_grid_bytes"] = r.rate.total_bits / 8.0;
   nlohmann::json per_tensor = nlohmann::json::object();
   for (size_t t = 0; t < r.rate.bits.size(); ++t) {
-    per_tensor[trainer::RateTensorName(int(t))] = {{"bits", r.rate.bits[t]}, {"coefficients", r.rate.coeffs[t]}};
+    per_tensor[trainer::RateTensorName(int(t))] = {{"bits", r.rate.bits[t]},
+                                                   {"coefficients", r.rate.coeffs[t]}};
   }
   m["estimated_bits_per_tensor"] = per_tensor;
   if (!r.psnr_curve.empty()) {
     nlohmann::json curve = nlohmann::json::array();
-    for (const auto& p : r.psnr_curve) curve.push_back({{"minutes", p.first}, {"test_psnr", p.second}});
+    for (const auto& p : r.psnr_curve)
+      curve.push_back({{"minutes", p.first}, {"test_psnr", p.second}});
     m["psnr_curve"] = curve;
   }
   const std::string text = m.dump(2) + "\n";

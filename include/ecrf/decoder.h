@@ -69,12 +69,12 @@ typedef struct ecrf_scene_info {
   int appearance_ranks[3];
   int has_occupancy;
   int occupancy_res[3];
-  int num_samples;      /* samples per ray */
-  float step_size;      /* world units between samples */
+  int num_samples; /* samples per ray */
+  float step_size; /* world units between samples */
   float near_plane, far_plane;
   float background[3];
   size_t stream_bytes;
-  size_t grid_bytes;    /* memory held by the decoded grids */
+  size_t grid_bytes; /* memory held by the decoded grids */
 } ecrf_scene_info;
 
 /* Pinhole camera. c2w: 3x4 row-major camera-to-world matrix (OpenGL: looks down -z, +y up).
@@ -122,17 +122,17 @@ ECRF_API int ecrf_scene_tensor(const ecrf_scene* scene, int grid, int tensor, co
 
 /* What a renderer of its own (a GPU shader, SPEC.md section 7) needs besides the tensors. */
 typedef struct ecrf_scene_field {
-  float density_shift;      /* sigma = softplus(density feature + density_shift) */
-  float distance_scale;     /* alpha = 1 - exp(-sigma * (dist * distance_scale)) */
-  float weight_threshold;   /* the colour of a sample counts when its weight is larger */
+  float density_shift;    /* sigma = softplus(density feature + density_shift) */
+  float distance_scale;   /* alpha = 1 - exp(-sigma * (dist * distance_scale)) */
+  float weight_threshold; /* the colour of a sample counts when its weight is larger */
   float occupancy_min[3], occupancy_max[3]; /* the mask's own box (has_occupancy) */
-  int mlp_features;         /* F: rows of the basis B */
-  int mlp_products;         /* P: appearance products, the sum of the appearance ranks */
-  int mlp_hidden;           /* H */
-  int mlp_feature_freqs;    /* Ff */
-  int mlp_viewdir_freqs;    /* Fv */
-  int mlp_inputs;           /* In = F + 3 + 2 F Ff + 6 Fv */
-  size_t mlp_params;        /* floats of ecrf_scene_mlp_params */
+  int mlp_features;                         /* F: rows of the basis B */
+  int mlp_products;      /* P: appearance products, the sum of the appearance ranks */
+  int mlp_hidden;        /* H */
+  int mlp_feature_freqs; /* Ff */
+  int mlp_viewdir_freqs; /* Fv */
+  int mlp_inputs;        /* In = F + 3 + 2 F Ff + 6 Fv */
+  size_t mlp_params;     /* floats of ecrf_scene_mlp_params */
 } ecrf_scene_field;
 
 ECRF_API int ecrf_scene_get_field(const ecrf_scene* scene, ecrf_scene_field* field);
@@ -157,7 +157,8 @@ ECRF_API int ecrf_scene_ndc_frame(const ecrf_scene* scene, float frame[15]);
 
 /* The occupancy mask's bits, packed [z][y][x] with x fastest, LSB first (SPEC.md 6.3);
  * ECRF_ERR_INVALID_ARGUMENT when the scene has no mask. */
-ECRF_API int ecrf_scene_occupancy(const ecrf_scene* scene, const uint8_t** bits, int res[3], size_t* bytes);
+ECRF_API int ecrf_scene_occupancy(const ecrf_scene* scene, const uint8_t** bits, int res[3],
+                                  size_t* bytes);
 
 /* Copies the basis and MLP parameters, in MLPW order (SPEC.md 6.6: B, W1, b1, W2, b2, W3, b3),
  * into params; count must be ecrf_scene_field.mlp_params. */

@@ -73,12 +73,23 @@ inline std::vector<int32_t> MakeCoefficients(const CoefVector& v) {
       // of max: the worst cases of the coder's escapes and of the IDCT's ranges.
       for (int i = 0; i < volume; ++i) {
         switch (b % 6) {
-          case 0: block[i] = max_abs; break;
-          case 1: block[i] = -max_abs; break;
-          case 2: block[i] = (i & 1) ? -max_abs : max_abs; break;
-          case 3: block[i] = i == 0 ? max_abs : 0; break;
-          case 4: block[i] = i == volume - 1 ? -max_abs : 0; break;
-          default: block[i] = (rng.Next() & 1) ? max_abs : -max_abs;
+          case 0:
+            block[i] = max_abs;
+            break;
+          case 1:
+            block[i] = -max_abs;
+            break;
+          case 2:
+            block[i] = (i & 1) ? -max_abs : max_abs;
+            break;
+          case 3:
+            block[i] = i == 0 ? max_abs : 0;
+            break;
+          case 4:
+            block[i] = i == volume - 1 ? -max_abs : 0;
+            break;
+          default:
+            block[i] = (rng.Next() & 1) ? max_abs : -max_abs;
         }
       }
       continue;
@@ -123,7 +134,8 @@ inline std::string DecodeVectorMd5(const CoefVector& v, const std::vector<uint8_
     if (!s.ok()) return std::string("error: ") + s.message();
     InverseDctInt(coeffs.data(), dims, v.coef_bits, samples.data());
     for (int32_t x : samples) {
-      const uint8_t le[4] = {uint8_t(x), uint8_t(x >> 8), uint8_t(x >> 16), uint8_t(uint32_t(x) >> 24)};
+      const uint8_t le[4] = {uint8_t(x), uint8_t(x >> 8), uint8_t(x >> 16),
+                             uint8_t(uint32_t(x) >> 24)};
       md5.Update(le, 4);
     }
   }

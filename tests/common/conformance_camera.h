@@ -5,8 +5,8 @@
 
 #include <string>
 
-#include "decoder/ray_marcher.h"
 #include "decoder/orbit_camera.h"
+#include "decoder/ray_marcher.h"
 
 namespace ecrf {
 namespace conformance {

@@ -13,7 +13,8 @@ namespace ecrf {
 
 inline dec::SceneField DecodeOrDie(const std::vector<uint8_t>& bytes) {
   dec::SceneField field;
-  const Status s = dec::DecodeScene(bytes.data(), bytes.size(), dec::DecodeOptions(), &field, nullptr);
+  const Status s =
+      dec::DecodeScene(bytes.data(), bytes.size(), dec::DecodeOptions(), &field, nullptr);
   EXPECT_TRUE(s.ok()) << s.message();
   return field;
 }

@@ -46,7 +46,8 @@ inline std::string SceneGridMd5(const dec::SceneField& scene) {
   return md5.HexDigest();
 }
 
-// MD5 of the packed mask bits (x fastest, LSB first, unused high bits 0); of no bytes without a mask.
+// MD5 of the packed mask bits (x fastest, LSB first, unused high bits 0); of no bytes without a
+// mask.
 inline std::string OccupancyMd5(const dec::SceneField& scene) {
   testing_md5::Md5 md5;
   if (scene.has_mask) {

@@ -12,8 +12,9 @@
 
 namespace ecrf::trainer {
 
-inline void ExpectEveryEighthFrameHeldOut(const Dataset& train, const Dataset& test, const Dataset& val,
-                                          int frames, const std::string& scene) {
+inline void ExpectEveryEighthFrameHeldOut(const Dataset& train, const Dataset& test,
+                                          const Dataset& val, int frames,
+                                          const std::string& scene) {
   const size_t held_out = size_t(frames + 7) / 8;
   ASSERT_EQ(test.views.size(), held_out);
   EXPECT_EQ(train.views.size(), size_t(frames) - held_out);

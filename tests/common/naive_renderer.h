@@ -63,16 +63,21 @@ inline void BuildScene(const SceneSpec& spec, TestScene* ts) {
     return std::exp(-0.5f * z * z);
   };
   for (int m = 0; m < 3; ++m) {
-    for (size_t i = 0; i < s.density.plane_count(m); ++i) s.density.plane_f32[m][i] = 0.4f * nrm(rng);
+    for (size_t i = 0; i < s.density.plane_count(m); ++i)
+      s.density.plane_f32[m][i] = 0.4f * nrm(rng);
     for (size_t i = 0; i < s.density.line_count(m); ++i) s.density.line_f32[m][i] = 0.4f * nrm(rng);
-    for (size_t i = 0; i < s.appearance.plane_count(m); ++i) s.appearance.plane_f32[m][i] = 0.5f * nrm(rng);
-    for (size_t i = 0; i < s.appearance.line_count(m); ++i) s.appearance.line_f32[m][i] = 0.5f * nrm(rng);
+    for (size_t i = 0; i < s.appearance.plane_count(m); ++i)
+      s.appearance.plane_f32[m][i] = 0.5f * nrm(rng);
+    for (size_t i = 0; i < s.appearance.line_count(m); ++i)
+      s.appearance.line_f32[m][i] = 0.5f * nrm(rng);
     if (spec.dranks[m] > 0) {
       const int u = kMat[m][0], v = kMat[m][1], w = kVec[m];
       for (int y = 0; y < spec.res[v]; ++y)
         for (int x = 0; x < spec.res[u]; ++x)
-          s.density.plane_f32[m][s.density.plane_index(m, y, x, 0)] = spec.blob_amp * gauss(u, x) * gauss(v, y);
-      for (int i = 0; i < spec.res[w]; ++i) s.density.line_f32[m][s.density.line_index(m, i, 0)] = gauss(w, i);
+          s.density.plane_f32[m][s.density.plane_index(m, y, x, 0)] =
+              spec.blob_amp * gauss(u, x) * gauss(v, y);
+      for (int i = 0; i < spec.res[w]; ++i)
+        s.density.line_f32[m][s.density.line_index(m, i, 0)] = gauss(w, i);
     }
   }
   MlpConfig mc = spec.mlp;
@@ -183,7 +188,7 @@ inline bool RefMaskKeeps(const OccupancyMask& mask, const float p[3]) {
 }
 
 inline void NaiveMlp(const MlpConfig& cfg, const std::vector<float>& params,
-              const std::vector<double>& prod, const float* vd, double rgb[3]) {
+                     const std::vector<double>& prod, const float* vd, double rgb[3]) {
   const int P = cfg.num_products, F = cfg.feature_dim, H = cfg.hidden, in_dim = cfg.input_dim();
   const size_t o_w1 = size_t(F) * P, o_b1 = o_w1 + size_t(H) * in_dim, o_w2 = o_b1 + H,
                o_b2 = o_w2 + size_t(H) * H, o_w3 = o_b2 + H, o_b3 = o_w3 + 3 * size_t(H);
@@ -242,13 +247,14 @@ struct NaiveComposite {
     }
   }
   void Finish(const SceneField& s, double rgb[3], double* acc_out) const {
-    for (int k = 0; k < 3; ++k) rgb[k] = std::min(std::max(col[k] + (1.0 - acc) * s.background[k], 0.0), 1.0);
+    for (int k = 0; k < 3; ++k)
+      rgb[k] = std::min(std::max(col[k] + (1.0 - acc) * s.background[k], 0.0), 1.0);
     *acc_out = acc;
   }
 };
 
 inline void NaiveRender(const TestScene& ts, const float o[3], const float d[3], double rgb[3],
-                 double* acc_out) {
+                        double* acc_out) {
   const SceneField& s = ts.field;
   const float step = s.StepSize();
   const int n = s.NumSamples();
@@ -275,12 +281,14 @@ inline void NaiveRender(const TestScene& ts, const float o[3], const float d[3],
 
 // SPEC.md 7.2.1 written out from the pseudo-code (not decoder/contraction.h): positions in
 // binary32 as specified, compositing in double.
-inline void NaiveRenderUnbounded(const TestScene& ts, const float o[3], const float d[3], double rgb[3],
-                          double* acc_out) {
+inline void NaiveRenderUnbounded(const TestScene& ts, const float o[3], const float d[3],
+                                 double rgb[3], double* acc_out) {
   const SceneField& s = ts.field;
   float S[3];
   for (int a = 0; a < 3; ++a) S[a] = (1.f / (s.aabb_max[a] - s.aabb_min[a])) * 2.f;
-  auto contract = [](float v) { return v >= -1.f && v <= 1.f ? v : (v > 0.f ? 2.f - 1.f / v : -2.f - 1.f / v); };
+  auto contract = [](float v) {
+    return v >= -1.f && v <= 1.f ? v : (v > 0.f ? 2.f - 1.f / v : -2.f - 1.f / v);
+  };
   NaiveComposite comp;
   float t = s.near_far[0];
   const int n = s.NumSamples();

@@ -24,10 +24,10 @@ inline void LoadDecodedGrids(const dec::SceneField& field, TensorfModel* model) 
   const dec::VmGrid* decoded[2] = {&field.density, &field.appearance};
   for (int g = 0; g < 2; ++g) {
     for (int m = 0; m < 3; ++m) {
-      std::copy(decoded[g]->plane_f32[m].data(), decoded[g]->plane_f32[m].data() + grids[g]->plane_size(m),
-                grids[g]->plane(m));
-      std::copy(decoded[g]->line_f32[m].data(), decoded[g]->line_f32[m].data() + grids[g]->line_size(m),
-                grids[g]->line(m));
+      std::copy(decoded[g]->plane_f32[m].data(),
+                decoded[g]->plane_f32[m].data() + grids[g]->plane_size(m), grids[g]->plane(m));
+      std::copy(decoded[g]->line_f32[m].data(),
+                decoded[g]->line_f32[m].data() + grids[g]->line_size(m), grids[g]->line(m));
     }
   }
 }
@@ -40,7 +40,8 @@ struct RendererAgreement {
 
 // Renders the rays with RenderRays and with the decoder's reference process (no early stop).
 inline RendererAgreement RenderBothWays(const TensorfModel& model, const dec::SceneField& field,
-                                        const std::vector<float>& origins, const std::vector<float>& dirs) {
+                                        const std::vector<float>& origins,
+                                        const std::vector<float>& dirs) {
   RendererAgreement r;
   const size_t n = origins.size() / 3;
   std::vector<float> mine(n * 3), theirs(n * 3), acc(n);
@@ -50,7 +51,8 @@ inline RendererAgreement RenderBothWays(const TensorfModel& model, const dec::Sc
   dec::RayMarcher marcher;
   EXPECT_TRUE(marcher.Init(&field, ro).ok());
   dec::RenderStats stats;
-  EXPECT_TRUE(marcher.RenderRays(n, origins.data(), dirs.data(), theirs.data(), acc.data(), &stats).ok());
+  EXPECT_TRUE(
+      marcher.RenderRays(n, origins.data(), dirs.data(), theirs.data(), acc.data(), &stats).ok());
   for (size_t i = 0; i < mine.size(); ++i) {
     r.worst = std::max(r.worst, std::fabs(mine[i] - theirs[i]));
     r.spread = std::max(r.spread, std::fabs(theirs[i] - theirs[0]));

@@ -48,24 +48,98 @@ struct SceneVector {
 
 inline const std::vector<SceneVector>& SceneVectors() {
   static const std::vector<SceneVector> v = {
-      {"scene_ranks_dropped", {12, 10, 9}, {{0, 3, 2}, {2, 0, 3}}, {4, 8, 8}, {1, 4, 8}, 8, 0,
-       OccupancyKind::kNone, 11, SceneModel::kObject},
-      {"scene_2d_blocks", {20, 18, 16}, {{2, 2, 2}, {3, 3, 3}}, {1, 8, 8}, {1, 1, 16}, 8, 1,
-       OccupancyKind::kSphere, 12, SceneModel::kObject},
-      {"scene_16bit", {9, 9, 9}, {{2, 1, 2}, {2, 2, 1}}, {2, 4, 4}, {1, 2, 4}, 16, 0,
-       OccupancyKind::kSphere, 13, SceneModel::kObject},
-      {"scene_empty_occupancy", {8, 8, 8}, {{1, 1, 1}, {1, 1, 1}}, {1, 4, 4}, {1, 1, 8}, 8, 0,
-       OccupancyKind::kEmpty, 14, SceneModel::kObject},
-      {"scene_quantized_mlp", {10, 12, 8}, {{2, 2, 2}, {2, 3, 2}}, {2, 4, 4}, {1, 2, 8}, 8, 2,
-       OccupancyKind::kSphere, 15, SceneModel::kObject},
-      {"scene_unbounded", {16, 16, 16}, {{2, 2, 2}, {2, 2, 2}}, {2, 4, 4}, {1, 2, 8}, 8, 0,
-       OccupancyKind::kSphere, 16, SceneModel::kUnbounded},
-      {"scene_forward", {16, 16, 16}, {{2, 2, 2}, {2, 2, 2}}, {2, 4, 4}, {1, 2, 8}, 8, 0,
-       OccupancyKind::kSphere, 17, SceneModel::kForward},
-      {"scene_wide_contexts", {16, 14, 12}, {{2, 2, 2}, {4, 4, 4}}, {4, 8, 8}, {1, 4, 8}, 8, 2,
-       OccupancyKind::kSphere, 18, SceneModel::kObject, true},
-      {"scene_wide_contexts_16bit", {9, 9, 9}, {{2, 1, 2}, {2, 2, 1}}, {2, 4, 4}, {1, 2, 4}, 16, 0,
-       OccupancyKind::kSphere, 19, SceneModel::kObject, true},
+      {"scene_ranks_dropped",
+       {12, 10, 9},
+       {{0, 3, 2}, {2, 0, 3}},
+       {4, 8, 8},
+       {1, 4, 8},
+       8,
+       0,
+       OccupancyKind::kNone,
+       11,
+       SceneModel::kObject},
+      {"scene_2d_blocks",
+       {20, 18, 16},
+       {{2, 2, 2}, {3, 3, 3}},
+       {1, 8, 8},
+       {1, 1, 16},
+       8,
+       1,
+       OccupancyKind::kSphere,
+       12,
+       SceneModel::kObject},
+      {"scene_16bit",
+       {9, 9, 9},
+       {{2, 1, 2}, {2, 2, 1}},
+       {2, 4, 4},
+       {1, 2, 4},
+       16,
+       0,
+       OccupancyKind::kSphere,
+       13,
+       SceneModel::kObject},
+      {"scene_empty_occupancy",
+       {8, 8, 8},
+       {{1, 1, 1}, {1, 1, 1}},
+       {1, 4, 4},
+       {1, 1, 8},
+       8,
+       0,
+       OccupancyKind::kEmpty,
+       14,
+       SceneModel::kObject},
+      {"scene_quantized_mlp",
+       {10, 12, 8},
+       {{2, 2, 2}, {2, 3, 2}},
+       {2, 4, 4},
+       {1, 2, 8},
+       8,
+       2,
+       OccupancyKind::kSphere,
+       15,
+       SceneModel::kObject},
+      {"scene_unbounded",
+       {16, 16, 16},
+       {{2, 2, 2}, {2, 2, 2}},
+       {2, 4, 4},
+       {1, 2, 8},
+       8,
+       0,
+       OccupancyKind::kSphere,
+       16,
+       SceneModel::kUnbounded},
+      {"scene_forward",
+       {16, 16, 16},
+       {{2, 2, 2}, {2, 2, 2}},
+       {2, 4, 4},
+       {1, 2, 8},
+       8,
+       0,
+       OccupancyKind::kSphere,
+       17,
+       SceneModel::kForward},
+      {"scene_wide_contexts",
+       {16, 14, 12},
+       {{2, 2, 2}, {4, 4, 4}},
+       {4, 8, 8},
+       {1, 4, 8},
+       8,
+       2,
+       OccupancyKind::kSphere,
+       18,
+       SceneModel::kObject,
+       true},
+      {"scene_wide_contexts_16bit",
+       {9, 9, 9},
+       {{2, 1, 2}, {2, 2, 1}},
+       {2, 4, 4},
+       {1, 2, 4},
+       16,
+       0,
+       OccupancyKind::kSphere,
+       19,
+       SceneModel::kObject,
+       true},
   };
   return v;
 }
@@ -122,8 +196,8 @@ inline SceneHeader SceneVectorHeader(const SceneVector& v) {
 // platform writes the same bytes; scale 2.75 is about its 2 fx / width.
 inline NdcFrame SceneVectorNdcFrame() {
   NdcFrame f;
-  const float m[12] = {-0.644218f, 0.764842f, 0.f,       0.f,  -0.366685f, -0.308854f,
-                       0.877583f,  0.f,       0.671212f, 0.565354f, 0.479426f, -4.f};
+  const float m[12] = {-0.644218f, 0.764842f, 0.f,       0.f,       -0.366685f, -0.308854f,
+                       0.877583f,  0.f,       0.671212f, 0.565354f, 0.479426f,  -4.f};
   for (int k = 0; k < 12; ++k) f.world_to_ref[k] = m[k];
   f.scale[0] = 2.75f;
   f.scale[1] = 2.75f;
@@ -132,7 +206,8 @@ inline NdcFrame SceneVectorNdcFrame() {
 }
 
 // The box the grids and the occupancy mask span: the HEAD box, or the contracted cube.
-inline void SceneVectorGridBox(const SceneVector& v, const SceneHeader& h, float lo[3], float hi[3]) {
+inline void SceneVectorGridBox(const SceneVector& v, const SceneHeader& h, float lo[3],
+                               float hi[3]) {
   for (int a = 0; a < 3; ++a) {
     lo[a] = v.scene_model == SceneModel::kUnbounded ? -2.f : h.aabb_min[a];
     hi[a] = v.scene_model == SceneModel::kUnbounded ? 2.f : h.aabb_max[a];
@@ -140,8 +215,7 @@ inline void SceneVectorGridBox(const SceneVector& v, const SceneHeader& h, float
 }
 
 // Coefficients of one block: a strong DC, decaying lower frequencies, some zero blocks.
-inline void MakeSceneBlock(Lcg& rng, const int dims[3], int32_t max_abs, bool density,
-                           int32_t* q) {
+inline void MakeSceneBlock(Lcg& rng, const int dims[3], int32_t max_abs, bool density, int32_t* q) {
   const int volume = dims[0] * dims[1] * dims[2];
   for (int i = 0; i < volume; ++i) q[i] = 0;
   if (rng.Below(5) == 0) return;
@@ -164,7 +238,7 @@ inline std::vector<uint8_t> BuildSceneVector(const SceneVector& v) {
   Lcg rng(v.seed);
   // 1.1: quantized MLP; 1.2: unbounded scene model; 1.3: forward-facing scene model; 1.4: wide
   // coefficient contexts.
-  const uint8_t version_minor = v.wide_contexts                              ? 4
+  const uint8_t version_minor = v.wide_contexts                             ? 4
                                 : v.scene_model == SceneModel::kForward     ? 3
                                 : v.scene_model == SceneModel::kUnbounded   ? 2
                                 : v.mlp_precision == kMlpPrecisionQuantized ? 1
@@ -211,7 +285,8 @@ inline std::vector<uint8_t> BuildSceneVector(const SceneVector& v) {
       CoefContexts ctx;
       // The 1.4 vectors code planes with the wide set and lines with the narrow one: the set is
       // chosen per chunk.
-      const CoefContextSet set = v.wide_contexts && t < 3 ? CoefContextSet::kWide : CoefContextSet::kNarrow;
+      const CoefContextSet set =
+          v.wide_contexts && t < 3 ? CoefContextSet::kWide : CoefContextSet::kNarrow;
       if (!ctx.Init(BlockShape{dims[0], dims[1], dims[2]}, set).ok()) return {};
       RangeEncoder enc;
       std::vector<int32_t> q(size_t(dims[0]) * dims[1] * dims[2]);

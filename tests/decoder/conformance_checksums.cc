@@ -35,7 +35,8 @@ std::vector<std::pair<std::string, std::string>> ReadMd5List(const std::string& 
   return list;
 }
 
-std::string RenderMd5(const ecrf::dec::SceneField& field, const std::string& name, std::string* error) {
+std::string RenderMd5(const ecrf::dec::SceneField& field, const std::string& name,
+                      std::string* error) {
   const ecrf::dec::Camera cam = ecrf::conformance::ReferenceCamera(name);
   ecrf::dec::RenderOptions options;
   options.early_stop_transmittance = 0.f;  // the exact reference process
@@ -72,7 +73,8 @@ int main(int argc, char** argv) {
     }
     const std::string md5 = ecrf::conformance::DecodeVectorMd5(v, bytes);
     std::string expected;
-    for (const auto& [f, m] : coef_list) if (f == file) expected = m;
+    for (const auto& [f, m] : coef_list)
+      if (f == file) expected = m;
     const bool ok = md5 == expected;
     failures += !ok;
     std::printf("coefficients %s %s%s\n", file.c_str(), md5.c_str(), ok ? "" : " MISMATCH");
@@ -89,7 +91,8 @@ int main(int argc, char** argv) {
       return 2;
     }
     ecrf::dec::SceneField field;
-    const Status s = ecrf::dec::DecodeScene(bytes.data(), bytes.size(), ecrf::dec::DecodeOptions(), &field, nullptr);
+    const Status s = ecrf::dec::DecodeScene(bytes.data(), bytes.size(), ecrf::dec::DecodeOptions(),
+                                            &field, nullptr);
     if (!s.ok()) {
       std::printf("scene %s DECODE ERROR %s\n", file.c_str(), s.message());
       ++failures;
@@ -99,14 +102,16 @@ int main(int argc, char** argv) {
     const bool ok = grids == expected;
     failures += !ok;
     std::printf("scene %s grids %s occupancy %s mlp %s%s\n", file.c_str(), grids.c_str(),
-                ecrf::conformance::OccupancyMd5(field).c_str(), ecrf::conformance::MlpMd5(field).c_str(),
-                ok ? "" : " MISMATCH");
+                ecrf::conformance::OccupancyMd5(field).c_str(),
+                ecrf::conformance::MlpMd5(field).c_str(), ok ? "" : " MISMATCH");
     std::string error;
     const std::string name = file.substr(0, file.size() - 5);  // without ".ecrf"
     const std::string render = RenderMd5(field, name, &error);
-    std::printf("render %s %s\n", file.c_str(), render.empty() ? ("ERROR " + error).c_str() : render.c_str());
+    std::printf("render %s %s\n", file.c_str(),
+                render.empty() ? ("ERROR " + error).c_str() : render.c_str());
     failures += render.empty();
   }
-  std::printf("%s\n", failures ? "conformance checksums: FAILED" : "conformance checksums: all match");
+  std::printf("%s\n",
+              failures ? "conformance checksums: FAILED" : "conformance checksums: all match");
   return failures ? 1 : 0;
 }

@@ -29,7 +29,8 @@ void RenderWith(const SceneField& s, const RenderOptions& opt, const Rays& rays,
   ASSERT_TRUE(st.ok()) << st.message();
   rgb->assign(rays.size() * 3, -1.f);
   acc->assign(rays.size(), -1.f);
-  const Status r = rm.RenderRays(rays.size(), rays.o.data(), rays.d.data(), rgb->data(), acc->data(), stats);
+  const Status r =
+      rm.RenderRays(rays.size(), rays.o.data(), rays.d.data(), rgb->data(), acc->data(), stats);
   ASSERT_TRUE(r.ok()) << r.message();
 }
 
@@ -203,7 +204,8 @@ TEST(RayMarcherTest, Int16GridsMatchFloatWithinQuantization) {
   RenderWith(ts.field, Exact(), rays, &rf, &af);
   RenderWith(tq.field, Exact(), rays, &rq, &aq);
   double max_diff = 0.0;
-  for (size_t i = 0; i < rf.size(); ++i) max_diff = std::max(max_diff, double(std::fabs(rf[i] - rq[i])));
+  for (size_t i = 0; i < rf.size(); ++i)
+    max_diff = std::max(max_diff, double(std::fabs(rf[i] - rq[i])));
   EXPECT_LT(max_diff, 2e-3);
   std::printf("int16 vs float grids: max |rgb diff| = %.3g\n", max_diff);
 }
@@ -285,7 +287,8 @@ TEST(RayMarcherTest, EarlyTerminationChangesAlmostNothing) {
   RenderWith(ts.field, on, rays, &r1, &a1, &s_on);
   RenderWith(ts.field, off, rays, &r2, &a2, &s_off);
   double max_diff = 0.0;
-  for (size_t i = 0; i < r1.size(); ++i) max_diff = std::max(max_diff, double(std::fabs(r1[i] - r2[i])));
+  for (size_t i = 0; i < r1.size(); ++i)
+    max_diff = std::max(max_diff, double(std::fabs(r1[i] - r2[i])));
   EXPECT_LE(max_diff, 1.1e-4);
   EXPECT_LT(s_on.samples, s_off.samples);
   EXPECT_EQ(s_on.color_samples, s_off.color_samples);
@@ -357,7 +360,8 @@ TEST(RayMarcherTest, SampleBudgetRefusesScenesWithTooManySamplesPerRay) {
   RayMarcher rm;
   const Status s = rm.Init(&ts.field, o);
   EXPECT_EQ(s.code(), kErrLimit);
-  EXPECT_NE(std::string(s.message()).find("1048576 samples per ray"), std::string::npos) << s.message();
+  EXPECT_NE(std::string(s.message()).find("1048576 samples per ray"), std::string::npos)
+      << s.message();
   o.max_samples = kDefaultSampleBudget;
   EXPECT_TRUE(rm.Init(&ts.field, o).ok());
   o.max_samples = 0;
@@ -423,8 +427,10 @@ TEST(RayMarcherTest, EmptyDensityRendersBackground) {
   TestScene t2;
   BuildScene(spec2, &t2);
   for (int m = 0; m < 3; ++m) {
-    for (size_t i = 0; i < t2.field.density.plane_count(m); ++i) t2.field.density.plane_f32[m][i] = 0.f;
-    for (size_t i = 0; i < t2.field.density.line_count(m); ++i) t2.field.density.line_f32[m][i] = 0.f;
+    for (size_t i = 0; i < t2.field.density.plane_count(m); ++i)
+      t2.field.density.plane_f32[m][i] = 0.f;
+    for (size_t i = 0; i < t2.field.density.line_count(m); ++i)
+      t2.field.density.line_f32[m][i] = 0.f;
   }
   for (size_t i = 0; i < t2.field.density.plane_count(0); i += t2.field.density.ranks[0]) {
     t2.field.density.plane_f32[0][i] = -10.f;
@@ -445,20 +451,24 @@ TEST(RayMarcherTest, EmptyDensityRendersBackground) {
 
 // Streams that pass every decoder check can still overflow the rendering arithmetic (binary32
 // MLP weights of +-3e38, grid values near the float range from steps of 2^64): the infinities
-// become NaN inside, and every pixel must still come out as a number in [0, 1] (SPEC.md 1.2, Clip3 and Max of NaN).
+// become NaN inside, and every pixel must still come out as a number in [0, 1] (SPEC.md 1.2, Clip3
+// and Max of NaN).
 TEST(RayMarcherTest, OverflowingStreamsStillRenderDefinedPixels) {
   for (int kind = 0; kind < 2; ++kind) {
     SCOPED_TRACE(kind == 0 ? "MLP weights of +-3e38" : "grid values of +-3e38");
     TestScene ts;
     BuildScene(SceneSpec(), &ts);
     if (kind == 0) {
-      for (size_t i = 0; i < ts.mlp_params.size(); ++i) ts.mlp_params[i] = (i % 3 == 0 ? -3e38f : 3e38f);
+      for (size_t i = 0; i < ts.mlp_params.size(); ++i)
+        ts.mlp_params[i] = (i % 3 == 0 ? -3e38f : 3e38f);
       ASSERT_TRUE(ts.field.mlp.SetParams(ts.mlp_params.data(), ts.mlp_params.size()).ok());
     } else {
       for (VmGrid* g : {&ts.field.density, &ts.field.appearance}) {
         for (int m = 0; m < 3; ++m) {
-          for (size_t i = 0; i < g->plane_count(m); ++i) g->plane_f32[m][i] = (i % 2 ? 3e38f : -3e38f);
-          for (size_t i = 0; i < g->line_count(m); ++i) g->line_f32[m][i] = (i % 3 ? 3e38f : -3e38f);
+          for (size_t i = 0; i < g->plane_count(m); ++i)
+            g->plane_f32[m][i] = (i % 2 ? 3e38f : -3e38f);
+          for (size_t i = 0; i < g->line_count(m); ++i)
+            g->line_f32[m][i] = (i % 3 ? 3e38f : -3e38f);
         }
       }
     }

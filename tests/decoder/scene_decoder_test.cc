@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "decoder/orbit_camera.h"
 #include "decoder/ray_marcher.h"
 #include "decoder/scene_decoder.h"
 #include "ecrf/decoder.h"
@@ -19,7 +20,6 @@
 #include "format/scene_header.h"
 #include "tests/common/grid_md5.h"
 #include "tests/common/scene_vectors.h"
-#include "decoder/orbit_camera.h"
 
 namespace ecrf {
 namespace dec {
@@ -29,7 +29,8 @@ const std::string kDir = std::string(ECRF_SOURCE_DIR) + "/tests/conformance/";
 
 std::vector<uint8_t> ReadFile(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  return std::vector<uint8_t>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return std::vector<uint8_t>((std::istreambuf_iterator<char>(in)),
+                              std::istreambuf_iterator<char>());
 }
 
 std::map<std::string, std::string> SceneManifest() {
@@ -46,7 +47,8 @@ Status Decode(const std::vector<uint8_t>& bytes, SceneField* field, SceneInfo* i
 
 TEST(SceneDecoder, ConformanceScenesDecodeToTheirMd5) {
   const auto manifest = SceneManifest();
-  ASSERT_EQ(manifest.size(), conformance::SceneVectors().size() + 1) << "missing " << kDir << "scenes.md5";
+  ASSERT_EQ(manifest.size(), conformance::SceneVectors().size() + 1)
+      << "missing " << kDir << "scenes.md5";
   for (const auto& [file, md5] : manifest) {
     SceneField field;
     const Status s = Decode(ReadFile(kDir + file), &field);
@@ -66,7 +68,8 @@ TEST(SceneDecoder, ReportsWhatTheStreamHolds) {
   for (const auto& v : conformance::SceneVectors()) {
     SceneField field;
     SceneInfo info;
-    const std::vector<uint8_t> bytes = conformance::BuildSceneVector(v);  // info.metadata points here
+    const std::vector<uint8_t> bytes =
+        conformance::BuildSceneVector(v);  // info.metadata points here
     ASSERT_TRUE(Decode(bytes, &field, &info).ok()) << v.name;
     for (int g = 0; g < 2; ++g) {
       for (int t = 0; t < 6; ++t) {
@@ -78,7 +81,8 @@ TEST(SceneDecoder, ReportsWhatTheStreamHolds) {
         for (int a = 0; a < 3; ++a) EXPECT_EQ(ti.block[a], block[a]);
         EXPECT_LE(ti.coded_blocks, ti.blocks);
       }
-      for (int m = 0; m < 3; ++m) EXPECT_EQ((g ? field.appearance : field.density).ranks[m], v.ranks[g][m]);
+      for (int m = 0; m < 3; ++m)
+        EXPECT_EQ((g ? field.appearance : field.density).ranks[m], v.ranks[g][m]);
     }
     EXPECT_EQ(field.has_mask, v.occupancy != conformance::OccupancyKind::kNone);
     EXPECT_EQ(info.mlp_precision, v.mlp_precision);
@@ -140,7 +144,8 @@ TEST(SceneDecoder, CorruptedStreamsFailCleanlyOrDecodeValidScenes) {
     }
   }
   EXPECT_GT(failed, 100);  // the parsers do reject what they see
-  std::printf("  %d corrupted streams rejected, %d still decoded to valid scenes\n", failed, decoded);
+  std::printf("  %d corrupted streams rejected, %d still decoded to valid scenes\n", failed,
+              decoded);
 }
 
 // Chunk-level syntax errors, each with its category.
@@ -153,7 +158,8 @@ Chunks SplitChunks(const std::vector<uint8_t>& stream) {
     uint32_t type, length;
     std::memcpy(&type, stream.data() + pos, 4);
     std::memcpy(&length, stream.data() + pos + 4, 4);
-    chunks.emplace_back(type, std::vector<uint8_t>(stream.begin() + long(pos) + 8, stream.begin() + long(pos) + 8 + length));
+    chunks.emplace_back(type, std::vector<uint8_t>(stream.begin() + long(pos) + 8,
+                                                   stream.begin() + long(pos) + 8 + length));
     pos += 12 + length;
   }
   return chunks;
@@ -258,13 +264,15 @@ TEST(SceneDecoder, MemoryBudgetIsCheckedBeforeAllocating) {
   SceneField refused;
   Status s = DecodeScene(bytes.data(), bytes.size(), o, &refused, nullptr);
   EXPECT_EQ(s.code(), kErrLimit) << s.message();
-  EXPECT_NE(std::string(s.message()).find("HEAD: the grids need"), std::string::npos) << s.message();
+  EXPECT_NE(std::string(s.message()).find("HEAD: the grids need"), std::string::npos)
+      << s.message();
   EXPECT_TRUE(refused.density.plane_f32[0].empty());
   o.max_memory_bytes = grid_bytes;  // the grids, but not the occupancy mask after them
   SceneField no_mask;
   s = DecodeScene(bytes.data(), bytes.size(), o, &no_mask, nullptr);
   EXPECT_EQ(s.code(), kErrLimit) << s.message();
-  EXPECT_NE(std::string(s.message()).find("OCCU: the occupancy mask need"), std::string::npos) << s.message();
+  EXPECT_NE(std::string(s.message()).find("OCCU: the occupancy mask need"), std::string::npos)
+      << s.message();
   EXPECT_FALSE(no_mask.has_mask);
   o.max_memory_bytes = 1 << 20;
   SceneField ok;
@@ -282,7 +290,8 @@ TEST(SceneDecoder, HostileSizesAreRefusedByTheDefaultBudget) {
   Status s = DecodeScene(grid_bomb.data(), grid_bomb.size(), DecodeOptions(), &field, nullptr);
   EXPECT_EQ(s.code(), kErrLimit) << s.message();
   EXPECT_TRUE(field.density.plane_f32[0].empty());
-  EXPECT_NE(std::string(s.message()).find("memory budget of 268435456 bytes"), std::string::npos) << s.message();
+  EXPECT_NE(std::string(s.message()).find("memory budget of 268435456 bytes"), std::string::npos)
+      << s.message();
 
   // A 2^31-voxel mask (288 MiB with its acceleration levels) behind a tiny grid.
   const uint16_t small[3] = {8, 8, 8};
@@ -319,8 +328,10 @@ TEST(SceneDecoder, Int16StorageMatchesFloat) {
 TEST(DecoderCApi, DecodeInfoTensorRenderAndErrors) {
   ecrf_scene* scene = ecrf_scene_create();
   ASSERT_NE(scene, nullptr);
-  const uint8_t garbage[16] = {'E', 'C', 'R', 'F', 1, 0, 0, 0, 'H', 'E', 'A', 'D', 255, 255, 255, 255};
-  EXPECT_EQ(ecrf_scene_decode(scene, garbage, sizeof(garbage), ECRF_STORAGE_FLOAT32), ECRF_ERR_LIMIT);
+  const uint8_t garbage[16] = {'E', 'C', 'R', 'F', 1,   0,   0,   0,
+                               'H', 'E', 'A', 'D', 255, 255, 255, 255};
+  EXPECT_EQ(ecrf_scene_decode(scene, garbage, sizeof(garbage), ECRF_STORAGE_FLOAT32),
+            ECRF_ERR_LIMIT);
   EXPECT_NE(std::strlen(ecrf_scene_message(scene)), 0u);
   ecrf_scene_info info;
   EXPECT_EQ(ecrf_scene_get_info(scene, &info), ECRF_ERR_INVALID_ARGUMENT);
@@ -355,7 +366,8 @@ TEST(DecoderCApi, DecodeInfoTensorRenderAndErrors) {
   ro.num_threads = 2;
   std::vector<float> rgb(24 * 16 * 3);
   std::vector<uint8_t> rgba(24 * 16 * 4);
-  ASSERT_EQ(ecrf_scene_render(scene, &cam, &ro, rgba.data(), rgb.data()), ECRF_OK) << ecrf_scene_message(scene);
+  ASSERT_EQ(ecrf_scene_render(scene, &cam, &ro, rgba.data(), rgb.data()), ECRF_OK)
+      << ecrf_scene_message(scene);
   for (size_t p = 0; p < 24 * 16; ++p) {
     ASSERT_EQ(rgb[3 * p + 0], 1.f);
     ASSERT_EQ(rgb[3 * p + 1], 0.5f);
@@ -382,8 +394,8 @@ TEST(DecoderCApi, DecodeInfoTensorRenderAndErrors) {
 // scene constants, the mask's bits and the MLP parameters, for every conformance scene.
 TEST(SceneDecoder, CApiExposesTheFieldOccupancyAndMlpOfTheReferenceRenderer) {
   for (const char* name :
-       {"scene_builtin.ecrf", "scene_quantized_mlp.ecrf", "scene_ranks_dropped.ecrf", "scene_unbounded.ecrf",
-        "scene_forward.ecrf"}) {
+       {"scene_builtin.ecrf", "scene_quantized_mlp.ecrf", "scene_ranks_dropped.ecrf",
+        "scene_unbounded.ecrf", "scene_forward.ecrf"}) {
     SCOPED_TRACE(name);
     const std::vector<uint8_t> bytes = ReadFile(kDir + name);
     SceneField field;
@@ -395,8 +407,10 @@ TEST(SceneDecoder, CApiExposesTheFieldOccupancyAndMlpOfTheReferenceRenderer) {
     ASSERT_EQ(ecrf_scene_decode(scene, bytes.data(), bytes.size(), ECRF_STORAGE_FLOAT32), ECRF_OK);
     ASSERT_EQ(ecrf_scene_get_field(scene, &f), ECRF_OK);
     EXPECT_EQ(ecrf_scene_model(scene), static_cast<int>(field.scene_model));
-    EXPECT_EQ(ecrf_scene_model(scene) == ECRF_SCENE_UNBOUNDED, std::string(name) == "scene_unbounded.ecrf");
-    EXPECT_EQ(ecrf_scene_model(scene) == ECRF_SCENE_FORWARD, std::string(name) == "scene_forward.ecrf");
+    EXPECT_EQ(ecrf_scene_model(scene) == ECRF_SCENE_UNBOUNDED,
+              std::string(name) == "scene_unbounded.ecrf");
+    EXPECT_EQ(ecrf_scene_model(scene) == ECRF_SCENE_FORWARD,
+              std::string(name) == "scene_forward.ecrf");
     float frame[15];
     if (field.scene_model == SceneModel::kForward) {
       ASSERT_EQ(ecrf_scene_ndc_frame(scene, frame), ECRF_OK);
@@ -414,11 +428,13 @@ TEST(SceneDecoder, CApiExposesTheFieldOccupancyAndMlpOfTheReferenceRenderer) {
     EXPECT_EQ(f.mlp_products, field.appearance.total_rank());
     EXPECT_EQ(f.mlp_inputs, f.mlp_features + 3 + 2 * f.mlp_features * f.mlp_feature_freqs +
                                 6 * f.mlp_viewdir_freqs);
-    EXPECT_EQ(f.mlp_params, size_t(f.mlp_features) * f.mlp_products + size_t(c.hidden) * f.mlp_inputs +
-                                size_t(c.hidden) * c.hidden + 3u * c.hidden + 2u * c.hidden + 3u);
+    EXPECT_EQ(f.mlp_params, size_t(f.mlp_features) * f.mlp_products +
+                                size_t(c.hidden) * f.mlp_inputs + size_t(c.hidden) * c.hidden +
+                                3u * c.hidden + 2u * c.hidden + 3u);
 
     std::vector<float> params(f.mlp_params), expected(f.mlp_params);
-    EXPECT_EQ(ecrf_scene_mlp_params(scene, params.data(), params.size() - 1), ECRF_ERR_INVALID_ARGUMENT);
+    EXPECT_EQ(ecrf_scene_mlp_params(scene, params.data(), params.size() - 1),
+              ECRF_ERR_INVALID_ARGUMENT);
     ASSERT_EQ(ecrf_scene_mlp_params(scene, params.data(), params.size()), ECRF_OK);
     ASSERT_TRUE(field.mlp.GetParams(expected.data(), expected.size()).ok());
     EXPECT_EQ(std::memcmp(params.data(), expected.data(), params.size() * sizeof(float)), 0);

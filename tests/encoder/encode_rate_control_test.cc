@@ -4,8 +4,8 @@
 
 #include <stdexcept>
 
-#include "trainer/train/rate_state.h"
 #include "trainer/model/tensorf_model.h"
+#include "trainer/train/rate_state.h"
 
 namespace ecrf {
 namespace trainer {

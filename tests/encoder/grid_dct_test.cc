@@ -48,8 +48,7 @@ std::vector<LayoutCase> Cases() {
       {true, {19, 13, 7}, 5, 1, {16, 16, 16}},  // one block per axis, heavy padding
       {true, {16, 32, 8}, 16, 2, {16, 8, 8}},   // exact multiples
       {true, {9, 11, 6}, 3, 1, {1, 4, 4}},      // 1 x K x K plane blocks
-      {true, {5, 5, 5}, 48, 0, {32, 2, 1}},
-      {false, {19, 13, 7}, 5, 0, {1, 8, 8}},
+      {true, {5, 5, 5}, 48, 0, {32, 2, 1}},     {false, {19, 13, 7}, 5, 0, {1, 8, 8}},
       {false, {19, 13, 10}, 12, 2, {1, 4, 32}},
   };
 }
@@ -152,7 +151,8 @@ TEST(GridDctTest, EdgeReplicationKeepsConstantTensorsDcOnly) {
   ForwardBlocks(x.data(), L, coeffs.data());
   for (int id = 0; id < L.num_blocks(); ++id) {
     EXPECT_NEAR(coeffs[static_cast<size_t>(id) * 4096], 2.f * 64.f, 1e-3f);
-    for (int p = 1; p < 4096; ++p) ASSERT_NEAR(coeffs[static_cast<size_t>(id) * 4096 + p], 0.f, 1e-4f);
+    for (int p = 1; p < 4096; ++p)
+      ASSERT_NEAR(coeffs[static_cast<size_t>(id) * 4096 + p], 0.f, 1e-4f);
   }
 }
 
@@ -167,13 +167,15 @@ TEST(GridDctTest, BlockListMatchesFullTransform) {
   std::vector<float> sub(ids.size() * V);
   ForwardBlockList(x.data(), L, ids.data(), static_cast<int>(ids.size()), sub.data());
   for (size_t j = 0; j < ids.size(); ++j) {
-    for (int p = 0; p < V; ++p) ASSERT_EQ(sub[j * V + p], full[static_cast<size_t>(ids[j]) * V + p]);
+    for (int p = 0; p < V; ++p)
+      ASSERT_EQ(sub[j * V + p], full[static_cast<size_t>(ids[j]) * V + p]);
   }
   // Backward of a list == backward of the full array with zeros elsewhere.
   const std::vector<float> g = RandomVector(sub.size(), 18);
   std::vector<float> gfull(L.num_coeffs(), 0.f);
   for (size_t j = 0; j < ids.size(); ++j) {
-    std::copy(g.begin() + j * V, g.begin() + (j + 1) * V, gfull.begin() + static_cast<size_t>(ids[j]) * V);
+    std::copy(g.begin() + j * V, g.begin() + (j + 1) * V,
+              gfull.begin() + static_cast<size_t>(ids[j]) * V);
   }
   std::vector<float> a(L.tensor_size(), 0.f), b(L.tensor_size(), 0.f);
   BackwardBlockList(g.data(), L, ids.data(), static_cast<int>(ids.size()), a.data());
@@ -216,9 +218,10 @@ TEST(GridDctTest, SpeedFullAppearanceGrid300) {
     best_b = std::min(best_b, std::chrono::duration<double>(t2 - t1).count());
     cpu = std::min(cpu, double(std::clock() - c0) / CLOCKS_PER_SEC);
   }
-  std::printf("[speed] app grid 300^3: %zu values, %zu coeffs; forward %.1f ms, backward %.1f ms "
-              "wall; forward+backward %.1f ms CPU\n",
-              grid.params().size(), total, best_f * 1e3, best_b * 1e3, cpu * 1e3);
+  std::printf(
+      "[speed] app grid 300^3: %zu values, %zu coeffs; forward %.1f ms, backward %.1f ms "
+      "wall; forward+backward %.1f ms CPU\n",
+      grid.params().size(), total, best_f * 1e3, best_b * 1e3, cpu * 1e3);
   // After 3 accumulations of F^T F x: grads = 3 * pad^T pad x; interior elements = 3 x.
   EXPECT_NEAR(grid.grads()[12345], 3.f * grid.params()[12345], 1e-4f);
 }
@@ -275,8 +278,7 @@ TEST(RateObjectiveTest, RegularizerValueAndGradient) {
   SmallSetup s;
   s.density.ZeroGrads();
   s.app.ZeroGrads();
-  const RateEstimate e =
-      AddRateGradients(s.grids(), s.steps, s.config, &s.model, 0.f, 1.f, 1.f, 1);
+  const RateEstimate e = AddRateGradients(s.grids(), s.steps, s.config, &s.model, 0.f, 1.f, 1.f, 1);
   // Value: sum of squares of the padded blocks' coefficients == of the padded tensors.
   double reg = 0.0;
   for (VmGrid* g : s.grids()) {
@@ -291,8 +293,12 @@ TEST(RateObjectiveTest, RegularizerValueAndGradient) {
   // Gradient by central differences (exact for a quadratic up to float rounding), including
   // corner / edge elements that padding replicates.
   for (VmGrid* g : s.grids()) {
-    const std::vector<size_t> probe = {0, 7, g->params().size() / 2, g->params().size() - 1,
-                                       g->line_offset(0) - 1, g->line_offset(2) + 3};
+    const std::vector<size_t> probe = {0,
+                                       7,
+                                       g->params().size() / 2,
+                                       g->params().size() - 1,
+                                       g->line_offset(0) - 1,
+                                       g->line_offset(2) + 3};
     for (size_t i : probe) {
       const float h = 1e-2f;
       const float orig = g->params()[i];
@@ -330,7 +336,8 @@ TEST(RateObjectiveTest, BitsGradientMatchesFiniteDifferences) {
   for (VmGrid* g : s.grids()) {
     for (size_t i : {size_t(1), size_t(50), g->params().size() / 3, g->params().size() - 2,
                      g->line_offset(1) + 1}) {
-      const float h = 1e-2f;  // float rounding of ~10^4 per-coefficient bit counts needs a wide step
+      const float h =
+          1e-2f;  // float rounding of ~10^4 per-coefficient bit counts needs a wide step
       const float orig = g->params()[i];
       g->params()[i] = orig + h;
       const double up = loss();
@@ -383,7 +390,8 @@ TEST(RateObjectiveTest, EvaluateRateMatchesPerCoefficientModel) {
     double bits = 0.0;
     for (size_t i = 0; i < c.size(); ++i) {
       const int p = static_cast<int>(i % L.block_volume());
-      const int k2 = p % L.block[2], k1 = (p / L.block[2]) % L.block[1], k0 = p / (L.block[1] * L.block[2]);
+      const int k2 = p % L.block[2], k1 = (p / L.block[2]) % L.block[1],
+                k0 = p / (L.block[1] * L.block[2]);
       const int model = RateModelIndex(ti, FrequencyBand(ti % 6 >= 3, k0, k1, k2));
       bits += s.model.BitsDouble(model, std::round(c[i] / s.steps[ti]), nullptr, nullptr);
     }
@@ -411,11 +419,14 @@ TEST(RateObjectiveTest, SpeedAt300) {
       const std::clock_t c0 = std::clock();
       auto t0 = std::chrono::steady_clock::now();
       AddRateGradients({&density, &app}, steps, config, &model, 1e-9f, 1e-9f, f, rep);
-      best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+      best = std::min(best,
+                      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
       cpu = std::min(cpu, double(std::clock() - c0) / CLOCKS_PER_SEC);
     }
-    std::printf("[speed] AddRateGradients 300^3 density+app, fraction %.2f: %.1f ms wall, %.1f ms "
-                "CPU\n", f, best * 1e3, cpu * 1e3);
+    std::printf(
+        "[speed] AddRateGradients 300^3 density+app, fraction %.2f: %.1f ms wall, %.1f ms "
+        "CPU\n",
+        f, best * 1e3, cpu * 1e3);
   }
   auto t0 = std::chrono::steady_clock::now();
   const RateReport rep = EvaluateRate({&density, &app}, steps, config, model);

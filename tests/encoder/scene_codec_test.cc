@@ -9,17 +9,17 @@
 #include <string>
 #include <vector>
 
+#include "decoder/orbit_camera.h"
 #include "decoder/ray_marcher.h"
 #include "decoder/scene_decoder.h"
+#include "encoder/grid_dct.h"
+#include "encoder/scene_encoder.h"
 #include "format/int_idct.h"
 #include "tests/common/decode_or_die.h"
 #include "tests/common/grid_md5.h"
-#include "encoder/grid_dct.h"
 #include "trainer/data/image_io.h"
 #include "trainer/data/image_metrics.h"
 #include "trainer/train/rate_state.h"
-#include "encoder/scene_encoder.h"
-#include "decoder/orbit_camera.h"
 
 namespace ecrf {
 namespace trainer {
@@ -86,8 +86,9 @@ TEST(SceneCodec, DecodedGridsAreTheQuantizedModel) {
     EXPECT_LT(worst_units, 1.05) << coef_bits << "-bit";
     // Error against the float model: at most half a step per coefficient, spread by the IDCT.
     EXPECT_LT(worst_quant, 4.0) << coef_bits << "-bit";
-    std::printf("  %d-bit: decoded vs float-quantized max %.3f output units; vs model max %.3f steps\n",
-                coef_bits, worst_units, worst_quant);
+    std::printf(
+        "  %d-bit: decoded vs float-quantized max %.3f output units; vs model max %.3f steps\n",
+        coef_bits, worst_units, worst_quant);
   }
 }
 
@@ -104,7 +105,8 @@ TEST(SceneCodec, EncodingIsDeterministicAndMlpPrecisionsAgree) {
     for (int t = 0; t < 6; ++t) {
       const size_t n = t < 3 ? (g ? fa.appearance : fa.density).plane_count(t)
                              : (g ? fa.appearance : fa.density).line_count(t - 3);
-      for (size_t i = 0; i < n; ++i) ASSERT_EQ(DecodedTensor(fa, g, t)[i], DecodedTensor(fb, g, t)[i]);
+      for (size_t i = 0; i < n; ++i)
+        ASSERT_EQ(DecodedTensor(fa, g, t)[i], DecodedTensor(fb, g, t)[i]);
     }
   }
   EXPECT_LT(a.size(), b.size());
@@ -135,19 +137,24 @@ TensorfModel BumpyModel() {
   model.Initialize({48, 40, 44}, 9);
   VmGrid& grid = model.appearance();
   uint32_t state = 12345;
-  auto next = [&state] { state = state * 1664525u + 1013904223u; return float(state >> 8) / float(1u << 24); };
+  auto next = [&state] {
+    state = state * 1664525u + 1013904223u;
+    return float(state >> 8) / float(1u << 24);
+  };
   for (int m = 0; m < 3; ++m) {
     const int rank = grid.ranks()[m];
     const int h = grid.res()[kMatMode[m][1]], w = grid.res()[kMatMode[m][0]];
     float* plane = grid.plane(m);
     std::fill(plane, plane + size_t(h) * w * rank, 0.f);
     for (int bump = 0; bump < 30; ++bump) {
-      const float cy = next() * h, cx = next() * w, width = 0.7f + 4.f * next(), amp = 2.f * next() - 1.f;
+      const float cy = next() * h, cx = next() * w, width = 0.7f + 4.f * next(),
+                  amp = 2.f * next() - 1.f;
       for (int y = 0; y < h; ++y) {
         for (int x = 0; x < w; ++x) {
           const float d2 = ((y - cy) * (y - cy) + (x - cx) * (x - cx)) / (width * width);
           if (d2 > 9.f) continue;
-          for (int r = 0; r < rank; ++r) plane[(size_t(y) * w + x) * rank + r] += amp * std::exp(-d2) / float(1 + r);
+          for (int r = 0; r < rank; ++r)
+            plane[(size_t(y) * w + x) * rank + r] += amp * std::exp(-d2) / float(1 + r);
         }
       }
     }

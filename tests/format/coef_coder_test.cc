@@ -137,25 +137,25 @@ TEST(CoefScanTest, ShapeValidation) {
 TEST(CoefCoderTest, RoundTripEveryShapeWithBothContextSets) {
   SplitMix rng(42);
   for (const BlockShape& shape : AllValidShapes()) {
-   for (const CoefContextSet set : {CoefContextSet::kNarrow, CoefContextSet::kWide}) {
-    SCOPED_TRACE(testing::Message() << shape.n0 << "x" << shape.n1 << "x" << shape.n2
-                                    << (set == CoefContextSet::kWide ? " wide" : " narrow"));
-    const size_t volume = static_cast<size_t>(shape.Volume());
-    std::vector<std::vector<int32_t>> blocks;
-    blocks.emplace_back(volume, 0);  // all zero
-    blocks.emplace_back(volume, 0);
-    blocks.back()[0] = -7;  // DC only
-    blocks.emplace_back(volume, 0);
-    blocks.back()[volume - 1] = 1;  // highest frequency only (eob = volume)
-    blocks.emplace_back(volume, 0);
-    blocks.back()[volume - 1] = -127;
-    for (int n = 0; n < 4; ++n) blocks.push_back(SparseBlock(rng, shape, 127));
-    blocks.emplace_back(volume, 0);
-    for (size_t r = 0; r < volume; ++r)
-      blocks.back()[r] = static_cast<int32_t>(rng.Below(255)) - 127;
-    blocks.emplace_back(volume, 0);
-    ExpectDecodes(shape, Encode(shape, std::move(blocks), set), 127, set);
-   }
+    for (const CoefContextSet set : {CoefContextSet::kNarrow, CoefContextSet::kWide}) {
+      SCOPED_TRACE(testing::Message() << shape.n0 << "x" << shape.n1 << "x" << shape.n2
+                                      << (set == CoefContextSet::kWide ? " wide" : " narrow"));
+      const size_t volume = static_cast<size_t>(shape.Volume());
+      std::vector<std::vector<int32_t>> blocks;
+      blocks.emplace_back(volume, 0);  // all zero
+      blocks.emplace_back(volume, 0);
+      blocks.back()[0] = -7;  // DC only
+      blocks.emplace_back(volume, 0);
+      blocks.back()[volume - 1] = 1;  // highest frequency only (eob = volume)
+      blocks.emplace_back(volume, 0);
+      blocks.back()[volume - 1] = -127;
+      for (int n = 0; n < 4; ++n) blocks.push_back(SparseBlock(rng, shape, 127));
+      blocks.emplace_back(volume, 0);
+      for (size_t r = 0; r < volume; ++r)
+        blocks.back()[r] = static_cast<int32_t>(rng.Below(255)) - 127;
+      blocks.emplace_back(volume, 0);
+      ExpectDecodes(shape, Encode(shape, std::move(blocks), set), 127, set);
+    }
   }
 }
 
@@ -175,7 +175,8 @@ TEST(CoefCoderTest, WideContextsCodeBlocksWithVaryingExtentsInFewerBytes) {
         for (int k = 0; k < 16; ++k) {
           const bool inside = i < e0 && j < e1 && k < e2;
           if (rng.Below(100) >= (inside ? 60u : 2u)) continue;
-          const int32_t magnitude = 1 + static_cast<int32_t>(rng.Below(inside && i + j + k < 4 ? 6 : 2));
+          const int32_t magnitude =
+              1 + static_cast<int32_t>(rng.Below(inside && i + j + k < 4 ? 6 : 2));
           block[static_cast<size_t>((i * 16 + j) * 16 + k)] = rng.Below(2) ? -magnitude : magnitude;
         }
       }
@@ -188,8 +189,6 @@ TEST(CoefCoderTest, WideContextsCodeBlocksWithVaryingExtentsInFewerBytes) {
   ExpectDecodes(shape, wide, 127, CoefContextSet::kWide);
   EXPECT_LT(wide.bytes.size(), narrow.bytes.size() * 0.98);  // measured: 3.5% fewer
 }
-
-
 
 TEST(CoefCoderTest, ExtremeAndSixteenBitValues) {
   SplitMix rng(7);

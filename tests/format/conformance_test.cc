@@ -17,7 +17,8 @@ const std::string kDir = std::string(ECRF_SOURCE_DIR) + "/tests/conformance/";
 
 std::vector<uint8_t> ReadFile(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  return std::vector<uint8_t>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return std::vector<uint8_t>((std::istreambuf_iterator<char>(in)),
+                              std::istreambuf_iterator<char>());
 }
 
 std::map<std::string, std::string> Manifest() {
@@ -31,13 +32,15 @@ std::map<std::string, std::string> Manifest() {
 TEST(Conformance, Md5ImplementationMatchesRfc1321) {
   EXPECT_EQ(testing_md5::Md5Hex("", 0), "d41d8cd98f00b204e9800998ecf8427e");
   EXPECT_EQ(testing_md5::Md5Hex("abc", 3), "900150983cd24fb0d6963f7d28e17f72");
-  const std::string s = "12345678901234567890123456789012345678901234567890123456789012345678901234567890";
+  const std::string s =
+      "12345678901234567890123456789012345678901234567890123456789012345678901234567890";
   EXPECT_EQ(testing_md5::Md5Hex(s.data(), s.size()), "57edf4a22be3c955ac49da2e2107b67a");
 }
 
 TEST(Conformance, CheckedInVectorsDecodeToTheirMd5) {
   const auto manifest = Manifest();
-  ASSERT_EQ(manifest.size(), conformance::CoefVectors().size()) << "missing " << kDir << "coefficients.md5";
+  ASSERT_EQ(manifest.size(), conformance::CoefVectors().size())
+      << "missing " << kDir << "coefficients.md5";
   for (const auto& v : conformance::CoefVectors()) {
     const std::string file = std::string(v.name) + ".bin";
     const std::vector<uint8_t> stream = ReadFile(kDir + file);
@@ -55,7 +58,8 @@ TEST(Conformance, EncoderStillWritesTheCheckedInStreams) {
   for (const auto& v : conformance::CoefVectors()) {
     const std::vector<uint8_t> stream = ReadFile(kDir + v.name + ".bin");
     EXPECT_TRUE(conformance::EncodeVector(v) == stream)
-        << v.name << ": the encoder's output changed. If intended, the bitstream version must change "
+        << v.name
+        << ": the encoder's output changed. If intended, the bitstream version must change "
         << "and the vectors be rebuilt with `ecrf conformance --write tests/conformance`.";
   }
 }

@@ -58,7 +58,8 @@ TEST(IntIdct, TablesMatchTheirDefinition) {
       EXPECT_EQ(t[j], int32_t(std::floor(v + 0.5))) << "N=" << n << " j=" << j;
     }
     // The DC row reuses K_N[N/2] = round(2^26 sqrt(1/N)).
-    EXPECT_EQ(IdctMatrixEntry(n, 0, 0), int32_t(std::floor(std::ldexp(std::sqrt(1.0 / n), 26) + 0.5)));
+    EXPECT_EQ(IdctMatrixEntry(n, 0, 0),
+              int32_t(std::floor(std::ldexp(std::sqrt(1.0 / n), 26) + 0.5)));
     // Every entry matches the rounded real matrix.
     const double* m = DctMatrix(n);
     for (int k = 0; k < n; ++k)
@@ -99,9 +100,10 @@ TEST_P(IntIdctShapes, RandomBlocksWithinOneUnitOfFloat64) {
     EXPECT_LE(laplacian.max_error, 1.0) << s[0] << "x" << s[1] << "x" << s[2];
     if (::testing::Test::HasFailure() || (s[0] == 16 && s[1] == 16 && s[2] == 16) ||
         (s[0] == 1 && s[1] == 8 && s[2] == 8) || (s[0] == 1 && s[1] == 32 && s[2] == 32)) {
-      std::printf("  %d-bit %2dx%2dx%2d: uniform max %.3f mean %.4f, laplacian max %.3f mean %.4f\n",
-                  bits, s[0], s[1], s[2], uniform.max_error, uniform.sum_error / uniform.count,
-                  laplacian.max_error, laplacian.sum_error / laplacian.count);
+      std::printf(
+          "  %d-bit %2dx%2dx%2d: uniform max %.3f mean %.4f, laplacian max %.3f mean %.4f\n", bits,
+          s[0], s[1], s[2], uniform.max_error, uniform.sum_error / uniform.count,
+          laplacian.max_error, laplacian.sum_error / laplacian.count);
     }
   }
 }
@@ -129,7 +131,9 @@ TEST(IntIdct, WorstCaseInputsStayExactAndInRange) {
       for (int i0 = 0; i0 < dims[0]; ++i0)
         for (int i1 = 0; i1 < dims[1]; ++i1)
           for (int i2 = 0; i2 < dims[2]; ++i2) {
-            auto sign = [](int n, int k) { return n == 1 || IdctMatrixEntry(n, k, 0) >= 0 ? 1 : -1; };
+            auto sign = [](int n, int k) {
+              return n == 1 || IdctMatrixEntry(n, k, 0) >= 0 ? 1 : -1;
+            };
             peak[(i0 * dims[1] + i1) * dims[2] + i2] =
                 max_q * sign(dims[0], i0) * sign(dims[1], i1) * sign(dims[2], i2);
           }
@@ -176,7 +180,8 @@ TEST(IntIdct, ForwardThenIntegerInverseRecoversQuantizedSignal) {
   std::mt19937 rng(7);
   const int dims[3] = {4, 8, 8};
   std::vector<double> x(256);
-  for (int i = 0; i < 256; ++i) x[i] = 20.0 * std::sin(0.1 * i) + std::normal_distribution<>(0, 2)(rng);
+  for (int i = 0; i < 256; ++i)
+    x[i] = 20.0 * std::sin(0.1 * i) + std::normal_distribution<>(0, 2)(rng);
   std::vector<double> c = x;
   ForwardDct(c.data(), dims);
   std::vector<int32_t> q(256);

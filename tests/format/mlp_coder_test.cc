@@ -60,17 +60,20 @@ TEST(MlpCoder, RoundTripIsWhatTheEncoderPredictsAndErrorIsHalfAStep) {
     for (const MlpMatrixSpan& mat : m) {
       for (int r = 0; r < mat.rows; ++r) {
         float peak = 0.f;
-        for (int c = 0; c < mat.cols; ++c) peak = std::fmax(peak, std::fabs(w[mat.offset + size_t(r) * mat.cols + c]));
+        for (int c = 0; c < mat.cols; ++c)
+          peak = std::fmax(peak, std::fabs(w[mat.offset + size_t(r) * mat.cols + c]));
         const float step = HalfToFloat(FloatToHalf(peak / float(max_level)));
         for (int c = 0; c < mat.cols; ++c) {
           const size_t i = mat.offset + size_t(r) * mat.cols + c;
           // Rounded to the row's step (binary16 steps round the step, not the error bound).
-          EXPECT_LE(std::fabs(decoded[i] - w[i]), step > 0.f ? 0.5001f * step + 1e-6f * std::fabs(w[i]) : std::fabs(w[i]) + 0.f);
+          EXPECT_LE(std::fabs(decoded[i] - w[i]),
+                    step > 0.f ? 0.5001f * step + 1e-6f * std::fabs(w[i]) : std::fabs(w[i]) + 0.f);
         }
       }
     }
     for (const MlpMatrixSpan& bias : b) {
-      for (int c = 0; c < bias.cols; ++c) EXPECT_EQ(decoded[bias.offset + c], HalfToFloat(FloatToHalf(w[bias.offset + c])));
+      for (int c = 0; c < bias.cols; ++c)
+        EXPECT_EQ(decoded[bias.offset + c], HalfToFloat(FloatToHalf(w[bias.offset + c])));
     }
   }
 }

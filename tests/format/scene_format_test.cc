@@ -117,11 +117,14 @@ TEST(SceneHeader, RejectsInvalidFields) {
       {"res 1", [](SceneHeader* h) { h->res[0] = 1; }, kErrLimit},
       {"res 4097", [](SceneHeader* h) { h->res[2] = 4097; }, kErrLimit},
       {"rank 1025", [](SceneHeader* h) { h->ranks[0][1] = 1025; }, kErrLimit},
-      {"too many values", [](SceneHeader* h) {
+      {"too many values",
+       [](SceneHeader* h) {
          h->res[0] = h->res[1] = h->res[2] = 4096;
          h->ranks[1][0] = 1000;
-       }, kErrLimit},
-      {"no appearance", [](SceneHeader* h) { h->ranks[1][0] = h->ranks[1][1] = h->ranks[1][2] = 0; }, kErrCorrupt},
+       },
+       kErrLimit},
+      {"no appearance",
+       [](SceneHeader* h) { h->ranks[1][0] = h->ranks[1][1] = h->ranks[1][2] = 0; }, kErrCorrupt},
       {"step 0", [](SceneHeader* h) { h->step_size = 0.f; }, kErrCorrupt},
       {"no samples", [](SceneHeader* h) { h->num_samples = 0; }, kErrLimit},
       {"near > far", [](SceneHeader* h) { h->near_far[0] = 7.f; }, kErrCorrupt},
@@ -146,7 +149,8 @@ TEST(SceneHeader, RejectsInvalidFields) {
   EXPECT_EQ(ParseSceneHeader(w.bytes().data(), w.size() - 1, &back).code(), kErrCorrupt);
 }
 
-std::vector<uint8_t> DecodeVolume(const std::vector<uint8_t>& stream, const int res[3], Status* status) {
+std::vector<uint8_t> DecodeVolume(const std::vector<uint8_t>& stream, const int res[3],
+                                  Status* status) {
   std::vector<uint8_t> bits(OccupancyBytes(res), 0xAB);
   *status = DecodeOccupancy(stream.data(), stream.size(), res, bits.data());
   std::vector<uint8_t> voxels(size_t(res[0]) * res[1] * res[2]);
@@ -164,7 +168,8 @@ TEST(OccupancyCoder, RoundTripsStructuredAndRandomVolumes) {
       for (int z = 0; z < res[2]; ++z)
         for (int y = 0; y < res[1]; ++y)
           for (int x = 0; x < res[0]; ++x) {
-            const double dx = 2.0 * x / res[0] - 1, dy = 2.0 * y / res[1] - 1, dz = 2.0 * z / res[2] - 1;
+            const double dx = 2.0 * x / res[0] - 1, dy = 2.0 * y / res[1] - 1,
+                         dz = 2.0 * z / res[2] - 1;
             uint8_t bit = 0;
             if (kind == 1) bit = 1;
             if (kind == 2) bit = dx * dx + dy * dy + dz * dz < 0.5;
@@ -173,13 +178,15 @@ TEST(OccupancyCoder, RoundTripsStructuredAndRandomVolumes) {
           }
       const std::vector<uint8_t> stream = EncodeOccupancy(v.data(), res);
       Status s;
-      EXPECT_EQ(DecodeVolume(stream, res, &s), v) << res[0] << "x" << res[1] << "x" << res[2] << " kind " << kind;
+      EXPECT_EQ(DecodeVolume(stream, res, &s), v)
+          << res[0] << "x" << res[1] << "x" << res[2] << " kind " << kind;
       EXPECT_TRUE(s.ok()) << s.message();
       if (kind == 0 && n >= 64 * 64 * 64) {
         EXPECT_LT(stream.size(), 40u) << "empty volumes must cost almost nothing";
       }
       if (kind == 2 && n >= 64 * 64 * 64) {
-        EXPECT_LT(stream.size() * 8.0 / n, 0.05) << "a smooth solid costs well under a bit per voxel";
+        EXPECT_LT(stream.size() * 8.0 / n, 0.05)
+            << "a smooth solid costs well under a bit per voxel";
       }
     }
   }

@@ -12,11 +12,13 @@
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size < 2) return 0;
   // First byte picks the shape, the context set and the bit depth; the rest is the coded stream.
-  static const ecrf::BlockShape kShapes[] = {{16, 16, 16}, {1, 8, 8}, {1, 1, 32}, {32, 4, 32}, {1, 1, 1}};
+  static const ecrf::BlockShape kShapes[] = {
+      {16, 16, 16}, {1, 8, 8}, {1, 1, 32}, {32, 4, 32}, {1, 1, 1}};
   const ecrf::BlockShape shape = kShapes[data[0] % 5];
   const bool wide = data[0] & 0x80;
   const int32_t max_abs = wide ? 32767 : 127;
-  const ecrf::CoefContextSet set = data[0] & 0x40 ? ecrf::CoefContextSet::kWide : ecrf::CoefContextSet::kNarrow;
+  const ecrf::CoefContextSet set =
+      data[0] & 0x40 ? ecrf::CoefContextSet::kWide : ecrf::CoefContextSet::kNarrow;
   ecrf::CoefContexts contexts;
   if (!contexts.Init(shape, set).ok()) return 0;
   ecrf::RangeDecoder decoder(data + 1, size - 1);

@@ -9,7 +9,8 @@
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   ecrf::dec::SceneField scene;
   ecrf::dec::SceneInfo info;
-  const ecrf::Status s = ecrf::dec::DecodeScene(data, size, ecrf::dec::DecodeOptions(), &scene, &info);
+  const ecrf::Status s =
+      ecrf::dec::DecodeScene(data, size, ecrf::dec::DecodeOptions(), &scene, &info);
   if (s.ok() && !scene.Validate().ok()) __builtin_trap();
   return 0;
 }

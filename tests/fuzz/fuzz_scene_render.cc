@@ -6,9 +6,9 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "decoder/orbit_camera.h"
 #include "decoder/ray_marcher.h"
 #include "decoder/scene_decoder.h"
-#include "decoder/orbit_camera.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size < 1) return 0;

@@ -46,8 +46,8 @@ Output Capture(int (*command)(int, char**), const std::vector<std::string>& args
   return r;
 }
 
-// The line of a CLI11 help text that starts with flag ("  --early-stop T:FLOAT in [0 - 1]=0.0001 ..."),
-// or "" when the help does not list the flag.
+// The line of a CLI11 help text that starts with flag ("  --early-stop T:FLOAT in [0 - 1]=0.0001
+// ..."), or "" when the help does not list the flag.
 std::string FlagLine(const std::string& help, const std::string& flag) {
   std::istringstream in(help);
   std::string line;
@@ -69,7 +69,8 @@ void ExpectFlag(const std::string& help, const std::string& flag, const std::str
   if (value.empty()) return;
   const std::string shown = "=" + value;
   const size_t at = line.find(shown);
-  EXPECT_TRUE(at != std::string::npos && (at + shown.size() == line.size() || line[at + shown.size()] == ' '))
+  EXPECT_TRUE(at != std::string::npos &&
+              (at + shown.size() == line.size() || line[at + shown.size()] == ' '))
       << flag << ": '" << line << "' does not show the default '" << shown << "'";
 }
 
@@ -90,8 +91,8 @@ void ExpectRenderFlags(const std::string& help) {
   ExpectFlag(help, "--early-stop", Text(defaults.early_stop_transmittance));
   ExpectFlag(help, "--samples", Text(defaults.max_samples));
   ExpectFlag(help, "--step-scale", Text(defaults.step_scale));
-  EXPECT_NE(FlagLine(help, "--step-scale").find("[" + Text(dec::kMinStepScale) + " - " +
-                                                  Text(dec::kMaxStepScale) + "]"),
+  EXPECT_NE(FlagLine(help, "--step-scale")
+                .find("[" + Text(dec::kMinStepScale) + " - " + Text(dec::kMaxStepScale) + "]"),
             std::string::npos);
   ExpectFlag(help, "--weight-threshold", "the scene's");
   ExpectFlag(help, "--max-memory-mb", Text(dec::kDefaultDecodeMemoryBudget >> 20));
@@ -135,7 +136,8 @@ TEST(Cli, EvalHelpShowsTrainsNamesAndDefaults) {
   ExpectFlag(r.out, "--eval-downscale", "1");
   ExpectFlag(r.out, "--image-scale", "1");
   // The old names are not offered (they only explain the rename when used).
-  for (const char* old : {"--stride", "--downscale", "--max-views"}) EXPECT_EQ(FlagLine(r.out, old), "") << old;
+  for (const char* old : {"--stride", "--downscale", "--max-views"})
+    EXPECT_EQ(FlagLine(r.out, old), "") << old;
   ExpectRenderFlags(r.out);
 }
 
@@ -148,13 +150,19 @@ TEST(Cli, OtherCommandsHelpExitsZeroWithTheirFlags) {
   const std::vector<Case> cases = {
       {RunInfo, {"info", "--help"}, {"SCENE", "--md5"}},
       {RunConformance, {"conformance", "--help"}, {"--write", "--check", "--retrain-builtin"}},
-      {RunReport, {"report", "render", "--help"}, {"REPORT", "--lambda", "--test-stride", "--max-views"}},
+      {RunReport,
+       {"report", "render", "--help"},
+       {"REPORT", "--lambda", "--test-stride", "--max-views"}},
       {RunReport, {"report", "compare", "--help"}, {"A", "B", "--json", "--plot"}},
       {RunReport, {"report", "plot", "--help"}, {"REPORT"}},
       {RunBench, {"bench", "coder", "--help"}, {"--json"}},
       {RunBench, {"bench", "idct", "--help"}, {"--json"}},
-      {RunBench, {"bench", "mlp", "--help"}, {"--n", "--threads", "--reps", "--chunk", "--adam", "--best"}},
-      {RunBench, {"bench", "train", "--help"}, {"--res", "--rays", "--reps", "--threads", "--mask", "--blob-peak"}},
+      {RunBench,
+       {"bench", "mlp", "--help"},
+       {"--n", "--threads", "--reps", "--chunk", "--adam", "--best"}},
+      {RunBench,
+       {"bench", "train", "--help"},
+       {"--res", "--rays", "--reps", "--threads", "--mask", "--blob-peak"}},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.args[0] + " " + c.args[1]);
@@ -177,28 +185,32 @@ TEST(Cli, SelfcheckHelpDoesNotRunTheCheck) {
   EXPECT_NE(help.out.find("Usage: ecrf selfcheck"), std::string::npos) << help.out;
   EXPECT_EQ(help.out.find("coefficient coder:"), std::string::npos) << help.out;
   EXPECT_EQ(help.out.find("selfcheck passed"), std::string::npos) << help.out;
-  ExpectOneLineError(Capture(RunSelfCheck, {"selfcheck", "--fast"}), "selfcheck", "unknown option '--fast'");
-  ExpectOneLineError(Capture(RunSelfCheck, {"selfcheck", "now"}), "selfcheck", "unexpected argument 'now'");
+  ExpectOneLineError(Capture(RunSelfCheck, {"selfcheck", "--fast"}), "selfcheck",
+                     "unknown option '--fast'");
+  ExpectOneLineError(Capture(RunSelfCheck, {"selfcheck", "now"}), "selfcheck",
+                     "unexpected argument 'now'");
   const Output run = Capture(RunSelfCheck, {"selfcheck"});
   EXPECT_EQ(run.rc, 0);
   EXPECT_NE(run.out.find("selfcheck passed"), std::string::npos) << run.out;
 }
 
 TEST(Cli, UnknownFlagsAreOneLineWithTheNearestFlag) {
-  ExpectOneLineError(Capture(RunEval, {"eval", kScene, "--scene", "builtin", "--test-strid", "3"}), "eval",
-                     "unknown option '--test-strid' (did you mean --test-stride?)");
+  ExpectOneLineError(Capture(RunEval, {"eval", kScene, "--scene", "builtin", "--test-strid", "3"}),
+                     "eval", "unknown option '--test-strid' (did you mean --test-stride?)");
   ExpectOneLineError(Capture(RunEval, {"eval", kScene, "--max-test-view", "3"}), "eval",
                      "did you mean --max-test-views?");
-  ExpectOneLineError(Capture(RunRender, {"render", kScene, "--orbit", "2", "-o", "/nonexistent/x", "--elevatio", "9"}),
+  ExpectOneLineError(Capture(RunRender, {"render", kScene, "--orbit", "2", "-o", "/nonexistent/x",
+                                         "--elevatio", "9"}),
                      "render", "unknown option '--elevatio' (did you mean --elevation?)");
   ExpectOneLineError(Capture(RunInfo, {"info", kScene, "--md"}), "info", "did you mean --md5?");
   ExpectOneLineError(Capture(RunConformance, {"conformance", "--chek", "/tmp"}), "conformance",
                      "did you mean --check?");
-  ExpectOneLineError(Capture(RunReport, {"report", "render", "/tmp", "--test-strid", "2"}), "report render",
-                     "did you mean --test-stride?");
-  ExpectOneLineError(Capture(RunReport, {"report", "compare", "a", "b", "--jsn", "x"}), "report compare",
-                     "did you mean --json?");
-  ExpectOneLineError(Capture(RunBench, {"bench", "mlp", "--rep", "2"}), "bench mlp", "did you mean --reps?");
+  ExpectOneLineError(Capture(RunReport, {"report", "render", "/tmp", "--test-strid", "2"}),
+                     "report render", "did you mean --test-stride?");
+  ExpectOneLineError(Capture(RunReport, {"report", "compare", "a", "b", "--jsn", "x"}),
+                     "report compare", "did you mean --json?");
+  ExpectOneLineError(Capture(RunBench, {"bench", "mlp", "--rep", "2"}), "bench mlp",
+                     "did you mean --reps?");
   // Subcommands likewise.
   ExpectOneLineError(Capture(RunReport, {"report", "rendr"}), "report",
                      "unknown report 'rendr' (did you mean render?)");
@@ -206,35 +218,48 @@ TEST(Cli, UnknownFlagsAreOneLineWithTheNearestFlag) {
 }
 
 TEST(Cli, RenamedFlagsSayTheNewName) {
-  ExpectOneLineError(Capture(RunEval, {"eval", kScene, "--scene", "builtin", "--stride", "2"}), "eval",
-                     "--stride is now called --test-stride");
-  ExpectOneLineError(Capture(RunEval, {"eval", kScene, "--scene", "builtin", "--downscale", "2"}), "eval",
-                     "--downscale is now called --eval-downscale");
-  ExpectOneLineError(Capture(RunEval, {"eval", kScene, "--scene", "builtin", "--max-views", "2"}), "eval",
-                     "--max-views is now called --max-test-views");
-  ExpectOneLineError(Capture(RunReport, {"report", "render", "/tmp", "--stride", "2"}), "report render",
-                     "--stride is now called --test-stride");
+  ExpectOneLineError(Capture(RunEval, {"eval", kScene, "--scene", "builtin", "--stride", "2"}),
+                     "eval", "--stride is now called --test-stride");
+  ExpectOneLineError(Capture(RunEval, {"eval", kScene, "--scene", "builtin", "--downscale", "2"}),
+                     "eval", "--downscale is now called --eval-downscale");
+  ExpectOneLineError(Capture(RunEval, {"eval", kScene, "--scene", "builtin", "--max-views", "2"}),
+                     "eval", "--max-views is now called --max-test-views");
+  ExpectOneLineError(Capture(RunReport, {"report", "render", "/tmp", "--stride", "2"}),
+                     "report render", "--stride is now called --test-stride");
 }
 
 TEST(Cli, BadValuesAndMissingChoicesAreUsageErrors) {
   ExpectOneLineError(Capture(RunEval, {"eval", kScene, "--scene", "nowhere"}), "eval", "--scene");
-  ExpectOneLineError(Capture(RunEval, {"eval", kScene}), "eval", "needs --data DIR or --scene NAME");
-  ExpectOneLineError(Capture(RunEval, {"eval", kScene, "--scene", "builtin", "--data", "d"}), "eval", "excludes");
-  ExpectOneLineError(Capture(RunEval, {"eval", kScene, "--scene", "builtin", "--test-stride", "0"}), "eval",
-                     "--test-stride");
+  ExpectOneLineError(Capture(RunEval, {"eval", kScene}), "eval",
+                     "needs --data DIR or --scene NAME");
+  ExpectOneLineError(Capture(RunEval, {"eval", kScene, "--scene", "builtin", "--data", "d"}),
+                     "eval", "excludes");
+  ExpectOneLineError(Capture(RunEval, {"eval", kScene, "--scene", "builtin", "--test-stride", "0"}),
+                     "eval", "--test-stride");
   ExpectOneLineError(Capture(RunRender, {"render", kScene, "-o", "/nonexistent/x"}), "render",
                      "needs --views FILE or --orbit N");
-  ExpectOneLineError(Capture(RunRender, {"render", kScene, "--orbit", "2", "-o", "/nonexistent/x", "--step-scale",
-                                         "100"}),
+  ExpectOneLineError(Capture(RunRender, {"render", kScene, "--orbit", "2", "-o", "/nonexistent/x",
+                                         "--step-scale", "100"}),
                      "render", "--step-scale");
-  ExpectOneLineError(Capture(RunConformance, {"conformance"}), "conformance", "needs --write DIR or --check DIR");
-  ExpectOneLineError(Capture(RunBench, {"bench", "train", "--threads", "1,x"}), "bench train", "--threads");
+  ExpectOneLineError(Capture(RunConformance, {"conformance"}), "conformance",
+                     "needs --write DIR or --check DIR");
+  ExpectOneLineError(Capture(RunBench, {"bench", "train", "--threads", "1,x"}), "bench train",
+                     "--threads");
 }
 
 TEST(Cli, HelpCommandIsTheCommandsHelp) {
-  const std::vector<std::vector<std::string>> commands = {
-      {"render"}, {"eval"}, {"info"}, {"selfcheck"}, {"conformance"}, {"version"}, {"report"}, {"report", "render"},
-      {"report", "compare"}, {"report", "plot"}, {"bench"}, {"bench", "mlp"}};
+  const std::vector<std::vector<std::string>> commands = {{"render"},
+                                                          {"eval"},
+                                                          {"info"},
+                                                          {"selfcheck"},
+                                                          {"conformance"},
+                                                          {"version"},
+                                                          {"report"},
+                                                          {"report", "render"},
+                                                          {"report", "compare"},
+                                                          {"report", "plot"},
+                                                          {"bench"},
+                                                          {"bench", "mlp"}};
   for (const std::vector<std::string>& words : commands) {
     std::vector<std::string> help = {"ecrf", "help"}, flag = {"ecrf"};
     help.insert(help.end(), words.begin(), words.end());
@@ -247,18 +272,20 @@ TEST(Cli, HelpCommandIsTheCommandsHelp) {
     EXPECT_EQ(a.out, b.out);
     EXPECT_FALSE(a.out.empty());
   }
-  // The general usage lists every command, on stdout for `help`, on stderr (exit code 2) for nothing.
+  // The general usage lists every command, on stdout for `help`, on stderr (exit code 2) for
+  // nothing.
   const Output usage = Capture(RunEcrf, {"ecrf", "help"});
   EXPECT_EQ(usage.rc, 0);
   EXPECT_EQ(Capture(RunEcrf, {"ecrf", "--help"}).out, usage.out);
-  for (const char* command :
-       {"version", "selfcheck", "train", "encode", "info", "render", "eval", "conformance", "report", "bench"}) {
+  for (const char* command : {"version", "selfcheck", "train", "encode", "info", "render", "eval",
+                              "conformance", "report", "bench"}) {
     EXPECT_NE(usage.out.find(std::string("\n  ") + command + " "), std::string::npos) << command;
   }
   const Output nothing = Capture(RunEcrf, {"ecrf"});
   EXPECT_EQ(nothing.rc, 2);
   EXPECT_EQ(nothing.err, usage.out);
-  ExpectOneLineError(Capture(RunEcrf, {"ecrf", "rendr"}), "", "unknown command 'rendr' (did you mean render?)");
+  ExpectOneLineError(Capture(RunEcrf, {"ecrf", "rendr"}), "",
+                     "unknown command 'rendr' (did you mean render?)");
   ExpectOneLineError(Capture(RunEcrf, {"ecrf", "help", "evl"}), "", "did you mean eval?");
 }
 
@@ -287,16 +314,16 @@ TEST(Cli, RenderAndEvalUseEveryCoreByDefault) {
   ASSERT_FALSE(dir.empty());
   const int all = std::min(AllCores(), dec::kMaxRenderThreads);
   const std::string threads = "(" + std::to_string(all) + (all == 1 ? " thread" : " threads");
-  const Output render = Capture(RunRender, {"render", kScene, "--orbit", "2", "-W", "16", "-H", "12", "--elevation",
-                                         "-20.5", "-o", dir + "/orbit"});
+  const Output render = Capture(RunRender, {"render", kScene, "--orbit", "2", "-W", "16", "-H",
+                                            "12", "--elevation", "-20.5", "-o", dir + "/orbit"});
   ASSERT_EQ(render.rc, 0) << render.err;
   EXPECT_NE(render.out.find(threads), std::string::npos) << render.out;
   for (const char* png : {"/orbit/orbit_000.png", "/orbit/orbit_001.png"}) {
     EXPECT_TRUE(std::ifstream(dir + png).good()) << png;
   }
   const std::string json = dir + "/eval.json";
-  const Output eval = Capture(RunEval, {"eval", kScene, "--scene", "builtin", "--max-test-views", "1",
-                                     "--eval-downscale", "4", "--json", json});
+  const Output eval = Capture(RunEval, {"eval", kScene, "--scene", "builtin", "--max-test-views",
+                                        "1", "--eval-downscale", "4", "--json", json});
   ASSERT_EQ(eval.rc, 0) << eval.err;
   EXPECT_NE(eval.out.find(threads), std::string::npos) << eval.out;
   std::ifstream in(json);

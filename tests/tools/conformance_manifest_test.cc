@@ -14,9 +14,9 @@
 #include "tests/common/scene_vectors.h"
 #include "tools/conformance_manifest.h"
 #include "tools/decoded_scene.h"
-#include "trainer/train/checkpoint.h"
-#include "trainer/data/image_io.h"
 #include "trainer/data/file_io.h"
+#include "trainer/data/image_io.h"
+#include "trainer/train/checkpoint.h"
 
 namespace ecrf {
 namespace tools {
@@ -60,7 +60,8 @@ TEST(ConformanceManifest, ListsEveryVectorWithItsParameters) {
     ASSERT_NE(e, nullptr) << v.name;
     for (int a = 0; a < 3; ++a) EXPECT_EQ((*e)["grid"][a], v.res[a]) << v.name;
     EXPECT_EQ((*e)["coef_bits"], v.coef_bits) << v.name;
-    EXPECT_EQ((*e)["occupancy"].is_null(), v.occupancy == conformance::OccupancyKind::kNone) << v.name;
+    EXPECT_EQ((*e)["occupancy"].is_null(), v.occupancy == conformance::OccupancyKind::kNone)
+        << v.name;
     const dec::Camera cam = CameraFromJson((*e)["render"]["camera"], v.name);
     EXPECT_EQ(cam.width, 48);
     EXPECT_EQ(cam.height, 48);

@@ -22,7 +22,8 @@ std::vector<uint8_t> ReadBytes(const std::string& path) {
 
 // A conformance stream with `meta` inserted before DONE.
 std::vector<uint8_t> WithMetadata(const std::string& meta) {
-  const std::vector<uint8_t> base = ReadBytes(std::string(ECRF_SOURCE_DIR) + "/tests/conformance/scene_16bit.ecrf");
+  const std::vector<uint8_t> base =
+      ReadBytes(std::string(ECRF_SOURCE_DIR) + "/tests/conformance/scene_16bit.ecrf");
   ContainerReader reader;
   EXPECT_TRUE(reader.Open(base.data(), base.size()).ok());
   ContainerWriter writer(reader.version_minor());
@@ -38,7 +39,8 @@ std::vector<uint8_t> WithMetadata(const std::string& meta) {
 
 std::string InfoOutput(const std::vector<uint8_t>& stream) {
   const std::string path = std::string(::testing::TempDir()) + "/info_meta.ecrf";
-  std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(stream.data()), stream.size());
+  std::ofstream(path, std::ios::binary)
+      .write(reinterpret_cast<const char*>(stream.data()), stream.size());
   std::string arg0 = "info", arg1 = path;
   char* argv[] = {arg0.data(), arg1.data()};
   ::testing::internal::CaptureStdout();
@@ -50,7 +52,10 @@ std::string InfoOutput(const std::vector<uint8_t>& stream) {
 }
 
 TEST(Info, MetadataIsEscapedAndTruncated) {
-  const std::string hostile = "{\"a\":\"\x1b]0;owned\x07\x1b[2J\xc2\x9b" "31m\"}" + std::string(1 << 20, 'x');
+  const std::string hostile =
+      "{\"a\":\"\x1b]0;owned\x07\x1b[2J\xc2\x9b"
+      "31m\"}" +
+      std::string(1 << 20, 'x');
   const std::string out = InfoOutput(WithMetadata(hostile));
   EXPECT_EQ(out.find('\x1b'), std::string::npos) << "an escape sequence reached the terminal";
   EXPECT_EQ(out.find('\x07'), std::string::npos);
@@ -59,7 +64,8 @@ TEST(Info, MetadataIsEscapedAndTruncated) {
   EXPECT_NE(out.find("more bytes)"), std::string::npos);
   EXPECT_LT(out.size(), size_t(8192));
   // Plain ASCII JSON is shown as it is.
-  EXPECT_NE(InfoOutput(WithMetadata("{\"encoder\":\"ecrf\"}")).find("{\"encoder\":\"ecrf\"}"), std::string::npos);
+  EXPECT_NE(InfoOutput(WithMetadata("{\"encoder\":\"ecrf\"}")).find("{\"encoder\":\"ecrf\"}"),
+            std::string::npos);
 }
 
 }  // namespace

@@ -14,9 +14,9 @@
 #include "tools/commands.h"
 #include "tools/report/report.h"
 #include "tools/train_flags.h"
+#include "trainer/data/file_io.h"
 #include "trainer/train/checkpoint.h"
 #include "trainer/train/train_config.h"
-#include "trainer/data/file_io.h"
 
 namespace ecrf {
 namespace tools {
@@ -25,8 +25,9 @@ namespace {
 using testing_cli::Invoke;
 
 // Short runs that still pass through every phase (upsampling, mask, rate phase, QAT).
-const std::vector<std::string> kSmallRun = {"--scene", "builtin", "--iters", "160", "--batch", "512",
-                                            "--final-grid", "48", "--threads", "2"};
+const std::vector<std::string> kSmallRun = {"--scene",   "builtin", "--iters",      "160",
+                                            "--batch",   "512",     "--final-grid", "48",
+                                            "--threads", "2"};
 
 class RunConfigTest : public ::testing::Test {
  protected:
@@ -47,7 +48,9 @@ class RunConfigTest : public ::testing::Test {
     EXPECT_EQ(Invoke(RunTrain, argv), 0) << name;
     return dir;
   }
-  static std::vector<uint8_t> Bytes(const std::string& path) { return trainer::ReadWholeFile(path); }
+  static std::vector<uint8_t> Bytes(const std::string& path) {
+    return trainer::ReadWholeFile(path);
+  }
 
   std::string root_;
 };
@@ -60,7 +63,8 @@ TEST_F(RunConfigTest, EncodeRunRebuildsTheFileTrainWroteForEveryRatePoint) {
     EXPECT_EQ(Bytes(again), Bytes(run + "/scene.ecrf")) << "rate point " << rate;
     // The run's configuration is there for every later command, and reads back as the run's.
     const trainer::TrainOptions stored = trainer::TrainConfigFromJson(
-        std::string(reinterpret_cast<const char*>(Bytes(run + "/config.json").data()), Bytes(run + "/config.json").size()),
+        std::string(reinterpret_cast<const char*>(Bytes(run + "/config.json").data()),
+                    Bytes(run + "/config.json").size()),
         run);
     EXPECT_EQ(stored.rate_point, rate);
     std::vector<std::string> args = kSmallRun;
@@ -98,7 +102,8 @@ TEST_F(RunConfigTest, ASweepPointWritesTheBytesOfTheTrainRunOfItsSettings) {
   const std::string high = Train("high", {"--rate", "high"});
   const std::string lambda = Train("lambda", {"--lambda-e", "1e-10"});
   EXPECT_EQ(Bytes(root_ + "/report/runs/rate_high/scene.ecrf"), Bytes(high + "/scene.ecrf"));
-  EXPECT_EQ(Bytes(root_ + "/report/runs/lambda_1e-10_steps3/scene.ecrf"), Bytes(lambda + "/scene.ecrf"));
+  EXPECT_EQ(Bytes(root_ + "/report/runs/lambda_1e-10_steps3/scene.ecrf"),
+            Bytes(lambda + "/scene.ecrf"));
   // report.json records each point's configuration and rate point.
   const nlohmann::json report = ReadReport(root_ + "/report");
   ASSERT_EQ(report["points"].size(), 2u);
@@ -147,13 +152,16 @@ TEST(TrainHelp, ShowsTheResolvedDefaultsOfEachRatePoint) {
     testing::internal::CaptureStdout();
     EXPECT_EQ(Invoke(RunReportSweep, {"sweep", "--rate", rate, "--help"}), 0);
     help += testing::internal::GetCapturedStdout();
-    for (const std::string& shown :
-         {"--lambda-e X:NONNEGATIVE=" + Shown(o.lambda_e), "--quant-step-scale S=" + Shown(o.quant_step_scale),
-          "--mlp-levels L:INT in [0 - 32767]=" + Shown(o.mlp_levels), "--rate-start F=" + Shown(o.rate_start),
-          "--iters N:INT in [1 - 100000000]=" + Shown(o.iters), "--rate TEXT:{low,medium,high,none}=" + o.rate_point}) {
+    for (const std::string& shown : {"--lambda-e X:NONNEGATIVE=" + Shown(o.lambda_e),
+                                     "--quant-step-scale S=" + Shown(o.quant_step_scale),
+                                     "--mlp-levels L:INT in [0 - 32767]=" + Shown(o.mlp_levels),
+                                     "--rate-start F=" + Shown(o.rate_start),
+                                     "--iters N:INT in [1 - 100000000]=" + Shown(o.iters),
+                                     "--rate TEXT:{low,medium,high,none}=" + o.rate_point}) {
       const size_t first = help.find(shown);
       EXPECT_NE(first, std::string::npos) << rate << ": help lacks '" << shown << "'";
-      EXPECT_NE(help.find(shown, first + 1), std::string::npos) << rate << ": sweep help lacks '" << shown << "'";
+      EXPECT_NE(help.find(shown, first + 1), std::string::npos)
+          << rate << ": sweep help lacks '" << shown << "'";
     }
   }
   // The encoder's help is help, not a run.
@@ -164,19 +172,27 @@ TEST(TrainHelp, ShowsTheResolvedDefaultsOfEachRatePoint) {
 
 TEST(TrainHelp, UnknownFlagIsOneShortLineWithASuggestion) {
   testing::internal::CaptureStderr();
-  EXPECT_EQ(Invoke(RunTrain, {"train", "--scene", "builtin", "--test-strid", "3", "-o", "/tmp/never"}), 2);
+  EXPECT_EQ(
+      Invoke(RunTrain, {"train", "--scene", "builtin", "--test-strid", "3", "-o", "/tmp/never"}),
+      2);
   const std::string err = testing::internal::GetCapturedStderr();
-  EXPECT_EQ(err, "ecrf train: error: unknown option '--test-strid' (did you mean --test-stride?); see 'ecrf train "
-                 "--help'\n");
+  EXPECT_EQ(err,
+            "ecrf train: error: unknown option '--test-strid' (did you mean --test-stride?); see "
+            "'ecrf train "
+            "--help'\n");
   EXPECT_FALSE(FileExists("/tmp/never"));
   for (auto command : {RunTrain, RunEncode}) {
     testing::internal::CaptureStderr();
     const std::vector<std::string> args =
-        command == RunTrain ? std::vector<std::string>{"train", "--scene", "builtin", "--target-size", "500", "-o", "/tmp/never"}
-                            : std::vector<std::string>{"encode", "run", "-o", "/tmp/never.ecrf", "--target-size", "500"};
+        command == RunTrain
+            ? std::vector<std::string>{"train", "--scene", "builtin",   "--target-size",
+                                       "500",   "-o",      "/tmp/never"}
+            : std::vector<std::string>{"encode",          "run",           "-o",
+                                       "/tmp/never.ecrf", "--target-size", "500"};
     EXPECT_EQ(Invoke(command, args), 2) << args[0];
     const std::string err = testing::internal::GetCapturedStderr();
-    EXPECT_NE(err.find("'500' has no unit: write 500B for bytes or 500KB"), std::string::npos) << err;
+    EXPECT_NE(err.find("'500' has no unit: write 500B for bytes or 500KB"), std::string::npos)
+        << err;
     EXPECT_EQ(err.find('\n'), err.size() - 1) << "one line: " << err;
   }
   EXPECT_FALSE(FileExists("/tmp/never"));

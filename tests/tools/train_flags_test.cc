@@ -7,9 +7,9 @@
 #include <vector>
 
 #include "tools/train_flags.h"
-#include "trainer/train/train_config.h"
 #include "trainer/data/dataset.h"
 #include "trainer/data/scene_fit.h"
+#include "trainer/train/train_config.h"
 #include "trainer/train/trainer.h"
 
 namespace ecrf {
@@ -23,7 +23,8 @@ TEST(TrainFlags, RateStartAndSceneTypeAreReadAndChecked) {
   EXPECT_FLOAT_EQ(defaults.rate_start, 16000.f / 30000.f);  // tiny keeps its schedule at medium
   EXPECT_EQ(defaults.procedural_scene, "forward");
   EXPECT_EQ(defaults.scene_type, "auto");
-  const trainer::TrainOptions o = Parse({"--scene", "forward", "--rate-start", "0.8", "--scene-type", "forward"});
+  const trainer::TrainOptions o =
+      Parse({"--scene", "forward", "--rate-start", "0.8", "--scene-type", "forward"});
   EXPECT_FLOAT_EQ(o.rate_start, 0.8f);
   EXPECT_EQ(o.scene_type, "forward");
   EXPECT_THROW(Parse({"--rate-start", "1"}), std::invalid_argument);
@@ -94,7 +95,8 @@ TEST(TrainFlags, FinalGridSetsWhereUpsamplingEnds) {
 }
 
 TEST(TrainFlags, UpsampleAtAndMaskAtMoveTheScheduleAndTheRatePhaseFollows) {
-  const trainer::TrainOptions o = Parse({"--upsample-at", "200,400,600,800,1000", "--rate-start", "0.1"});
+  const trainer::TrainOptions o =
+      Parse({"--upsample-at", "200,400,600,800,1000", "--rate-start", "0.1"});
   EXPECT_EQ(o.upsample_iters, (std::vector<int>{200, 400, 600, 800, 1000}));
   // The rate phase still waits for the last upsampling and the last mask update (fast: 900).
   EXPECT_EQ(trainer::RateStartIteration(o), 1001);
@@ -103,8 +105,8 @@ TEST(TrainFlags, UpsampleAtAndMaskAtMoveTheScheduleAndTheRatePhaseFollows) {
     EXPECT_THROW(Parse({"--upsample-at", bad}), std::invalid_argument) << bad;
     EXPECT_THROW(Parse({"--mask-at", bad}), std::invalid_argument) << bad;
   }
-  const trainer::TrainOptions early =
-      Parse({"--upsample-at", "100,200,300,400,500", "--mask-at", "200,600", "--rate-start", "0.1"});
+  const trainer::TrainOptions early = Parse(
+      {"--upsample-at", "100,200,300,400,500", "--mask-at", "200,600", "--rate-start", "0.1"});
   EXPECT_EQ(early.alpha_mask_iters, (std::vector<int>{200, 600}));
   EXPECT_EQ(trainer::RateStartIteration(early), 601);
 }
@@ -113,8 +115,10 @@ TEST(TrainFlags, ARatePointIsADefaultThatOtherFlagsOverrideInAnyOrder) {
   // The low point sets lambda_e, the steps, the head, the components and the grid schedule;
   // flags given before or after it win alike.
   for (const std::vector<std::string>& args :
-       {std::vector<std::string>{"--rate", "low", "--final-grid", "200", "--rate-start", "0.8", "--lambda-e", "3e-10"},
-        std::vector<std::string>{"--final-grid", "200", "--rate-start", "0.8", "--lambda-e", "3e-10", "--rate", "low"}}) {
+       {std::vector<std::string>{"--rate", "low", "--final-grid", "200", "--rate-start", "0.8",
+                                 "--lambda-e", "3e-10"},
+        std::vector<std::string>{"--final-grid", "200", "--rate-start", "0.8", "--lambda-e",
+                                 "3e-10", "--rate", "low"}}) {
     const trainer::TrainOptions o = Parse(args);
     EXPECT_EQ(o.voxels_final, 200L * 200 * 200);
     EXPECT_FLOAT_EQ(o.rate_start, 0.8f);
@@ -137,7 +141,8 @@ TEST(TrainFlags, LambdaEAloneAdjustsTheDefaultPointAndZeroIsPlainTensorf) {
   std::snprintf(text, sizeof(text), "%.9g", double(medium.lambda_e));
   EXPECT_TRUE(trainer::ChangedSettings(defaults, Parse({"--lambda-e", text})).empty());
   // Another value changes lambda_e alone: the steps, levels and schedule stay the point's.
-  const std::vector<std::string> changed = trainer::ChangedSettings(defaults, Parse({"--lambda-e", "1e-10"}));
+  const std::vector<std::string> changed =
+      trainer::ChangedSettings(defaults, Parse({"--lambda-e", "1e-10"}));
   ASSERT_EQ(changed.size(), 1u);
   EXPECT_EQ(changed[0].rfind("lambda_e:", 0), 0u) << changed[0];
   // 0 is plain TensoRF: the "none" point, the preset's schedule and the peak steps.
@@ -156,8 +161,9 @@ TEST(TrainFlags, LambdaEAloneAdjustsTheDefaultPointAndZeroIsPlainTensorf) {
 
 TEST(TrainFlags, ConfigJsonRoundTripsEverySetting) {
   const trainer::TrainOptions o =
-      Parse({"--scene", "capture", "--rate", "low", "--lambda-e", "1.5e-10", "--dct-block", "8x16x16", "--ranks", "8,20",
-             "--upsample-at", "100,200", "--target-size", "123KB", "--test-stride", "3", "-o", "run/x"});
+      Parse({"--scene", "capture", "--rate", "low", "--lambda-e", "1.5e-10", "--dct-block",
+             "8x16x16", "--ranks", "8,20", "--upsample-at", "100,200", "--target-size", "123KB",
+             "--test-stride", "3", "-o", "run/x"});
   const std::string text = trainer::TrainConfigToJson(o);
   const trainer::TrainOptions back = trainer::TrainConfigFromJson(text, "test");
   EXPECT_TRUE(trainer::ChangedSettings(o, back).empty());
@@ -166,9 +172,11 @@ TEST(TrainFlags, ConfigJsonRoundTripsEverySetting) {
   EXPECT_NE(text.find("\"lambda_e\": 1.5e-10"), std::string::npos) << text;
   EXPECT_EQ(back.test_view_stride, 3);
   EXPECT_EQ(back.out_dir, "run/x");
-  EXPECT_THROW(trainer::TrainConfigFromJson("{\"config_version\": 99, \"settings\": {}}", "x"), std::runtime_error);
+  EXPECT_THROW(trainer::TrainConfigFromJson("{\"config_version\": 99, \"settings\": {}}", "x"),
+               std::runtime_error);
   EXPECT_THROW(trainer::TrainConfigFromJson("[1, 2]", "x"), std::runtime_error);
-  EXPECT_THROW(trainer::TrainConfigFromJson("{\"settings\": {\"iters\": \"many\"}}", "x"), std::runtime_error);
+  EXPECT_THROW(trainer::TrainConfigFromJson("{\"settings\": {\"iters\": \"many\"}}", "x"),
+               std::runtime_error);
 }
 
 TEST(TrainFlags, DefaultScoringIsAtMostTwentyEvenlySpacedViews) {

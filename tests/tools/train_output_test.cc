@@ -12,8 +12,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "tools/cli_args.h"
 #include "tests/common/invoke.h"
+#include "tools/cli_args.h"
 #include "tools/commands.h"
 
 namespace ecrf {
@@ -53,7 +53,8 @@ TEST_F(TrainOutputTest, OutputBelowAFileFailsBeforeLoadingData) {
   const std::string file = root_ + "/file";
   std::fclose(std::fopen(file.c_str(), "wb"));
   // The data directory does not exist either: the output is checked first.
-  const std::string error = ErrorOf({"train", "--data", root_ + "/no_such_scene", "-o", file + "/run"});
+  const std::string error =
+      ErrorOf({"train", "--data", root_ + "/no_such_scene", "-o", file + "/run"});
   EXPECT_NE(error.find("cannot create directory"), std::string::npos) << error;
 }
 
@@ -67,16 +68,19 @@ TEST_F(TrainOutputTest, ReadOnlyOutputFailsBeforeLoadingData) {
 }
 
 TEST_F(TrainOutputTest, ResumeWithoutCheckpointSaysSo) {
-  const std::string error = ErrorOf({"train", "--scene", "builtin", "--resume", "-o", root_ + "/fresh"});
+  const std::string error =
+      ErrorOf({"train", "--scene", "builtin", "--resume", "-o", root_ + "/fresh"});
   EXPECT_NE(error.find("--resume: no checkpoint"), std::string::npos) << error;
   EXPECT_FALSE(FileExists(root_ + "/fresh"));
 }
 
-// --eval-downscale: a short run scored at half size records it, with the renderer's samples per ray.
+// --eval-downscale: a short run scored at half size records it, with the renderer's samples per
+// ray.
 TEST_F(TrainOutputTest, EvalDownscaleIsRecordedWithSamplesPerRay) {
   const std::string out = root_ + "/run";
-  Invoke(RunTrain, {"train", "--scene", "builtin", "--iters", "300", "--batch", "1024", "--lambda-e", "0", "--eval-downscale", "2",
-                    "--max-test-views", "2", "-o", out});
+  Invoke(RunTrain,
+         {"train", "--scene", "builtin", "--iters", "300", "--batch", "1024", "--lambda-e", "0",
+          "--eval-downscale", "2", "--max-test-views", "2", "-o", out});
   std::FILE* f = std::fopen((out + "/metrics.json").c_str(), "rb");
   ASSERT_NE(f, nullptr);
   std::string text;
@@ -87,10 +91,13 @@ TEST_F(TrainOutputTest, EvalDownscaleIsRecordedWithSamplesPerRay) {
   EXPECT_EQ(m["eval_downscale"], 2);
   EXPECT_EQ(m["test_views"], 2);
   EXPECT_GT(m["decoded_samples_per_ray"].get<double>(), 1.0);
-  EXPECT_GT(m["decoded_samples_per_ray"].get<double>(), m["decoded_mlp_samples_per_ray"].get<double>());
+  EXPECT_GT(m["decoded_samples_per_ray"].get<double>(),
+            m["decoded_mlp_samples_per_ray"].get<double>());
   EXPECT_GT(m["decoded_test_psnr"].get<double>(), 10.0);
   testing::internal::CaptureStderr();
-  EXPECT_EQ(Invoke(RunTrain, {"train", "--scene", "builtin", "--eval-downscale", "0", "-o", root_ + "/bad"}), 2);
+  EXPECT_EQ(Invoke(RunTrain,
+                   {"train", "--scene", "builtin", "--eval-downscale", "0", "-o", root_ + "/bad"}),
+            2);
   EXPECT_NE(testing::internal::GetCapturedStderr().find("--eval-downscale"), std::string::npos);
 }
 

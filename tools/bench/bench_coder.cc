@@ -168,7 +168,8 @@ int RunCoderBench(int argc, char** argv) {
   std::string json;
   const int rc = ParseJsonOnlyCommandLine(
       "bench coder",
-      "speed of the range coder and the coefficient coder (one thread), and how the coefficient coder compresses "
+      "speed of the range coder and the coefficient coder (one thread), and how the coefficient "
+      "coder compresses "
       "compared with the order-0 entropy of the same int8 values and with zstd -19",
       argc, argv, &json);
   if (rc >= 0) return rc;

@@ -7,9 +7,9 @@
 
 #include "format/block_shape.h"
 #include "format/coef_coder.h"
-#include "format/range_coder.h"
 #include "format/float_dct.h"
 #include "format/int_idct.h"
+#include "format/range_coder.h"
 #include "tools/bench/bench_json.h"
 #include "tools/bench/benches.h"
 
@@ -34,7 +34,8 @@ std::vector<int32_t> MakeBlocks(const int dims[3], int count, double scale, doub
           std::exponential_distribution<double> e(1.0 / s);
           double m = std::floor(e(rng));
           if (m > 127) m = 127;
-          blocks[size_t(b) * v + (i0 * dims[1] + i1) * dims[2] + i2] = int32_t(u(rng) < 0.5 ? -m : m);
+          blocks[size_t(b) * v + (i0 * dims[1] + i1) * dims[2] + i2] =
+              int32_t(u(rng) < 0.5 ? -m : m);
         }
   }
   return blocks;
@@ -112,11 +113,13 @@ double DecodePlusIdctPerSecond(const std::vector<int32_t>& blocks, const int dim
 
 int RunIdctBench(int argc, char** argv) {
   std::string json;
-  const int rc = ParseJsonOnlyCommandLine(
-      "bench idct",
-      "integer inverse DCT throughput on 16x16x16 blocks (dense, typical sparse, all-zero) and 1x8x8 line blocks, "
-      "one thread, alone and after the coefficient decoder, against the float64 reference transform",
-      argc, argv, &json);
+  const int rc =
+      ParseJsonOnlyCommandLine("bench idct",
+                               "integer inverse DCT throughput on 16x16x16 blocks (dense, typical "
+                               "sparse, all-zero) and 1x8x8 line blocks, "
+                               "one thread, alone and after the coefficient decoder, against the "
+                               "float64 reference transform",
+                               argc, argv, &json);
   if (rc >= 0) return rc;
   BenchReport report;
   std::printf("integer inverse DCT, one thread (coefficients per second, input included)\n");
@@ -130,13 +133,14 @@ int RunIdctBench(int argc, char** argv) {
   report.Add("idct_16x16x16_sparse_mcoef_per_s", CoefficientsPerSecond(sparse, cube) / 1e6, "M/s");
   report.Add("idct_16x16x16_zero_mcoef_per_s", CoefficientsPerSecond(zeros, cube) / 1e6, "M/s");
   report.Add("idct_1x8x8_lines_mcoef_per_s", CoefficientsPerSecond(lines, line) / 1e6, "M/s");
-  report.Add("decode_plus_idct_16x16x16_sparse_mcoef_per_s", DecodePlusIdctPerSecond(sparse, cube) / 1e6,
+  report.Add("decode_plus_idct_16x16x16_sparse_mcoef_per_s",
+             DecodePlusIdctPerSecond(sparse, cube) / 1e6, "M/s");
+  report.Add("decode_plus_idct_16x16x16_dense_mcoef_per_s",
+             DecodePlusIdctPerSecond(dense, cube) / 1e6, "M/s");
+  report.Add("decode_plus_idct_1x8x8_lines_mcoef_per_s", DecodePlusIdctPerSecond(lines, line) / 1e6,
              "M/s");
-  report.Add("decode_plus_idct_16x16x16_dense_mcoef_per_s", DecodePlusIdctPerSecond(dense, cube) / 1e6,
-             "M/s");
-  report.Add("decode_plus_idct_1x8x8_lines_mcoef_per_s", DecodePlusIdctPerSecond(lines, line) / 1e6, "M/s");
-  report.Add("float64_idct_16x16x16_dense_mcoef_per_s", FloatCoefficientsPerSecond(dense, cube) / 1e6,
-             "M/s");
+  report.Add("float64_idct_16x16x16_dense_mcoef_per_s",
+             FloatCoefficientsPerSecond(dense, cube) / 1e6, "M/s");
   if (!json.empty() && !report.WriteJson(json)) {
     std::fprintf(stderr, "ecrf bench idct: cannot write %s\n", json.c_str());
     return 1;

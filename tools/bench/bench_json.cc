@@ -50,7 +50,8 @@ std::vector<int> ParseThreadList(const std::string& list) {
     char* end = nullptr;
     const long v = std::strtol(item.c_str(), &end, 10);
     if (item.empty() || *end != '\0' || v < 0 || v > 4096) {
-      throw std::invalid_argument("'" + list + "' is not a comma-separated list of thread counts in [0, 4096]");
+      throw std::invalid_argument("'" + list +
+                                  "' is not a comma-separated list of thread counts in [0, 4096]");
     }
     counts.push_back(int(v));
     pos = comma + 1;
@@ -73,8 +74,8 @@ CLI::Option* AddThreadListFlag(CLI::App* app, std::string* list) {
       "");
   return app
       ->add_option("--threads", *list,
-                   "thread counts to measure, one after the other (0 = all cores: " + std::to_string(AllCores()) +
-                       ")")
+                   "thread counts to measure, one after the other (0 = all cores: " +
+                       std::to_string(AllCores()) + ")")
       ->type_name("LIST")
       ->check(check)
       ->capture_default_str();
@@ -86,10 +87,11 @@ std::vector<int> ThreadCounts(const std::string& list) {
   return counts;
 }
 
-int ParseJsonOnlyCommandLine(const std::string& name, const std::string& description, int argc, char** argv,
-                             std::string* json_path) {
+int ParseJsonOnlyCommandLine(const std::string& name, const std::string& description, int argc,
+                             char** argv, std::string* json_path) {
   auto app = MakeCommand(name, description);
-  app->add_option("--json", *json_path, "also write the figures as a flat JSON object")->type_name("FILE");
+  app->add_option("--json", *json_path, "also write the figures as a flat JSON object")
+      ->type_name("FILE");
   return ParseCommandLine(app.get(), argc, argv);
 }
 

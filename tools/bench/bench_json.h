@@ -32,8 +32,8 @@ std::vector<int> ThreadCounts(const std::string& list);
 
 // Parses the command line of a benchmark whose only flag is --json FILE (into *json_path).
 // Returns -1 to run, else the exit code (tools/cli.h's ParseCommandLine).
-int ParseJsonOnlyCommandLine(const std::string& name, const std::string& description, int argc, char** argv,
-                             std::string* json_path);
+int ParseJsonOnlyCommandLine(const std::string& name, const std::string& description, int argc,
+                             char** argv, std::string* json_path);
 
 }  // namespace tools
 }  // namespace ecrf

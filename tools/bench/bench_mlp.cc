@@ -17,9 +17,9 @@
 
 #include "tools/bench/bench_json.h"
 #include "tools/bench/cpu_peak.h"
-#include "trainer/train/adam.h"
 #include "trainer/model/appearance_head.h"
 #include "trainer/model/small_gemm.h"
+#include "trainer/train/adam.h"
 
 namespace ecrf {
 namespace tools {
@@ -53,10 +53,11 @@ int RunMlpBench(int argc, char** argv) {
   int n = 131072, reps = 5, chunk = 256;
   long adam_size = 20000000;
   std::string threads = "1," + std::to_string(std::max(1, omp_get_max_threads())), json_path;
-  auto app = MakeCommand("bench mlp",
-                         "throughput of the appearance MLP (AppearanceHead, on SmallGemm) and Adam against this "
-                         "CPU's measured single-precision FMA peak, with Eigen's GEMM on the shape of the first MLP "
-                         "layer for comparison; times are medians of --reps runs, or the fastest with --best");
+  auto app = MakeCommand(
+      "bench mlp",
+      "throughput of the appearance MLP (AppearanceHead, on SmallGemm) and Adam against this "
+      "CPU's measured single-precision FMA peak, with Eigen's GEMM on the shape of the first MLP "
+      "layer for comparison; times are medians of --reps runs, or the fastest with --best");
   app->add_option("--n", n, "rows (samples) per forward/backward")
       ->type_name("N")
       ->check(CLI::Range(1, 1 << 26))
@@ -74,7 +75,8 @@ int RunMlpBench(int argc, char** argv) {
       ->type_name("FLOATS")
       ->check(CLI::Range(0L, 1L << 32))
       ->capture_default_str();
-  app->add_flag("--best", g_use_best, "report the fastest run instead of the median (steadier on a shared machine)");
+  app->add_flag("--best", g_use_best,
+                "report the fastest run instead of the median (steadier on a shared machine)");
   app->add_option("--json", json_path, "also write the figures as JSON")->type_name("FILE");
   if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
   const std::vector<int> thread_counts = ThreadCounts(threads);
@@ -124,16 +126,13 @@ int RunMlpBench(int argc, char** argv) {
     const double gemm_s = MedianSeconds(std::max(reps, 20), [&] { c.noalias() = a * b; });
     const double gemm_gflops = 2.0 * gm * gk * gn / gemm_s * 1e-9;
 
-    const double fwd_s = MedianSeconds(reps, [&] {
-      head.Forward(n, products.data(), viewdirs.data(), rgb.data());
-    });
+    const double fwd_s =
+        MedianSeconds(reps, [&] { head.Forward(n, products.data(), viewdirs.data(), rgb.data()); });
     head.Forward(n, products.data(), viewdirs.data(), rgb.data());
-    const double bwd_s = MedianSeconds(reps, [&] {
-      head.Backward(n, dl_drgb.data(), dl_dproducts.data());
-    });
-    const double inf_s = MedianSeconds(reps, [&] {
-      head.Infer(n, products.data(), viewdirs.data(), rgb.data());
-    });
+    const double bwd_s =
+        MedianSeconds(reps, [&] { head.Backward(n, dl_drgb.data(), dl_dproducts.data()); });
+    const double inf_s =
+        MedianSeconds(reps, [&] { head.Infer(n, products.data(), viewdirs.data(), rgb.data()); });
     double adam_s = 0.0;
     if (adam_size > 0) {
       std::vector<float> p(static_cast<size_t>(adam_size), 0.5f), g(p.size(), 0.25f);

@@ -14,9 +14,9 @@
 #include <vector>
 
 #include "tools/bench/bench_json.h"
-#include "trainer/train/adam.h"
 #include "trainer/model/tensorf_model.h"
 #include "trainer/model/volume_render.h"
+#include "trainer/train/adam.h"
 
 namespace ecrf {
 namespace tools {
@@ -33,7 +33,8 @@ using trainer::VmGrid;
 double CpuSeconds() {
   struct rusage ru;
   getrusage(RUSAGE_SELF, &ru);
-  return ru.ru_utime.tv_sec + ru.ru_stime.tv_sec + 1e-6 * (ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
+  return ru.ru_utime.tv_sec + ru.ru_stime.tv_sec +
+         1e-6 * (ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
 }
 
 double PeakRssMb() {
@@ -88,10 +89,11 @@ int RunTrainStepBench(int argc, char** argv) {
   int res = 128, rays = 4096, reps = 5, mask = 0;
   float early = 0.f, blob_peak = 14.f;
   std::string threads = "1,2", json_path;
-  auto app = MakeCommand("bench train",
-                         "times one training iteration as the trainer runs it (zero the gradients, forward + "
-                         "backward incl. the appearance head, density L1, Adam on grids and head) on a synthetic "
-                         "Blender-like scene: an opaque soft blob in a randomly initialised VM-192 field");
+  auto app = MakeCommand(
+      "bench train",
+      "times one training iteration as the trainer runs it (zero the gradients, forward + "
+      "backward incl. the appearance head, density L1, Adam on grids and head) on a synthetic "
+      "Blender-like scene: an opaque soft blob in a randomly initialised VM-192 field");
   app->add_option("--res", res, "grid resolution per axis")
       ->type_name("N")
       ->check(CLI::Range(2, 1024))
@@ -113,13 +115,16 @@ int RunTrainStepBench(int argc, char** argv) {
       ->type_name("T")
       ->check(CLI::Range(0.0f, 1.0f))
       ->capture_default_str();
-  app->add_option("--blob-peak", blob_peak,
-                  "peak density feature of the blob; larger -> more opaque -> fewer appearance samples per ray "
-                  "(e.g. 40 gives about the 0.14 M of the reference PyTorch run's iterations 150-320)")
+  app->add_option(
+         "--blob-peak", blob_peak,
+         "peak density feature of the blob; larger -> more opaque -> fewer appearance samples per "
+         "ray "
+         "(e.g. 40 gives about the 0.14 M of the reference PyTorch run's iterations 150-320)")
       ->type_name("F")
       ->check(CLI::Range(0.0f, 1000.0f))
       ->capture_default_str();
-  app->add_option("--json", json_path, "also write the figures of the last thread count as JSON")->type_name("FILE");
+  app->add_option("--json", json_path, "also write the figures of the last thread count as JSON")
+      ->type_name("FILE");
   if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
   const std::vector<int> thread_counts = ThreadCounts(threads);
 
@@ -134,10 +139,11 @@ int RunTrainStepBench(int argc, char** argv) {
   }
   std::vector<float> o, d, rgb;
   MakeRays(rays, 7, &o, &d, &rgb);
-  std::printf("train-step bench: res %d^3 (after shrink %dx%dx%d), %d rays, %d samples/ray, mask %d, "
-              "early stop %g, blob peak %g\n",
-              res, model.res()[0], model.res()[1], model.res()[2], rays, model.n_samples(), mask,
-              early, blob_peak);
+  std::printf(
+      "train-step bench: res %d^3 (after shrink %dx%dx%d), %d rays, %d samples/ray, mask %d, "
+      "early stop %g, blob peak %g\n",
+      res, model.res()[0], model.res()[1], model.res()[2], rays, model.n_samples(), mask, early,
+      blob_peak);
   // The trainer's optimizers (trainer.cc): grids at lr 0.02, head at 1e-3.
   trainer::Adam adam_density(model.density().params().size(), trainer::AdamConfig{});
   trainer::Adam adam_app(model.appearance().params().size(), trainer::AdamConfig{});

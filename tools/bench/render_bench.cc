@@ -119,7 +119,8 @@ Status MakeBlobScene(int res, GridStorage storage, bool with_mask, uint32_t seed
         for (int x = 0; x < res; ++x) {
           const int ii[3] = {x, y, z};
           float cn[3];
-          for (int a = 0; a < 3; ++a) cn[a] = static_cast<float>(ii[a]) / static_cast<float>(res - 1) * 2.f - 1.f;
+          for (int a = 0; a < 3; ++a)
+            cn[a] = static_cast<float>(ii[a]) / static_cast<float>(res - 1) * 2.f - 1.f;
           GridPoint gp;
           LocateGridPoint(cn, s.res, &gp);
           const float sigma = Softplus(DensityFeature(s.density, gp) + s.density_shift);
@@ -159,8 +160,9 @@ Status BenchmarkRender(const SceneField& scene, int width, int height, int threa
   ECRF_RETURN_IF_ERROR(marcher.Init(&scene, opt));
   HeapArray<uint8_t> image;
   size_t bytes = 0;
-  ECRF_CHECK_OR_RETURN(CheckedMul(static_cast<size_t>(width) * 4, static_cast<size_t>(height), &bytes),
-                       kErrLimit, "BenchmarkRender: image too large");
+  ECRF_CHECK_OR_RETURN(
+      CheckedMul(static_cast<size_t>(width) * 4, static_cast<size_t>(height), &bytes), kErrLimit,
+      "BenchmarkRender: image too large");
   ECRF_RETURN_IF_ERROR(image.Allocate(bytes));
   RenderStats stats;
   ECRF_RETURN_IF_ERROR(marcher.RenderImage(OrbitCamera(width, height, 0.3f, 0.5f, 4.f),
@@ -190,17 +192,26 @@ int RunRenderBench(int argc, char** argv) {
   int res = 128, width = 400, height = 400, views = 2;
   bool int16 = false, no_skip = false;
   std::string threads = "1,0", json_path;
-  auto app = MakeCommand("bench render",
-                         "the renderer's speed on a synthetic res^3 blob scene (ranks 16/48, hidden 128, alpha "
-                         "mask): milliseconds per view and samples per second, per thread count");
-  app->add_option("--res", res, "grid resolution per axis")->type_name("N")->check(CLI::Range(8, 512))
+  auto app = MakeCommand(
+      "bench render",
+      "the renderer's speed on a synthetic res^3 blob scene (ranks 16/48, hidden 128, alpha "
+      "mask): milliseconds per view and samples per second, per thread count");
+  app->add_option("--res", res, "grid resolution per axis")
+      ->type_name("N")
+      ->check(CLI::Range(8, 512))
       ->capture_default_str();
-  app->add_option("--width", width, "image width")->type_name("PIXELS")->check(CLI::Range(1, 8192))
+  app->add_option("--width", width, "image width")
+      ->type_name("PIXELS")
+      ->check(CLI::Range(1, 8192))
       ->capture_default_str();
-  app->add_option("--height", height, "image height")->type_name("PIXELS")->check(CLI::Range(1, 8192))
+  app->add_option("--height", height, "image height")
+      ->type_name("PIXELS")
+      ->check(CLI::Range(1, 8192))
       ->capture_default_str();
-  app->add_option("--views", views, "timed orbit views (after one warm-up view)")->type_name("N")
-      ->check(CLI::Range(1, 1000))->capture_default_str();
+  app->add_option("--views", views, "timed orbit views (after one warm-up view)")
+      ->type_name("N")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
   app->add_flag("--int16", int16, "int16 grids (as a decoded file holds them) instead of float32");
   app->add_flag("--no-skip", no_skip, "march every sample (no empty-space skipping)");
   AddThreadListFlag(app.get(), &threads);
@@ -209,15 +220,17 @@ int RunRenderBench(int argc, char** argv) {
 
   SceneField scene;
   const auto t0 = std::chrono::steady_clock::now();
-  if (const Status st = MakeBlobScene(res, int16 ? GridStorage::kInt16 : GridStorage::kFloat32, true, 1, &scene);
+  if (const Status st =
+          MakeBlobScene(res, int16 ? GridStorage::kInt16 : GridStorage::kFloat32, true, 1, &scene);
       !st.ok()) {
     std::fprintf(stderr, "bench render: %s\n", st.message());
     return 1;
   }
-  std::printf("bench render: %d^3 blob scene (%s grids, built in %.0f ms), %dx%d, %d views, skipping %s\n", res,
-              int16 ? "int16" : "float32",
-              std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() * 1e3, width, height,
-              views, no_skip ? "off" : "on");
+  std::printf(
+      "bench render: %d^3 blob scene (%s grids, built in %.0f ms), %dx%d, %d views, skipping %s\n",
+      res, int16 ? "int16" : "float32",
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() * 1e3, width,
+      height, views, no_skip ? "off" : "on");
   BenchReport report;
   RenderOptions options;
   options.skip_empty_space = !no_skip;
@@ -232,7 +245,8 @@ int RunRenderBench(int argc, char** argv) {
     report.Add(key + "msamples_per_s", r.msamples_per_s, "M samples/s");
     report.Add(key + "mcolor_samples_per_s", r.mcolor_samples_per_s, "M MLP samples/s");
     report.Add(key + "samples_per_view", static_cast<double>(r.samples_per_view), "samples");
-    report.Add(key + "color_samples_per_view", static_cast<double>(r.color_samples_per_view), "MLP samples");
+    report.Add(key + "color_samples_per_view", static_cast<double>(r.color_samples_per_view),
+               "MLP samples");
   }
   if (!json_path.empty() && !report.WriteJson(json_path)) {
     std::fprintf(stderr, "bench render: cannot write %s\n", json_path.c_str());

@@ -75,8 +75,8 @@ double Pchip::operator()(double x) const {
                          0, std::upper_bound(x_.begin(), x_.end(), x) - x_.begin() - 1)));
   const double h = x_[k + 1] - x_[k], t = (x - x_[k]) / h;
   const double t2 = t * t, t3 = t2 * t;
-  return (2 * t3 - 3 * t2 + 1) * y_[k] + (t3 - 2 * t2 + t) * h * d_[k] + (-2 * t3 + 3 * t2) * y_[k + 1] +
-         (t3 - t2) * h * d_[k + 1];
+  return (2 * t3 - 3 * t2 + 1) * y_[k] + (t3 - 2 * t2 + t) * h * d_[k] +
+         (-2 * t3 + 3 * t2) * y_[k + 1] + (t3 - t2) * h * d_[k + 1];
 }
 
 double Pchip::Integral(double a, double b) const {

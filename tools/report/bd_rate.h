@@ -18,9 +18,9 @@ struct RdPoint {
 
 struct BdResult {
   bool ok = false;
-  std::string error;        // why not, when !ok
-  double bd_rate = 0.0;     // percent: mean rate change of test against anchor at equal PSNR
-  double bd_psnr = 0.0;     // dB: mean PSNR change of test against anchor at equal rate
+  std::string error;     // why not, when !ok
+  double bd_rate = 0.0;  // percent: mean rate change of test against anchor at equal PSNR
+  double bd_psnr = 0.0;  // dB: mean PSNR change of test against anchor at equal rate
   double psnr_range[2] = {0.0, 0.0};  // the overlap BD-rate integrates over
   double rate_range[2] = {0.0, 0.0};  // the overlap BD-PSNR integrates over
 };

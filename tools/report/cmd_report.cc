@@ -15,7 +15,8 @@ namespace {
 
 int RunReportPlot(int argc, char** argv) {
   std::string dir;
-  auto app = MakeCommand("report plot", "redraw the plots and index.html of a report from its report.json");
+  auto app = MakeCommand("report plot",
+                         "redraw the plots and index.html of a report from its report.json");
   app->add_option("REPORT", dir, "the report directory")->type_name("DIR")->required();
   if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
   return WriteReport(dir, ReadReport(dir)) ? 0 : 1;
@@ -25,22 +26,30 @@ int RunReportPlot(int argc, char** argv) {
 
 int RunReportCompare(int argc, char** argv) {
   std::string paths[2], json_path, plot_path;
-  auto app = MakeCommand("report compare",
-                         "BD-rate and BD-PSNR of report B against report A (decoded-file PSNR against file bytes, "
-                         "PCHIP interpolation)");
-  app->add_option("A", paths[0], "the anchor: a report directory or its report.json")->type_name("REPORT")->required();
+  auto app = MakeCommand(
+      "report compare",
+      "BD-rate and BD-PSNR of report B against report A (decoded-file PSNR against file bytes, "
+      "PCHIP interpolation)");
+  app->add_option("A", paths[0], "the anchor: a report directory or its report.json")
+      ->type_name("REPORT")
+      ->required();
   app->add_option("B", paths[1], "the report compared with A")->type_name("REPORT")->required();
   app->add_option("--json", json_path, "write the result as JSON")->type_name("FILE");
-  app->add_option("--plot", plot_path, "draw both curves (writes FILE.csv beside it)")->type_name("FILE.png");
+  app->add_option("--plot", plot_path, "draw both curves (writes FILE.csv beside it)")
+      ->type_name("FILE.png");
   if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
   const nlohmann::json a = ReadReport(paths[0]), b = ReadReport(paths[1]);
   const BdResult r = Bjontegaard(RateDistortionCurve(a), RateDistortionCurve(b));
-  if (!r.ok) throw std::runtime_error("cannot compare " + paths[0] + " and " + paths[1] + ": " + r.error);
-  std::printf("B = %s against A = %s (decoded-file PSNR vs file bytes, PCHIP):\n", paths[1].c_str(), paths[0].c_str());
-  std::printf("  BD-rate %+.2f%%  (B needs %.2f%% %s bytes than A for the same PSNR, over %.2f-%.2f dB)\n", r.bd_rate,
-              std::fabs(r.bd_rate), r.bd_rate <= 0 ? "fewer" : "more", r.psnr_range[0], r.psnr_range[1]);
-  std::printf("  BD-PSNR %+.3f dB  (at the same size, over %.0f-%.0f bytes)\n", r.bd_psnr, r.rate_range[0],
-              r.rate_range[1]);
+  if (!r.ok)
+    throw std::runtime_error("cannot compare " + paths[0] + " and " + paths[1] + ": " + r.error);
+  std::printf("B = %s against A = %s (decoded-file PSNR vs file bytes, PCHIP):\n", paths[1].c_str(),
+              paths[0].c_str());
+  std::printf(
+      "  BD-rate %+.2f%%  (B needs %.2f%% %s bytes than A for the same PSNR, over %.2f-%.2f dB)\n",
+      r.bd_rate, std::fabs(r.bd_rate), r.bd_rate <= 0 ? "fewer" : "more", r.psnr_range[0],
+      r.psnr_range[1]);
+  std::printf("  BD-PSNR %+.3f dB  (at the same size, over %.0f-%.0f bytes)\n", r.bd_psnr,
+              r.rate_range[0], r.rate_range[1]);
   if (!json_path.empty()) {
     const nlohmann::json j = {{"anchor", paths[0]},
                               {"test", paths[1]},
@@ -54,8 +63,8 @@ int RunReportCompare(int argc, char** argv) {
     WriteTextFile(json_path, j.dump(2) + "\n");
   }
   if (!plot_path.empty()) {
-    const std::string csv = CompareCsv({{"A: " + paths[0], RateDistortionCurve(a)},
-                                        {"B: " + paths[1], RateDistortionCurve(b)}});
+    const std::string csv = CompareCsv(
+        {{"A: " + paths[0], RateDistortionCurve(a)}, {"B: " + paths[1], RateDistortionCurve(b)}});
     const std::string csv_path = plot_path.substr(0, plot_path.rfind('.')) + ".csv";
     WriteTextFile(csv_path, csv);
     if (!DrawComparePlot(plot_path, csv_path)) return 1;
@@ -74,8 +83,10 @@ int RunReport(int argc, char** argv) {
           {"render", RunReportRender,
            "the speed-error sweep of the renderer on one rate point: ecrf report render REPORT"},
           {"compare", RunReportCompare,
-           "BD-rate and BD-PSNR of B against A: ecrf report compare A B [--json FILE] [--plot FILE.png]"},
-          {"plot", RunReportPlot, "redraw the plots and index.html from REPORT/report.json: ecrf report plot REPORT"},
+           "BD-rate and BD-PSNR of B against A: ecrf report compare A B [--json FILE] [--plot "
+           "FILE.png]"},
+          {"plot", RunReportPlot,
+           "redraw the plots and index.html from REPORT/report.json: ecrf report plot REPORT"},
       },
       "`ecrf report <report> --help` (or `ecrf help report <report>`) for the options of each.\n"};
   return RunSubcommand(table, argc, argv);

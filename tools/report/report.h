@@ -1,8 +1,8 @@
 // `ecrf report`: rate–distortion and speed–error reports of ecrf on a scene.
 //
 // A report is a directory: report.json (everything measured; the source of every other file),
-// one CSV per plot, PNG plots drawn by tools/report/plot_report.py when matplotlib is there, index.html
-// (tables, and the plots that exist), and runs/ with one training run per rate point.
+// one CSV per plot, PNG plots drawn by tools/report/plot_report.py when matplotlib is there,
+// index.html (tables, and the plots that exist), and runs/ with one training run per rate point.
 #ifndef ECRF_TOOLS_REPORT_REPORT_H_
 #define ECRF_TOOLS_REPORT_REPORT_H_
 

@@ -11,8 +11,8 @@
 
 #include "tools/cli_args.h"
 #include "tools/report/report.h"
-#include "trainer/train/checkpoint.h"
 #include "trainer/data/file_io.h"
+#include "trainer/train/checkpoint.h"
 
 namespace ecrf {
 namespace tools {
@@ -37,11 +37,20 @@ std::string Html(const std::string& text) {
   std::string out;
   for (char c : text) {
     switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '&':
+        out += "&amp;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -53,13 +62,15 @@ std::string Str(const nlohmann::json& j, const char* key) {
 
 std::string RdCsv(nlohmann::json& r) {
   std::ostringstream o;
-  o << "label,lambda_e,file_bytes,decoded_psnr,decoded_ssim,float_psnr,float_ssim,ratio,psnr_loss_db,"
+  o << "label,lambda_e,file_bytes,decoded_psnr,decoded_ssim,float_psnr,float_ssim,ratio,psnr_loss_"
+       "db,"
        "float32_bytes,train_seconds,iterations\n";
   for (nlohmann::json& p : r["points"]) {
     o << Csv(Str(p, "label")) << ',' << Num(p["lambda_e"]) << ',' << Num(p["file_bytes"]) << ','
-      << Num(p["decoded_psnr"]) << ',' << Num(p["decoded_ssim"]) << ',' << Num(p["float_psnr"]) << ','
-      << Num(p["float_ssim"]) << ',' << Num(p["ratio"]) << ',' << Num(p["psnr_loss_db"]) << ','
-      << Num(p["float32_bytes"]) << ',' << Num(p["train_seconds"]) << ',' << Num(p["iterations"]) << '\n';
+      << Num(p["decoded_psnr"]) << ',' << Num(p["decoded_ssim"]) << ',' << Num(p["float_psnr"])
+      << ',' << Num(p["float_ssim"]) << ',' << Num(p["ratio"]) << ',' << Num(p["psnr_loss_db"])
+      << ',' << Num(p["float32_bytes"]) << ',' << Num(p["train_seconds"]) << ','
+      << Num(p["iterations"]) << '\n';
   }
   return o.str();
 }
@@ -69,7 +80,8 @@ std::string ChunksCsv(nlohmann::json& r) {
   o << "label,lambda_e,chunk,bytes\n";
   for (nlohmann::json& p : r["points"]) {
     for (const auto& [name, bytes] : p["chunks"].items()) {
-      o << Csv(Str(p, "label")) << ',' << Num(p["lambda_e"]) << ',' << Csv(name) << ',' << Num(bytes) << '\n';
+      o << Csv(Str(p, "label")) << ',' << Num(p["lambda_e"]) << ',' << Csv(name) << ','
+        << Num(bytes) << '\n';
     }
   }
   return o.str();
@@ -80,7 +92,8 @@ std::string CurveCsv(nlohmann::json& r) {
   o << "label,lambda_e,minutes,test_psnr\n";
   for (nlohmann::json& p : r["points"]) {
     for (nlohmann::json& c : p["curve"]) {
-      o << Csv(Str(p, "label")) << ',' << Num(p["lambda_e"]) << ',' << Num(c[0]) << ',' << Num(c[1]) << '\n';
+      o << Csv(Str(p, "label")) << ',' << Num(p["lambda_e"]) << ',' << Num(c[0]) << ',' << Num(c[1])
+        << '\n';
     }
   }
   return o.str();
@@ -91,8 +104,8 @@ std::string AnchorsCsv(nlohmann::json& r) {
   o << "label,file_bytes,psnr,ratio,psnr_loss_db\n";
   for (nlohmann::json& a : r["anchors"]) {
     o << Csv(Str(a, "label")) << ',' << Num(a.value("file_bytes", nlohmann::json())) << ','
-      << Num(a.value("psnr", nlohmann::json())) << ',' << Num(a.value("ratio", nlohmann::json())) << ','
-      << Num(a.value("psnr_loss_db", nlohmann::json())) << '\n';
+      << Num(a.value("psnr", nlohmann::json())) << ',' << Num(a.value("ratio", nlohmann::json()))
+      << ',' << Num(a.value("psnr_loss_db", nlohmann::json())) << '\n';
   }
   return o.str();
 }
@@ -102,10 +115,11 @@ std::string SpeedCsv(nlohmann::json& r) {
   o << "knob,setting,is_default,seconds_per_view,psnr,ssim,threads,width,height,samples_per_ray,"
        "mlp_samples_per_ray\n";
   for (nlohmann::json& row : r["speed"]["rows"]) {
-    o << Csv(Str(row, "knob")) << ',' << Csv(Str(row, "setting")) << ',' << (row.value("is_default", false) ? 1 : 0)
-      << ',' << Num(row["seconds_per_view"]) << ',' << Num(row["psnr"]) << ',' << Num(row["ssim"]) << ','
-      << Num(row["threads"]) << ',' << Num(row["width"]) << ',' << Num(row["height"]) << ','
-      << Num(row["samples_per_ray"]) << ',' << Num(row["mlp_samples_per_ray"]) << '\n';
+    o << Csv(Str(row, "knob")) << ',' << Csv(Str(row, "setting")) << ','
+      << (row.value("is_default", false) ? 1 : 0) << ',' << Num(row["seconds_per_view"]) << ','
+      << Num(row["psnr"]) << ',' << Num(row["ssim"]) << ',' << Num(row["threads"]) << ','
+      << Num(row["width"]) << ',' << Num(row["height"]) << ',' << Num(row["samples_per_ray"]) << ','
+      << Num(row["mlp_samples_per_ray"]) << '\n';
   }
   return o.str();
 }
@@ -132,7 +146,8 @@ std::string Python() {
 bool RunPlotScript(const std::string& args, const std::string& dir) {
   const std::string script = PlotScript();
   if (!FileExists(script)) {
-    std::fprintf(stderr, "report: plots skipped: %s not found (set ECRF_PLOT_SCRIPT)\n", script.c_str());
+    std::fprintf(stderr, "report: plots skipped: %s not found (set ECRF_PLOT_SCRIPT)\n",
+                 script.c_str());
     return false;
   }
   const std::string command = Quote(Python()) + " " + Quote(script) + " " + args + " 1>&2";
@@ -140,11 +155,16 @@ bool RunPlotScript(const std::string& args, const std::string& dir) {
   const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   if (code == 0) return true;
   if (code == 3) {  // the script's "matplotlib is not installed"
-    std::fprintf(stderr, "report: plots skipped; for plots: apt-get install python3-matplotlib, then "
-                 "`ecrf report plot %s`\n", dir.c_str());
+    std::fprintf(stderr,
+                 "report: plots skipped; for plots: apt-get install python3-matplotlib, then "
+                 "`ecrf report plot %s`\n",
+                 dir.c_str());
   } else {
-    std::fprintf(stderr, "report: %s failed (exit status %d, its message is above); the tables and CSV files "
-                 "are complete\n", script.c_str(), code);
+    std::fprintf(
+        stderr,
+        "report: %s failed (exit status %d, its message is above); the tables and CSV files "
+        "are complete\n",
+        script.c_str(), code);
   }
   return false;
 }
@@ -155,14 +175,14 @@ void Row(std::ostringstream& o, std::initializer_list<std::string> cells, const 
   o << "</tr>\n";
 }
 
-void Figure(std::ostringstream& o, const std::string& dir, const std::string& png, const std::string& csv,
-            const std::string& alt) {
+void Figure(std::ostringstream& o, const std::string& dir, const std::string& png,
+            const std::string& csv, const std::string& alt) {
   if (FileExists(dir + "/" + png)) {
     o << "<figure><img src=\"" << png << "\" alt=\"" << Html(alt) << "\"><figcaption>" << Html(alt)
       << " (data: <a href=\"" << csv << "\">" << csv << "</a>)</figcaption></figure>\n";
   } else {
-    o << "<p class=note>Plot " << png << " not drawn (needs python3-matplotlib); data in <a href=\"" << csv
-      << "\">" << csv << "</a>.</p>\n";
+    o << "<p class=note>Plot " << png << " not drawn (needs python3-matplotlib); data in <a href=\""
+      << csv << "\">" << csv << "</a>.</p>\n";
   }
 }
 
@@ -171,21 +191,28 @@ std::string IndexHtml(const std::string& dir, nlohmann::json& r) {
   const std::string scene = Html(Str(r, "scene"));
   o << "<!doctype html>\n<html lang=en><head><meta charset=utf-8>"
        "<meta name=viewport content=\"width=device-width, initial-scale=1\">\n<title>ecrf report: "
-    << scene << "</title>\n<style>body{font:15px/1.45 system-ui,sans-serif;max-width:1100px;margin:2em auto;"
-       "padding:0 1em;color:#222}table{border-collapse:collapse;margin:1em 0;font-variant-numeric:tabular-nums}"
+    << scene
+    << "</title>\n<style>body{font:15px/1.45 system-ui,sans-serif;max-width:1100px;margin:2em auto;"
+       "padding:0 1em;color:#222}table{border-collapse:collapse;margin:1em "
+       "0;font-variant-numeric:tabular-nums}"
        "td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}th{background:#f3f3f3}"
        "td:first-child,th:first-child{text-align:left}img{max-width:100%}figure{margin:1em 0}"
        ".note{color:#666}tr.default{font-weight:600}</style></head><body>\n";
   o << "<h1>ecrf report: " << scene << "</h1>\n";
   nlohmann::json& s = r["sweep"];
-  o << "<p>Data <code>" << Html(Str(r, "data")) << "</code>, preset <code>" << Html(Str(s, "preset")) << "</code>, "
-    << Num(s["iterations"]) << " iterations per run, test PSNR over the test views with stride " << Num(s["test_view_stride"])
-    << ". ecrf " << Html(Str(r, "ecrf_version")) << " (bitstream " << Num(r["bitstream_version"])
-    << "), " << Html(Str(r, "date")) << ", " << Html(Str(r["machine"], "cpu")) << ", "
-    << "training threads: " << Num(s["threads"]) << ". All numbers in <a href=\"report.json\">report.json</a>.</p>\n";
+  o << "<p>Data <code>" << Html(Str(r, "data")) << "</code>, preset <code>"
+    << Html(Str(s, "preset")) << "</code>, " << Num(s["iterations"])
+    << " iterations per run, test PSNR over the test views with stride "
+    << Num(s["test_view_stride"]) << ". ecrf " << Html(Str(r, "ecrf_version")) << " (bitstream "
+    << Num(r["bitstream_version"]) << "), " << Html(Str(r, "date")) << ", "
+    << Html(Str(r["machine"], "cpu")) << ", "
+    << "training threads: " << Num(s["threads"])
+    << ". All numbers in <a href=\"report.json\">report.json</a>.</p>\n";
 
-  o << "<h2>Rate–distortion</h2>\n<p>Each point is one training run at rate weight lambda_e, encoded to a "
-       ".ecrf file and scored after decoding it with the embeddable decoder. Ratio and loss are against the "
+  o << "<h2>Rate–distortion</h2>\n<p>Each point is one training run at rate weight lambda_e, "
+       "encoded to a "
+       ".ecrf file and scored after decoding it with the embeddable decoder. Ratio and loss are "
+       "against the "
        "lambda = 0 float32 model";
   if (!r["reference"].is_null()) {
     o << " (" << Num(r["reference"]["float32_bytes"], "%.0f") << " bytes, "
@@ -195,12 +222,15 @@ std::string IndexHtml(const std::string& dir, nlohmann::json& r) {
   Figure(o, dir, "rd.png", "rd.csv", "file size vs PSNR of the decoded file");
   Figure(o, dir, "ratio.png", "rd.csv", "compression ratio vs PSNR loss");
   o << "<table>\n";
-  Row(o, {"point", "file bytes", "ratio", "decoded PSNR", "SSIM", "float PSNR", "quantization loss", "loss vs lambda=0",
-          "train min"}, "th");
+  Row(o,
+      {"point", "file bytes", "ratio", "decoded PSNR", "SSIM", "float PSNR", "quantization loss",
+       "loss vs lambda=0", "train min"},
+      "th");
   for (nlohmann::json& p : r["points"]) {
     Row(o, {Html(Str(p, "label")), Num(p["file_bytes"], "%.0f"), Num(p["ratio"], "%.1fx"),
-            Num(p["decoded_psnr"], "%.2f dB"), Num(p["decoded_ssim"], "%.4f"), Num(p["float_psnr"], "%.2f dB"),
-            Num(p["quantization_loss_db"], "%+.2f dB"), Num(p["psnr_loss_db"], "%+.2f dB"),
+            Num(p["decoded_psnr"], "%.2f dB"), Num(p["decoded_ssim"], "%.4f"),
+            Num(p["float_psnr"], "%.2f dB"), Num(p["quantization_loss_db"], "%+.2f dB"),
+            Num(p["psnr_loss_db"], "%+.2f dB"),
             Num(nlohmann::json(p["train_seconds"].get<double>() / 60.0), "%.1f")});
   }
   o << "</table>\n";
@@ -209,7 +239,8 @@ std::string IndexHtml(const std::string& dir, nlohmann::json& r) {
     Row(o, {"anchor", "file bytes", "PSNR", "ratio", "loss", "note"}, "th");
     for (nlohmann::json& a : r["anchors"]) {
       Row(o, {Html(Str(a, "label")), Num(a.value("file_bytes", nlohmann::json()), "%.0f"),
-              Num(a.value("psnr", nlohmann::json()), "%.2f dB"), Num(a.value("ratio", nlohmann::json()), "%.1fx"),
+              Num(a.value("psnr", nlohmann::json()), "%.2f dB"),
+              Num(a.value("ratio", nlohmann::json()), "%.1fx"),
               Num(a.value("psnr_loss_db", nlohmann::json()), "%+.2f dB"), Html(Str(a, "note"))});
     }
     o << "</table>\n";
@@ -218,45 +249,57 @@ std::string IndexHtml(const std::string& dir, nlohmann::json& r) {
   o << "<h2>Where the bytes go</h2>\n";
   Figure(o, dir, "chunks.png", "chunks.csv", "bytes per chunk");
   o << "<table>\n";
-  Row(o, {"point", "density COEF", "appearance COEF", "MLPW", "OCCU", "HEAD + meta + container"}, "th");
+  Row(o, {"point", "density COEF", "appearance COEF", "MLPW", "OCCU", "HEAD + meta + container"},
+      "th");
   for (nlohmann::json& p : r["points"]) {
     double density = 0, appearance = 0, other = 0;
     for (const auto& [name, bytes] : p["chunks"].items()) {
       const double b = bytes.get<double>();
-      if (name.rfind("density.", 0) == 0) density += b;
-      else if (name.rfind("appearance.", 0) == 0) appearance += b;
-      else if (name != "MLPW" && name != "OCCU") other += b;
+      if (name.rfind("density.", 0) == 0)
+        density += b;
+      else if (name.rfind("appearance.", 0) == 0)
+        appearance += b;
+      else if (name != "MLPW" && name != "OCCU")
+        other += b;
     }
-    Row(o, {Html(Str(p, "label")), Num(nlohmann::json(density), "%.0f"), Num(nlohmann::json(appearance), "%.0f"),
-            Num(p["chunks"]["MLPW"], "%.0f"), Num(p["chunks"]["OCCU"], "%.0f"), Num(nlohmann::json(other), "%.0f")});
+    Row(o, {Html(Str(p, "label")), Num(nlohmann::json(density), "%.0f"),
+            Num(nlohmann::json(appearance), "%.0f"), Num(p["chunks"]["MLPW"], "%.0f"),
+            Num(p["chunks"]["OCCU"], "%.0f"), Num(nlohmann::json(other), "%.0f")});
   }
   o << "</table>\n";
 
-  o << "<h2>Training curve</h2>\n<p>Test PSNR of the float model against wall-clock training minutes "
+  o << "<h2>Training curve</h2>\n<p>Test PSNR of the float model against wall-clock training "
+       "minutes "
        "(evaluation time excluded).</p>\n";
   Figure(o, dir, "curve.png", "curve.csv", "test PSNR vs training minutes");
 
   if (r.contains("speed")) {
     nlohmann::json& sp = r["speed"];
     nlohmann::json& d = sp["decode"];
-    o << "<h2>Speed against error</h2>\n<p>Renderer knobs of SPEC.md 7.8, one at a time from the defaults, on "
-      << Html(Str(sp, "file")) << " (" << Html(Str(sp, "point")) << ", " << Num(sp["file_bytes"], "%.0f")
-      << " bytes), " << Num(sp["views"]) << " test views (stride " << Num(sp["test_view_stride"])
+    o << "<h2>Speed against error</h2>\n<p>Renderer knobs of SPEC.md 7.8, one at a time from the "
+         "defaults, on "
+      << Html(Str(sp, "file")) << " (" << Html(Str(sp, "point")) << ", "
+      << Num(sp["file_bytes"], "%.0f") << " bytes), " << Num(sp["views"]) << " test views (stride "
+      << Num(sp["test_view_stride"])
       << "). Image scale 1/k renders at 1/k of the size and scores the bilinear upsampling.</p>\n";
     o << "<p>Decoding (entropy decoding + integer IDCT + grid layout, one thread, fastest of 3): "
-      << Num(d["float32_seconds"], "%.3f") << " s to float32 grids (" << Num(d["float32_ms_per_mb"], "%.0f")
-      << " ms per MB of stream, " << Num(nlohmann::json(d["float32_grid_bytes"].get<double>() / 1e6), "%.1f")
+      << Num(d["float32_seconds"], "%.3f") << " s to float32 grids ("
+      << Num(d["float32_ms_per_mb"], "%.0f") << " ms per MB of stream, "
+      << Num(nlohmann::json(d["float32_grid_bytes"].get<double>() / 1e6), "%.1f")
       << " MB of grids), " << Num(d["int16_seconds"], "%.3f") << " s to int16 grids ("
-      << Num(nlohmann::json(d["int16_grid_bytes"].get<double>() / 1e6), "%.1f")
-      << " MB)";
+      << Num(nlohmann::json(d["int16_grid_bytes"].get<double>() / 1e6), "%.1f") << " MB)";
     if (d["peak_rss_growth_bytes"].is_number()) {
-      o << "; peak RSS grew by " << Num(nlohmann::json(d["peak_rss_growth_bytes"].get<double>() / 1e6), "%.1f")
+      o << "; peak RSS grew by "
+        << Num(nlohmann::json(d["peak_rss_growth_bytes"].get<double>() / 1e6), "%.1f")
         << " MB while decoding to float32 (stream and grids)";
     }
     o << ".</p>\n";
     Figure(o, dir, "speed.png", "speed.csv", "render time per view vs PSNR");
     o << "<table>\n";
-    Row(o, {"knob", "setting", "ms/view", "PSNR", "SSIM", "threads", "size", "samples/ray", "MLP samples/ray"}, "th");
+    Row(o,
+        {"knob", "setting", "ms/view", "PSNR", "SSIM", "threads", "size", "samples/ray",
+         "MLP samples/ray"},
+        "th");
     for (nlohmann::json& row : sp["rows"]) {
       if (row.value("is_default", false)) o << "<tr class=default>";
       std::ostringstream line;
@@ -271,8 +314,10 @@ std::string IndexHtml(const std::string& dir, nlohmann::json& r) {
     }
     o << "</table>\n";
   }
-  o << "<p class=note>Rebuild: <code>ecrf report sweep ... -o DIR</code> (finished runs are reused), "
-       "<code>ecrf report render DIR</code>, <code>ecrf report plot DIR</code>; compare two reports with "
+  o << "<p class=note>Rebuild: <code>ecrf report sweep ... -o DIR</code> (finished runs are "
+       "reused), "
+       "<code>ecrf report render DIR</code>, <code>ecrf report plot DIR</code>; compare two "
+       "reports with "
        "<code>ecrf report compare A/report.json B/report.json</code>.</p>\n</body></html>\n";
   return o.str();
 }
@@ -286,8 +331,8 @@ std::string CompareCsv(const std::vector<std::pair<std::string, std::vector<RdPo
   o << "series,file_bytes,psnr\n";
   for (const auto& [name, points] : curves) {
     for (const RdPoint& p : points) {
-      o << Csv(name) << ',' << Num(nlohmann::json(p.rate), "%.0f") << ',' << Num(nlohmann::json(p.psnr), "%.6f")
-        << '\n';
+      o << Csv(name) << ',' << Num(nlohmann::json(p.rate), "%.0f") << ','
+        << Num(nlohmann::json(p.psnr), "%.6f") << '\n';
     }
   }
   return o.str();

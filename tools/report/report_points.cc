@@ -6,8 +6,8 @@
 #include <stdexcept>
 
 #include "tools/report/report.h"
-#include "trainer/train/checkpoint.h"
 #include "trainer/data/file_io.h"
+#include "trainer/train/checkpoint.h"
 
 namespace ecrf {
 namespace tools {
@@ -86,13 +86,15 @@ void AddReferenceColumns(nlohmann::json* report) {
   // A sweep without a lambda = 0 point may borrow that reference from an earlier sweep of the
   // same scene and preset (`report sweep --reference`): its float model does not depend on
   // anything the rate points change.
-  if (ref.is_null() && report->contains("borrowed_reference")) ref = (*report)["borrowed_reference"];
+  if (ref.is_null() && report->contains("borrowed_reference"))
+    ref = (*report)["borrowed_reference"];
   (*report)["reference"] = ref;
   for (nlohmann::json& p : points) {
     const double bytes = p.at("file_bytes").get<double>();
     const double float32 = (ref.is_null() ? p : ref).at("float32_bytes").get<double>();
     p["ratio"] = float32 / bytes;
-    p["quantization_loss_db"] = p.at("decoded_psnr").get<double>() - p.at("float_psnr").get<double>();
+    p["quantization_loss_db"] =
+        p.at("decoded_psnr").get<double>() - p.at("float_psnr").get<double>();
     if (!ref.is_null()) {
       p["psnr_loss_db"] = p.at("decoded_psnr").get<double>() - ref.at("float_psnr").get<double>();
     } else {

@@ -13,8 +13,8 @@
 #include "tools/cli.h"
 #include "tools/decoded_scene.h"
 #include "tools/report/report.h"
-#include "trainer/train/checkpoint.h"
 #include "trainer/data/file_io.h"
+#include "trainer/train/checkpoint.h"
 
 namespace ecrf {
 namespace tools {
@@ -99,7 +99,8 @@ std::vector<Setting> Settings(int all_threads, float scene_threshold) {
 
 const nlohmann::json& ChoosePoint(const nlohmann::json& report, double lambda) {
   const nlohmann::json& points = report.at("points");
-  if (points.empty()) throw std::runtime_error("the report has no rate points yet (run `ecrf report sweep`)");
+  if (points.empty())
+    throw std::runtime_error("the report has no rate points yet (run `ecrf report sweep`)");
   if (lambda < 0) return points[points.size() / 2];
   for (const nlohmann::json& p : points) {
     if (LambdaText(p.at("lambda_e").get<double>()) == LambdaText(lambda)) return p;
@@ -108,8 +109,8 @@ const nlohmann::json& ChoosePoint(const nlohmann::json& report, double lambda) {
 }
 
 // Decodes `reps` times and keeps the fastest (the first also warms the caches).
-LoadedScene TimedDecode(const std::vector<uint8_t>& bytes, const std::string& name, dec::GridStorage storage,
-                        int reps, double* best_seconds) {
+LoadedScene TimedDecode(const std::vector<uint8_t>& bytes, const std::string& name,
+                        dec::GridStorage storage, int reps, double* best_seconds) {
   LoadedScene s;
   *best_seconds = 1e30;
   for (int r = 0; r < reps; ++r) {
@@ -127,7 +128,8 @@ void RunSpeedSweep(const std::string& dir, const SpeedSweepOptions& so, nlohmann
   const std::string file = dir + "/" + point.at("run_dir").get<std::string>() + "/scene.ecrf";
   const int sweep_stride = report->at("sweep").value("test_view_stride", 1);
   const int stride = so.stride > 0 ? so.stride : 2 * sweep_stride;
-  const int max_views = so.max_views > 0 ? so.max_views : report->at("sweep").value("max_test_views", 0);
+  const int max_views =
+      so.max_views > 0 ? so.max_views : report->at("sweep").value("max_test_views", 0);
 
   // Decode first, so that the growth of the peak RSS is the decoder's.
   const std::vector<uint8_t> bytes = trainer::ReadWholeFile(file);
@@ -141,14 +143,15 @@ void RunSpeedSweep(const std::string& dir, const SpeedSweepOptions& so, nlohmann
   const std::string data = report->at("data").get<std::string>();
   const trainer::Dataset test =
       data == "builtin" || data == "capture" || data == "forward"
-          ? ProceduralDataset(data, "test", report->at("sweep").value("seed", trainer::TrainOptions().seed))
+          ? ProceduralDataset(data, "test",
+                              report->at("sweep").value("seed", trainer::TrainOptions().seed))
           : trainer::LoadDataset(data, "test", report->at("sweep").value("downscale", 1));
   const unsigned hw = std::thread::hardware_concurrency();
   const int all_threads = hw == 0 ? 1 : int(std::min<unsigned>(hw, dec::kMaxRenderThreads));
   const std::vector<Setting> settings = Settings(all_threads, f32.field->weight_threshold);
 
-  std::fprintf(stderr, "report: speed-error sweep of %s: %zu settings, test views with stride %d\n", file.c_str(),
-               settings.size(), stride);
+  std::fprintf(stderr, "report: speed-error sweep of %s: %zu settings, test views with stride %d\n",
+               file.c_str(), settings.size(), stride);
   // One untimed view first: page faults and cold caches belong to no setting.
   EvaluateDecoded(*f32.field, test, stride, 1, dec::RenderOptions(), false);
   nlohmann::json rows = nlohmann::json::array();
@@ -162,8 +165,9 @@ void RunSpeedSweep(const std::string& dir, const SpeedSweepOptions& so, nlohmann
       continue;
     }
     dec::RenderStats stats;
-    const trainer::EvalResult r = EvaluateDecoded(s.int16 ? *i16.field : *f32.field, test, stride, max_views,
-                                                  s.options, false, s.image_scale, &stats);
+    const trainer::EvalResult r =
+        EvaluateDecoded(s.int16 ? *i16.field : *f32.field, test, stride, max_views, s.options,
+                        false, s.image_scale, &stats);
     const double rays = std::max<double>(1.0, double(stats.rays));
     const int threads = s.options.num_threads == 0 ? all_threads : s.options.num_threads;
     nlohmann::json row = {{"knob", s.knob},
@@ -178,7 +182,8 @@ void RunSpeedSweep(const std::string& dir, const SpeedSweepOptions& so, nlohmann
                           {"height", test.views[0].camera.height / s.image_scale},
                           {"samples_per_ray", double(stats.samples) / rays},
                           {"mlp_samples_per_ray", double(stats.color_samples) / rays}};
-    std::fprintf(stderr, "  %-17s %-9s %8.1f ms/view  %6.2f dB  %7.1f samples/ray  %6.2f MLP samples/ray\n",
+    std::fprintf(stderr,
+                 "  %-17s %-9s %8.1f ms/view  %6.2f dB  %7.1f samples/ray  %6.2f MLP samples/ray\n",
                  s.knob.c_str(), s.value.c_str(), 1e3 * r.seconds_per_view, r.psnr,
                  double(stats.samples) / rays, double(stats.color_samples) / rays);
     if (s.is_default) measured_default = row;
@@ -192,15 +197,18 @@ void RunSpeedSweep(const std::string& dir, const SpeedSweepOptions& so, nlohmann
   speed["test_view_stride"] = stride;
   speed["views"] = measured_default.value("views", 0);
   speed["scene_weight_threshold"] = f32.field->weight_threshold;
-  speed["decode"] = {{"float32_seconds", f32_seconds},
-                     {"int16_seconds", i16_seconds},
-                     {"float32_ms_per_mb", 1e3 * f32_seconds / mb},
-                     {"int16_ms_per_mb", 1e3 * i16_seconds / mb},
-                     {"float32_grid_bytes", f32.field->density.StorageBytes() + f32.field->appearance.StorageBytes()},
-                     {"int16_grid_bytes", i16.field->density.StorageBytes() + i16.field->appearance.StorageBytes()},
-                     {"peak_rss_growth_bytes",
-                      reset && rss_before >= 0 && rss_peak >= 0 ? nlohmann::json((rss_peak - rss_before) * 1024.0)
-                                                                : nlohmann::json()}};
+  speed["decode"] = {
+      {"float32_seconds", f32_seconds},
+      {"int16_seconds", i16_seconds},
+      {"float32_ms_per_mb", 1e3 * f32_seconds / mb},
+      {"int16_ms_per_mb", 1e3 * i16_seconds / mb},
+      {"float32_grid_bytes",
+       f32.field->density.StorageBytes() + f32.field->appearance.StorageBytes()},
+      {"int16_grid_bytes",
+       i16.field->density.StorageBytes() + i16.field->appearance.StorageBytes()},
+      {"peak_rss_growth_bytes", reset && rss_before >= 0 && rss_peak >= 0
+                                    ? nlohmann::json((rss_peak - rss_before) * 1024.0)
+                                    : nlohmann::json()}};
   speed["rows"] = rows;
   (*report)["speed"] = speed;
   WriteReport(dir, *report);
@@ -209,11 +217,14 @@ void RunSpeedSweep(const std::string& dir, const SpeedSweepOptions& so, nlohmann
 int RunReportRender(int argc, char** argv) {
   std::string dir;
   SpeedSweepOptions so;
-  auto app = MakeCommand("report render",
-                         "the speed-error sweep of the renderer on one rate point of a report: decode time and "
-                         "memory, then the render time per view and the PSNR of the decoded file for each speed "
-                         "knob (SPEC.md 7.8), one knob at a time from the defaults");
-  app->add_option("REPORT", dir, "the report directory (from ecrf report sweep)")->type_name("DIR")->required();
+  auto app = MakeCommand(
+      "report render",
+      "the speed-error sweep of the renderer on one rate point of a report: decode time and "
+      "memory, then the render time per view and the PSNR of the decoded file for each speed "
+      "knob (SPEC.md 7.8), one knob at a time from the defaults");
+  app->add_option("REPORT", dir, "the report directory (from ecrf report sweep)")
+      ->type_name("DIR")
+      ->required();
   app->add_option("--lambda", so.lambda, "the rate point to measure (its lambda_e)")
       ->type_name("X")
       ->check(CLI::NonNegativeNumber)
@@ -222,7 +233,8 @@ int RunReportRender(int argc, char** argv) {
       ->type_name("K")
       ->check(CLI::Range(1, 1000000))
       ->default_str("twice the sweep's test stride");
-  app->add_option("--max-views", so.max_views, "at most N views per setting (0 = the sweep's --max-test-views)")
+  app->add_option("--max-views", so.max_views,
+                  "at most N views per setting (0 = the sweep's --max-test-views)")
       ->type_name("N")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();

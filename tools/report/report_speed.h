@@ -18,7 +18,8 @@ struct SpeedSweepOptions {
 
 // Measures the point's scene.ecrf, stores the result as report["speed"] and rewrites the report
 // in dir.
-void RunSpeedSweep(const std::string& dir, const SpeedSweepOptions& options, nlohmann::json* report);
+void RunSpeedSweep(const std::string& dir, const SpeedSweepOptions& options,
+                   nlohmann::json* report);
 
 }  // namespace tools
 }  // namespace ecrf

@@ -4,11 +4,11 @@
 #include <omp.h>
 
 #include <algorithm>
-#include <climits>
-#include <cstdlib>
 #include <chrono>
+#include <climits>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <ctime>
 #include <fstream>
@@ -22,8 +22,8 @@
 #include "tools/cli_args.h"
 #include "tools/report/report.h"
 #include "tools/report/report_speed.h"
-#include "tools/train_run.h"
 #include "tools/train_flags.h"
+#include "tools/train_run.h"
 #include "trainer/train/checkpoint.h"
 #include "trainer/train/train_config.h"
 
@@ -89,7 +89,9 @@ std::vector<SweepPoint> ParsePoints(const std::string& text) {
     p.lambda = ParseFloat("--lambdas", item.substr(0, at).c_str());
     if (at != std::string::npos) {
       p.step_scale = ParseFloat("--lambdas (step scale after @)", item.substr(at + 1).c_str());
-      if (!(p.step_scale > 0.f)) throw std::invalid_argument("--lambdas: the step scale after @ must be > 0 in '" + item + "'");
+      if (!(p.step_scale > 0.f))
+        throw std::invalid_argument("--lambdas: the step scale after @ must be > 0 in '" + item +
+                                    "'");
     }
     bool seen = false;
     for (const SweepPoint& q : out) seen |= q.lambda == p.lambda && q.step_scale == p.step_scale;
@@ -127,26 +129,29 @@ bool SameData(const std::string& a, const std::string& b) {
 
 // A finished run is reused only when it was trained as this sweep would train it: by its
 // config.json when it has one (every setting), else by the metrics older runs recorded.
-void CheckReusable(const nlohmann::json& m, const trainer::TrainOptions& o, const std::string& path) {
+void CheckReusable(const nlohmann::json& m, const trainer::TrainOptions& o,
+                   const std::string& path) {
   const std::string dir = path.substr(0, path.find_last_of('/'));
   if (FileExists(dir + "/config.json")) {
-    const trainer::TrainOptions had =
-        trainer::TrainConfigFromJson(ReadJsonFile(dir + "/config.json").dump(), dir + "/config.json");
+    const trainer::TrainOptions had = trainer::TrainConfigFromJson(
+        ReadJsonFile(dir + "/config.json").dump(), dir + "/config.json");
     std::vector<std::string> changed = trainer::ChangedSettings(had, o);
     // The same data under another relative path is the same run.
     changed.erase(std::remove_if(changed.begin(), changed.end(),
                                  [&](const std::string& c) {
-                                   return c.rfind("data_dir:", 0) == 0 && SameData(had.data_dir, o.data_dir);
+                                   return c.rfind("data_dir:", 0) == 0 &&
+                                          SameData(had.data_dir, o.data_dir);
                                  }),
                   changed.end());
     if (changed.empty()) return;
     std::string list;
     for (const std::string& c : changed) list += "\n  " + c;
-    throw std::runtime_error(dir + ": finished run has other settings than this sweep asks for:" + list +
-                             "\nremove that run directory or report into another -o");
+    throw std::runtime_error(dir + ": finished run has other settings than this sweep asks for:" +
+                             list + "\nremove that run directory or report into another -o");
   }
   auto mismatch = [&](const std::string& what, const std::string& had, const std::string& want) {
-    throw std::runtime_error(path + ": finished run has " + what + " " + had + ", this sweep asks for " + want +
+    throw std::runtime_error(path + ": finished run has " + what + " " + had +
+                             ", this sweep asks for " + want +
                              "; remove that run directory or report into another -o");
   };
   const std::string& data = trainer::DataSource(o);
@@ -158,11 +163,13 @@ void CheckReusable(const nlohmann::json& m, const trainer::TrainOptions& o, cons
   if (m.contains("test_view_stride") && m["test_view_stride"] != o.test_view_stride) {
     mismatch("test stride", m["test_view_stride"].dump(), std::to_string(o.test_view_stride));
   }
-  if (m.contains("seed") && m["seed"] != o.seed) mismatch("seed", m["seed"].dump(), std::to_string(o.seed));
+  if (m.contains("seed") && m["seed"] != o.seed)
+    mismatch("seed", m["seed"].dump(), std::to_string(o.seed));
   // Runs from before these options existed were trained with their defaults (1 and off).
   auto check_float = [&](const char* key, const char* what, float want) {
     const double had = m.value(key, 1.0);
-    if (std::fabs(had - want) > 1e-6 * std::fabs(want)) mismatch(what, std::to_string(had), std::to_string(want));
+    if (std::fabs(had - want) > 1e-6 * std::fabs(want))
+      mismatch(what, std::to_string(had), std::to_string(want));
   };
   check_float("quant_step_scale", "quantization step scale", o.quant_step_scale);
   check_float("qat_start", "quantization-aware start", o.qat_start);
@@ -172,19 +179,23 @@ void CheckReusable(const nlohmann::json& m, const trainer::TrainOptions& o, cons
 }
 
 // The lambda = 0 float model of an earlier sweep, usable when this sweep trains it the same way.
-nlohmann::json BorrowReference(const std::string& dir, const nlohmann::json& sweep, const std::string& data) {
+nlohmann::json BorrowReference(const std::string& dir, const nlohmann::json& sweep,
+                               const std::string& data) {
   const nlohmann::json other = ReadReport(dir);
   if (!other.contains("reference") || other["reference"].is_null()) {
     throw std::runtime_error(dir + "/report.json: has no lambda = 0 reference to borrow");
   }
   if (!SameData(other.value("data", ""), data)) {
-    throw std::runtime_error(dir + "/report.json: reference of data " + other.value("data", "?") + ", this sweep is of " + data);
+    throw std::runtime_error(dir + "/report.json: reference of data " + other.value("data", "?") +
+                             ", this sweep is of " + data);
   }
-  for (const char* key : {"preset", "iterations", "seed", "test_view_stride", "max_test_views", "downscale"}) {
+  for (const char* key :
+       {"preset", "iterations", "seed", "test_view_stride", "max_test_views", "downscale"}) {
     if (!other.contains("sweep") || other["sweep"].value(key, nlohmann::json()) != sweep.at(key)) {
-      throw std::runtime_error(dir + "/report.json: its sweep has " + key + " " +
-                               (other.contains("sweep") ? other["sweep"].value(key, nlohmann::json()).dump() : "?") +
-                               ", this one " + sweep.at(key).dump() + "; its reference does not apply");
+      throw std::runtime_error(
+          dir + "/report.json: its sweep has " + key + " " +
+          (other.contains("sweep") ? other["sweep"].value(key, nlohmann::json()).dump() : "?") +
+          ", this one " + sweep.at(key).dump() + "; its reference does not apply");
     }
   }
   nlohmann::json ref = other["reference"];
@@ -217,38 +228,47 @@ std::vector<std::string> TrainArgs(const std::vector<std::string>& args) {
 }  // namespace
 
 int RunReportSweep(int argc, char** argv) {
-  auto app = MakeCommand("report sweep",
-                         "One `ecrf train` run per rate point, each encoded, decoded and scored, then the "
-                         "rate-distortion report. Each point is the run `ecrf train` makes with the shared flags "
-                         "plus --rate R (for --rates) or --lambda-e X (for --lambdas, on the same base as train: "
-                         "the medium point unless --rate or --preset say otherwise), so both write the same bytes.\n"
-                         "usage: ecrf report sweep (--data DIR | --scene NAME) (--rates R,... | --lambdas L,...) "
-                         "-o REPORT_DIR [train options]");
+  auto app = MakeCommand(
+      "report sweep",
+      "One `ecrf train` run per rate point, each encoded, decoded and scored, then the "
+      "rate-distortion report. Each point is the run `ecrf train` makes with the shared flags "
+      "plus --rate R (for --rates) or --lambda-e X (for --lambdas, on the same base as train: "
+      "the medium point unless --rate or --preset say otherwise), so both write the same bytes.\n"
+      "usage: ecrf report sweep (--data DIR | --scene NAME) (--rates R,... | --lambdas L,...) "
+      "-o REPORT_DIR [train options]");
   const std::vector<std::string> args(argv + 1, argv + argc);
   TrainFlags flags;
   flags.options = BaseTrainOptions(args);
   AddTrainFlags(app.get(), &flags);
   std::string out, lambdas_text, rates_text, anchors_path, reference_dir;
   bool render = false;
-  app->add_option("-o,--out", out, "report directory (runs/ holds one run per point)")->type_name("REPORT_DIR");
-  app->add_option("--rates", rates_text, "named rate points, one run each (e.g. low,medium,high; none: lambda_e 0)")
+  app->add_option("-o,--out", out, "report directory (runs/ holds one run per point)")
+      ->type_name("REPORT_DIR");
+  app->add_option("--rates", rates_text,
+                  "named rate points, one run each (e.g. low,medium,high; none: lambda_e 0)")
       ->type_name("R1,R2,...");
-  app->add_option("--lambdas", lambdas_text,
-                  "one run per lambda_e on the base; L@S also sets the step scale S (e.g. 0,1e-10,5e-11@2); "
-                  "0 is the plain TensoRF reference")
+  app->add_option(
+         "--lambdas", lambdas_text,
+         "one run per lambda_e on the base; L@S also sets the step scale S (e.g. 0,1e-10,5e-11@2); "
+         "0 is the plain TensoRF reference")
       ->type_name("L1,L2@S,...");
-  app->add_option("--anchors", anchors_path, "reference points drawn on the plots (docs/reports/anchors_paper.json)")
+  app->add_option("--anchors", anchors_path,
+                  "reference points drawn on the plots (docs/reports/anchors_paper.json)")
       ->type_name("FILE.json");
   app->add_flag("--render", render, "also run the speed-error sweep (as `ecrf report render`)");
   app->add_option("--reference", reference_dir,
-                  "without a lambda_e 0 point: take the float32 reference of that earlier sweep (same data, preset, "
+                  "without a lambda_e 0 point: take the float32 reference of that earlier sweep "
+                  "(same data, preset, "
                   "iterations, seed, stride)")
       ->type_name("REPORT_DIR");
   trainer::TrainOptions o;
   if (const int rc = ParseTrainCommandLine(app.get(), &flags, argc, argv, &o); rc >= 0) return rc;
-  if (out.empty() || (lambdas_text.empty() && rates_text.empty()) || trainer::DataSource(o).empty()) {
-    std::fprintf(stderr, "ecrf report sweep: error: needs --data DIR or --scene NAME, --rates or --lambdas, and -o; "
-                 "see 'ecrf report sweep --help'\n");
+  if (out.empty() || (lambdas_text.empty() && rates_text.empty()) ||
+      trainer::DataSource(o).empty()) {
+    std::fprintf(
+        stderr,
+        "ecrf report sweep: error: needs --data DIR or --scene NAME, --rates or --lambdas, and -o; "
+        "see 'ecrf report sweep --help'\n");
     return 2;
   }
   std::vector<SweepPoint> points = ParseRates(rates_text);
@@ -260,7 +280,8 @@ int RunReportSweep(int argc, char** argv) {
   if (!app->count("--test-stride")) {
     train_args.insert(train_args.end(), {"--test-stride", o.procedural_scene.empty() ? "10" : "1"});
   }
-  if (!app->count("--eval-every")) train_args.insert(train_args.end(), {"--eval-every", std::to_string(std::max(1, o.iters / 4))});
+  if (!app->count("--eval-every"))
+    train_args.insert(train_args.end(), {"--eval-every", std::to_string(std::max(1, o.iters / 4))});
   train_args.push_back("--score-float");
   std::vector<trainer::TrainOptions> runs;
   std::vector<std::string> names;
@@ -295,20 +316,28 @@ int RunReportSweep(int argc, char** argv) {
   }
   report["scene"] = SceneName(o);
   report["data"] = trainer::DataSource(o);
-  report["sweep"] = {{"preset", o.preset},          {"iterations", o.iters},
-                     {"lambdas", lambdas},          {"step_scales", step_scales}, {"rate_points", rate_points},
-                     {"alpha", o.alpha},            {"test_view_stride", o.test_view_stride},
-                     {"max_test_views", o.max_test_views}, {"eval_every", o.eval_every},
-                     {"seed", o.seed},              {"downscale", o.downscale},
+  report["sweep"] = {{"preset", o.preset},
+                     {"iterations", o.iters},
+                     {"lambdas", lambdas},
+                     {"step_scales", step_scales},
+                     {"rate_points", rate_points},
+                     {"alpha", o.alpha},
+                     {"test_view_stride", o.test_view_stride},
+                     {"max_test_views", o.max_test_views},
+                     {"eval_every", o.eval_every},
+                     {"seed", o.seed},
+                     {"downscale", o.downscale},
                      {"threads", omp_get_max_threads()}};
-  report["machine"] = {{"cpu", CpuModel()}, {"hardware_threads", std::thread::hardware_concurrency()}};
+  report["machine"] = {{"cpu", CpuModel()},
+                       {"hardware_threads", std::thread::hardware_concurrency()}};
   report["ecrf_version"] = ecrf_version_string();
   report["bitstream_version"] = ecrf_bitstream_version();
   report["date"] = Today();
   report["anchors"] = anchors;
   report.erase("borrowed_reference");
   if (!reference_dir.empty()) {
-    report["borrowed_reference"] = BorrowReference(reference_dir, report["sweep"], report["data"].get<std::string>());
+    report["borrowed_reference"] =
+        BorrowReference(reference_dir, report["sweep"], report["data"].get<std::string>());
   }
   report["points"] = nlohmann::json::array();
 
@@ -322,24 +351,27 @@ int RunReportSweep(int argc, char** argv) {
     if (FileExists(metrics_path)) {
       metrics = ReadJsonFile(metrics_path);
       CheckReusable(metrics, run, metrics_path);
-      std::fprintf(stderr, "report: point %zu/%zu (%s): reusing the finished run in %s\n", k + 1, runs.size(),
-                   names[k].c_str(), run_dir.c_str());
+      std::fprintf(stderr, "report: point %zu/%zu (%s): reusing the finished run in %s\n", k + 1,
+                   runs.size(), names[k].c_str(), run_dir.c_str());
     } else {
       size_t left = 0;
-      for (size_t j = k; j < runs.size(); ++j) left += !FileExists(out + "/runs/" + names[j] + "/metrics.json");
+      for (size_t j = k; j < runs.size(); ++j)
+        left += !FileExists(out + "/runs/" + names[j] + "/metrics.json");
       const std::string eta = trained ? "sweep ETA " + Minutes(trained_seconds / trained * left)
                                       : "sweep ETA known after the first point";
-      std::fprintf(stderr, "report: point %zu/%zu (%s): training into %s; %zu to train, %s\n", k + 1, runs.size(),
-                   names[k].c_str(), run_dir.c_str(), left, eta.c_str());
+      std::fprintf(stderr, "report: point %zu/%zu (%s): training into %s; %zu to train, %s\n",
+                   k + 1, runs.size(), names[k].c_str(), run_dir.c_str(), left, eta.c_str());
       run.out_dir = run_dir;
       const auto start = std::chrono::steady_clock::now();
       metrics = TrainEncodeEvaluate(run);
-      trained_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      trained_seconds +=
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       ++trained;
     }
     nlohmann::json point = RatePointFromMetrics(metrics, "runs/" + names[k]);
     point["rate_point"] = rate_points[k];
-    if (!points[k].rate.empty()) point["label"] = points[k].rate + " (" + point["label"].get<std::string>() + ")";
+    if (!points[k].rate.empty())
+      point["label"] = points[k].rate + " (" + point["label"].get<std::string>() + ")";
     // The point's whole configuration: what `ecrf train` needs to write the same file.
     point["config"] = nlohmann::json::parse(trainer::TrainConfigToJson(run, -1));
     point["config"]["bookkeeping"].erase("out_dir");
@@ -348,13 +380,15 @@ int RunReportSweep(int argc, char** argv) {
     WriteReport(out, report);
   }
   if (render) RunSpeedSweep(out, SpeedSweepOptions(), &report);
-  std::printf("%-24s %10s %8s %10s %10s %9s %10s\n", "point", "bytes", "ratio", "decoded", "float", "loss",
-              "train");
+  std::printf("%-24s %10s %8s %10s %10s %9s %10s\n", "point", "bytes", "ratio", "decoded", "float",
+              "loss", "train");
   for (const nlohmann::json& p : report["points"]) {
     const double loss = p["psnr_loss_db"].is_null() ? NAN : p["psnr_loss_db"].get<double>();
-    std::printf("%-24s %10lld %7.1fx %7.2f dB %7.2f dB %+6.2f dB %10s\n", p["label"].get<std::string>().c_str(),
-                p["file_bytes"].get<long long>(), p["ratio"].get<double>(), p["decoded_psnr"].get<double>(),
-                p["float_psnr"].get<double>(), loss, Minutes(p["train_seconds"].get<double>()).c_str());
+    std::printf("%-24s %10lld %7.1fx %7.2f dB %7.2f dB %+6.2f dB %10s\n",
+                p["label"].get<std::string>().c_str(), p["file_bytes"].get<long long>(),
+                p["ratio"].get<double>(), p["decoded_psnr"].get<double>(),
+                p["float_psnr"].get<double>(), loss,
+                Minutes(p["train_seconds"].get<double>()).c_str());
   }
   std::printf("report: %s/index.html (report.json, CSV files and plots beside it)\n", out.c_str());
   return 0;

@@ -68,9 +68,11 @@ void GenerateRay(const Camera& camera, double px, double py, float origin[3], fl
   const double local[3] = {x, -y, -1.0};
   double world[3];
   for (int r = 0; r < 3; ++r) {
-    world[r] = camera.c2w[r][0] * local[0] + camera.c2w[r][1] * local[1] + camera.c2w[r][2] * local[2];
+    world[r] =
+        camera.c2w[r][0] * local[0] + camera.c2w[r][1] * local[1] + camera.c2w[r][2] * local[2];
   }
-  const double inv_norm = 1.0 / std::sqrt(world[0] * world[0] + world[1] * world[1] + world[2] * world[2]);
+  const double inv_norm =
+      1.0 / std::sqrt(world[0] * world[0] + world[1] * world[1] + world[2] * world[2]);
   for (int r = 0; r < 3; ++r) {
     dir[r] = static_cast<float>(world[r] * inv_norm);
     origin[r] = static_cast<float>(camera.c2w[r][3]);
@@ -78,7 +80,8 @@ void GenerateRay(const Camera& camera, double px, double py, float origin[3], fl
 }
 
 Camera ScaledCamera(const Camera& camera, int factor) {
-  if (factor < 1) throw std::runtime_error("ScaledCamera: factor must be >= 1, got " + std::to_string(factor));
+  if (factor < 1)
+    throw std::runtime_error("ScaledCamera: factor must be >= 1, got " + std::to_string(factor));
   Camera scaled = camera;
   scaled.width = camera.width / factor;
   scaled.height = camera.height / factor;

@@ -36,13 +36,16 @@ class JsonContext {
  public:
   explicit JsonContext(std::string file) : file_(std::move(file)) {}
 
-  [[noreturn]] void Fail(const std::string& problem) const { throw std::runtime_error(file_ + ": " + problem); }
+  [[noreturn]] void Fail(const std::string& problem) const {
+    throw std::runtime_error(file_ + ": " + problem);
+  }
   // Names the frame by its index and, when it has one, its file_path.
   [[noreturn]] void FailFrame(size_t frame, const std::string& problem) const {
     std::string where = "frame " + std::to_string(frame);
     if (frames_ && frame < frames_->size() && (*frames_)[frame].is_object()) {
       auto it = (*frames_)[frame].find("file_path");
-      if (it != (*frames_)[frame].end() && it->is_string()) where += " ('" + it->get<std::string>() + "')";
+      if (it != (*frames_)[frame].end() && it->is_string())
+        where += " ('" + it->get<std::string>() + "')";
     }
     Fail(where + ": " + problem);
   }
@@ -94,7 +97,8 @@ struct IntrinsicFields {
       if (!model->is_string()) context.Fail(where + "'camera_model' must be a string");
       const std::string name = model->get<std::string>();
       if (name != "OPENCV" && name != "PINHOLE" && name != "SIMPLE_PINHOLE") {
-        context.Fail(where + "camera_model '" + name + "' is not supported (need OPENCV or PINHOLE)");
+        context.Fail(where + "camera_model '" + name +
+                     "' is not supported (need OPENCV or PINHOLE)");
       }
     }
   }
@@ -113,7 +117,8 @@ void ReadTransform(const json& frame, size_t index, const JsonContext& context, 
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 4; ++c) {
       camera->c2w[r][c] = matrix[r][c].get<double>();
-      if (!std::isfinite(camera->c2w[r][c])) context.FailFrame(index, "'transform_matrix' has a non-finite entry");
+      if (!std::isfinite(camera->c2w[r][c]))
+        context.FailFrame(index, "'transform_matrix' has a non-finite entry");
     }
   }
   // A degenerate rotation gives rays of NaN or zero direction, which train a NaN model.
@@ -127,16 +132,19 @@ void ReadTransform(const json& frame, size_t index, const JsonContext& context, 
   }
   if (!(worst <= kRotationTolerance)) {
     char detail[160];
-    std::snprintf(detail, sizeof(detail),
-                  "the rotation part of 'transform_matrix' is not orthonormal (|R^T R - I| reaches %.3g, "
-                  "tolerance %g)", worst, kRotationTolerance);
+    std::snprintf(
+        detail, sizeof(detail),
+        "the rotation part of 'transform_matrix' is not orthonormal (|R^T R - I| reaches %.3g, "
+        "tolerance %g)",
+        worst, kRotationTolerance);
     context.FailFrame(index, detail);
   }
-  const double (*m)[4] = camera->c2w;
+  const double(*m)[4] = camera->c2w;
   const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
                      m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
                      m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-  if (!(det > 0.0)) context.FailFrame(index, "the rotation part of 'transform_matrix' is a reflection (det < 0)");
+  if (!(det > 0.0))
+    context.FailFrame(index, "the rotation part of 'transform_matrix' is a reflection (det < 0)");
 }
 
 std::string StripDotSlash(std::string path) {
@@ -170,7 +178,8 @@ Camera ResolveIntrinsics(const IntrinsicFields& fields, const std::string& image
   if (fields.w && fields.h) {
     camera.width = static_cast<int>(std::lround(*fields.w));
     camera.height = static_cast<int>(std::lround(*fields.h));
-    if (camera.width <= 0 || camera.height <= 0) context.FailFrame(index, "'w' and 'h' must be positive");
+    if (camera.width <= 0 || camera.height <= 0)
+      context.FailFrame(index, "'w' and 'h' must be positive");
   } else {
     // Blender JSON leaves the size to the image; its header is enough.
     ImageSize size = ReadImageSize(image_path);
@@ -191,7 +200,8 @@ Camera ResolveIntrinsics(const IntrinsicFields& fields, const std::string& image
   } else {
     camera.fy = camera.fx;  // square pixels
   }
-  if (!(camera.fx > 0) || !(camera.fy > 0) || !std::isfinite(camera.fx) || !std::isfinite(camera.fy)) {
+  if (!(camera.fx > 0) || !(camera.fy > 0) || !std::isfinite(camera.fx) ||
+      !std::isfinite(camera.fy)) {
     context.FailFrame(index, "focal length must be positive and finite");
   }
   camera.cx = fields.cx.value_or(0.5 * camera.width);
@@ -201,7 +211,9 @@ Camera ResolveIntrinsics(const IntrinsicFields& fields, const std::string& image
   camera.p1 = fields.p1.value_or(0.0);
   camera.p2 = fields.p2.value_or(0.0);
   for (double v : {camera.cx, camera.cy, camera.k1, camera.k2, camera.p1, camera.p2}) {
-    if (!std::isfinite(v)) context.FailFrame(index, "principal point and distortion ('cx' 'cy' 'k1' 'k2' 'p1' 'p2') must be finite");
+    if (!std::isfinite(v))
+      context.FailFrame(
+          index, "principal point and distortion ('cx' 'cy' 'k1' 'k2' 'p1' 'p2') must be finite");
   }
   return camera;
 }
@@ -275,7 +287,8 @@ DatasetManifest ParseTransforms(const fs::path& dir, const std::string& json_pat
     // Sorting makes the hold-out independent of the order tools happened to write frames in.
     std::vector<std::string> paths(frames.size());
     for (size_t i = 0; i < frames.size(); ++i) paths[i] = FilePathOf(frames[i], i, context);
-    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return paths[a] < paths[b]; });
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t a, size_t b) { return paths[a] < paths[b]; });
   }
 
   std::vector<Camera> poses;  // every frame's pose, for near/far independent of the split
@@ -296,8 +309,8 @@ DatasetManifest ParseTransforms(const fs::path& dir, const std::string& json_pat
     source.name = ViewName(file_path);
     std::error_code error;
     if (layout == Layout::kNgp && !fs::exists(source.image_path, error)) {
-      std::fprintf(stderr, "warning: %s: frame %zu: image %s not found, skipping it\n", json_path.c_str(), index,
-                   source.image_path.c_str());
+      std::fprintf(stderr, "warning: %s: frame %zu: image %s not found, skipping it\n",
+                   json_path.c_str(), index, source.image_path.c_str());
       ++skipped;
       continue;
     }
@@ -307,8 +320,10 @@ DatasetManifest ParseTransforms(const fs::path& dir, const std::string& json_pat
     manifest.views.push_back(std::move(source));
   }
   if (manifest.views.empty()) {
-    context.Fail("no frames for split '" + split + "'" +
-                 (skipped ? " (" + std::to_string(skipped) + " skipped because their images are missing)" : ""));
+    context.Fail(
+        "no frames for split '" + split + "'" +
+        (skipped ? " (" + std::to_string(skipped) + " skipped because their images are missing)"
+                 : ""));
   }
   if (layout == Layout::kNgp) SetNearFarFromCameras(poses, &manifest);
   return manifest;
@@ -320,7 +335,8 @@ View LoadView(const ViewSource& source, int downscale, bool* had_alpha) {
   if (image.width != source.camera.width || image.height != source.camera.height) {
     throw std::runtime_error(source.image_path + ": image is " + std::to_string(image.width) + "x" +
                              std::to_string(image.height) + " but its camera says " +
-                             std::to_string(source.camera.width) + "x" + std::to_string(source.camera.height));
+                             std::to_string(source.camera.width) + "x" +
+                             std::to_string(source.camera.height));
   }
   *had_alpha = image.channels == 2 || image.channels == 4;
   View view;
@@ -336,8 +352,10 @@ View LoadView(const ViewSource& source, int downscale, bool* had_alpha) {
   return view;
 }
 
-std::vector<View> LoadViewsImpl(const std::vector<ViewSource>& sources, int downscale, bool* any_alpha) {
-  if (downscale < 1) throw std::runtime_error("downscale must be >= 1, got " + std::to_string(downscale));
+std::vector<View> LoadViewsImpl(const std::vector<ViewSource>& sources, int downscale,
+                                bool* any_alpha) {
+  if (downscale < 1)
+    throw std::runtime_error("downscale must be >= 1, got " + std::to_string(downscale));
   const int count = static_cast<int>(sources.size());
   std::vector<View> views(sources.size());
   std::vector<std::string> errors(sources.size());
@@ -374,7 +392,8 @@ void NgpAabb(double aabb_scale, double scale, const double offset[3], double aab
 // Real captures have no agreed near/far, so derive them from the geometry: near is the
 // smallest camera-to-box distance (the box holds everything modelled), far the largest
 // distance from a camera to a box corner (no ray leaves the box later).
-void NearFarFromCameras(const std::vector<Camera>& cameras, const double box[2][3], double* near_out, double* far_out) {
+void NearFarFromCameras(const std::vector<Camera>& cameras, const double box[2][3],
+                        double* near_out, double* far_out) {
   double diagonal_sq = 0;
   for (int a = 0; a < 3; ++a) diagonal_sq += (box[1][a] - box[0][a]) * (box[1][a] - box[0][a]);
   double near = INFINITY, far = 0;
@@ -394,7 +413,8 @@ void NearFarFromCameras(const std::vector<Camera>& cameras, const double box[2][
   *far_out = std::max(far, *near_out * 1.01);
 }
 
-DatasetManifest ReadDatasetManifest(const std::string& dir, const std::string& split, int downscale) {
+DatasetManifest ReadDatasetManifest(const std::string& dir, const std::string& split,
+                                    int downscale) {
   if (split != "train" && split != "val" && split != "test") {
     throw std::runtime_error("unknown split '" + split + "' (expected train, val or test)");
   }
@@ -402,7 +422,8 @@ DatasetManifest ReadDatasetManifest(const std::string& dir, const std::string& s
   if (!fs::is_directory(dir, error)) throw std::runtime_error(dir + ": not a directory");
   const fs::path root(dir);
   const fs::path blender = root / ("transforms_" + split + ".json");
-  if (fs::exists(blender, error)) return ParseTransforms(root, blender.string(), Layout::kBlender, split);
+  if (fs::exists(blender, error))
+    return ParseTransforms(root, blender.string(), Layout::kBlender, split);
   const fs::path ngp = root / "transforms.json";
   if (fs::exists(ngp, error)) return ParseTransforms(root, ngp.string(), Layout::kNgp, split);
   if (fs::exists(root / "poses_bounds.npy", error)) {
@@ -411,7 +432,8 @@ DatasetManifest ReadDatasetManifest(const std::string& dir, const std::string& s
     manifest.prescaled = prescaled;
     return manifest;
   }
-  throw std::runtime_error(dir + ": neither transforms_" + split + ".json nor transforms.json found " +
+  throw std::runtime_error(dir + ": neither transforms_" + split +
+                           ".json nor transforms.json found " +
                            "(Blender, Instant-NGP), nor poses_bounds.npy (LLFF)");
 }
 
@@ -421,7 +443,8 @@ std::vector<View> LoadViews(const std::vector<ViewSource>& sources, int downscal
 }
 
 Dataset LoadDataset(const std::string& dir, const std::string& split, int downscale) {
-  if (downscale < 1) throw std::runtime_error(dir + ": downscale must be >= 1, got " + std::to_string(downscale));
+  if (downscale < 1)
+    throw std::runtime_error(dir + ": downscale must be >= 1, got " + std::to_string(downscale));
   DatasetManifest manifest = ReadDatasetManifest(dir, split, downscale);
   Dataset dataset;
   bool any_alpha = false;
@@ -435,12 +458,14 @@ Dataset LoadDataset(const std::string& dir, const std::string& split, int downsc
 }
 
 Dataset DownscaleViews(Dataset dataset, int factor) {
-  if (factor < 1) throw std::invalid_argument("downscale must be >= 1, got " + std::to_string(factor));
+  if (factor < 1)
+    throw std::invalid_argument("downscale must be >= 1, got " + std::to_string(factor));
   if (factor == 1) return dataset;
   for (View& view : dataset.views) {
     if (view.rgb.width < factor || view.rgb.height < factor) {
       throw std::invalid_argument("downscale " + std::to_string(factor) + " leaves no pixel of a " +
-                                  std::to_string(view.rgb.width) + "x" + std::to_string(view.rgb.height) + " view");
+                                  std::to_string(view.rgb.width) + "x" +
+                                  std::to_string(view.rgb.height) + " view");
     }
     view.rgb = DownscaleArea(view.rgb, factor);
     view.camera = ScaledCamera(view.camera, factor);

@@ -51,7 +51,8 @@ struct DatasetManifest {
 //  * otherwise dir/poses_bounds.npy with dir/images (LLFF; see trainer/data/llff.h), which picks
 //    dir/images_<downscale> when it exists and then sets `prescaled`.
 // Throws std::runtime_error naming the file and the problem for anything malformed.
-DatasetManifest ReadDatasetManifest(const std::string& dir, const std::string& split, int downscale = 1);
+DatasetManifest ReadDatasetManifest(const std::string& dir, const std::string& split,
+                                    int downscale = 1);
 
 // Decodes the images in parallel (OpenMP), composites them on white and downscales them with
 // DownscaleArea; the cameras are scaled to match. Throws the first failing view's error
@@ -70,7 +71,8 @@ void NgpAabb(double aabb_scale, double scale, const double offset[3], double aab
 // smallest camera-to-box distance (the box holds everything modelled; at least 1% of its
 // diagonal, to keep samples off the lens of a camera inside it), far the largest distance from
 // a camera to a box corner (no ray leaves the box later).
-void NearFarFromCameras(const std::vector<Camera>& cameras, const double aabb[2][3], double* near, double* far);
+void NearFarFromCameras(const std::vector<Camera>& cameras, const double aabb[2][3], double* near,
+                        double* far);
 
 // The views area-filtered to 1/factor of their size with their cameras scaled to match (what
 // --downscale does at load time), for evaluating at less than capture resolution.

@@ -18,7 +18,9 @@ void WriteFileAtomically(const std::string& path, const void* bytes, size_t size
   const std::string tmp =
       path + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter.fetch_add(1));
   FILE* f = std::fopen(tmp.c_str(), "wbx");
-  if (!f) throw std::runtime_error(path + ": cannot create temporary file " + tmp + ": " + std::strerror(errno));
+  if (!f)
+    throw std::runtime_error(path + ": cannot create temporary file " + tmp + ": " +
+                             std::strerror(errno));
   const bool written = size == 0 || std::fwrite(bytes, 1, size, f) == size;
   const bool flushed = written && std::fflush(f) == 0 && ::fsync(::fileno(f)) == 0;
   int saved_errno = errno;
@@ -31,7 +33,8 @@ void WriteFileAtomically(const std::string& path, const void* bytes, size_t size
   if (std::rename(tmp.c_str(), path.c_str()) != 0) {
     saved_errno = errno;
     std::remove(tmp.c_str());
-    throw std::runtime_error(path + ": cannot rename the temporary file into place: " + std::strerror(saved_errno));
+    throw std::runtime_error(
+        path + ": cannot rename the temporary file into place: " + std::strerror(saved_errno));
   }
 }
 
@@ -41,7 +44,8 @@ std::vector<uint8_t> ReadWholeFile(const std::string& path) {
   std::vector<uint8_t> bytes;
   uint8_t buffer[1 << 16];
   size_t n;
-  while ((n = std::fread(buffer, 1, sizeof(buffer), f)) > 0) bytes.insert(bytes.end(), buffer, buffer + n);
+  while ((n = std::fread(buffer, 1, sizeof(buffer), f)) > 0)
+    bytes.insert(bytes.end(), buffer, buffer + n);
   const bool failed = std::ferror(f);
   std::fclose(f);
   if (failed) throw std::runtime_error(path + ": read error");

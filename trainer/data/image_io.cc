@@ -10,6 +10,7 @@
 // jerror.h needs jpeglib.h first for the J_MESSAGE_CODE enum it fills.
 #include <jerror.h>
 
+#include <unistd.h>
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
@@ -19,7 +20,6 @@
 #include <cstring>
 #include <memory>
 #include <stdexcept>
-#include <unistd.h>
 
 #include "trainer/data/file_io.h"
 
@@ -156,7 +156,8 @@ bool DecodePngRaw(PngSource* source, PngRaw* out) {
 Image DecodePng(const std::string& path, const std::vector<uint8_t>& bytes) {
   PngSource source{bytes.data(), bytes.size(), 0, {0}};
   PngRaw raw;
-  if (!DecodePngRaw(&source, &raw)) Fail(path, std::string("corrupt or truncated PNG: ") + source.error);
+  if (!DecodePngRaw(&source, &raw))
+    Fail(path, std::string("corrupt or truncated PNG: ") + source.error);
   if (raw.bit_depth != 8 && raw.bit_depth != 16) {
     Fail(path, "unsupported PNG bit depth " + std::to_string(raw.bit_depth));
   }
@@ -169,7 +170,8 @@ Image DecodePng(const std::string& path, const std::vector<uint8_t>& bytes) {
       for (size_t i = 0; i < samples_per_row; ++i) dst[i] = row[i] / 255.0f;
     } else {
       // PNG stores 16-bit samples big-endian.
-      for (size_t i = 0; i < samples_per_row; ++i) dst[i] = ((row[2 * i] << 8) | row[2 * i + 1]) / 65535.0f;
+      for (size_t i = 0; i < samples_per_row; ++i)
+        dst[i] = ((row[2 * i] << 8) | row[2 * i + 1]) / 65535.0f;
     }
   }
   return image;
@@ -285,8 +287,10 @@ void PngOnWriteError(png_structp png, png_const_charp message) {
   png_longjmp(png, 1);
 }
 
-bool EncodePngRaw(const Image& image, int bit_depth, const std::vector<png_bytep>& rows, PngSink* sink) {
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, sink, PngOnWriteError, PngOnWarning);
+bool EncodePngRaw(const Image& image, int bit_depth, const std::vector<png_bytep>& rows,
+                  PngSink* sink) {
+  png_structp png =
+      png_create_write_struct(PNG_LIBPNG_VER_STRING, sink, PngOnWriteError, PngOnWarning);
   if (!png) {
     std::snprintf(sink->error, sizeof sink->error, "cannot create libpng writer");
     return false;
@@ -301,11 +305,11 @@ bool EncodePngRaw(const Image& image, int bit_depth, const std::vector<png_bytep
     png_destroy_write_struct(&png, &info);
     return false;
   }
-  static const int kColorTypes[5] = {0, PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA, PNG_COLOR_TYPE_RGB,
-                                     PNG_COLOR_TYPE_RGB_ALPHA};
+  static const int kColorTypes[5] = {0, PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA,
+                                     PNG_COLOR_TYPE_RGB, PNG_COLOR_TYPE_RGB_ALPHA};
   png_set_write_fn(png, sink, PngWrite, PngFlush);
-  png_set_IHDR(png, info, image.width, image.height, bit_depth, kColorTypes[image.channels], PNG_INTERLACE_NONE,
-               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_set_IHDR(png, info, image.width, image.height, bit_depth, kColorTypes[image.channels],
+               PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_write_info(png, info);
   png_write_image(png, const_cast<png_bytepp>(rows.data()));
   png_write_end(png, nullptr);
@@ -346,8 +350,8 @@ ImageSize ReadImageSize(const std::string& path) {
         Fail(path, "corrupt or truncated PNG: missing IHDR header");
       }
       auto be32 = [&](size_t at) {
-        return (uint32_t{bytes[at]} << 24) | (uint32_t{bytes[at + 1]} << 16) | (uint32_t{bytes[at + 2]} << 8) |
-               bytes[at + 3];
+        return (uint32_t{bytes[at]} << 24) | (uint32_t{bytes[at + 1]} << 16) |
+               (uint32_t{bytes[at + 2]} << 8) | bytes[at + 3];
       };
       uint32_t width = be32(16), height = be32(20);
       if (width == 0 || height == 0 || width > 0x7fffffff || height > 0x7fffffff) {
@@ -371,10 +375,12 @@ ImageSize ReadImageSize(const std::string& path) {
 
 void SavePng(const std::string& path, const Image& image, int bit_depth) {
   if (image.channels < 1 || image.channels > 4) {
-    Fail(path, "cannot save a PNG with " + std::to_string(image.channels) + " channels (need 1 to 4)");
+    Fail(path,
+         "cannot save a PNG with " + std::to_string(image.channels) + " channels (need 1 to 4)");
   }
   if (image.width <= 0 || image.height <= 0) {
-    Fail(path, "cannot save an empty image (" + std::to_string(image.width) + "x" + std::to_string(image.height) + ")");
+    Fail(path, "cannot save an empty image (" + std::to_string(image.width) + "x" +
+                   std::to_string(image.height) + ")");
   }
   if (image.pixels.size() != static_cast<size_t>(image.width) * image.height * image.channels) {
     Fail(path, "image pixel buffer does not match its width x height x channels");
@@ -401,13 +407,15 @@ void SavePng(const std::string& path, const Image& image, int bit_depth) {
   for (int y = 0; y < image.height; ++y) rows[y] = samples.data() + y * row_bytes;
   PngSink sink;
   sink.error[0] = 0;
-  if (!EncodePngRaw(image, bit_depth, rows, &sink)) Fail(path, std::string("PNG encoding failed: ") + sink.error);
+  if (!EncodePngRaw(image, bit_depth, rows, &sink))
+    Fail(path, std::string("PNG encoding failed: ") + sink.error);
   WriteFileAtomically(path, sink.bytes);
 }
 
 Image CompositeOnWhite(const Image& image) {
   if (image.channels < 1 || image.channels > 4) {
-    throw std::runtime_error("CompositeOnWhite: unsupported channel count " + std::to_string(image.channels));
+    throw std::runtime_error("CompositeOnWhite: unsupported channel count " +
+                             std::to_string(image.channels));
   }
   Image out = MakeImage(image.width, image.height, 3);
   const bool has_alpha = image.channels == 2 || image.channels == 4;
@@ -425,7 +433,8 @@ Image CompositeOnWhite(const Image& image) {
 }
 
 Image DownscaleArea(const Image& image, int factor) {
-  if (factor < 1) throw std::runtime_error("DownscaleArea: factor must be >= 1, got " + std::to_string(factor));
+  if (factor < 1)
+    throw std::runtime_error("DownscaleArea: factor must be >= 1, got " + std::to_string(factor));
   if (factor == 1) return image;
   Image out = MakeImage(image.width / factor, image.height / factor, image.channels);
   const float inv_area = 1.0f / static_cast<float>(factor * factor);

@@ -15,7 +15,9 @@ struct Image {
   int channels = 0;
   std::vector<float> pixels;
 
-  float& at(int x, int y, int c) { return pixels[(static_cast<size_t>(y) * width + x) * channels + c]; }
+  float& at(int x, int y, int c) {
+    return pixels[(static_cast<size_t>(y) * width + x) * channels + c];
+  }
   float at(int x, int y, int c) const {
     return pixels[(static_cast<size_t>(y) * width + x) * channels + c];
   }

@@ -17,12 +17,13 @@ constexpr double kSsimC2 = 0.03 * 0.03;
 
 void CheckSameShape(const Image& a, const Image& b, const char* metric) {
   if (a.width != b.width || a.height != b.height || a.channels != b.channels) {
-    throw std::runtime_error(std::string(metric) + ": images differ in shape (" + std::to_string(a.width) + "x" +
-                             std::to_string(a.height) + "x" + std::to_string(a.channels) + " vs " +
-                             std::to_string(b.width) + "x" + std::to_string(b.height) + "x" +
-                             std::to_string(b.channels) + ")");
+    throw std::runtime_error(std::string(metric) + ": images differ in shape (" +
+                             std::to_string(a.width) + "x" + std::to_string(a.height) + "x" +
+                             std::to_string(a.channels) + " vs " + std::to_string(b.width) + "x" +
+                             std::to_string(b.height) + "x" + std::to_string(b.channels) + ")");
   }
-  if (a.width <= 0 || a.height <= 0 || a.channels <= 0) throw std::runtime_error(std::string(metric) + ": empty image");
+  if (a.width <= 0 || a.height <= 0 || a.channels <= 0)
+    throw std::runtime_error(std::string(metric) + ": empty image");
 }
 
 int ColourChannels(const Image& image) { return std::min(3, image.channels); }
@@ -48,7 +49,8 @@ std::vector<double> FilterValid(const std::vector<double>& plane, int width, int
   for (int y = 0; y < out_h; ++y) {
     for (int x = 0; x < width; ++x) {
       double sum = 0;
-      for (int k = 0; k < kSsimWindow; ++k) sum += window[k] * plane[static_cast<size_t>(y + k) * width + x];
+      for (int k = 0; k < kSsimWindow; ++k)
+        sum += window[k] * plane[static_cast<size_t>(y + k) * width + x];
       rows[static_cast<size_t>(y) * width + x] = sum;
     }
   }
@@ -56,7 +58,8 @@ std::vector<double> FilterValid(const std::vector<double>& plane, int width, int
   for (int y = 0; y < out_h; ++y) {
     for (int x = 0; x < out_w; ++x) {
       double sum = 0;
-      for (int k = 0; k < kSsimWindow; ++k) sum += window[k] * rows[static_cast<size_t>(y) * width + x + k];
+      for (int k = 0; k < kSsimWindow; ++k)
+        sum += window[k] * rows[static_cast<size_t>(y) * width + x + k];
       out[static_cast<size_t>(y) * out_w + x] = sum;
     }
   }
@@ -72,7 +75,8 @@ double MeanSquaredError(const Image& a, const Image& b) {
   double sum = 0;
   for (size_t p = 0; p < count; ++p) {
     for (int c = 0; c < colours; ++c) {
-      const double d = static_cast<double>(a.pixels[p * a.channels + c]) - b.pixels[p * b.channels + c];
+      const double d =
+          static_cast<double>(a.pixels[p * a.channels + c]) - b.pixels[p * b.channels + c];
       sum += d * d;
     }
   }
@@ -89,7 +93,8 @@ double Psnr(const Image& a, const Image& b) {
 double Ssim(const Image& a, const Image& b) {
   CheckSameShape(a, b, "SSIM");
   if (a.width < kSsimWindow || a.height < kSsimWindow) {
-    throw std::runtime_error("SSIM: images are " + std::to_string(a.width) + "x" + std::to_string(a.height) +
+    throw std::runtime_error("SSIM: images are " + std::to_string(a.width) + "x" +
+                             std::to_string(a.height) +
                              ", need at least 11x11 for the 11x11 window");
   }
   const std::vector<double> window = GaussianWindow();

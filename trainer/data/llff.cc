@@ -75,7 +75,8 @@ void Recentre(const Mat34 avg, Camera* camera) {
 
 bool IsImageName(const fs::path& path) {
   std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return char(std::tolower(c)); });
   return ext == ".png" || ext == ".jpg" || ext == ".jpeg";
 }
 
@@ -119,13 +120,17 @@ void GrowByFrustum(const Camera& camera, double near, double far, double box[2][
 
 }  // namespace
 
-DatasetManifest ReadLlffManifest(const std::string& dir, const std::string& split, int downscale, int* prescaled) {
+DatasetManifest ReadLlffManifest(const std::string& dir, const std::string& split, int downscale,
+                                 int* prescaled) {
   const fs::path root(dir);
   const std::string npy_path = (root / "poses_bounds.npy").string();
   const NpyMatrix table = ReadNpyMatrix(npy_path);
-  auto fail = [&](const std::string& problem) { throw std::runtime_error(npy_path + ": " + problem); };
+  auto fail = [&](const std::string& problem) {
+    throw std::runtime_error(npy_path + ": " + problem);
+  };
   if (table.cols != kColumns || table.rows < 1) {
-    fail("shape is " + std::to_string(table.rows) + " x " + std::to_string(table.cols) + "; need N x 17 (N >= 1)");
+    fail("shape is " + std::to_string(table.rows) + " x " + std::to_string(table.cols) +
+         "; need N x 17 (N >= 1)");
   }
   for (int64_t r = 0; r < table.rows; ++r) {
     for (int64_t c = 0; c < kColumns; ++c) {
@@ -142,10 +147,12 @@ DatasetManifest ReadLlffManifest(const std::string& dir, const std::string& spli
     folder = root / ("images_" + std::to_string(downscale));
     *prescaled = downscale;
   }
-  if (!fs::is_directory(folder, error)) throw std::runtime_error(folder.string() + ": no such directory (LLFF images)");
+  if (!fs::is_directory(folder, error))
+    throw std::runtime_error(folder.string() + ": no such directory (LLFF images)");
   const std::vector<fs::path> images = SortedImages(folder);
   if (int64_t(images.size()) != table.rows) {
-    fail(std::to_string(table.rows) + " poses but " + folder.string() + " has " + std::to_string(images.size()) +
+    fail(std::to_string(table.rows) + " poses but " + folder.string() + " has " +
+         std::to_string(images.size()) +
          " images (.png/.jpg); they must match one to one in name order");
   }
 
@@ -155,8 +162,10 @@ DatasetManifest ReadLlffManifest(const std::string& dir, const std::string& spli
     auto m = [&](int r, int c) { return table.at(i, r * 5 + c); };
     const double height = m(0, 4), width = m(1, 4), focal = m(2, 4);
     const double near = table.at(i, 15), far = table.at(i, 16);
-    if (!(height > 0 && width > 0 && focal > 0)) fail("row " + std::to_string(i) + ": h, w and focal must be positive");
-    if (!(near > 0 && far >= near)) fail("row " + std::to_string(i) + ": bounds need 0 < near <= far");
+    if (!(height > 0 && width > 0 && focal > 0))
+      fail("row " + std::to_string(i) + ": h, w and focal must be positive");
+    if (!(near > 0 && far >= near))
+      fail("row " + std::to_string(i) + ": bounds need 0 < near <= far");
     min_bound = std::min(min_bound, near);
     max_bound = std::max(max_bound, far);
     Camera& camera = cameras[size_t(i)];
@@ -169,10 +178,12 @@ DatasetManifest ReadLlffManifest(const std::string& dir, const std::string& spli
       camera.c2w[r][3] = m(r, 3);
     }
     const ImageSize size = ReadImageSize(images[size_t(i)].string());
-    if (std::abs(double(size.height) / size.width - height / width) > kAspectTolerance * height / width) {
-      throw std::runtime_error(images[size_t(i)].string() + ": image is " + std::to_string(size.width) + "x" +
-                               std::to_string(size.height) + " but row " + std::to_string(i) + " of " + npy_path +
-                               " says " + std::to_string(int(width)) + "x" + std::to_string(int(height)));
+    if (std::abs(double(size.height) / size.width - height / width) >
+        kAspectTolerance * height / width) {
+      throw std::runtime_error(images[size_t(i)].string() + ": image is " +
+                               std::to_string(size.width) + "x" + std::to_string(size.height) +
+                               " but row " + std::to_string(i) + " of " + npy_path + " says " +
+                               std::to_string(int(width)) + "x" + std::to_string(int(height)));
     }
     camera.width = size.width;
     camera.height = size.height;
@@ -204,7 +215,8 @@ DatasetManifest ReadLlffManifest(const std::string& dir, const std::string& spli
     manifest.views.push_back(std::move(source));
   }
   std::copy(&box[0][0], &box[0][0] + 6, &manifest.scene_aabb[0][0]);
-  if (manifest.views.empty()) fail("no images for split '" + split + "' (" + std::to_string(table.rows) + " in all)");
+  if (manifest.views.empty())
+    fail("no images for split '" + split + "' (" + std::to_string(table.rows) + " in all)");
   return manifest;
 }
 

@@ -22,7 +22,8 @@ namespace ecrf::trainer {
 // replaces it with an NDC box whose near plane, 0.75 / 0.9 of `near`, is 1 as in TensoRF.
 // Throws std::runtime_error naming the file and the problem: a malformed .npy, a shape other
 // than N x 17, non-finite or non-positive values, a pose count that does not match the images.
-DatasetManifest ReadLlffManifest(const std::string& dir, const std::string& split, int downscale, int* prescaled);
+DatasetManifest ReadLlffManifest(const std::string& dir, const std::string& split, int downscale,
+                                 int* prescaled);
 
 }  // namespace ecrf::trainer
 

@@ -60,29 +60,35 @@ NpyMatrix ParseNpyMatrix(const std::string& name, const std::vector<uint8_t>& by
     header_start = 10;
   } else if (major == 2 || major == 3) {
     if (bytes.size() < 12) Fail(name, ".npy file truncated in its header");
-    header_size = bytes[8] | size_t(bytes[9]) << 8 | size_t(bytes[10]) << 16 | size_t(bytes[11]) << 24;
+    header_size =
+        bytes[8] | size_t(bytes[9]) << 8 | size_t(bytes[10]) << 16 | size_t(bytes[11]) << 24;
     header_start = 12;
   } else {
     Fail(name, ".npy format version " + std::to_string(major) + " is not supported (1, 2 or 3)");
   }
   if (header_start + header_size > bytes.size()) Fail(name, ".npy file truncated in its header");
-  const std::string header(bytes.begin() + header_start, bytes.begin() + header_start + header_size);
+  const std::string header(bytes.begin() + header_start,
+                           bytes.begin() + header_start + header_size);
 
   std::string descr = DictValue(name, header, "descr");
-  if (descr.size() >= 2 && (descr.front() == '\'' || descr.front() == '"')) descr = descr.substr(1, descr.size() - 2);
+  if (descr.size() >= 2 && (descr.front() == '\'' || descr.front() == '"'))
+    descr = descr.substr(1, descr.size() - 2);
   size_t item = 0;
   if (descr == "<f8") {
     item = 8;
   } else if (descr == "<f4") {
     item = 4;
   } else {
-    Fail(name, "dtype '" + descr + "' is not supported (need little-endian float64 '<f8' or float32 '<f4')");
+    Fail(name, "dtype '" + descr +
+                   "' is not supported (need little-endian float64 '<f8' or float32 '<f4')");
   }
-  if (DictValue(name, header, "fortran_order") != "False") Fail(name, "Fortran-order arrays are not supported");
+  if (DictValue(name, header, "fortran_order") != "False")
+    Fail(name, "Fortran-order arrays are not supported");
 
   const std::string shape = DictValue(name, header, "shape");
   std::vector<int64_t> dims;
-  if (shape.size() < 2 || shape.front() != '(' || shape.back() != ')') Fail(name, "malformed .npy shape " + shape);
+  if (shape.size() < 2 || shape.front() != '(' || shape.back() != ')')
+    Fail(name, "malformed .npy shape " + shape);
   for (size_t i = 1; i + 1 < shape.size();) {
     if (std::isdigit(static_cast<unsigned char>(shape[i]))) {
       int64_t v = 0;
@@ -105,8 +111,8 @@ NpyMatrix ParseNpyMatrix(const std::string& name, const std::vector<uint8_t>& by
   const size_t count = size_t(m.rows * m.cols);
   const size_t data_start = header_start + header_size;
   if (bytes.size() - data_start < count * item) {
-    Fail(name, ".npy data truncated: shape " + shape + " needs " + std::to_string(count * item) + " bytes, the file has " +
-                   std::to_string(bytes.size() - data_start));
+    Fail(name, ".npy data truncated: shape " + shape + " needs " + std::to_string(count * item) +
+                   " bytes, the file has " + std::to_string(bytes.size() - data_start));
   }
   m.values.resize(count);
   const uint8_t* p = bytes.data() + data_start;
@@ -129,7 +135,8 @@ NpyMatrix ParseNpyMatrix(const std::string& name, const std::vector<uint8_t>& by
 NpyMatrix ReadNpyMatrix(const std::string& path) {
   std::ifstream stream(path, std::ios::binary);
   if (!stream) throw std::runtime_error(path + ": cannot open");
-  const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(stream)), std::istreambuf_iterator<char>());
+  const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(stream)),
+                                   std::istreambuf_iterator<char>());
   return ParseNpyMatrix(path, bytes);
 }
 

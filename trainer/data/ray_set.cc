@@ -13,7 +13,8 @@ namespace trainer {
 RaySet::RaySet(const std::vector<View>& views) : views_(views) {
   view_offset_.push_back(0);
   for (const View& v : views) {
-    if (v.rgb.channels != 3) throw std::invalid_argument("RaySet: view '" + v.name + "' is not RGB");
+    if (v.rgb.channels != 3)
+      throw std::invalid_argument("RaySet: view '" + v.name + "' is not RGB");
     view_offset_.push_back(view_offset_.back() + uint64_t(v.rgb.width) * v.rgb.height);
   }
   if (view_offset_.back() > UINT32_MAX) {
@@ -24,8 +25,10 @@ RaySet::RaySet(const std::vector<View>& views) : views_(views) {
 }
 
 void RaySet::Ray(uint32_t index, float origin[3], float dir[3], float rgb[3]) const {
-  const size_t v = size_t(std::upper_bound(view_offset_.begin(), view_offset_.end(), uint64_t(index)) -
-                          view_offset_.begin()) - 1;
+  const size_t v =
+      size_t(std::upper_bound(view_offset_.begin(), view_offset_.end(), uint64_t(index)) -
+             view_offset_.begin()) -
+      1;
   const View& view = views_[v];
   const uint32_t pixel = uint32_t(index - view_offset_[v]);
   const int x = int(pixel % uint32_t(view.rgb.width));
@@ -104,21 +107,25 @@ void RaySet::SaveState(std::vector<float>* keep, std::string* shuffle_rng, uint6
   *cursor = cursor_;
 }
 
-void RaySet::RestoreState(const std::vector<float>& keep, const std::string& shuffle_rng, uint64_t cursor) {
+void RaySet::RestoreState(const std::vector<float>& keep, const std::string& shuffle_rng,
+                          uint64_t cursor) {
   if (keep.size() != (total() + 15) / 16) {
-    throw std::runtime_error("training state: the kept-ray set is for " + std::to_string(16 * keep.size()) +
-                             " rays, these views have " + std::to_string(total()));
+    throw std::runtime_error("training state: the kept-ray set is for " +
+                             std::to_string(16 * keep.size()) + " rays, these views have " +
+                             std::to_string(total()));
   }
   active_.clear();
   for (size_t i = 0; i < keep.size(); ++i) {
     const float v = keep[i];
-    if (!(v >= 0.f && v < 65536.f) || v != float(uint32_t(v))) throw std::runtime_error("training state: damaged ray set");
+    if (!(v >= 0.f && v < 65536.f) || v != float(uint32_t(v)))
+      throw std::runtime_error("training state: damaged ray set");
     const uint32_t bits = uint32_t(v);
     for (uint32_t b = 0; b < 16; ++b) {
       if (bits >> b & 1u) active_.push_back(uint32_t(16 * i + b));
     }
   }
-  if (!active_.empty() && active_.back() >= total()) throw std::runtime_error("training state: damaged ray set");
+  if (!active_.empty() && active_.back() >= total())
+    throw std::runtime_error("training state: damaged ray set");
   order_.clear();
   shuffle_rng_.clear();
   cursor_ = 0;
@@ -128,7 +135,8 @@ void RaySet::RestoreState(const std::vector<float>& keep, const std::string& shu
     in >> rng;
     if (in.fail()) throw std::runtime_error("training state: damaged sampler state");
     Shuffle(rng);
-    if (cursor > order_.size()) throw std::runtime_error("training state: sampler position past its permutation");
+    if (cursor > order_.size())
+      throw std::runtime_error("training state: sampler position past its permutation");
     cursor_ = size_t(cursor);
   }
 }

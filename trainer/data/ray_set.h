@@ -27,9 +27,9 @@ class RaySet {
   // Same, for a test that runs on many rays at once: keep(n, origins, dirs, flags_out), called on
   // consecutive chunks (the callback parallelises internally). Keeps every ray and returns false
   // when fewer than min_keep would remain (training cannot go on with no rays).
-  bool FilterChunked(
-      const std::function<void(int n, const float* origins, const float* dirs, uint8_t* keep)>& keep,
-      size_t min_keep = 1);
+  bool FilterChunked(const std::function<void(int n, const float* origins, const float* dirs,
+                                              uint8_t* keep)>& keep,
+                     size_t min_keep = 1);
 
   // The next n rays of a shuffled order (TensoRF's SimpleSampler: consecutive slices of a random
   // permutation, reshuffled when exhausted). Outputs are n x 3 each.
@@ -45,7 +45,8 @@ class RaySet {
   // draw) and the position in it. Restoring redraws that permutation.
   void SaveState(std::vector<float>* keep, std::string* shuffle_rng, uint64_t* cursor) const;
   // Throws std::runtime_error when the state does not fit these views.
-  void RestoreState(const std::vector<float>& keep, const std::string& shuffle_rng, uint64_t cursor);
+  void RestoreState(const std::vector<float>& keep, const std::string& shuffle_rng,
+                    uint64_t cursor);
 
  private:
   void Shuffle(std::mt19937_64& rng);

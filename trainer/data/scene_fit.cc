@@ -54,7 +54,8 @@ Aabb FitRegionOfInterest(const std::vector<Camera>& cameras, const double box[2]
   for (int k = 0; k < kLattice; ++k) {
     for (int j = 0; j < kLattice; ++j) {
       for (int i = 0; i < kLattice; ++i) {
-        const double p[3] = {box[0][0] + unit[0] * i, box[0][1] + unit[1] * j, box[0][2] + unit[2] * k};
+        const double p[3] = {box[0][0] + unit[0] * i, box[0][1] + unit[1] * j,
+                             box[0][2] + unit[2] * k};
         int seen = 0;
         for (const Camera& cam : cameras) seen += Sees(cam, p) ? 1 : 0;
         seen_by_enough[(size_t(k) * kLattice + j) * kLattice + i] = seen >= needed;
@@ -111,8 +112,9 @@ bool CamerasFaceOneWay(const std::vector<Camera>& cameras) {
 NdcFrame FitNdcFrame(const std::vector<Camera>& cameras, double near) {
   if (cameras.empty()) throw std::invalid_argument("forward-facing scene: no cameras");
   if (!(near > 0) || !std::isfinite(near)) {
-    throw std::invalid_argument("forward-facing scene: the dataset's near bound must be positive (got " +
-                                std::to_string(near) + ")");
+    throw std::invalid_argument(
+        "forward-facing scene: the dataset's near bound must be positive (got " +
+        std::to_string(near) + ")");
   }
   double centre[3] = {0, 0, 0}, back[3] = {0, 0, 0}, up[3] = {0, 0, 0}, scale[2] = {0, 0};
   for (const Camera& c : cameras) {
@@ -158,7 +160,8 @@ Aabb FitNdcBox(const std::vector<Camera>& cameras, const NdcFrame& frame) {
   double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
   for (const Camera& c : cameras) {
     for (int corner = 0; corner < 4; ++corner) {
-      const double px = (corner & 1) ? c.width - 0.5 : -0.5, py = (corner & 2) ? c.height - 0.5 : -0.5;
+      const double px = (corner & 1) ? c.width - 0.5 : -0.5,
+                   py = (corner & 2) ? c.height - 0.5 : -0.5;
       float o[3], d[3], ndc_o[3], ndc_d[3];
       GenerateRay(c, px, py, o, d);
       if (!NdcRay(frame, o, d, ndc_o, ndc_d)) continue;
@@ -173,7 +176,8 @@ Aabb FitNdcBox(const std::vector<Camera>& cameras, const NdcFrame& frame) {
     }
   }
   if (!(hi[0] > lo[0] && hi[1] > lo[1])) {
-    throw std::invalid_argument("forward-facing scene: the cameras' corner rays never cross the reference near plane");
+    throw std::invalid_argument(
+        "forward-facing scene: the cameras' corner rays never cross the reference near plane");
   }
   Aabb box;
   for (int a = 0; a < 2; ++a) {
@@ -187,7 +191,8 @@ Aabb FitNdcBox(const std::vector<Camera>& cameras, const NdcFrame& frame) {
 }
 
 void CheckSceneType(const std::string& scene_type) {
-  if (scene_type != "auto" && scene_type != "object" && scene_type != "unbounded" && scene_type != "forward") {
+  if (scene_type != "auto" && scene_type != "object" && scene_type != "unbounded" &&
+      scene_type != "forward") {
     throw std::invalid_argument("--scene-type: unknown scene type '" + scene_type +
                                 "' (auto, object, unbounded or forward)");
   }

@@ -25,7 +25,8 @@ inline constexpr double kObjectRoiShare = 0.25;
 
 // The box of the points of `box` that at least kRoiViewShare of the cameras see (in front of the
 // camera, inside its image, lens distortion applied), on a 64^3 lattice, grown by kRoiMargin of
-// its extent and one lattice step: where the frusta meet. `box` itself when fewer than 8 lattice points qualify.
+// its extent and one lattice step: where the frusta meet. `box` itself when fewer than 8 lattice
+// points qualify.
 Aabb FitRegionOfInterest(const std::vector<Camera>& cameras, const double box[2][3]);
 
 // True when every camera looks within 35 degrees of their mean viewing direction (an LLFF-style
@@ -49,11 +50,11 @@ Aabb FitNdcBox(const std::vector<Camera>& cameras, const NdcFrame& frame);
 
 struct SceneFit {
   SceneModel model = SceneModel::kObject;
-  NdcFrame ndc;              // forward: the reference camera; roi is then the NDC box
-  Aabb roi;                  // the fitted region of interest
-  double roi_share = 1.0;    // its volume over the dataset box's
+  NdcFrame ndc;            // forward: the reference camera; roi is then the NDC box
+  Aabb roi;                // the fitted region of interest
+  double roi_share = 1.0;  // its volume over the dataset box's
   bool forward_facing = false;
-  std::string reason;        // why this model (for the log)
+  std::string reason;  // why this model (for the log)
 };
 
 // scene_type "auto" chooses from the layout: the object model for white-background datasets

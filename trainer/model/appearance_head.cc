@@ -265,14 +265,13 @@ void AppearanceHead::Forward(int n, const float* products, const float* viewdirs
       prod = act.products + r0 * d.p;
     }
     float* out = act.rgb + r0 * kRgb;
-    ForwardChunk(d, w, wt, m, prod, viewdirs + r0 * kViewDim, act.x + r0 * d.in,
-                 act.h1 + r0 * d.h, act.h2 + r0 * d.h, out, pe_tmp);
+    ForwardChunk(d, w, wt, m, prod, viewdirs + r0 * kViewDim, act.x + r0 * d.in, act.h1 + r0 * d.h,
+                 act.h2 + r0 * d.h, out, pe_tmp);
     std::memcpy(rgb + r0 * kRgb, out, sizeof(float) * m * kRgb);
   });
 }
 
-void AppearanceHead::Infer(int n, const float* products, const float* viewdirs,
-                           float* rgb) const {
+void AppearanceHead::Infer(int n, const float* products, const float* viewdirs, float* rgb) const {
   if (n <= 0) return;
   const Dims d = DimsOf(config_);
   const Params w{params_.data() + basis_offset(), params_.data() + w1_offset(),

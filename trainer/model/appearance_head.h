@@ -18,8 +18,8 @@ namespace ecrf {
 namespace trainer {
 
 struct AppearanceHeadConfig {
-  int num_products = 144;     // P: input width (sum of the appearance ranks over the 3 modes)
-  int feature_dim = 27;       // basis output width
+  int num_products = 144;  // P: input width (sum of the appearance ranks over the 3 modes)
+  int feature_dim = 27;    // basis output width
   int feature_pe_freqs = 2;
   int viewdir_pe_freqs = 2;
   int hidden = 128;

@@ -13,8 +13,7 @@ namespace {
 // Inputs above this use the library functions (without FMA the reduction loses accuracy beyond).
 constexpr float kFastLimit = 1.0e4f;
 
-void SinCosKernel(const float* __restrict x, int count, float* __restrict s,
-                  float* __restrict c) {
+void SinCosKernel(const float* __restrict x, int count, float* __restrict s, float* __restrict c) {
   using namespace fast_sincos;  // NOLINT(google-build-using-namespace)
   for (int i = 0; i < count; ++i) {
     const float v = x[i];

@@ -39,9 +39,9 @@ void CheckRes(const std::array<int, 3>& res, const char* what) {
 }  // namespace
 
 int CalNSamples(const std::array<int, 3>& res, float step_ratio) {
-  const double norm = std::sqrt(static_cast<double>(res[0]) * res[0] +
-                                static_cast<double>(res[1]) * res[1] +
-                                static_cast<double>(res[2]) * res[2]);
+  const double norm =
+      std::sqrt(static_cast<double>(res[0]) * res[0] + static_cast<double>(res[1]) * res[1] +
+                static_cast<double>(res[2]) * res[2]);
   return static_cast<int>(norm / step_ratio);
 }
 
@@ -245,8 +245,9 @@ void TensorfModel::Shrink(const Aabb& new_aabb) {
     tl[a] = std::max(tl[a], 0);
     br[a] = std::min(br[a], res_[a]);
     if (br[a] - tl[a] < 2)
-      throw std::runtime_error("TensorfModel::Shrink: the new box keeps fewer than 2 vertices on axis " +
-                               std::to_string(a));
+      throw std::runtime_error(
+          "TensorfModel::Shrink: the new box keeps fewer than 2 vertices on axis " +
+          std::to_string(a));
   }
   density_.Crop(tl, br);
   appearance_.Crop(tl, br);
@@ -272,7 +273,8 @@ std::vector<uint8_t> TensorfModel::FilterRays(int64_t n, const float* origins, c
   if (use_mask) {
     mask_box = mask_.aabb();
     for (int a = 0; a < 3; ++a) {
-      const float unit = (mask_box.max[a] - mask_box.min[a]) / static_cast<float>(mask_.res()[a] - 1);
+      const float unit =
+          (mask_box.max[a] - mask_box.min[a]) / static_cast<float>(mask_.res()[a] - 1);
       mask_box.min[a] -= 1.01f * unit;
       mask_box.max[a] += 1.01f * unit;
     }

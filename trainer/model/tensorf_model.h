@@ -14,12 +14,12 @@
 #include <string>
 #include <vector>
 
+#include "decoder/softplus.h"
 #include "format/ndc_frame.h"
 #include "format/scene_header.h"
 #include "trainer/model/alpha_mask.h"
 #include "trainer/model/appearance_head.h"
 #include "trainer/model/vm_grid.h"
-#include "decoder/softplus.h"
 
 namespace ecrf {
 namespace trainer {
@@ -27,20 +27,20 @@ namespace trainer {
 struct TensorfConfig {
   std::array<int, 3> density_ranks{{16, 16, 16}};
   std::array<int, 3> app_ranks{{48, 48, 48}};
-  float init_scale = 0.1f;        // grids init: init_scale * N(0,1)
-  float density_shift = -10.f;    // sigma = softplus(feature + density_shift)
-  float distance_scale = 25.f;    // alpha = 1 - exp(-sigma * dist * distance_scale)
-  float step_ratio = 0.5f;        // step = mean(aabb_size / (res - 1)) * step_ratio
-  float weight_threshold = 1e-4f; // rayMarch_weight_thres: colour only where weight > this
+  float init_scale = 0.1f;         // grids init: init_scale * N(0,1)
+  float density_shift = -10.f;     // sigma = softplus(feature + density_shift)
+  float distance_scale = 25.f;     // alpha = 1 - exp(-sigma * dist * distance_scale)
+  float step_ratio = 0.5f;         // step = mean(aabb_size / (res - 1)) * step_ratio
+  float weight_threshold = 1e-4f;  // rayMarch_weight_thres: colour only where weight > this
   float alpha_mask_threshold = 1e-4f;
   // UpdateAlphaMask computes alpha = 1 - exp(-sigma * step * alpha_mask_length_scale). The
   // reference (getDenseAlpha -> compute_alpha(xyz, self.stepSize)) uses 1; set it to
   // distance_scale for a mask that matches the rendering alpha.
   float alpha_mask_length_scale = 1.f;
-  float near = 2.f;               // Blender near/far
+  float near = 2.f;  // Blender near/far
   float far = 6.f;
-  bool white_background = true;   // false: black, and in training white with probability 0.5
-  int max_samples = 1000000;      // cap on samples per ray (train.py --nSamples)
+  bool white_background = true;  // false: black, and in training white with probability 0.5
+  int max_samples = 1000000;     // cap on samples per ray (train.py --nSamples)
   // Optional early ray termination: stop marching once the transmittance drops below this
   // (0 = off, the reference behaviour). With a value <= weight_threshold the set of colour
   // samples is unchanged and rgb changes by at most this value per ray.
@@ -48,15 +48,15 @@ struct TensorfConfig {
   // TrainStep runs the head on chunks of rays with at most this many colour samples (bounds the
   // head's activation memory; the loss is separable over rays, so results do not depend on it).
   int head_chunk_rows = 32768;
-  Aabb aabb;                       // initial scene box (unbounded: the contracted cube [-2, 2]^3)
+  Aabb aabb;  // initial scene box (unbounded: the contracted cube [-2, 2]^3)
   // kUnbounded: world points are normalised by `roi` and contracted (decoder/contraction.h,
   // SPEC.md 7.2.1); the grids span the contracted cube, which never shrinks.
   SceneModel scene_model = SceneModel::kObject;
-  Aabb roi;                        // unbounded only: the region of interest, world units
+  Aabb roi;  // unbounded only: the region of interest, world units
   // kForward: rays are mapped into the NDC of this frame's reference camera (decoder/ndc.h,
   // SPEC.md 7.2.2) and `aabb` is an NDC box; the view direction stays the world one.
   NdcFrame ndc;
-  AppearanceHeadConfig head;       // head.num_products must equal the sum of app_ranks
+  AppearanceHeadConfig head;  // head.num_products must equal the sum of app_ranks
 };
 
 // One named parameter array (for checkpoints). shape is the storage order: planes
@@ -153,7 +153,10 @@ class TensorfModel {
 
   const AlphaMask* alpha_mask() const { return has_mask_ ? &mask_ : nullptr; }
   void SetAlphaMask(AlphaMask mask);
-  void ClearAlphaMask() { has_mask_ = false; mask_ = AlphaMask(); }
+  void ClearAlphaMask() {
+    has_mask_ = false;
+    mask_ = AlphaMask();
+  }
 
   // All trainable arrays: density.plane.{0,1,2}, density.line.{0,1,2}, appearance.plane.*,
   // appearance.line.*, head. Pointers stay valid until the next geometry change.

@@ -168,8 +168,8 @@ void VmGrid::Products(const GridPoint& gp, float* out) const {
                          gp.f[w], out + off);
         break;
       default:
-        ProductsMode<0>(pl, res_[u], ln, R, gp.i0[u], gp.i0[v], gp.i0[w], gp.f[u], gp.f[v],
-                        gp.f[w], out + off);
+        ProductsMode<0>(pl, res_[u], ln, R, gp.i0[u], gp.i0[v], gp.i0[w], gp.f[u], gp.f[v], gp.f[w],
+                        out + off);
     }
     off += R;
   }
@@ -211,7 +211,7 @@ void VmGrid::UpsampleTo(const std::array<int, 3>& new_res) {
     const int H = res_[v], W = res_[u], H2 = new_res[v], W2 = new_res[u];
     const float* src = plane(m);
     float* dst = out.plane(m);
-#pragma omp parallel for schedule(static) if (static_cast<int64_t>(H2) * W2 * R > kParallelMin)
+#pragma omp parallel for schedule(static) if (static_cast <int64_t>(H2) * W2 * R > kParallelMin)
     for (int y = 0; y < H2; ++y) {
       int y0, y1;
       float ly;
@@ -238,8 +238,8 @@ void VmGrid::UpsampleTo(const std::array<int, 3>& new_res) {
       float li;
       SourceIndex(L, L2, i, &i0, &i1, &li);
       for (int r = 0; r < R; ++r)
-        ldst[static_cast<size_t>(i) * R + r] =
-            (1.f - li) * lsrc[static_cast<size_t>(i0) * R + r] + li * lsrc[static_cast<size_t>(i1) * R + r];
+        ldst[static_cast<size_t>(i) * R + r] = (1.f - li) * lsrc[static_cast<size_t>(i0) * R + r] +
+                                               li * lsrc[static_cast<size_t>(i1) * R + r];
     }
   }
   *this = std::move(out);

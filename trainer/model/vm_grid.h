@@ -63,7 +63,8 @@ class VmGrid {
 
   // Element access (plane m at row y = index along v, column x = index along u).
   float& PlaneAt(int m, int y, int x, int r) {
-    return params_[plane_off_[m] + (static_cast<size_t>(y) * res_[kMatMode[m][0]] + x) * ranks_[m] + r];
+    return params_[plane_off_[m] + (static_cast<size_t>(y) * res_[kMatMode[m][0]] + x) * ranks_[m] +
+                   r];
   }
   float& LineAt(int m, int i, int r) {
     return params_[line_off_[m] + static_cast<size_t>(i) * ranks_[m] + r];

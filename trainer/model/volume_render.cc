@@ -30,7 +30,7 @@ struct SampleRec {
   GridPoint gp;  // kept so the gather and scatter passes need not locate the sample again
   float t;
   float dscale;  // dist * distance_scale of this sample's interval
-  float feat;   // density feature + shift; after the composite pass: dL/d(feature)
+  float feat;    // density feature + shift; after the composite pass: dL/d(feature)
   float alpha;
   float trans;  // transmittance before this sample
   int app;      // row in the batch's appearance matrix, or -1
@@ -56,9 +56,9 @@ inline void EnsureSize(std::vector<float>& v, size_t n) {
 }
 
 struct RayRec {
-  int tid;         // thread whose sample buffer holds the samples
+  int tid;  // thread whose sample buffer holds the samples
   int count;
-  size_t offset;   // into that buffer
+  size_t offset;  // into that buffer
   int64_t app_start;
   int app_count;
 };
@@ -194,8 +194,8 @@ void ObjectCandidates(const MarchParams& p, const float* o, const float* d, floa
     const float t = t_min + p.step * ri;
     float x[3];
     PointAt(o, d, t, x);
-    if (x[0] < p.box.min[0] || x[0] > p.box.max[0] || x[1] < p.box.min[1] ||
-        x[1] > p.box.max[1] || x[2] < p.box.min[2] || x[2] > p.box.max[2])
+    if (x[0] < p.box.min[0] || x[0] > p.box.max[0] || x[1] < p.box.min[1] || x[1] > p.box.max[1] ||
+        x[2] < p.box.min[2] || x[2] > p.box.max[2])
       continue;
     if (p.mask && !p.mask->Occupied(x)) continue;
     Candidate c;
@@ -304,7 +304,8 @@ void GatherAppearance(const VmGrid& app, Workspace& ws, int r0, int r1, const fl
 }  // namespace
 
 float RayJitter(uint64_t seed, int64_t ray) {
-  const uint64_t h = SplitMix64(SplitMix64(seed) ^ (static_cast<uint64_t>(ray) * 0xD1B54A32D192ED03ull));
+  const uint64_t h =
+      SplitMix64(SplitMix64(seed) ^ (static_cast<uint64_t>(ray) * 0xD1B54A32D192ED03ull));
   return static_cast<float>(h >> 40) * (1.0f / 16777216.0f);
 }
 
@@ -337,8 +338,8 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
   ws.Prepare(n_rays, threads);
   const MarchParams p = MakeMarchParams(model);
   const TensorfConfig& cfg = model.config();
-  const bool white = cfg.white_background ||
-                     (SplitMix64(rng_seed ^ 0x5DEECE66Dull) >> 63) != 0;  // rand < 0.5
+  const bool white =
+      cfg.white_background || (SplitMix64(rng_seed ^ 0x5DEECE66Dull) >> 63) != 0;  // rand < 0.5
 
   double clock = omp_get_wtime();
   auto lap = [&clock]() {
@@ -367,7 +368,8 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
   // samples (the loss is a sum over rays), bounding the head's activation memory.
   for (int r0 = 0; r0 < n_rays;) {
     int r1 = r0 + 1;
-    while (r1 < n_rays && ws.rays[r1].app_start + ws.rays[r1].app_count - ws.rays[r0].app_start <= max_rows)
+    while (r1 < n_rays &&
+           ws.rays[r1].app_start + ws.rays[r1].app_count - ws.rays[r0].app_start <= max_rows)
       ++r1;
     const int nr = r1 - r0;
     const int64_t base = ws.rays[r0].app_start;
@@ -378,7 +380,8 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
     EnsureSize(ws.rgb, static_cast<size_t>(rows) * 3);
     EnsureSize(ws.dl_drgb, static_cast<size_t>(rows) * 3);
     stats.t_march += lap();
-    if (rows > 0) head.Forward(static_cast<int>(rows), ws.products.data(), ws.viewdirs.data(), ws.rgb.data());
+    if (rows > 0)
+      head.Forward(static_cast<int>(rows), ws.products.data(), ws.viewdirs.data(), ws.rgb.data());
     stats.t_head += lap();
 
     // Compositing forward, loss, compositing backward (dL/dfeature, dL/drgb).

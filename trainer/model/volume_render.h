@@ -62,7 +62,8 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
 void RenderRays(const TensorfModel& model, int n_rays, const float* origins, const float* dirs,
                 float* rgb_out, float* depth_or_null);
 
-// One evaluated sample of a ray (inside the aabb and the alpha mask), as TrainStep/RenderRays see it.
+// One evaluated sample of a ray (inside the aabb and the alpha mask), as TrainStep/RenderRays see
+// it.
 struct RaySampleInfo {
   float t, sigma, alpha, weight;
   bool colour;  // weight > weight_threshold: sent through the appearance head

@@ -16,9 +16,9 @@ namespace ecrf {
 namespace trainer {
 namespace {
 
-constexpr int kChunk = 64;             // values per inner chunk (2 * kChunk network inputs)
-constexpr size_t kWorkItem = 2048;     // values per OpenMP work item
-constexpr long kSumSlots = 16;         // runs of work items summed apart, then in order
+constexpr int kChunk = 64;          // values per inner chunk (2 * kChunk network inputs)
+constexpr size_t kWorkItem = 2048;  // values per OpenMP work item
+constexpr long kSumSlots = 16;      // runs of work items summed apart, then in order
 constexpr int kP = kEntropyParamsPerModel;
 
 uint64_t SplitMix64(uint64_t x) {
@@ -54,7 +54,9 @@ __attribute__((always_inline)) inline float ExpT(float x) {
 inline double ExpT(double x) { return std::exp(x); }
 
 // tanh(a) = 1 - 2 / (exp(2a) + 1); absolute error ~1e-7 in float.
-__attribute__((always_inline)) inline float TanhT(float a) { return 1.f - 2.f / (ExpT(2.f * a) + 1.f); }
+__attribute__((always_inline)) inline float TanhT(float a) {
+  return 1.f - 2.f / (ExpT(2.f * a) + 1.f);
+}
 inline double TanhT(double a) { return std::tanh(a); }
 
 __attribute__((always_inline)) inline float SigmoidT(float z) { return 1.f / (1.f + ExpT(-z)); }
@@ -73,7 +75,8 @@ __attribute__((always_inline)) inline float Log2T(float x) {
   e = big ? e + 1 : e;
   const float f = (m - 1.f) / (m + 1.f);
   const float f2 = f * f;
-  const float s = f * (2.f + f2 * (0.666666667f + f2 * (0.4f + f2 * (0.285714286f + f2 * 0.222222222f))));
+  const float s =
+      f * (2.f + f2 * (0.666666667f + f2 * (0.4f + f2 * (0.285714286f + f2 * 0.222222222f))));
   return static_cast<float>(e) + s * 1.44269504088896341f;
 }
 inline double Log2T(double x) { return std::log2(x); }
@@ -81,10 +84,10 @@ inline double Log2T(double x) { return std::log2(x); }
 // Derived parameters of one model.
 template <typename T>
 struct ModelView {
-  T sp[4][9];    // softplus(matrix_i), [k * fin + j]
-  T dsp[4][9];   // sigmoid(matrix_i) = d softplus / d matrix
+  T sp[4][9];   // softplus(matrix_i), [k * fin + j]
+  T dsp[4][9];  // sigmoid(matrix_i) = d softplus / d matrix
   T bias[4][3];
-  T g[3][3];     // tanh(factor_i)
+  T g[3][3];  // tanh(factor_i)
   explicit ModelView(const float* p) {
     const int fin[4] = {1, 3, 3, 3}, fout[4] = {3, 3, 3, 1};
     for (int l = 0; l < 4; ++l) {
@@ -97,7 +100,8 @@ struct ModelView {
       for (int k = 0; k < fout[l]; ++k) bias[l][k] = static_cast<T>(p[kEntropyBiasOffset[l] + k]);
     }
     for (int l = 0; l < 3; ++l) {
-      for (int k = 0; k < 3; ++k) g[l][k] = static_cast<T>(std::tanh(double(p[kEntropyFactorOffset[l] + k])));
+      for (int k = 0; k < 3; ++k)
+        g[l][k] = static_cast<T>(std::tanh(double(p[kEntropyFactorOffset[l] + k])));
     }
   }
 };
@@ -129,9 +133,12 @@ struct alignas(64) ChunkState {
 };
 
 template <typename T>
-__attribute__((always_inline)) inline double RunChunk(const ModelView<T>& mv, const EntropyModelOptions& opt, const float* x_f,
-                const double* x_d, int n, T grad_scale, float* bits_out, float* dx_out_f,
-                double* dx_out_d, ChunkGrad<T>* acc, ChunkState<T>& st) {
+__attribute__((always_inline)) inline double RunChunk(const ModelView<T>& mv,
+                                                      const EntropyModelOptions& opt,
+                                                      const float* x_f, const double* x_d, int n,
+                                                      T grad_scale, float* bits_out,
+                                                      float* dx_out_f, double* dx_out_d,
+                                                      ChunkGrad<T>* acc, ChunkState<T>& st) {
   const bool backward = acc != nullptr || dx_out_f != nullptr || dx_out_d != nullptr;
   constexpr int M = ChunkState<T>::M;
   const int m = M;  // process padded lanes too (values 0), keeps loops fixed-length
@@ -274,7 +281,8 @@ void AddParamGrads(const ModelView<T>& mv, const ChunkGrad<T>& cg, double* out) 
     for (int i = 0; i < count[l]; ++i) {
       out[kEntropyMatrixOffset[l] + i] += double(cg.dsp[l][i]) * double(mv.dsp[l][i]);
     }
-    for (int k = 0; k < (l == 3 ? 1 : 3); ++k) out[kEntropyBiasOffset[l] + k] += double(cg.db[l][k]);
+    for (int k = 0; k < (l == 3 ? 1 : 3); ++k)
+      out[kEntropyBiasOffset[l] + k] += double(cg.db[l][k]);
   }
   for (int l = 0; l < 3; ++l) {
     for (int k = 0; k < 3; ++k) {

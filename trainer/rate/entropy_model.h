@@ -79,8 +79,8 @@ class FactorizedEntropyModel {
   // Positions of x not covered by a segment are not touched. Not reentrant when accumulating.
   double Bits(const float* x, const EntropySegment* segments, int num_segments, float* bits,
               float* dbits_dx, float grad_scale, bool accumulate_param_grads);
-  double Bits(int model, const float* x, size_t n, float* bits, float* dbits_dx,
-              float grad_scale, bool accumulate_param_grads) {
+  double Bits(int model, const float* x, size_t n, float* bits, float* dbits_dx, float grad_scale,
+              bool accumulate_param_grads) {
     const EntropySegment s{model, 0, n};
     return Bits(x, &s, 1, bits, dbits_dx, grad_scale, accumulate_param_grads);
   }

@@ -24,7 +24,8 @@ void ReconstructQuantizedGrid(const VmGrid& grid, const float* steps, const Rate
 #pragma omp parallel for schedule(static) if (n > 65536)
     for (long i = 0; i < n; ++i) {
       // The encoder's quantizer, on the double quotient.
-      coeffs[i] = static_cast<float>(QuantizeLevel(static_cast<double>(coeffs[i]), step, rounding_offset) * step);
+      coeffs[i] = static_cast<float>(
+          QuantizeLevel(static_cast<double>(coeffs[i]), step, rounding_offset) * step);
     }
     const size_t offset = static_cast<size_t>(RateTensorData(grid, t) - grid.params().data());
     InverseBlocks(coeffs.data(), layout, out->data() + offset);
@@ -32,7 +33,8 @@ void ReconstructQuantizedGrid(const VmGrid& grid, const float* steps, const Rate
 }
 
 MlpLayout HeadMlpLayout(const AppearanceHeadConfig& h) {
-  return MakeMlpLayout(h.feature_dim, h.num_products, h.hidden, h.feature_pe_freqs, h.viewdir_pe_freqs);
+  return MakeMlpLayout(h.feature_dim, h.num_products, h.hidden, h.feature_pe_freqs,
+                       h.viewdir_pe_freqs);
 }
 
 void ReconstructQuantizedHead(const TensorfModel& model, int max_level, std::vector<float>* out) {
@@ -46,7 +48,9 @@ void ReconstructQuantizedHead(const TensorfModel& model, int max_level, std::vec
 }
 
 std::vector<float>& QuantAwareModel::Params(TensorfModel* model, int k) {
-  return k == 0 ? model->density().params() : k == 1 ? model->appearance().params() : model->head().params();
+  return k == 0   ? model->density().params()
+         : k == 1 ? model->appearance().params()
+                  : model->head().params();
 }
 
 void QuantAwareModel::Refresh(const TensorfModel& model, const std::vector<float>& steps,
@@ -56,7 +60,8 @@ void QuantAwareModel::Refresh(const TensorfModel& model, const std::vector<float
     throw std::invalid_argument("QuantAwareModel: need 12 quantization steps");
   }
   ReconstructQuantizedGrid(model.density(), steps.data(), config, &error_[0], rounding_offset);
-  ReconstructQuantizedGrid(model.appearance(), steps.data() + kTensorsPerGrid, config, &error_[1], rounding_offset);
+  ReconstructQuantizedGrid(model.appearance(), steps.data() + kTensorsPerGrid, config, &error_[1],
+                           rounding_offset);
   error_[2].clear();
   if (mlp_levels > 0) ReconstructQuantizedHead(model, mlp_levels, &error_[2]);
   const std::vector<float>* params[3] = {&model.density().params(), &model.appearance().params(),
@@ -76,7 +81,8 @@ bool QuantAwareModel::fresh_for(const TensorfModel& model) const {
 }
 
 void QuantAwareModel::Apply(TensorfModel* model) {
-  if (applied_ || !fresh_for(*model)) throw std::logic_error("QuantAwareModel::Apply: not refreshed");
+  if (applied_ || !fresh_for(*model))
+    throw std::logic_error("QuantAwareModel::Apply: not refreshed");
   for (int k = 0; k < 3; ++k) {
     if (error_[k].empty()) continue;
     std::vector<float>& p = Params(model, k);

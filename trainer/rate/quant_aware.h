@@ -19,8 +19,8 @@
 #include <vector>
 
 #include "format/mlp_coder.h"
-#include "trainer/rate/rate_objective.h"
 #include "trainer/model/tensorf_model.h"
+#include "trainer/rate/rate_objective.h"
 
 namespace ecrf {
 namespace trainer {

@@ -102,8 +102,8 @@ TensorResult ProcessTensor(const float* tensor, float* grad, const GridBlockLayo
   // dx = scale * d bits / d x; the model's parameter gradients get the same scale.
   std::vector<float>& dx = x;  // Bits reads x chunk by chunk before writing dx for it
   std::vector<float> xin(x);
-  res.bits = model->Bits(xin.data(), segs.data(), static_cast<int>(segs.size()), nullptr,
-                         dx.data(), scale, true);
+  res.bits = model->Bits(xin.data(), segs.data(), static_cast<int>(segs.size()), nullptr, dx.data(),
+                         scale, true);
   xin.clear();
   xin.shrink_to_fit();
   // d loss / d coeff = lambda_e * dx / step + 2 lambda_r scale c, written over c.
@@ -115,7 +115,8 @@ TensorResult ProcessTensor(const float* tensor, float* grad, const GridBlockLayo
     for (int p = 0; p < V; ++p) cj[p] *= gr;
     for (int b = 0; b < kNumFrequencyBands; ++b) {
       const int cnt = bm.begin[b + 1] - bm.begin[b];
-      const float* db = dx.data() + static_cast<size_t>(k) * bm.begin[b] + static_cast<size_t>(j) * cnt;
+      const float* db =
+          dx.data() + static_cast<size_t>(k) * bm.begin[b] + static_cast<size_t>(j) * cnt;
       const int* pb = bm.perm.data() + bm.begin[b];
       for (int q = 0; q < cnt; ++q) cj[pb[q]] += ge * db[q];
     }
@@ -163,7 +164,8 @@ RateEstimate AddRateGradients(const std::vector<VmGrid*>& grids, const std::vect
       const int ti = static_cast<int>(g) * kTensorsPerGrid + t;
       const GridBlockLayout L = RateTensorLayout(grid, t, config);
       const int n = L.num_blocks();
-      int k = fraction >= 1.f ? n : static_cast<int>(std::lround(fraction * static_cast<double>(n)));
+      int k =
+          fraction >= 1.f ? n : static_cast<int>(std::lround(fraction * static_cast<double>(n)));
       k = std::min(n, std::max(1, k));
       std::vector<int> ids(n);
       std::iota(ids.begin(), ids.end(), 0);
@@ -199,8 +201,8 @@ RateReport EvaluateRate(const std::vector<const VmGrid*>& grids, const std::vect
       const GridBlockLayout L = RateTensorLayout(*grids[g], t, config);
       std::vector<int> ids(L.num_blocks());
       std::iota(ids.begin(), ids.end(), 0);
-      const TensorResult r = ProcessTensor(RateTensorData(*grids[g], t), nullptr, L, ids,
-                                           steps[ti], ti, m, Mode::kRoundedEval, 1.f, 0.f, 0.f, 0);
+      const TensorResult r = ProcessTensor(RateTensorData(*grids[g], t), nullptr, L, ids, steps[ti],
+                                           ti, m, Mode::kRoundedEval, 1.f, 0.f, 0.f, 0);
       rep.bits.push_back(r.bits);
       rep.coeffs.push_back(L.num_coeffs());
       rep.total_bits += r.bits;

@@ -21,10 +21,10 @@
 #include <cstdint>
 #include <vector>
 
-#include "trainer/rate/entropy_model.h"
 #include "encoder/coded_tensors.h"
 #include "encoder/grid_dct.h"
 #include "trainer/model/vm_grid.h"
+#include "trainer/rate/entropy_model.h"
 
 namespace ecrf {
 namespace trainer {
@@ -39,9 +39,7 @@ int FrequencyBand(bool line, int k0, int k1, int k2);
 inline int RateModelIndex(int tensor_index, int band) {
   return tensor_index * kNumFrequencyBands + band;
 }
-inline int NumRateModels(int num_grids) {
-  return num_grids * kTensorsPerGrid * kNumFrequencyBands;
-}
+inline int NumRateModels(int num_grids) { return num_grids * kTensorsPerGrid * kNumFrequencyBands; }
 
 struct RateEstimate {
   double bits = 0.0;         // unbiased estimate of the total noisy-proxy bits (all tensors)
@@ -65,8 +63,8 @@ RateEstimate AddRateGradients(const std::vector<VmGrid*>& grids, const std::vect
 // from zero), no noise, no gradients: the bits an encoder using this static model would pay
 // (up to the arithmetic coder's overhead).
 struct RateReport {
-  std::vector<double> bits;     // per tensor index
-  std::vector<size_t> coeffs;   // coefficients per tensor index (padded blocks)
+  std::vector<double> bits;    // per tensor index
+  std::vector<size_t> coeffs;  // coefficients per tensor index (padded blocks)
   double total_bits = 0.0;
 };
 RateReport EvaluateRate(const std::vector<const VmGrid*>& grids, const std::vector<float>& steps,

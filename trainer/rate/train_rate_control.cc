@@ -8,7 +8,8 @@ namespace ecrf {
 namespace trainer {
 
 float InitialLambdaForSize(size_t target_bytes, size_t float32_bytes) {
-  if (target_bytes == 0 || float32_bytes == 0) throw std::invalid_argument("InitialLambdaForSize: zero size");
+  if (target_bytes == 0 || float32_bytes == 0)
+    throw std::invalid_argument("InitialLambdaForSize: zero size");
   const double share = double(target_bytes) / double(float32_bytes);
   const double lambda = 1e-10 * std::pow(share / 0.0225, -1.0 / 0.45);
   return float(std::clamp(lambda, 1e-12, 1e-8));

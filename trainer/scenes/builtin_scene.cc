@@ -49,7 +49,10 @@ Vec3 OnSphere(double azimuth, double z) {
 
 std::vector<Vec3> CameraPositions(const std::string& split, int count, uint32_t seed) {
   std::vector<Vec3> positions;
-  Random random(0x5eed0000ull ^ (uint64_t{seed} << 16) ^ (split == "train" ? 1 : split == "test" ? 2 : 3));
+  Random random(0x5eed0000ull ^ (uint64_t{seed} << 16) ^
+                (split == "train"  ? 1
+                 : split == "test" ? 2
+                                   : 3));
   if (split == "train") {
     // Uniform in area over the band; the poles are left out because the look-at frame needs
     // a horizon and nothing is seen from straight below the slab.
@@ -69,7 +72,8 @@ std::vector<Vec3> CameraPositions(const std::string& split, int count, uint32_t 
 }
 
 Image Render(const Camera& camera) {
-  static const double kSubpixel[4][2] = {{-0.25, -0.25}, {0.25, -0.25}, {-0.25, 0.25}, {0.25, 0.25}};
+  static const double kSubpixel[4][2] = {
+      {-0.25, -0.25}, {0.25, -0.25}, {-0.25, 0.25}, {0.25, 0.25}};
   Image image = MakeImage(camera.width, camera.height, 3);
   for (int j = 0; j < camera.height; ++j) {
     for (int i = 0; i < camera.width; ++i) {
@@ -89,10 +93,12 @@ Image Render(const Camera& camera) {
 
 }  // namespace
 
-Dataset MakeBuiltinScene(const std::string& split, int width, int height, int num_views, uint32_t seed) {
+Dataset MakeBuiltinScene(const std::string& split, int width, int height, int num_views,
+                         uint32_t seed) {
   procedural::CheckSceneArguments("builtin", split, width, height);
   if (num_views < 1) {
-    throw std::runtime_error("builtin scene: num_views must be >= 1, got " + std::to_string(num_views));
+    throw std::runtime_error("builtin scene: num_views must be >= 1, got " +
+                             std::to_string(num_views));
   }
   const std::vector<Vec3> positions = CameraPositions(split, num_views, seed);
   Dataset dataset;  // defaults are the Blender conventions

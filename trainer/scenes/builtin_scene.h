@@ -26,7 +26,8 @@ inline constexpr double kBuiltinCameraDistance = 4.0;
 //   "val":   an orbit at 50 degrees elevation.
 // The dataset uses the Blender conventions: aabb [-1.5, 1.5]^3, near 2, far 6, white background.
 // Deterministic for given arguments. Throws std::runtime_error for a bad split or sizes.
-Dataset MakeBuiltinScene(const std::string& split, int width, int height, int num_views, uint32_t seed);
+Dataset MakeBuiltinScene(const std::string& split, int width, int height, int num_views,
+                         uint32_t seed);
 
 }  // namespace ecrf::trainer
 

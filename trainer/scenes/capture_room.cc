@@ -26,7 +26,9 @@ double Hash(int a, int b) {
   return (h & 0xffffu) / 65536.0;
 }
 
-bool OnLine(double coordinate, double period) { return Fract(coordinate / period) * period < kLine; }
+bool OnLine(double coordinate, double period) {
+  return Fract(coordinate / period) * period < kLine;
+}
 
 Vec3 Floor(Vec3 p) {
   // Planks 0.25 m wide along x, each a shade of oak with a wavy grain.
@@ -62,8 +64,10 @@ Vec3 Brick(double u, double v) {  // wall at -y
 Vec3 WindowWall(double u, double v) {  // wall at +y: a window and a picture beside it
   const double wu = u - 0.6, wv = v - 1.3;
   if (std::abs(wu) < 0.8 && std::abs(wv) < 0.55) {
-    if (std::abs(wu) > 0.72 || std::abs(wv) > 0.47 || std::abs(wu) < 0.04) return {0.95, 0.95, 0.93};
-    return Mix(Vec3{0.55, 0.75, 0.95}, Vec3{0.85, 0.92, 1.0}, std::clamp(wv / 0.94 + 0.5, 0.0, 1.0));
+    if (std::abs(wu) > 0.72 || std::abs(wv) > 0.47 || std::abs(wu) < 0.04)
+      return {0.95, 0.95, 0.93};
+    return Mix(Vec3{0.55, 0.75, 0.95}, Vec3{0.85, 0.92, 1.0},
+               std::clamp(wv / 0.94 + 0.5, 0.0, 1.0));
   }
   const double pu = u + 1.6, pv = v - 1.2;
   if (std::abs(pu) < 0.4 && std::abs(pv) < 0.3) {
@@ -88,7 +92,8 @@ Vec3 Wall(int axis, bool positive, Vec3 p, double floor_z) {
 }
 
 // From inside a box the ray leaves through the nearest of the three faces it heads for.
-double Exit(const double room_min[3], const double room_max[3], Vec3 origin, Vec3 dir, int* exit_axis) {
+double Exit(const double room_min[3], const double room_max[3], Vec3 origin, Vec3 dir,
+            int* exit_axis) {
   double t_exit = INFINITY;
   *exit_axis = 2;
   for (int axis = 0; axis < 3; ++axis) {

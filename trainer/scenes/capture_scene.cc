@@ -20,7 +20,8 @@ using procedural::Vec3;
 
 constexpr double kDegree = kPi / 180.0;
 
-Camera CaptureCamera(Vec3 position, Vec3 target, double roll, double pitch, double yaw, int width, int height) {
+Camera CaptureCamera(Vec3 position, Vec3 target, double roll, double pitch, double yaw, int width,
+                     int height) {
   Camera camera;
   camera.width = width;
   camera.height = height;
@@ -45,10 +46,12 @@ std::vector<Camera> CapturePath(int frames, int width, int height, uint32_t seed
     const double step = 2 * kPi / frames;
     const double azimuth = phase + step * (i + 0.3 * random.Signed());
     const double loop = step * i;
-    const double distance = 2.5 + 0.25 * std::sin(2 * loop + wobble_phase[0]) + 0.08 * random.Signed();
+    const double distance =
+        2.5 + 0.25 * std::sin(2 * loop + wobble_phase[0]) + 0.08 * random.Signed();
     const double z = 0.9 + 0.35 * std::sin(3 * loop + wobble_phase[1]) + 0.05 * random.Signed();
     const Vec3 position{distance * std::cos(azimuth), distance * std::sin(azimuth), z};
-    const Vec3 target{0.08 * random.Signed(), 0.08 * random.Signed(), -0.15 + 0.08 * random.Signed()};
+    const Vec3 target{0.08 * random.Signed(), 0.08 * random.Signed(),
+                      -0.15 + 0.08 * random.Signed()};
     const double roll = 3 * kDegree * random.Signed();
     const double pitch = 2 * kDegree * random.Signed();
     const double yaw = 2 * kDegree * random.Signed();
@@ -113,7 +116,8 @@ std::vector<View> RenderCaptureFrames(const char* scene, const std::vector<Camer
   return views;
 }
 
-Dataset MakeCaptureScene(const std::string& split, int width, int height, int num_frames, uint32_t seed) {
+Dataset MakeCaptureScene(const std::string& split, int width, int height, int num_frames,
+                         uint32_t seed) {
   procedural::CheckSceneArguments("capture", split, width, height);
   procedural::CheckFrameCount("capture", num_frames);
   const std::vector<Camera> cameras = CapturePath(num_frames, width, height, seed);

@@ -32,17 +32,18 @@ inline constexpr int kCaptureTestEvery = 8;
 // "train" all but every 8th, "test" and "val" every 8th (frames 0, 8, 16, ...). Views are
 // named capture/frame_NNN after their frame index.
 // The camera path is a rough hand-held loop once around the still life: 2.17 to 2.83 m from its
-// vertical axis, at z 0.5 to 1.3 (1.05 to 1.85 m above the floor), looking near the slab centre with
-// a few degrees of roll, pitch and yaw jitter; all jitter and the loop's phase come from `seed`.
-// Intrinsics: 62 degree horizontal field of view, square pixels, principal point off centre by
-// (kCaptureCxOffset, kCaptureCyOffset) of the size, barrel distortion k1 -0.12, k2 0.03.
-// Each pixel is one ray, exactly the one GenerateRay (and so RaySet) makes for it, so images
-// and rays agree to the last bit; no supersampling, like a sensor with sharp optics.
-// The dataset: aabb the cube Instant-NGP's aabb_scale 4 gives (about [-6.06, 6.06]^3), near and
-// far from the cameras as for transforms.json, no white background.
-// Deterministic for given arguments; 50 frames of 120x90 render in about 0.15 s on 2 cores.
-// Throws std::runtime_error for a bad split or sizes, or a split that would be empty.
-Dataset MakeCaptureScene(const std::string& split, int width, int height, int num_frames, uint32_t seed);
+// vertical axis, at z 0.5 to 1.3 (1.05 to 1.85 m above the floor), looking near the slab centre
+// with a few degrees of roll, pitch and yaw jitter; all jitter and the loop's phase come from
+// `seed`. Intrinsics: 62 degree horizontal field of view, square pixels, principal point off centre
+// by (kCaptureCxOffset, kCaptureCyOffset) of the size, barrel distortion k1 -0.12, k2 0.03. Each
+// pixel is one ray, exactly the one GenerateRay (and so RaySet) makes for it, so images and rays
+// agree to the last bit; no supersampling, like a sensor with sharp optics. The dataset: aabb the
+// cube Instant-NGP's aabb_scale 4 gives (about [-6.06, 6.06]^3), near and far from the cameras as
+// for transforms.json, no white background. Deterministic for given arguments; 50 frames of 120x90
+// render in about 0.15 s on 2 cores. Throws std::runtime_error for a bad split or sizes, or a split
+// that would be empty.
+Dataset MakeCaptureScene(const std::string& split, int width, int height, int num_frames,
+                         uint32_t seed);
 
 // The colour the images show along a ray (unit `dir`): what a pixel of the scene is.
 void CaptureSceneRadiance(const float origin[3], const float dir[3], float rgb[3]);

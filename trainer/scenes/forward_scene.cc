@@ -21,7 +21,8 @@ using procedural::Vec3;
 
 constexpr double kDegree = kPi / 180.0;
 
-Camera ForwardCamera(Vec3 position, Vec3 target, double roll, double pitch, double yaw, int width, int height) {
+Camera ForwardCamera(Vec3 position, Vec3 target, double roll, double pitch, double yaw, int width,
+                     int height) {
   Camera camera;  // no distortion: LLFF's COLMAP step undistorts the photos
   camera.width = width;
   camera.height = height;
@@ -49,9 +50,12 @@ std::vector<Camera> ForwardRig(int frames, int width, int height, uint32_t seed)
   for (int r = 0; r < rows; ++r) {
     const int in_row = frames / rows + (r < frames % rows ? 1 : 0);
     for (int k = 0; k < in_row; ++k) {
-      const int column = r % 2 ? in_row - 1 - k : k;  // back and forth: neighbouring frames are close
-      const double u = ((column + 0.5) / in_row - 0.5 + 0.3 * random.Signed() / in_row) * kForwardPatchWidth;
-      const double v = (0.5 - (r + 0.5) / rows + 0.3 * random.Signed() / rows) * kForwardPatchHeight;
+      const int column =
+          r % 2 ? in_row - 1 - k : k;  // back and forth: neighbouring frames are close
+      const double u =
+          ((column + 0.5) / in_row - 0.5 + 0.3 * random.Signed() / in_row) * kForwardPatchWidth;
+      const double v =
+          (0.5 - (r + 0.5) / rows + 0.3 * random.Signed() / rows) * kForwardPatchHeight;
       const Vec3 position = centre + right * u + up * v + back * (0.03 * random.Signed());
       const Vec3 aim = target + Vec3{random.Signed(), random.Signed(), random.Signed()} * 0.05;
       const double roll = 2 * kDegree * random.Signed();
@@ -74,7 +78,8 @@ void DepthRange(const std::vector<Camera>& cameras, double* nearest, double* far
       for (int i = 0; i < camera.width; ++i) {
         float origin[3], dir[3];
         GenerateRay(camera, i, j, origin, dir);
-        const double depth = CaptureSceneHitDistance(origin, dir) * Dot(Normalized({dir[0], dir[1], dir[2]}), axis);
+        const double depth =
+            CaptureSceneHitDistance(origin, dir) * Dot(Normalized({dir[0], dir[1], dir[2]}), axis);
         lo = std::min(lo, depth);
         hi = std::max(hi, depth);
       }
@@ -86,7 +91,8 @@ void DepthRange(const std::vector<Camera>& cameras, double* nearest, double* far
 
 }  // namespace
 
-Dataset MakeForwardScene(const std::string& split, int width, int height, int num_frames, uint32_t seed) {
+Dataset MakeForwardScene(const std::string& split, int width, int height, int num_frames,
+                         uint32_t seed) {
   procedural::CheckSceneArguments("forward", split, width, height);
   procedural::CheckFrameCount("forward", num_frames);
   const std::vector<Camera> cameras = ForwardRig(num_frames, width, height, seed);

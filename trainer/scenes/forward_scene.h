@@ -39,7 +39,8 @@ inline constexpr double kForwardNearShare = 0.9;
 // kForwardNearShare of the smallest.
 // Deterministic for given arguments. Throws std::runtime_error for a bad split or sizes, or a
 // split that would be empty.
-Dataset MakeForwardScene(const std::string& split, int width, int height, int num_frames, uint32_t seed);
+Dataset MakeForwardScene(const std::string& split, int width, int height, int num_frames,
+                         uint32_t seed);
 
 }  // namespace ecrf::trainer
 

@@ -20,7 +20,9 @@ inline Vec3 operator+(Vec3 a, Vec3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}
 inline Vec3 operator-(Vec3 a, Vec3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
 inline Vec3 operator*(Vec3 a, double s) { return {a.x * s, a.y * s, a.z * s}; }
 inline double Dot(Vec3 a, Vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-inline Vec3 Cross(Vec3 a, Vec3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+inline Vec3 Cross(Vec3 a, Vec3 b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
 inline Vec3 Normalized(Vec3 a) { return a * (1.0 / std::sqrt(Dot(a, a))); }
 inline double Axis(Vec3 v, int axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
 
@@ -34,7 +36,8 @@ inline void Rotate(Vec3* a, Vec3* b, double angle) {
 
 // Camera-to-world (OpenGL: looks down -z, +y up) of a hand-held camera at `position` aimed at
 // `target` with the horizon level (z up), then turned by the hand's pitch, yaw and roll.
-inline void LookAtPose(Vec3 position, Vec3 target, double roll, double pitch, double yaw, double c2w[3][4]) {
+inline void LookAtPose(Vec3 position, Vec3 target, double roll, double pitch, double yaw,
+                       double c2w[3][4]) {
   Vec3 forward = Normalized(target - position);
   Vec3 right = Normalized(Cross(forward, {0, 0, 1}));
   Vec3 up = Cross(right, forward);
@@ -50,22 +53,25 @@ inline void LookAtPose(Vec3 position, Vec3 target, double roll, double pitch, do
 }
 
 // The arguments every procedural scene takes, checked alike: "NAME scene: ..." errors.
-inline void CheckSceneArguments(const char* scene, const std::string& split, int width, int height) {
+inline void CheckSceneArguments(const char* scene, const std::string& split, int width,
+                                int height) {
   const std::string what = std::string(scene) + " scene: ";
   if (split != "train" && split != "val" && split != "test") {
     throw std::runtime_error(what + "unknown split '" + split + "' (expected train, val or test)");
   }
   if (width < 1 || height < 1 || width > 4096 || height > 4096) {
-    throw std::runtime_error(what + "image size " + std::to_string(width) + "x" + std::to_string(height) +
-                             " must be within 1..4096");
+    throw std::runtime_error(what + "image size " + std::to_string(width) + "x" +
+                             std::to_string(height) + " must be within 1..4096");
   }
 }
 
 // The frames of a captured sequence: every 8th is held out, so at least 2 leave one to train on.
 inline void CheckFrameCount(const char* scene, int num_frames) {
   if (num_frames < 2) {
-    throw std::runtime_error(std::string(scene) + " scene: num_frames must be >= 2 (frame 0 is the only test frame), got " +
-                             std::to_string(num_frames));
+    throw std::runtime_error(
+        std::string(scene) +
+        " scene: num_frames must be >= 2 (frame 0 is the only test frame), got " +
+        std::to_string(num_frames));
   }
 }
 

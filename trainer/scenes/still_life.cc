@@ -28,14 +28,35 @@ struct Shape {
 // within the bounding sphere below (radius 1.7), so the whole scene stays inside the
 // Blender box and mostly within the 40 degree view from 4 units away.
 const Shape kShapes[] = {
-    {false, {}, 0, {-1.0, -1.0, kStillLifeBottom}, {1.0, 1.0, -0.4},
+    {false,
+     {},
+     0,
+     {-1.0, -1.0, kStillLifeBottom},
+     {1.0, 1.0, -0.4},
      {{0.88, 0.86, 0.80}, {0.30, 0.42, 0.52}, Pattern::kSlabChecker, 0.05, 8}},
-    {true, {-0.35, -0.25, 0.15}, 0.55, {}, {},
+    {true,
+     {-0.35, -0.25, 0.15},
+     0.55,
+     {},
+     {},
      {{0.90, 0.22, 0.12}, {0.98, 0.80, 0.20}, Pattern::kSphereChecker, 0.45, 40}},
-    {true, {0.6, 0.55, -0.1}, 0.3, {}, {}, {{0.15, 0.30, 0.85}, {0.95, 0.95, 0.95}, Pattern::kSphereBands, 0.6, 80}},
-    {false, {}, 0, {0.15, -0.9, -0.4}, {0.8, -0.25, 0.25},
+    {true,
+     {0.6, 0.55, -0.1},
+     0.3,
+     {},
+     {},
+     {{0.15, 0.30, 0.85}, {0.95, 0.95, 0.95}, Pattern::kSphereBands, 0.6, 80}},
+    {false,
+     {},
+     0,
+     {0.15, -0.9, -0.4},
+     {0.8, -0.25, 0.25},
      {{0.25, 0.70, 0.30}, {0.08, 0.25, 0.10}, Pattern::kBoxGrid, 0.15, 20}},
-    {false, {}, 0, {-0.95, 0.35, -0.4}, {-0.6, 0.75, 0.95},
+    {false,
+     {},
+     0,
+     {-0.95, 0.35, -0.4},
+     {-0.6, 0.75, 0.95},
      {{0.60, 0.30, 0.75}, {0.95, 0.75, 0.40}, Pattern::kBoxStripes, 0.25, 30}},
 };
 constexpr int kShapeCount = sizeof(kShapes) / sizeof(kShapes[0]);
@@ -99,8 +120,9 @@ Hit Trace(Vec3 origin, Vec3 dir, double t_max) {
   for (int i = 0; i < kShapeCount; ++i) {
     double t;
     Vec3 normal;
-    const bool hit = kShapes[i].is_sphere ? IntersectSphere(kShapes[i], origin, dir, best.t, &t, &normal)
-                                          : IntersectBox(kShapes[i], origin, dir, best.t, &t, &normal);
+    const bool hit = kShapes[i].is_sphere
+                         ? IntersectSphere(kShapes[i], origin, dir, best.t, &t, &normal)
+                         : IntersectBox(kShapes[i], origin, dir, best.t, &t, &normal);
     if (hit) best = {t, i, normal};
   }
   return best;
@@ -187,7 +209,9 @@ bool ShadeStillLife(Vec3 origin, Vec3 dir, Vec3* out) {
   Vec3 colour = albedo * kAmbient;
   if (lit) {
     const Vec3 half = Normalized(kLight - dir);
-    const double highlight = shape.material.specular * std::pow(std::max(0.0, Dot(hit.normal, half)), shape.material.shininess);
+    const double highlight =
+        shape.material.specular *
+        std::pow(std::max(0.0, Dot(hit.normal, half)), shape.material.shininess);
     colour = colour + albedo * ((1.0 - kAmbient) * lambert) + Vec3{highlight, highlight, highlight};
   }
   *out = {std::min(colour.x, 1.0), std::min(colour.y, 1.0), std::min(colour.z, 1.0)};

@@ -45,8 +45,9 @@ void Adam::Step(float* params, const float* grads, size_t size, float learning_r
     float* __restrict v = v_all;
 #pragma omp simd
     for (size_t i = begin; i < end; ++i) {
-      m[i] += one_minus_beta1 * (g[i] - m[i]);             // exp_avg.lerp_(grad, 1 - beta1)
-      v[i] = v[i] * beta2 + (one_minus_beta2 * g[i]) * g[i];  // mul_(beta2).addcmul_(g, g, 1 - beta2)
+      m[i] += one_minus_beta1 * (g[i] - m[i]);  // exp_avg.lerp_(grad, 1 - beta1)
+      v[i] =
+          v[i] * beta2 + (one_minus_beta2 * g[i]) * g[i];  // mul_(beta2).addcmul_(g, g, 1 - beta2)
       p[i] += neg_step_size * (m[i] / (std::sqrt(v[i]) / bias_correction2_sqrt + eps));  // addcdiv_
     }
   }

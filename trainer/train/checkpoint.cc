@@ -2,12 +2,12 @@
 
 #include <zstd.h>
 
+#include <unistd.h>
 #include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <stdexcept>
-#include <unistd.h>
 
 #include "trainer/data/file_io.h"
 
@@ -89,7 +89,8 @@ void WriteCheckpoint(const std::string& path, const Checkpoint& checkpoint, int 
   if (!cctx) throw std::runtime_error(path + ": zstd: out of memory");
   ZSTD_CCtx_setParameter(cctx, ZSTD_c_compressionLevel, zstd_level);
   ZSTD_CCtx_setParameter(cctx, ZSTD_c_checksumFlag, 1);
-  const size_t z = ZSTD_compress2(cctx, out.data() + header, out.size() - header, raw.data(), raw.size());
+  const size_t z =
+      ZSTD_compress2(cctx, out.data() + header, out.size() - header, raw.data(), raw.size());
   ZSTD_freeCCtx(cctx);
   if (ZSTD_isError(z)) throw std::runtime_error(path + ": zstd: " + ZSTD_getErrorName(z));
   out.resize(header + z);
@@ -100,7 +101,8 @@ namespace {
 
 // Decompresses one frame, growing the output with what actually decompresses (a damaged size
 // field cannot make it allocate more than the frame really holds, and never over raw_size).
-std::vector<uint8_t> Decompress(const std::string& path, const uint8_t* data, size_t size, uint64_t raw_size) {
+std::vector<uint8_t> Decompress(const std::string& path, const uint8_t* data, size_t size,
+                                uint64_t raw_size) {
   std::vector<uint8_t> raw;
   ZSTD_DCtx* dctx = ZSTD_createDCtx();
   if (!dctx) throw std::runtime_error(path + ": zstd: out of memory");
@@ -109,7 +111,8 @@ std::vector<uint8_t> Decompress(const std::string& path, const uint8_t* data, si
   for (size_t status = 1; status != 0 && error.empty();) {
     const size_t chunk = size_t(std::min<uint64_t>(raw_size - raw.size(), uint64_t(64) << 20));
     const size_t before = raw.size();
-    raw.resize(before + std::max<size_t>(chunk, 1));  // one spare byte finds a frame longer than said
+    raw.resize(before +
+               std::max<size_t>(chunk, 1));  // one spare byte finds a frame longer than said
     ZSTD_outBuffer out{raw.data() + before, raw.size() - before, 0};
     status = ZSTD_decompressStream(dctx, &out, &in);
     raw.resize(before + out.pos);
@@ -123,7 +126,8 @@ std::vector<uint8_t> Decompress(const std::string& path, const uint8_t* data, si
   }
   ZSTD_freeDCtx(dctx);
   if (error.empty() && (raw.size() != raw_size || in.pos != size)) {
-    error = "it holds " + std::to_string(raw.size()) + " bytes, its header says " + std::to_string(raw_size);
+    error = "it holds " + std::to_string(raw.size()) + " bytes, its header says " +
+            std::to_string(raw_size);
   }
   if (!error.empty()) throw std::runtime_error(path + ": checkpoint is damaged: " + error);
   return raw;
@@ -164,7 +168,8 @@ Checkpoint ReadCheckpoint(const std::string& path) {
     a.name.assign(reinterpret_cast<const char*>(raw.data() + c.pos), name_size);
     c.pos += name_size;
     const uint64_t dims = c.U64();
-    if (dims > 8) throw std::runtime_error(path + ": array '" + a.name + "' has too many dimensions");
+    if (dims > 8)
+      throw std::runtime_error(path + ": array '" + a.name + "' has too many dimensions");
     uint64_t elements = 1;
     for (uint64_t d = 0; d < dims; ++d) {
       const uint64_t extent = c.U64();

@@ -29,8 +29,8 @@ EvalProgress::~EvalProgress() {
 std::string EvalProgress::Line(int done, double seconds, const std::string& extra) const {
   const double per_view = seconds / std::max(1, done);
   char text[256];
-  std::snprintf(text, sizeof(text), "%s: view %d/%d, %.1f s/view, %.0f s left", label_.c_str(), done, total_,
-                per_view, per_view * std::max(0, total_ - done));
+  std::snprintf(text, sizeof(text), "%s: view %d/%d, %.1f s/view, %.0f s left", label_.c_str(),
+                done, total_, per_view, per_view * std::max(0, total_ - done));
   return extra.empty() ? std::string(text) : std::string(text) + ", " + extra;
 }
 
@@ -40,7 +40,9 @@ void EvalProgress::ViewDone(const std::string& extra) {
   const double seconds = std::chrono::duration<double>(now - start_).count();
   if (seconds < quiet_seconds_) return;
   const bool last = done_ >= total_;
-  if (!terminal_ && !last && printed_ && std::chrono::duration<double>(now - last_print_).count() < 10.0) return;
+  if (!terminal_ && !last && printed_ &&
+      std::chrono::duration<double>(now - last_print_).count() < 10.0)
+    return;
   const std::string line = Line(done_, seconds, extra);
   std::fprintf(stderr, terminal_ ? "\r%s\033[K" : "%s\n", line.c_str());
   std::fflush(stderr);

@@ -2,8 +2,8 @@
 // configuration that rebuilds the model, written and read with their sanity checks.
 #include <algorithm>
 #include <cmath>
-#include <nlohmann/json.hpp>
 #include <new>
+#include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -17,15 +17,15 @@ namespace ecrf {
 namespace trainer {
 
 void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int iteration,
-                         const TrainOptions& o, const RateState* rate, const Checkpoint* train_state,
-                         const TrainOptions* config) {
+                         const TrainOptions& o, const RateState* rate,
+                         const Checkpoint* train_state, const TrainOptions* config) {
   Checkpoint ck;
   nlohmann::json j;
   j["format"] = "ecrf-checkpoint-1";
   j["iteration"] = iteration;
   j["preset"] = o.preset;
   j["iters"] = o.iters;
-  j["lambda_e"] = o.lambda_e;  // the live value under rate control
+  j["lambda_e"] = o.lambda_e;                // the live value under rate control
   j["rounding_offset"] = o.rounding_offset;  // the quantizer the run trained through
   j["res"] = model.res();
   j["aabb_min"] = model.aabb().min;
@@ -34,18 +34,26 @@ void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int itera
   j["density_rank"] = model.config().density_ranks;
   j["appearance_rank"] = model.config().app_ranks;
   const TensorfConfig& c = model.config();
-  j["render"] = {{"near", c.near}, {"far", c.far}, {"white_background", c.white_background},
-                 {"density_shift", c.density_shift}, {"distance_scale", c.distance_scale},
-                 {"step_ratio", c.step_ratio}, {"weight_threshold", c.weight_threshold},
-                 {"scene_model", static_cast<int>(c.scene_model)}, {"roi_min", c.roi.min},
+  j["render"] = {{"near", c.near},
+                 {"far", c.far},
+                 {"white_background", c.white_background},
+                 {"density_shift", c.density_shift},
+                 {"distance_scale", c.distance_scale},
+                 {"step_ratio", c.step_ratio},
+                 {"weight_threshold", c.weight_threshold},
+                 {"scene_model", static_cast<int>(c.scene_model)},
+                 {"roi_min", c.roi.min},
                  {"roi_max", c.roi.max}};
   if (c.scene_model == SceneModel::kForward) {
-    j["render"]["ndc_world_to_ref"] = std::vector<float>(c.ndc.world_to_ref, c.ndc.world_to_ref + 12);
+    j["render"]["ndc_world_to_ref"] =
+        std::vector<float>(c.ndc.world_to_ref, c.ndc.world_to_ref + 12);
     j["render"]["ndc_scale"] = std::vector<float>(c.ndc.scale, c.ndc.scale + 2);
     j["render"]["ndc_near_plane"] = c.ndc.near_plane;
   }
-  j["head"] = {{"feature_dim", c.head.feature_dim}, {"feature_pe_freqs", c.head.feature_pe_freqs},
-               {"viewdir_pe_freqs", c.head.viewdir_pe_freqs}, {"hidden", c.head.hidden}};
+  j["head"] = {{"feature_dim", c.head.feature_dim},
+               {"feature_pe_freqs", c.head.feature_pe_freqs},
+               {"viewdir_pe_freqs", c.head.viewdir_pe_freqs},
+               {"hidden", c.head.hidden}};
   if (const AlphaMask* mask = model.alpha_mask()) {
     j["mask_res"] = mask->res();
     j["mask_aabb_min"] = mask->aabb().min;
@@ -55,14 +63,17 @@ void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int itera
     ck.arrays.push_back(std::move(occ));
   }
   // The block shapes of the run, so that `ecrf encode` codes with the blocks training used.
-  j["plane_block"] = rate && rate->active ? std::vector<int>(rate->config.plane_block, rate->config.plane_block + 3)
-                                          : std::vector<int>(o.plane_block, o.plane_block + 3);
-  j["line_block"] = rate && rate->active ? std::vector<int>(rate->config.line_block, rate->config.line_block + 3)
-                                         : std::vector<int>(o.line_block, o.line_block + 3);
+  j["plane_block"] = rate && rate->active
+                         ? std::vector<int>(rate->config.plane_block, rate->config.plane_block + 3)
+                         : std::vector<int>(o.plane_block, o.plane_block + 3);
+  j["line_block"] = rate && rate->active
+                        ? std::vector<int>(rate->config.line_block, rate->config.line_block + 3)
+                        : std::vector<int>(o.line_block, o.line_block + 3);
   if (rate && rate->active) {
     j["rate_active"] = true;
     ck.arrays.push_back({"rate.steps", {int64_t(rate->steps.size())}, rate->steps});
-    ck.arrays.push_back({"rate.entropy_model", {int64_t(rate->entropy.params().size())}, rate->entropy.params()});
+    ck.arrays.push_back(
+        {"rate.entropy_model", {int64_t(rate->entropy.params().size())}, rate->entropy.params()});
   }
   if (config) j["config"] = nlohmann::json::parse(TrainConfigToJson(*config, -1));
   if (train_state) {
@@ -81,7 +92,8 @@ namespace {
 // Far above any preset (the paper's final grid is 300^3).
 constexpr int kMaxCheckpointRes = 4096;
 
-int LoadModelCheckpointOrThrow(const std::string& path, TensorfModel* model, RateState* rate, Checkpoint* whole) {
+int LoadModelCheckpointOrThrow(const std::string& path, TensorfModel* model, RateState* rate,
+                               Checkpoint* whole) {
   Checkpoint ck = ReadCheckpoint(path);
   nlohmann::json j;
   try {
@@ -93,8 +105,8 @@ int LoadModelCheckpointOrThrow(const std::string& path, TensorfModel* model, Rat
     // Checked before the grids are allocated from them (a damaged resolution would ask for GBs).
     for (int r : res) {
       if (r < 1 || r > kMaxCheckpointRes) {
-        throw std::runtime_error(path + ": checkpoint grid resolution " + std::to_string(r) + " outside [1, " +
-                                 std::to_string(kMaxCheckpointRes) + "]");
+        throw std::runtime_error(path + ": checkpoint grid resolution " + std::to_string(r) +
+                                 " outside [1, " + std::to_string(kMaxCheckpointRes) + "]");
       }
     }
     // Every plane is stored in the file, so its values bound the resolution: a damaged field
@@ -103,7 +115,8 @@ int LoadModelCheckpointOrThrow(const std::string& path, TensorfModel* model, Rat
     for (const CheckpointArray& a : ck.arrays) stored += a.data.size();
     for (int a = 0; a < 3; ++a) {
       if (size_t(res[a]) * size_t(res[(a + 1) % 3]) > stored) {
-        throw std::runtime_error(path + ": checkpoint grid resolution is larger than the values it stores");
+        throw std::runtime_error(
+            path + ": checkpoint grid resolution is larger than the values it stores");
       }
     }
     for (int a = 0; a < 3; ++a) {
@@ -120,11 +133,13 @@ int LoadModelCheckpointOrThrow(const std::string& path, TensorfModel* model, Rat
     const CheckpointArray* src = ck.Find(a.name);
     if (!src) throw std::runtime_error(path + ": checkpoint lacks array '" + a.name + "'");
     if (src->data.size() != a.size) {
-      throw std::runtime_error(path + ": array '" + a.name + "' has " + std::to_string(src->data.size()) +
-                               " values, the model expects " + std::to_string(a.size));
+      throw std::runtime_error(path + ": array '" + a.name + "' has " +
+                               std::to_string(src->data.size()) + " values, the model expects " +
+                               std::to_string(a.size));
     }
     for (float x : src->data) {
-      if (!std::isfinite(x)) throw std::runtime_error(path + ": array '" + a.name + "' holds a non-finite value");
+      if (!std::isfinite(x))
+        throw std::runtime_error(path + ": array '" + a.name + "' holds a non-finite value");
     }
     std::copy(src->data.begin(), src->data.end(), a.data);
   }
@@ -154,8 +169,8 @@ int LoadModelCheckpointOrThrow(const std::string& path, TensorfModel* model, Rat
     if (!steps || !params) throw std::runtime_error(path + ": checkpoint lacks the rate state");
     for (float step : steps->data) {
       if (!(step > 0.f) || !std::isfinite(step)) {
-        throw std::runtime_error(path + ": checkpoint holds a quantization step of " + std::to_string(step) +
-                                 " (steps are positive and finite)");
+        throw std::runtime_error(path + ": checkpoint holds a quantization step of " +
+                                 std::to_string(step) + " (steps are positive and finite)");
       }
     }
     rate->steps = steps->data;
@@ -180,7 +195,8 @@ int LoadModelCheckpointOrThrow(const std::string& path, TensorfModel* model, Rat
 
 }  // namespace
 
-int LoadModelCheckpoint(const std::string& path, TensorfModel* model, RateState* rate, Checkpoint* whole) {
+int LoadModelCheckpoint(const std::string& path, TensorfModel* model, RateState* rate,
+                        Checkpoint* whole) {
   try {
     return LoadModelCheckpointOrThrow(path, model, rate, whole);
   } catch (const std::invalid_argument& e) {  // the model's own checks do not know the file
@@ -188,7 +204,8 @@ int LoadModelCheckpoint(const std::string& path, TensorfModel* model, RateState*
   } catch (const std::length_error& e) {
     throw std::runtime_error(path + ": checkpoint does not describe a valid model: " + e.what());
   } catch (const std::bad_alloc&) {
-    throw std::runtime_error(path + ": checkpoint describes a model too large for this machine's memory");
+    throw std::runtime_error(path +
+                             ": checkpoint describes a model too large for this machine's memory");
   }
 }
 
@@ -209,25 +226,29 @@ TensorfModel LoadModelFromCheckpoint(const std::string& path, RateState* rate) {
     c.weight_threshold = render.value("weight_threshold", c.weight_threshold);
     const int scene_model = render.value("scene_model", 0);
     if (scene_model < 0 || scene_model >= kNumSceneModels) {
-      throw std::runtime_error(path + ": checkpoint has unknown scene model " + std::to_string(scene_model));
+      throw std::runtime_error(path + ": checkpoint has unknown scene model " +
+                               std::to_string(scene_model));
     }
     c.scene_model = static_cast<SceneModel>(scene_model);
     c.roi.min = render.value("roi_min", c.roi.min);
     c.roi.max = render.value("roi_max", c.roi.max);
     for (int a = 0; a < 3; ++a) {
-      if (!std::isfinite(c.roi.min[a]) || !std::isfinite(c.roi.max[a]) || !(c.roi.min[a] < c.roi.max[a])) {
+      if (!std::isfinite(c.roi.min[a]) || !std::isfinite(c.roi.max[a]) ||
+          !(c.roi.min[a] < c.roi.max[a])) {
         throw std::runtime_error(path + ": checkpoint region of interest is empty or not finite");
       }
     }
     if (c.scene_model == SceneModel::kForward) {
       const std::vector<float> m = render.at("ndc_world_to_ref").get<std::vector<float>>();
       const std::vector<float> scale = render.at("ndc_scale").get<std::vector<float>>();
-      if (m.size() != 12 || scale.size() != 2) throw std::runtime_error(path + ": checkpoint NDC frame has the wrong shape");
+      if (m.size() != 12 || scale.size() != 2)
+        throw std::runtime_error(path + ": checkpoint NDC frame has the wrong shape");
       std::copy(m.begin(), m.end(), c.ndc.world_to_ref);
       std::copy(scale.begin(), scale.end(), c.ndc.scale);
       c.ndc.near_plane = render.at("ndc_near_plane").get<float>();
       bool ok = std::all_of(m.begin(), m.end(), [](float v) { return std::isfinite(v); });
-      for (float v : {c.ndc.scale[0], c.ndc.scale[1], c.ndc.near_plane}) ok = ok && std::isfinite(v) && v > 0.f;
+      for (float v : {c.ndc.scale[0], c.ndc.scale[1], c.ndc.near_plane})
+        ok = ok && std::isfinite(v) && v > 0.f;
       if (!ok) throw std::runtime_error(path + ": checkpoint NDC frame is not finite and positive");
     }
     const nlohmann::json head = j.value("head", nlohmann::json::object());

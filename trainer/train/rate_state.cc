@@ -28,8 +28,9 @@ void RateState::Activate(const TensorfModel& model, const TrainOptions& o) {
 
 double RateState::Step(TensorfModel& model, const TrainOptions& o, uint64_t seed) {
   entropy.ZeroGrads();
-  const RateEstimate e = AddRateGradients({&model.density(), &model.appearance()}, steps, config,
-                                          &entropy, o.lambda_e, o.alpha * o.lambda_e, o.rate_fraction, seed);
+  const RateEstimate e =
+      AddRateGradients({&model.density(), &model.appearance()}, steps, config, &entropy, o.lambda_e,
+                       o.alpha * o.lambda_e, o.rate_fraction, seed);
   adam.Step(entropy.params().data(), entropy.grads().data(), entropy.params().size(), o.entropy_lr);
   last_bits = e.bits;
   last_regularizer = e.regularizer;

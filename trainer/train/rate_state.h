@@ -6,11 +6,11 @@
 
 #include <vector>
 
-#include "trainer/train/adam.h"
-#include "trainer/rate/entropy_model.h"
 #include "encoder/coded_tensors.h"
-#include "trainer/rate/rate_objective.h"
 #include "trainer/model/tensorf_model.h"
+#include "trainer/rate/entropy_model.h"
+#include "trainer/rate/rate_objective.h"
+#include "trainer/train/adam.h"
 #include "trainer/train/train_options.h"
 
 namespace ecrf {
@@ -26,7 +26,7 @@ struct RateState {
   float checkpoint_lambda_e = 0.f;
   // The coefficient quantizer's rounding offset a checkpointed run trained through.
   float rounding_offset = 0.5f;
-  double last_bits = 0.0;         // latest unbiased estimate (bits)
+  double last_bits = 0.0;  // latest unbiased estimate (bits)
   double last_regularizer = 0.0;
 
   // Applies the options' block shapes; does not activate.

@@ -94,7 +94,9 @@ struct Writer {
   void operator()(const char* key, float& v) const { (*out)[key] = FloatJson(v); }
   void operator()(const char* key, int (&v)[3]) const { (*out)[key] = {v[0], v[1], v[2]}; }
   template <class T>
-  void operator()(const char* key, T& v) const { (*out)[key] = v; }
+  void operator()(const char* key, T& v) const {
+    (*out)[key] = v;
+  }
 };
 
 struct Reader {
@@ -113,11 +115,14 @@ struct Reader {
     std::vector<int> shape;
     Read(key, &shape);
     if (!in->contains(key)) return;
-    if (shape.size() != 3) throw std::runtime_error(*where + ": config field '" + key + "' is not 3 integers");
+    if (shape.size() != 3)
+      throw std::runtime_error(*where + ": config field '" + key + "' is not 3 integers");
     for (int k = 0; k < 3; ++k) v[k] = shape[size_t(k)];
   }
   template <class T>
-  void operator()(const char* key, T& v) const { Read(key, &v); }
+  void operator()(const char* key, T& v) const {
+    Read(key, &v);
+  }
 };
 
 Json ToJson(const TrainOptions& options) {
@@ -125,12 +130,16 @@ Json ToJson(const TrainOptions& options) {
   Json settings = Json::object(), bookkeeping = Json::object();
   VisitSettings(o, Writer{&settings});
   VisitBookkeeping(o, Writer{&bookkeeping});
-  return Json{{"config_version", kTrainConfigVersion}, {"settings", settings}, {"bookkeeping", bookkeeping}};
+  return Json{{"config_version", kTrainConfigVersion},
+              {"settings", settings},
+              {"bookkeeping", bookkeeping}};
 }
 
 }  // namespace
 
-std::string TrainConfigToJson(const TrainOptions& options, int indent) { return ToJson(options).dump(indent); }
+std::string TrainConfigToJson(const TrainOptions& options, int indent) {
+  return ToJson(options).dump(indent);
+}
 
 TrainOptions TrainConfigFromJson(const std::string& text, const std::string& where) {
   Json j;
@@ -144,7 +153,8 @@ TrainOptions TrainConfigFromJson(const std::string& text, const std::string& whe
   }
   const int version = j.value("config_version", 0);
   if (version > kTrainConfigVersion) {
-    throw std::runtime_error(where + ": config_version " + std::to_string(version) + " is newer than this ecrf reads (" +
+    throw std::runtime_error(where + ": config_version " + std::to_string(version) +
+                             " is newer than this ecrf reads (" +
                              std::to_string(kTrainConfigVersion) + ")");
   }
   const Json& settings = j["settings"];

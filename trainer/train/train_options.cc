@@ -68,7 +68,8 @@ constexpr int kLowRateMaxAppearanceRank = 32;
 void ApplyFineGridSchedule(TrainOptions* o) {
   if (!o->fine_grid_at_rate_points) return;
   constexpr double kGridScale = 11.0 / 9.0;
-  o->voxels_final = long(std::lround(double(o->voxels_final) * kGridScale * kGridScale * kGridScale));
+  o->voxels_final =
+      long(std::lround(double(o->voxels_final) * kGridScale * kGridScale * kGridScale));
   for (int& at : o->upsample_iters) at = std::max(1, int(std::lround(at * 2.0 / 3.0)));
   o->rate_start = 0.0f;  // right after the last upsampling and mask update
 }
@@ -106,7 +107,8 @@ void ApplyRatePoint(const std::string& name, TrainOptions* o) {
     o->lambda_e = 2e-11f;
     o->quant_step_scale = 1.0f;
   } else {
-    throw std::invalid_argument("unknown rate point '" + name + "' (expected low, medium, high or none)");
+    throw std::invalid_argument("unknown rate point '" + name +
+                                "' (expected low, medium, high or none)");
   }
   o->rate_point = name;
 }
@@ -135,7 +137,8 @@ int ScaleMilestone(int milestone, int iters, int reference_iters) {
   return int(std::lround(double(milestone) * iters / reference_iters));
 }
 
-long ResolutionForVoxels(long voxels, const double aabb_min[3], const double aabb_max[3], int res[3]) {
+long ResolutionForVoxels(long voxels, const double aabb_min[3], const double aabb_max[3],
+                         int res[3]) {
   // TensoRF N_to_reso: cubic voxels of the size that gives `voxels` cells in the box.
   double volume = 1.0;
   for (int a = 0; a < 3; ++a) volume *= aabb_max[a] - aabb_min[a];
@@ -154,8 +157,8 @@ std::vector<long> UpsampleVoxelCounts(const TrainOptions& o) {
   const int n = int(o.upsample_iters.size());
   for (int i = 1; i <= n; ++i) {
     const double t = double(i) / n;
-    counts.push_back(
-        long(std::round(std::exp(std::log(double(o.voxels_init)) * (1 - t) + std::log(double(o.voxels_final)) * t))));
+    counts.push_back(long(std::round(std::exp(std::log(double(o.voxels_init)) * (1 - t) +
+                                              std::log(double(o.voxels_final)) * t))));
   }
   return counts;
 }

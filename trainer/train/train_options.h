@@ -27,8 +27,9 @@ struct TrainOptions {
   // below are what the run uses.
   std::string rate_point = "none";
   // Data.
-  std::string data_dir;        // NeRF Blender or Instant-NGP/nerfstudio layout
-  std::string procedural_scene;  // "builtin" (Blender-like), "capture" or "forward" instead of data_dir; "" = data_dir
+  std::string data_dir;          // NeRF Blender or Instant-NGP/nerfstudio layout
+  std::string procedural_scene;  // "builtin" (Blender-like), "capture" or "forward" instead of
+                                 // data_dir; "" = data_dir
   // "auto" (from the camera layout, trainer/data/scene_fit.h), "object" or "unbounded".
   std::string scene_type = "auto";
   int downscale = 1;
@@ -46,7 +47,7 @@ struct TrainOptions {
   float lr_network = 1e-3f;
   float lr_decay_ratio = 0.1f;  // learning rates fall to this fraction over the run
   float l1_weight_initial = 8e-5f;
-  float l1_weight_rest = 4e-5f;  // after the first alpha-mask update
+  float l1_weight_rest = 4e-5f;       // after the first alpha-mask update
   int max_samples_per_ray = 1000000;  // cap on TensoRF's n_samples (1e6 = no cap)
   // Whether the low and medium rate points train a finer grid reached sooner (ApplyRatePoint).
   // Measured on `fast` only: on chair it gains 0.3-0.5 dB at equal size. `tiny` keeps its
@@ -55,7 +56,7 @@ struct TrainOptions {
   bool fine_grid_at_rate_points = false;
 
   // Model.
-  int density_rank = 16;    // per mode
+  int density_rank = 16;     // per mode
   int appearance_rank = 48;  // per mode
   int mlp_hidden = 128;      // width of the appearance MLP's two hidden layers (TensoRF: 128)
 
@@ -68,8 +69,8 @@ struct TrainOptions {
   int line_block[3] = {1, 8, 8};      // 1 x channel x L
   float rate_fraction = 0.1f;         // share of DCT blocks in each step's unbiased rate estimate
   float rate_start = 16000.0f / 30000.0f;  // share of the run after which the rate terms switch on
-  float entropy_lr = 5e-3f;           // Adam rate of the entropy-model parameters
-  int coef_bits = 8;                  // quantization depth the steps are chosen for
+  float entropy_lr = 5e-3f;                // Adam rate of the entropy-model parameters
+  int coef_bits = 8;                       // quantization depth the steps are chosen for
   // Each tensor's step is its largest block-DCT coefficient / the largest level (127 for 8
   // bits), times this factor, frozen when the rate terms switch on.
   float quant_step_scale = 1.0f;
@@ -88,8 +89,8 @@ struct TrainOptions {
   // halves MLPW.
   int mlp_levels = 127;
   // > 0: lambda_e adapts during the rate phase so that the file lands at this size
-  // (trainer/rate/train_rate_control.h), re-measured by encoding every rate_control_every iterations;
-  // lambda_e, when given, is the starting value.
+  // (trainer/rate/train_rate_control.h), re-measured by encoding every rate_control_every
+  // iterations; lambda_e, when given, is the starting value.
   size_t target_bytes = 0;
   int rate_control_every = 100;
 
@@ -108,15 +109,17 @@ struct TrainOptions {
   // scored; the float model costs about as much again (chair-400, 2 cores: 1.0 s a view, the
   // decoded file 0.9 s).
   bool score_float = false;
-  int eval_downscale = 1;    // test views scored at 1/N of their size (area filter, cameras scaled)
+  int eval_downscale = 1;  // test views scored at 1/N of their size (area filter, cameras scaled)
   bool save_renders = false;
   int progress_every = 50;
-  int eval_every = 0;  // iterations between test evaluations for a PSNR-vs-time curve (0 = end only)
+  int eval_every =
+      0;  // iterations between test evaluations for a PSNR-vs-time curve (0 = end only)
 
   // The built-in scene's size (train views; test views are an orbit of 1/4 as many).
   int builtin_size = 64;
   int builtin_views = 60;
-  // The capture and forward scenes: frames of one hand-held loop or sweep, every 8th held out for test.
+  // The capture and forward scenes: frames of one hand-held loop or sweep, every 8th held out for
+  // test.
   int capture_width = 120;
   int capture_height = 90;
   int capture_frames = 64;
@@ -180,7 +183,8 @@ int ScaleMilestone(int milestone, int iters, int reference_iters);
 
 // Grid resolutions after each upsample: voxel counts spaced evenly in log space from
 // voxels_init to voxels_final (TensoRF's N_voxel_list), turned into per-axis sizes for the box.
-long ResolutionForVoxels(long voxels, const double aabb_min[3], const double aabb_max[3], int res[3]);
+long ResolutionForVoxels(long voxels, const double aabb_min[3], const double aabb_max[3],
+                         int res[3]);
 std::vector<long> UpsampleVoxelCounts(const TrainOptions& options);
 
 }  // namespace trainer

@@ -9,17 +9,20 @@ namespace trainer {
 namespace {
 
 void SaveAdam(const std::string& name, const Adam& adam, Checkpoint* ck, nlohmann::json* j) {
-  ck->arrays.push_back({"adam." + name + ".m", {int64_t(adam.first_moment().size())}, adam.first_moment()});
-  ck->arrays.push_back({"adam." + name + ".v", {int64_t(adam.second_moment().size())}, adam.second_moment()});
+  ck->arrays.push_back(
+      {"adam." + name + ".m", {int64_t(adam.first_moment().size())}, adam.first_moment()});
+  ck->arrays.push_back(
+      {"adam." + name + ".v", {int64_t(adam.second_moment().size())}, adam.second_moment()});
   (*j)["adam_steps"][name] = adam.step_count();
 }
 
-void LoadAdam(const std::string& name, const Checkpoint& ck, const nlohmann::json& j, const std::string& path,
-              size_t size, Adam* adam) {
+void LoadAdam(const std::string& name, const Checkpoint& ck, const nlohmann::json& j,
+              const std::string& path, size_t size, Adam* adam) {
   const CheckpointArray* m = ck.Find("adam." + name + ".m");
   const CheckpointArray* v = ck.Find("adam." + name + ".v");
   if (!m || !v || m->data.size() != size || v->data.size() != size) {
-    throw std::runtime_error(path + ": training state: optimizer '" + name + "' is missing or of the wrong size");
+    throw std::runtime_error(path + ": training state: optimizer '" + name +
+                             "' is missing or of the wrong size");
   }
   adam->Reset(size);
   adam->first_moment() = m->data;
@@ -38,9 +41,10 @@ void Optimizers::Reset(TensorfModel& m) {
 
 void Optimizers::Step(TensorfModel& m, const TrainOptions& o) {
   const float lr_grid = o.lr_grid * lr_scale, lr_net = o.lr_network * lr_scale;
-  density.Step(m.density().params().data(), m.density().grads().data(), m.density().params().size(), lr_grid);
-  appearance.Step(m.appearance().params().data(), m.appearance().grads().data(), m.appearance().params().size(),
-                  lr_grid);
+  density.Step(m.density().params().data(), m.density().grads().data(), m.density().params().size(),
+               lr_grid);
+  appearance.Step(m.appearance().params().data(), m.appearance().grads().data(),
+                  m.appearance().params().size(), lr_grid);
   head.Step(m.head().params().data(), m.head().grads().data(), m.head().params().size(), lr_net);
 }
 
@@ -71,8 +75,8 @@ Checkpoint SaveTrainState(const Optimizers& opt, const RateState& rate, const Ra
   return ck;
 }
 
-bool LoadTrainState(const Checkpoint& ck, const std::string& path, Optimizers* opt, RateState* rate, RaySet* rays,
-                    TrainProgress* progress) {
+bool LoadTrainState(const Checkpoint& ck, const std::string& path, Optimizers* opt, RateState* rate,
+                    RaySet* rays, TrainProgress* progress) {
   nlohmann::json all;
   try {
     all = nlohmann::json::parse(ck.json);
@@ -92,11 +96,13 @@ bool LoadTrainState(const Checkpoint& ck, const std::string& path, Optimizers* o
     progress->psnr_curve = j.at("psnr_curve").get<std::vector<std::pair<double, double>>>();
     std::istringstream rng(j.at("rng").get<std::string>());
     rng >> progress->rng;
-    if (rng.fail()) throw std::runtime_error(path + ": training state: damaged random generator state");
+    if (rng.fail())
+      throw std::runtime_error(path + ": training state: damaged random generator state");
     const CheckpointArray* keep = ck.Find("rays.keep16");
     if (!keep) throw std::runtime_error(path + ": training state: the kept-ray set is missing");
     try {
-      rays->RestoreState(keep->data, j.at("rays_shuffle_rng").get<std::string>(), j.at("rays_cursor").get<uint64_t>());
+      rays->RestoreState(keep->data, j.at("rays_shuffle_rng").get<std::string>(),
+                         j.at("rays_cursor").get<uint64_t>());
     } catch (const std::runtime_error& e) {
       throw std::runtime_error(path + ": " + e.what());
     }

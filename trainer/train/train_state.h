@@ -10,11 +10,11 @@
 #include <utility>
 #include <vector>
 
+#include "trainer/data/ray_set.h"
+#include "trainer/model/tensorf_model.h"
 #include "trainer/train/adam.h"
 #include "trainer/train/checkpoint.h"
-#include "trainer/data/ray_set.h"
 #include "trainer/train/rate_state.h"
-#include "trainer/model/tensorf_model.h"
 #include "trainer/train/train_options.h"
 
 namespace ecrf {
@@ -42,8 +42,8 @@ Checkpoint SaveTrainState(const Optimizers& opt, const RateState& rate, const Ra
 // Restores what SaveTrainState wrote from a whole checkpoint (`path` for errors). Returns false
 // when the checkpoint has no training state (written before ecrf saved it): the caller then
 // resumes approximately, as it used to.
-bool LoadTrainState(const Checkpoint& checkpoint, const std::string& path, Optimizers* opt, RateState* rate,
-                    RaySet* rays, TrainProgress* progress);
+bool LoadTrainState(const Checkpoint& checkpoint, const std::string& path, Optimizers* opt,
+                    RateState* rate, RaySet* rays, TrainProgress* progress);
 
 }  // namespace trainer
 }  // namespace ecrf

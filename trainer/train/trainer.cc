@@ -13,19 +13,19 @@
 #include <stdexcept>
 
 #include "decoder/contraction.h"
-#include "trainer/train/adam.h"
+#include "trainer/data/camera.h"
+#include "trainer/data/image_metrics.h"
+#include "trainer/data/ray_set.h"
+#include "trainer/model/volume_render.h"
+#include "trainer/rate/quant_aware.h"
+#include "trainer/rate/train_rate_control.h"
 #include "trainer/scenes/builtin_scene.h"
 #include "trainer/scenes/capture_scene.h"
-#include "trainer/data/camera.h"
+#include "trainer/scenes/forward_scene.h"
+#include "trainer/train/adam.h"
 #include "trainer/train/checkpoint.h"
 #include "trainer/train/eval_progress.h"
-#include "trainer/scenes/forward_scene.h"
-#include "trainer/data/image_metrics.h"
-#include "trainer/rate/quant_aware.h"
-#include "trainer/data/ray_set.h"
-#include "trainer/rate/train_rate_control.h"
 #include "trainer/train/train_state.h"
-#include "trainer/model/volume_render.h"
 
 namespace ecrf {
 namespace trainer {
@@ -86,11 +86,13 @@ Dataset LoadTrainingViews(const TrainOptions& o, const std::string& split) {
     return MakeForwardScene(split, o.capture_width, o.capture_height, o.capture_frames, o.seed);
   }
   if (!o.procedural_scene.empty()) {
-    if (o.procedural_scene != "builtin") throw std::invalid_argument("unknown scene '" + o.procedural_scene + "'");
+    if (o.procedural_scene != "builtin")
+      throw std::invalid_argument("unknown scene '" + o.procedural_scene + "'");
     const int views = split == "train" ? o.builtin_views : std::max(4, o.builtin_views / 4);
     return MakeBuiltinScene(split, o.builtin_size, o.builtin_size, views, o.seed);
   }
-  if (o.data_dir.empty()) throw std::invalid_argument("no data: give --data DIR or --scene builtin");
+  if (o.data_dir.empty())
+    throw std::invalid_argument("no data: give --data DIR or --scene builtin");
   return LoadDataset(o.data_dir, split, o.downscale);
 }
 
@@ -117,7 +119,7 @@ TensorfConfig ConfigFor(const TrainOptions& o, const Dataset& data, const SceneF
     c.ndc = fit.ndc;
     c.aabb = fit.roi;  // the NDC box
     c.near = 0.f;      // rays start on the near plane (NDC z = -1)
-    c.far = 10.f;      // past the far side of any NDC box of cameras narrower than about 160 degrees
+    c.far = 10.f;  // past the far side of any NDC box of cameras narrower than about 160 degrees
   }
   if (fit.model == SceneModel::kUnbounded) {
     c.roi = fit.roi;
@@ -141,7 +143,8 @@ Image RenderView(const TensorfModel& model, const Camera& camera) {
     const int rows = std::min(rows_per_chunk, camera.height - y0);
     const int n = rows * camera.width;
     GenerateRowRays(camera, y0, rows, &origins, &dirs);
-    RenderRays(model, n, origins.data(), dirs.data(), &img.pixels[size_t(y0) * camera.width * 3], nullptr);
+    RenderRays(model, n, origins.data(), dirs.data(), &img.pixels[size_t(y0) * camera.width * 3],
+               nullptr);
   }
   return img;
 }
@@ -151,7 +154,8 @@ EvalResult Evaluate(const TensorfModel& model, const Dataset& test, int stride, 
   EvalResult r;
   const auto start = Clock::now();
   stride = std::max(1, stride);
-  EvalProgress progress("evaluating the float model", EvalViewCount(test.views.size(), stride, max_views));
+  EvalProgress progress("evaluating the float model",
+                        EvalViewCount(test.views.size(), stride, max_views));
   for (size_t v = 0; v < test.views.size(); v += size_t(stride)) {
     if (max_views > 0 && r.views >= max_views) break;
     Image img = RenderView(model, test.views[v].camera);
@@ -180,29 +184,34 @@ bool AllFinite(const std::vector<float>& v) {
   return sum == 0.0f;
 }
 
-[[noreturn]] void FailDiverged(int iteration, const std::string& what, const std::string& ckpt_path) {
+[[noreturn]] void FailDiverged(int iteration, const std::string& what,
+                               const std::string& ckpt_path) {
   std::string keep = ckpt_path.empty() ? std::string("no checkpoint was asked for")
                                        : (access(ckpt_path.c_str(), R_OK) == 0
                                               ? "the last good checkpoint stays in " + ckpt_path
                                               : "no checkpoint had been written yet");
-  throw std::runtime_error("training diverged at iteration " + std::to_string(iteration) + ": " + what +
-                           " (non-finite input pixels or poses, or a learning rate too high); " + keep +
-                           " and nothing else was written");
+  throw std::runtime_error("training diverged at iteration " + std::to_string(iteration) + ": " +
+                           what +
+                           " (non-finite input pixels or poses, or a learning rate too high); " +
+                           keep + " and nothing else was written");
 }
 
 void CheckModelFinite(const TensorfModel& model, int iteration, const std::string& ckpt_path) {
-  if (!AllFinite(model.density().params())) FailDiverged(iteration, "a density parameter is not finite", ckpt_path);
+  if (!AllFinite(model.density().params()))
+    FailDiverged(iteration, "a density parameter is not finite", ckpt_path);
   if (!AllFinite(model.appearance().params())) {
     FailDiverged(iteration, "an appearance parameter is not finite", ckpt_path);
   }
-  if (!AllFinite(model.head().params())) FailDiverged(iteration, "an MLP parameter is not finite", ckpt_path);
+  if (!AllFinite(model.head().params()))
+    FailDiverged(iteration, "an MLP parameter is not finite", ckpt_path);
 }
 
 }  // namespace
 
 int QatStartIteration(const TrainOptions& o) {
   if (o.qat_start < 0.0f) {
-    return o.lambda_e > 0.0f || o.target_bytes > 0 ? std::min(RateStartIteration(o), o.iters) : o.iters;
+    return o.lambda_e > 0.0f || o.target_bytes > 0 ? std::min(RateStartIteration(o), o.iters)
+                                                   : o.iters;
   }
   if (!(o.qat_start < 1.0f)) return o.iters;
   int start = int(std::lround(double(std::max(0.0f, o.qat_start)) * o.iters));
@@ -214,8 +223,10 @@ int QatStartIteration(const TrainOptions& o) {
 
 int RateStartIteration(const TrainOptions& o) {
   int start = int(std::lround(double(o.rate_start) * o.iters));
-  for (int m : o.upsample_iters) start = std::max(start, ScaleMilestone(m, o.iters, o.reference_iters) + 1);
-  for (int m : o.alpha_mask_iters) start = std::max(start, ScaleMilestone(m, o.iters, o.reference_iters) + 1);
+  for (int m : o.upsample_iters)
+    start = std::max(start, ScaleMilestone(m, o.iters, o.reference_iters) + 1);
+  for (int m : o.alpha_mask_iters)
+    start = std::max(start, ScaleMilestone(m, o.iters, o.reference_iters) + 1);
   return start;
 }
 
@@ -229,8 +240,8 @@ EncodeOptions RunEncodeOptions(const TrainOptions& o, const RateState& rate) {
   return eo;
 }
 
-TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& test, TensorfModel* model,
-                  RateState* rate_out) {
+TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& test,
+                  TensorfModel* model, RateState* rate_out) {
   TrainResult result;
   RateState local_rate;
   RateState& rate = rate_out ? *rate_out : local_rate;
@@ -246,14 +257,16 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
 
   // Milestones scaled to this run's length.
   std::vector<int> upsample_at, mask_at;
-  for (int m : o.upsample_iters) upsample_at.push_back(ScaleMilestone(m, o.iters, o.reference_iters));
+  for (int m : o.upsample_iters)
+    upsample_at.push_back(ScaleMilestone(m, o.iters, o.reference_iters));
   for (int m : o.alpha_mask_iters) mask_at.push_back(ScaleMilestone(m, o.iters, o.reference_iters));
   const std::vector<long> voxel_counts = UpsampleVoxelCounts(o);
 
   const std::string ckpt_path = o.out_dir.empty() ? std::string() : o.out_dir + "/checkpoint.ckpt";
   if (o.resume && (ckpt_path.empty() || access(ckpt_path.c_str(), R_OK) != 0)) {
-    throw std::runtime_error("resume: no checkpoint to resume from" +
-                             (ckpt_path.empty() ? std::string(" (no output directory)") : " at " + ckpt_path));
+    throw std::runtime_error(
+        "resume: no checkpoint to resume from" +
+        (ckpt_path.empty() ? std::string(" (no output directory)") : " at " + ckpt_path));
   }
   int first_iter = 0;
   Checkpoint resumed_from;
@@ -291,8 +304,10 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   if (o.resume && !exact_resume) {
     // A checkpoint from before ecrf saved the training state: continue approximately (fresh
     // optimizer moments and generator, the schedule position recomputed).
-    std::fprintf(stderr, "warning: %s has no training state (an older ecrf wrote it): the resumed run "
-                 "will not equal an uninterrupted one\n", ckpt_path.c_str());
+    std::fprintf(stderr,
+                 "warning: %s has no training state (an older ecrf wrote it): the resumed run "
+                 "will not equal an uninterrupted one\n",
+                 ckpt_path.c_str());
     for (int m : mask_at) {
       if (first_iter > m) progress.l1_weight = o.l1_weight_rest;
     }
@@ -328,9 +343,11 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
     rays.NextBatch(n, rng, origins.data(), dirs.data(), rgb.data());
     model->ZeroGrads();
     if (use_rate && it >= rate_start && !controller && o.target_bytes > 0) {
-      const size_t float_bytes = sizeof(float) * (model->density().params().size() +
-                                                  model->appearance().params().size() + model->head().params().size());
-      live.lambda_e = o.lambda_e > 0.f ? o.lambda_e : InitialLambdaForSize(o.target_bytes, float_bytes);
+      const size_t float_bytes =
+          sizeof(float) * (model->density().params().size() + model->appearance().params().size() +
+                           model->head().params().size());
+      live.lambda_e =
+          o.lambda_e > 0.f ? o.lambda_e : InitialLambdaForSize(o.target_bytes, float_bytes);
       controller = std::make_unique<LambdaController>(o.target_bytes, live.lambda_e);
     }
     if (use_rate && it >= rate_start && !rate.active) {
@@ -338,19 +355,23 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
       std::fprintf(stderr, "%srate objective on at iteration %d (lambda_e %g, alpha %g)\n",
                    isatty(2) ? "\n" : "", it, live.lambda_e, o.alpha);
     }
-    if (controller && rate.active && it > rate_start && (it - rate_start) % std::max(1, o.rate_control_every) == 0) {
+    if (controller && rate.active && it > rate_start &&
+        (it - rate_start) % std::max(1, o.rate_control_every) == 0) {
       const size_t bytes = EncodeScene(*model, RunEncodeOptions(o, rate)).size();
       const float before = live.lambda_e;
       live.lambda_e = controller->Update(bytes);
-      std::fprintf(stderr, "%srate control at iteration %d: file %zu bytes for a target of %zu, lambda_e %g -> %g\n",
-                   isatty(2) ? "\n" : "", it, bytes, o.target_bytes, before, live.lambda_e);
+      std::fprintf(
+          stderr,
+          "%srate control at iteration %d: file %zu bytes for a target of %zu, lambda_e %g -> %g\n",
+          isatty(2) ? "\n" : "", it, bytes, o.target_bytes, before, live.lambda_e);
     }
     const bool quant_aware = it >= qat_start;
     if (quant_aware) {
       if (!rate.active) rate.Activate(*model, o);  // freezes the steps (lambda_e = 0 runs)
       if ((it - qat_start) % std::max(1, o.qat_refresh) == 0 || !qat.fresh_for(*model)) {
         if (it == qat_start) {
-          std::fprintf(stderr, "%squantization-aware training from iteration %d\n", isatty(2) ? "\n" : "", it);
+          std::fprintf(stderr, "%squantization-aware training from iteration %d\n",
+                       isatty(2) ? "\n" : "", it);
         }
         qat.Refresh(*model, rate.steps, rate.config, o.mlp_levels, o.rounding_offset);
       }
@@ -361,7 +382,8 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
     // One NaN reaches every parameter within a few steps, and Adam never washes it out: stop
     // before it is applied. The head's gradient is small and sees every ray.
     if (!std::isfinite(stats.mse)) FailDiverged(it, "the loss is not finite", ckpt_path);
-    if (!AllFinite(model->head().grads())) FailDiverged(it, "a gradient of the appearance MLP is not finite", ckpt_path);
+    if (!AllFinite(model->head().grads()))
+      FailDiverged(it, "a gradient of the appearance MLP is not finite", ckpt_path);
     if (l1_weight > 0) model->DensityL1(l1_weight);
     if (rate.active && use_rate) rate.Step(*model, live, rng());
     opt.Step(*model, o);
@@ -400,12 +422,16 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
             },
             size_t(o.batch_rays));
         if (filtered) {
-          std::fprintf(stderr, "\nfiltered training rays: %zu of %zu remain\n", rays.size(), rays.total());
+          std::fprintf(stderr, "\nfiltered training rays: %zu of %zu remain\n", rays.size(),
+                       rays.total());
         } else {
           // An empty alpha mask this early means the density has not formed yet (a very short
           // run scales the mask updates down with it); filtering would leave nothing to train on.
-          std::fprintf(stderr, "\nray filtering skipped at iteration %d: the alpha mask keeps fewer rays than one "
-                       "batch (the model has too little density yet; more --iters give it time)\n", it);
+          std::fprintf(
+              stderr,
+              "\nray filtering skipped at iteration %d: the alpha mask keeps fewer rays than one "
+              "batch (the model has too little density yet; more --iters give it time)\n",
+              it);
         }
       }
     }
@@ -417,18 +443,21 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
 
     if (o.eval_every > 0 && done % o.eval_every == 0 && done < o.iters) {
       const auto eval_start = Clock::now();
-      const EvalResult e = Evaluate(*model, test, ScoredTestViewStride(o, test.views.size()), o.max_test_views, false);
+      const EvalResult e = Evaluate(*model, test, ScoredTestViewStride(o, test.views.size()),
+                                    o.max_test_views, false);
       eval_seconds += Seconds(eval_start);
       result.psnr_curve.emplace_back(train_seconds() / 60.0, e.psnr);
-      std::fprintf(stderr, "%s  test psnr %.2f dB at %.1f min (training time)\n", isatty(2) ? "\n" : "",
-                   e.psnr, result.psnr_curve.back().first);
+      std::fprintf(stderr, "%s  test psnr %.2f dB at %.1f min (training time)\n",
+                   isatty(2) ? "\n" : "", e.psnr, result.psnr_curve.back().first);
     }
-    if (!ckpt_path.empty() && o.checkpoint_every > 0 && done % o.checkpoint_every == 0 && done < o.iters) {
+    if (!ckpt_path.empty() && o.checkpoint_every > 0 && done % o.checkpoint_every == 0 &&
+        done < o.iters) {
       CheckModelFinite(*model, it, ckpt_path);
       save_checkpoint(done, train_seconds());
     }
     if (o.stop_after > 0 && done == o.stop_after && done < o.iters) {
-      throw TrainingStopped("training stopped after iteration " + std::to_string(done) + " (--stop-after)");
+      throw TrainingStopped("training stopped after iteration " + std::to_string(done) +
+                            " (--stop-after)");
     }
   }
   if (isatty(2)) std::fprintf(stderr, "\n");
@@ -450,8 +479,10 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   // The float model is scored on request only: the decoded file is what a user gets (and is
   // always scored by the caller); scoring both doubled the evaluation time of a default run.
   if (o.score_float) {
-    result.test = Evaluate(*model, test, ScoredTestViewStride(o, test.views.size()), o.max_test_views, o.save_renders);
-    if (o.eval_every > 0) result.psnr_curve.emplace_back(result.train_seconds / 60.0, result.test.psnr);
+    result.test = Evaluate(*model, test, ScoredTestViewStride(o, test.views.size()),
+                           o.max_test_views, o.save_renders);
+    if (o.eval_every > 0)
+      result.psnr_curve.emplace_back(result.train_seconds / 60.0, result.test.psnr);
   }
   return result;
 }

@@ -9,13 +9,13 @@
 #include <string>
 #include <vector>
 
-#include "trainer/train/checkpoint.h"
+#include "encoder/scene_encoder.h"
 #include "trainer/data/dataset.h"
 #include "trainer/data/image_io.h"
-#include "trainer/train/rate_state.h"
 #include "trainer/data/scene_fit.h"
-#include "encoder/scene_encoder.h"
 #include "trainer/model/tensorf_model.h"
+#include "trainer/train/checkpoint.h"
+#include "trainer/train/rate_state.h"
 #include "trainer/train/train_options.h"
 
 namespace ecrf {
@@ -38,7 +38,7 @@ struct TrainResult {
   double final_train_psnr = 0.0;  // from the mean MSE of the last progress interval
   EvalResult test;
   std::vector<std::pair<double, double>> psnr_curve;  // (minutes, test PSNR) when --eval-every
-  RateReport rate;  // bits per tensor of the rounded coefficients (when lambda_e > 0)
+  RateReport rate;             // bits per tensor of the rounded coefficients (when lambda_e > 0)
   float final_lambda_e = 0.f;  // options.lambda_e, or where rate control left it
 };
 
@@ -88,7 +88,8 @@ class TrainingStopped : public std::runtime_error {
 // the live values (lambda_e under rate control).
 void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int iteration,
                          const TrainOptions& options, const RateState* rate = nullptr,
-                         const Checkpoint* train_state = nullptr, const TrainOptions* config = nullptr);
+                         const Checkpoint* train_state = nullptr,
+                         const TrainOptions* config = nullptr);
 // The configuration a checkpoint was trained with (train_config.h), and its iteration and live
 // lambda_e; false when it predates stored configurations. Throws on unreadable files.
 struct CheckpointRunInfo {

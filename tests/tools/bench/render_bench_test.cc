@@ -39,8 +39,9 @@ TEST(RenderBenchTest, RefusesBadArguments) {
 TEST(RenderBenchTest, CommandWritesItsFiguresAsJson) {
   const std::string json = ::testing::TempDir() + "/bench_render.json";
   std::remove(json.c_str());
-  EXPECT_EQ(testing_cli::Invoke(RunEcrf, {"ecrf", "bench", "render", "--res", "16", "--width", "24", "--height", "16",
-                                   "--views", "1", "--threads", "1,2", "--json", json}),
+  EXPECT_EQ(testing_cli::Invoke(
+                RunEcrf, {"ecrf", "bench", "render", "--res", "16", "--width", "24", "--height",
+                          "16", "--views", "1", "--threads", "1,2", "--json", json}),
             0);
   std::ifstream in(json);
   ASSERT_TRUE(in) << json;

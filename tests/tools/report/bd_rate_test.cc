@@ -8,7 +8,8 @@ namespace ecrf {
 namespace tools {
 namespace {
 
-std::vector<RdPoint> Scaled(const std::vector<RdPoint>& curve, double rate_factor, double psnr_offset = 0.0) {
+std::vector<RdPoint> Scaled(const std::vector<RdPoint>& curve, double rate_factor,
+                            double psnr_offset = 0.0) {
   std::vector<RdPoint> out = curve;
   for (RdPoint& p : out) {
     p.rate *= rate_factor;
@@ -18,7 +19,8 @@ std::vector<RdPoint> Scaled(const std::vector<RdPoint>& curve, double rate_facto
 }
 
 // A curved, concave RD curve as codecs give (diminishing PSNR per doubled rate).
-const std::vector<RdPoint> kAnchor = {{100e3, 30.0}, {200e3, 33.0}, {400e3, 35.2}, {800e3, 36.5}, {1600e3, 37.1}};
+const std::vector<RdPoint> kAnchor = {
+    {100e3, 30.0}, {200e3, 33.0}, {400e3, 35.2}, {800e3, 36.5}, {1600e3, 37.1}};
 
 TEST(BdRate, TenPercentFewerBytesAtEveryPsnrIsMinusTenPercent) {
   const BdResult r = Bjontegaard(kAnchor, Scaled(kAnchor, 0.9));
@@ -65,9 +67,9 @@ TEST(BdRate, PointOrderDoesNotMatter) {
 
 TEST(BdRate, RefusesWhatCannotBeCompared) {
   EXPECT_FALSE(Bjontegaard({kAnchor[0]}, kAnchor).ok);
-  EXPECT_FALSE(Bjontegaard(kAnchor, {{1e5, 30.0}, {2e5, 30.0}}).ok);             // same PSNR twice
-  EXPECT_FALSE(Bjontegaard(kAnchor, {{1e9, 50.0}, {2e9, 51.0}}).ok);             // no overlap
-  EXPECT_FALSE(Bjontegaard(kAnchor, {{0.0, 31.0}, {2e5, 33.0}}).ok);             // rate 0
+  EXPECT_FALSE(Bjontegaard(kAnchor, {{1e5, 30.0}, {2e5, 30.0}}).ok);  // same PSNR twice
+  EXPECT_FALSE(Bjontegaard(kAnchor, {{1e9, 50.0}, {2e9, 51.0}}).ok);  // no overlap
+  EXPECT_FALSE(Bjontegaard(kAnchor, {{0.0, 31.0}, {2e5, 33.0}}).ok);  // rate 0
   const BdResult r = Bjontegaard(kAnchor, {{1e5, NAN}, {2e5, 33.0}});
   EXPECT_FALSE(r.ok);
   EXPECT_FALSE(r.error.empty());

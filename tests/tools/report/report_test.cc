@@ -48,8 +48,9 @@ std::vector<std::vector<std::string>> ReadCsv(const std::string& path) {
 std::string root_, dir_;
 
 void WritesEveryFile() {
-  for (const char* f : {"report.json", "rd.csv", "chunks.csv", "curve.csv", "speed.csv", "index.html",
-                        "runs/lambda_0/scene.ecrf", "runs/lambda_1e-08_steps2/scene.ecrf"}) {
+  for (const char* f :
+       {"report.json", "rd.csv", "chunks.csv", "curve.csv", "speed.csv", "index.html",
+        "runs/lambda_0/scene.ecrf", "runs/lambda_1e-08_steps2/scene.ecrf"}) {
     EXPECT_FALSE(ReadText(dir_ + "/" + f).empty()) << f;
   }
   const std::string html = ReadText(dir_ + "/index.html");
@@ -69,8 +70,8 @@ void RatePointsAreWhatEvalMeasuresOnTheSameFiles() {
     const nlohmann::json& p = r["points"][k];
     const std::string file = dir_ + "/" + p["run_dir"].get<std::string>() + "/scene.ecrf";
     const std::string json = root_ + "/eval.json";
-    ASSERT_EQ(Invoke(RunEval, {"eval", file, "--scene", "builtin", "--seed", "7", "--max-test-views", "4",
-                               "--threads", "2", "--json", json}),
+    ASSERT_EQ(Invoke(RunEval, {"eval", file, "--scene", "builtin", "--seed", "7",
+                               "--max-test-views", "4", "--threads", "2", "--json", json}),
               0);
     const nlohmann::json e = ReadJson(json);
     EXPECT_EQ(e["bytes"], p["file_bytes"]);
@@ -86,7 +87,8 @@ void RatePointsAreWhatEvalMeasuresOnTheSameFiles() {
     EXPECT_EQ(sum, p["file_bytes"].get<double>());
     // Against the lambda = 0 float32 model.
     const nlohmann::json& ref = r["reference"];
-    EXPECT_DOUBLE_EQ(p["ratio"].get<double>(), ref["float32_bytes"].get<double>() / p["file_bytes"].get<double>());
+    EXPECT_DOUBLE_EQ(p["ratio"].get<double>(),
+                     ref["float32_bytes"].get<double>() / p["file_bytes"].get<double>());
     EXPECT_DOUBLE_EQ(p["psnr_loss_db"].get<double>(),
                      p["decoded_psnr"].get<double>() - ref["float_psnr"].get<double>());
     EXPECT_FALSE(p["curve"].empty());
@@ -113,26 +115,31 @@ void SpeedRowsObeyWhatTheSpecPromises() {
   // Thread count and empty-space skipping never change a pixel (SPEC.md 7.8).
   EXPECT_DOUBLE_EQ(row("threads", "1")["psnr"].get<double>(), default_psnr);
   EXPECT_DOUBLE_EQ(row("skip_empty_space", "off")["psnr"].get<double>(), default_psnr);
-  // Early termination at 1e-4 moves a channel by less than 1e-4: PSNR within 0.01 dB of the reference.
+  // Early termination at 1e-4 moves a channel by less than 1e-4: PSNR within 0.01 dB of the
+  // reference.
   EXPECT_NEAR(row("early_stop", "0")["psnr"].get<double>(), default_psnr, 0.01);
-  EXPECT_GE(row("early_stop", "0")["samples_per_ray"].get<double>(), row("default", "default")["samples_per_ray"].get<double>());
+  EXPECT_GE(row("early_stop", "0")["samples_per_ray"].get<double>(),
+            row("default", "default")["samples_per_ray"].get<double>());
   // Half the samples per ray.
   EXPECT_NEAR(row("step_scale", "2")["samples_per_ray"].get<double>(),
-              row("default", "default")["samples_per_ray"].get<double>() / 2, 0.15 * row("default", "default")["samples_per_ray"].get<double>());
+              row("default", "default")["samples_per_ray"].get<double>() / 2,
+              0.15 * row("default", "default")["samples_per_ray"].get<double>());
   // A higher weight threshold runs the MLP less often.
   EXPECT_LT(row("weight_threshold", "0.01")["mlp_samples_per_ray"].get<double>(),
             row("default", "default")["mlp_samples_per_ray"].get<double>());
   EXPECT_EQ(row("image_scale", "1/2")["width"], 32);
-  EXPECT_GT(speed["decode"]["float32_grid_bytes"].get<double>(), speed["decode"]["int16_grid_bytes"].get<double>());
+  EXPECT_GT(speed["decode"]["float32_grid_bytes"].get<double>(),
+            speed["decode"]["int16_grid_bytes"].get<double>());
   EXPECT_EQ(ReadCsv(dir_ + "/speed.csv").size(), 1 + speed["rows"].size());
 }
 
 void SweepResumesFromFinishedRunsAndRefusesIncompatibleOnes() {
   const nlohmann::json before = ReadJson(dir_ + "/report.json");
   // Same sweep again: nothing is trained (the runs' metrics are reused), the points are the same.
-  ASSERT_EQ(Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "--lambdas", "0,1e-8@2", "--iters", "150",
-                            "--max-test-views", "4", "--seed", "7", "-o", dir_}),
-            0);
+  ASSERT_EQ(
+      Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "--lambdas", "0,1e-8@2",
+                         "--iters", "150", "--max-test-views", "4", "--seed", "7", "-o", dir_}),
+      0);
   const nlohmann::json after = ReadJson(dir_ + "/report.json");
   EXPECT_EQ(after["points"], before["points"]);
   // A point's own step scale names its run and labels it.
@@ -145,7 +152,7 @@ void SweepResumesFromFinishedRunsAndRefusesIncompatibleOnes() {
   // Other iterations: the finished runs no longer match, and the sweep says so.
   try {
     Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "--lambdas", "0", "--iters", "151",
-                    "--max-test-views", "4", "--seed", "7", "-o", dir_});
+                       "--max-test-views", "4", "--seed", "7", "-o", dir_});
     ADD_FAILURE() << "an incompatible finished run was reused";
   } catch (const std::exception& e) {
     // The run's config.json against the sweep's settings, named as config.json names them.
@@ -155,7 +162,8 @@ void SweepResumesFromFinishedRunsAndRefusesIncompatibleOnes() {
 
 void CompareAgainstItselfIsZero() {
   const std::string json = root_ + "/compare.json";
-  ASSERT_EQ(Invoke(RunReport, {"report", "compare", dir_, dir_ + "/report.json", "--json", json}), 0);
+  ASSERT_EQ(Invoke(RunReport, {"report", "compare", dir_, dir_ + "/report.json", "--json", json}),
+            0);
   const nlohmann::json c = ReadJson(json);
   EXPECT_NEAR(c["bd_rate_percent"].get<double>(), 0.0, 1e-9);
   EXPECT_NEAR(c["bd_psnr_db"].get<double>(), 0.0, 1e-9);
@@ -167,8 +175,9 @@ TEST(Report, BuiltinSweepMatchesEvalResumesAndCompares) {
   root_ = tmpl;
   dir_ = root_ + "/nested/report";  // parents do not exist yet
   // Plots are drawn when matplotlib is installed; the checks below read the tables either way.
-  ASSERT_EQ(Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "--lambdas", "0,1e-8@2", "--iters", "150",
-                               "--max-test-views", "4", "--seed", "7", "--threads", "2", "-o", dir_}),
+  ASSERT_EQ(Invoke(RunReport,
+                   {"report", "sweep", "--scene", "builtin", "--lambdas", "0,1e-8@2", "--iters",
+                    "150", "--max-test-views", "4", "--seed", "7", "--threads", "2", "-o", dir_}),
             0);
   ASSERT_EQ(Invoke(RunReport, {"report", "render", dir_, "--test-stride", "1"}), 0);
   {
@@ -200,8 +209,10 @@ TEST(ReportCli, HelpExitsZeroAndBadUsageTwo) {
   EXPECT_EQ(Invoke(RunReport, {"report", "render", "--help"}), 0);
   EXPECT_EQ(Invoke(RunReport, {"report", "compare", "--help"}), 0);
   EXPECT_EQ(Invoke(RunReport, {"report", "nonsense"}), 2);
-  EXPECT_EQ(Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "-o", "/tmp/x"}), 2);  // no --lambdas
-  EXPECT_THROW(Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "--lambdas", "1e-8@0", "-o", "/tmp/x"}),
+  EXPECT_EQ(Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "-o", "/tmp/x"}),
+            2);  // no --lambdas
+  EXPECT_THROW(Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "--lambdas", "1e-8@0",
+                                  "-o", "/tmp/x"}),
                std::invalid_argument);
   EXPECT_EQ(Invoke(RunInfo, {"info", "--help"}), 0);
   EXPECT_EQ(Invoke(RunConformance, {"conformance", "--help"}), 0);
@@ -217,7 +228,8 @@ TEST(ReportCli, UnwritableOutputFailsBeforeTraining) {
   ASSERT_GE(fd, 0);
   close(fd);
   try {
-    Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "--lambdas", "0", "-o", std::string(tmpl) + "/r"});
+    Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "--lambdas", "0", "-o",
+                       std::string(tmpl) + "/r"});
     ADD_FAILURE() << "no error";
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("cannot create directory"), std::string::npos) << e.what();

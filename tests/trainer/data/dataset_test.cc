@@ -20,8 +20,8 @@
 namespace ecrf::trainer {
 namespace {
 
-using testing_errors::ErrorOf;
 using testing_errors::Contains;
+using testing_errors::ErrorOf;
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -29,15 +29,16 @@ using nlohmann::json;
 constexpr double kAngleX = 0.6911112070083618;  // chair's camera_angle_x
 
 json Translation(double x, double y, double z) {
-  return json::array({json::array({1, 0, 0, x}), json::array({0, 1, 0, y}), json::array({0, 0, 1, z}),
-                      json::array({0, 0, 0, 1})});
+  return json::array({json::array({1, 0, 0, x}), json::array({0, 1, 0, y}),
+                      json::array({0, 0, 1, z}), json::array({0, 0, 0, 1})});
 }
 
 class DatasetTest : public ::testing::Test {
  protected:
   void SetUp() override {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() / ("ecrf_dataset_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
+    dir_ = fs::temp_directory_path() /
+           ("ecrf_dataset_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
@@ -152,7 +153,9 @@ TEST_F(DatasetTest, BlenderErrorsNameFileFrameAndField) {
   json no_matrix = root;
   no_matrix["frames"][1].erase("transform_matrix");
   std::string error = error_for(no_matrix);
-  EXPECT_TRUE(Contains(error, file) && Contains(error, "frame 1") && Contains(error, "'transform_matrix'")) << error;
+  EXPECT_TRUE(Contains(error, file) && Contains(error, "frame 1") &&
+              Contains(error, "'transform_matrix'"))
+      << error;
 
   json bad_matrix = root;
   bad_matrix["frames"][2]["transform_matrix"] = json::array({json::array({1, 2, 3})});
@@ -195,16 +198,19 @@ TEST_F(DatasetTest, RefusesDegenerateAndMirroredPoses) {
     WriteJson("transforms_train.json", broken);
     return ErrorOf([&] { LoadDataset(Dir(), "train", 1); });
   };
-  const json zero = json::array({json::array({0, 0, 0, 0}), json::array({0, 0, 0, 0}), json::array({0, 0, 0, 0}),
-                                 json::array({0, 0, 0, 1})});
+  const json zero = json::array({json::array({0, 0, 0, 0}), json::array({0, 0, 0, 0}),
+                                 json::array({0, 0, 0, 0}), json::array({0, 0, 0, 1})});
   json zeros = root;
   zeros["frames"][1]["transform_matrix"] = zero;
   std::string error = error_for(zeros);
-  EXPECT_TRUE(Contains(error, file) && Contains(error, "frame 1 ('") && Contains(error, "not orthonormal")) << error;
+  EXPECT_TRUE(Contains(error, file) && Contains(error, "frame 1 ('") &&
+              Contains(error, "not orthonormal"))
+      << error;
 
   json scaled = root;  // a rotation scaled by 1.01 is not a rotation
   for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) scaled["frames"][0]["transform_matrix"][r][c] = (r == c) ? 1.01 : 0.0;
+    for (int c = 0; c < 3; ++c)
+      scaled["frames"][0]["transform_matrix"][r][c] = (r == c) ? 1.01 : 0.0;
   }
   EXPECT_TRUE(Contains(error_for(scaled), "not orthonormal"));
 
@@ -227,10 +233,13 @@ TEST_F(DatasetTest, MissingBlenderImageIsAnError) {
 }
 
 TEST_F(DatasetTest, ReportsMissingDirectoryFileAndSplit) {
-  EXPECT_TRUE(Contains(ErrorOf([&] { LoadDataset(Path("nothing"), "train", 1); }), "not a directory"));
-  EXPECT_TRUE(Contains(ErrorOf([&] { LoadDataset(Dir(), "train", 1); }), "transforms_train.json nor transforms.json"));
+  EXPECT_TRUE(
+      Contains(ErrorOf([&] { LoadDataset(Path("nothing"), "train", 1); }), "not a directory"));
+  EXPECT_TRUE(Contains(ErrorOf([&] { LoadDataset(Dir(), "train", 1); }),
+                       "transforms_train.json nor transforms.json"));
   WriteBlender();
-  EXPECT_TRUE(Contains(ErrorOf([&] { LoadDataset(Dir(), "training", 1); }), "unknown split 'training'"));
+  EXPECT_TRUE(
+      Contains(ErrorOf([&] { LoadDataset(Dir(), "training", 1); }), "unknown split 'training'"));
 }
 
 // Instant-NGP layout: ten JPEG frames written out of order, shared intrinsics with distortion,
@@ -315,10 +324,13 @@ TEST_F(NgpDatasetTest, ReadsIntrinsicsDistortionAndBounds) {
 }
 
 TEST_F(NgpDatasetTest, CameraInsideTheBoxKeepsNearPositive) {
-  WriteJson("transforms.json", {{"fl_x", 10},
-                                {"w", 4},
-                                {"h", 4},
-                                {"frames", json::array({{{"file_path", "a.png"}, {"transform_matrix", Translation(0, 0, 0)}}})}});
+  WriteJson(
+      "transforms.json",
+      {{"fl_x", 10},
+       {"w", 4},
+       {"h", 4},
+       {"frames",
+        json::array({{{"file_path", "a.png"}, {"transform_matrix", Translation(0, 0, 0)}}})}});
   SavePng(Path("a.png"), MakeImage(4, 4, 3));
   const DatasetManifest manifest = ReadDatasetManifest(Dir(), "test");
   const double diagonal = std::sqrt(3.0) / 0.33;
@@ -452,7 +464,8 @@ TEST(Distortion, RayThroughDistortedPixelFollowsUndistortedDirection) {
   DistortNormalized(camera, x, y, &xd, &yd);
   EXPECT_GT(std::abs(xd - x), 1e-3);  // the lens does move the point
   float origin[3], dir[3];
-  GenerateRay(camera, xd * camera.fx + camera.cx - 0.5, yd * camera.fy + camera.cy - 0.5, origin, dir);
+  GenerateRay(camera, xd * camera.fx + camera.cx - 0.5, yd * camera.fy + camera.cy - 0.5, origin,
+              dir);
   EXPECT_NEAR(dir[0] / -dir[2], x, 1e-6);
   EXPECT_NEAR(dir[1] / -dir[2], -y, 1e-6);
 }

@@ -11,14 +11,14 @@
 #include <unistd.h>
 
 #include <atomic>
-#include <filesystem>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <iterator>
 #include <stdexcept>
-#include <tuple>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "tests/common/error_of.h"
@@ -53,7 +53,8 @@ std::vector<uint8_t> ReadAll(const std::string& path) {
 
 void WriteAll(const std::string& path, const std::vector<uint8_t>& bytes) {
   std::ofstream out(path, std::ios::binary);
-  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  out.write(reinterpret_cast<const char*>(bytes.data()),
+            static_cast<std::streamsize>(bytes.size()));
 }
 
 // Every sample distinct and exactly representable at the given bit depth.
@@ -66,7 +67,8 @@ Image Ramp(int width, int height, int channels, int levels) {
 }
 
 // Encodes RGB or gray bytes with libjpeg, quality 95.
-void WriteJpeg(const std::string& path, int width, int height, int channels, const std::vector<uint8_t>& bytes) {
+void WriteJpeg(const std::string& path, int width, int height, int channels,
+               const std::vector<uint8_t>& bytes) {
   jpeg_compress_struct cinfo;
   jpeg_error_mgr errors;
   cinfo.err = jpeg_std_error(&errors);
@@ -82,7 +84,8 @@ void WriteJpeg(const std::string& path, int width, int height, int channels, con
   jpeg_set_quality(&cinfo, 95, TRUE);
   jpeg_start_compress(&cinfo, TRUE);
   while (cinfo.next_scanline < cinfo.image_height) {
-    JSAMPROW row = const_cast<uint8_t*>(bytes.data()) + size_t{cinfo.next_scanline} * width * channels;
+    JSAMPROW row =
+        const_cast<uint8_t*>(bytes.data()) + size_t{cinfo.next_scanline} * width * channels;
     jpeg_write_scanlines(&cinfo, &row, 1);
   }
   jpeg_finish_compress(&cinfo);
@@ -105,7 +108,8 @@ void WriteQuadrantJpeg(const std::string& path) {
   WriteJpeg(path, size, size, 3, rgb);
 }
 
-class PngRoundTrip : public ImageIoTest, public ::testing::WithParamInterface<std::tuple<int, int>> {};
+class PngRoundTrip : public ImageIoTest,
+                     public ::testing::WithParamInterface<std::tuple<int, int>> {};
 
 TEST_P(PngRoundTrip, LoadsWhatWasSaved) {
   const auto [channels, bit_depth] = GetParam();
@@ -125,7 +129,8 @@ TEST_P(PngRoundTrip, LoadsWhatWasSaved) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllLayouts, PngRoundTrip,
-                         ::testing::Combine(::testing::Values(1, 2, 3, 4), ::testing::Values(8, 16)));
+                         ::testing::Combine(::testing::Values(1, 2, 3, 4),
+                                            ::testing::Values(8, 16)));
 
 TEST_F(ImageIoTest, SavePngQuantisesAndClamps) {
   Image image = MakeImage(3, 1, 1);
@@ -145,8 +150,8 @@ TEST_F(ImageIoTest, PalettePngWithTransparencyExpandsToRgba) {
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   png_infop info = png_create_info_struct(png);
   png_init_io(png, file);
-  png_set_IHDR(png, info, 2, 1, 8, PNG_COLOR_TYPE_PALETTE, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
-               PNG_FILTER_TYPE_DEFAULT);
+  png_set_IHDR(png, info, 2, 1, 8, PNG_COLOR_TYPE_PALETTE, PNG_INTERLACE_NONE,
+               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_color palette[2] = {{255, 0, 0}, {0, 0, 255}};
   png_set_PLTE(png, info, palette, 2);
   png_byte alpha[1] = {0};  // entry 0 transparent
@@ -178,7 +183,8 @@ TEST_F(ImageIoTest, DecodesJpegColours) {
   const int centres[4][2] = {{8, 8}, {24, 8}, {8, 24}, {24, 24}};
   for (int q = 0; q < 4; ++q) {
     for (int c = 0; c < 3; ++c) {
-      EXPECT_NEAR(image.at(centres[q][0], centres[q][1], c), expected[q][c], 0.04) << "quadrant " << q;
+      EXPECT_NEAR(image.at(centres[q][0], centres[q][1], c), expected[q][c], 0.04)
+          << "quadrant " << q;
     }
   }
   const ImageSize size = ReadImageSize(path);
@@ -270,9 +276,12 @@ TEST_F(ImageIoTest, SavePngReplacesAtomicallyAndLeavesNoTemporaries) {
 
 TEST_F(ImageIoTest, SavePngReportsBadInput) {
   const std::string missing_dir = Path("no/such/dir/out.png");
-  EXPECT_NE(ErrorOf([&] { SavePng(missing_dir, Ramp(2, 2, 3, 255)); }).find(missing_dir), std::string::npos);
-  EXPECT_NE(ErrorOf([&] { SavePng(Path("a.png"), MakeImage(2, 2, 5)); }).find("5 channels"), std::string::npos);
-  EXPECT_NE(ErrorOf([&] { SavePng(Path("a.png"), MakeImage(2, 2, 3), 12); }).find("bit depth"), std::string::npos);
+  EXPECT_NE(ErrorOf([&] { SavePng(missing_dir, Ramp(2, 2, 3, 255)); }).find(missing_dir),
+            std::string::npos);
+  EXPECT_NE(ErrorOf([&] { SavePng(Path("a.png"), MakeImage(2, 2, 5)); }).find("5 channels"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf([&] { SavePng(Path("a.png"), MakeImage(2, 2, 3), 12); }).find("bit depth"),
+            std::string::npos);
 }
 
 TEST(CompositeOnWhite, BlendsStraightAlpha) {

@@ -11,7 +11,8 @@
 namespace ecrf::trainer {
 namespace {
 
-Image Pattern(int width, int height, int channels, const std::function<float(int, int, int)>& value) {
+Image Pattern(int width, int height, int channels,
+              const std::function<float(int, int, int)>& value) {
   Image image = MakeImage(width, height, channels);
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) {
@@ -81,15 +82,16 @@ TEST(Ssim, SingleWindowAgainstHandComputedGaussianWeight) {
   const double mu = w2, var = w2 - w2 * w2;
   // Against black: mu_b = var_b = cov = 0.
   const double expected = c1 * c2 / ((mu * mu + c1) * (var + c2));
-  const Image dot = Pattern(11, 11, 1, [](int x, int y, int) { return x == 5 && y == 5 ? 1.0f : 0.0f; });
+  const Image dot =
+      Pattern(11, 11, 1, [](int x, int y, int) { return x == 5 && y == 5 ? 1.0f : 0.0f; });
   EXPECT_NEAR(Ssim(dot, MakeImage(11, 11, 1, 0.0f)), expected, 1e-12);
 }
 
 TEST(Ssim, MatchesTensorfReferenceValues) {
   // Values from a literal Python transcription of TensoRF's rgb_ssim on the same patterns.
   const Image a = Pattern(17, 13, 3, PatternA);
-  const Image uncorrelated =
-      Pattern(17, 13, 3, [](int x, int y, int c) { return ((x * 5 + y * 2 + c * 3) % 13) / 12.0f; });
+  const Image uncorrelated = Pattern(
+      17, 13, 3, [](int x, int y, int c) { return ((x * 5 + y * 2 + c * 3) % 13) / 12.0f; });
   const Image similar = Pattern(17, 13, 3, [](int x, int y, int c) {
     return 0.8f * PatternA(x, y, c) + 0.1f + 0.05f * ((x * y + c) % 3) / 2.0f;
   });

@@ -1,5 +1,5 @@
-#include "tests/common/error_of.h"
 #include "trainer/data/llff.h"
+#include "tests/common/error_of.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -21,8 +21,8 @@
 namespace ecrf::trainer {
 namespace {
 
-using testing_errors::ErrorOf;
 using testing_errors::Contains;
+using testing_errors::ErrorOf;
 
 namespace fs = std::filesystem;
 
@@ -32,7 +32,8 @@ constexpr double kHeight = 48, kWidth = 64, kFocal = 50;  // hwf of the full-siz
 // np.save's layout: magic, version, header length, a dict literal padded to 64 bytes.
 std::vector<uint8_t> NpyBytes(const std::vector<double>& values, const std::string& shape,
                               const std::string& descr = "<f8", int version = 1) {
-  std::string header = "{'descr': '" + descr + "', 'fortran_order': False, 'shape': " + shape + ", }";
+  std::string header =
+      "{'descr': '" + descr + "', 'fortran_order': False, 'shape': " + shape + ", }";
   const size_t prefix = version == 1 ? 10 : 12;
   while ((prefix + header.size() + 1) % 64 != 0) header += ' ';
   header += '\n';
@@ -58,7 +59,10 @@ std::vector<uint8_t> NpyBytes(const std::vector<double>& values, const std::stri
 std::vector<double> LlffRow(const double gl[3][4], double near, double far) {
   std::vector<double> row;
   for (int r = 0; r < 3; ++r) {
-    for (double v : {-gl[r][1], gl[r][0], gl[r][2], gl[r][3], r == 0 ? kHeight : r == 1 ? kWidth : kFocal}) {
+    for (double v : {-gl[r][1], gl[r][0], gl[r][2], gl[r][3],
+                     r == 0   ? kHeight
+                     : r == 1 ? kWidth
+                              : kFocal}) {
       row.push_back(v);
     }
   }
@@ -84,7 +88,8 @@ class LlffTest : public ::testing::Test {
  protected:
   void SetUp() override {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() / ("ecrf_llff_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
+    dir_ = fs::temp_directory_path() /
+           ("ecrf_llff_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_ / "images");
   }
@@ -93,7 +98,8 @@ class LlffTest : public ::testing::Test {
   std::string Dir() const { return dir_.string(); }
 
   void WriteBytes(const std::string& name, const std::vector<uint8_t>& bytes) const {
-    std::ofstream(dir_ / name, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+    std::ofstream(dir_ / name, std::ios::binary)
+        .write(reinterpret_cast<const char*>(bytes.data()), bytes.size());
   }
 
   // Images half the hwf size, named so that name order is not creation order.
@@ -151,7 +157,8 @@ TEST_F(LlffTest, ParsesPosesIntrinsicsBoundsAndSplit) {
       double gl[3][4];
       RigPose(i, gl);
       for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) EXPECT_NEAR(view.camera.c2w[r][c], gl[r][c], 1e-12) << view.name;
+        for (int c = 0; c < 3; ++c)
+          EXPECT_NEAR(view.camera.c2w[r][c], gl[r][c], 1e-12) << view.name;
         EXPECT_NEAR(view.camera.c2w[r][3], gl[r][3] * scale, 1e-12) << view.name;
       }
       EXPECT_EQ(view.camera.width, 32);
@@ -169,7 +176,8 @@ TEST_F(LlffTest, ParsesPosesIntrinsicsBoundsAndSplit) {
   EXPECT_NEAR(train.far, Far(kImages - 1) * scale, 1e-12);
   for (int a = 0; a < 3; ++a) {
     EXPECT_TRUE(std::isfinite(train.scene_aabb[0][a]) && std::isfinite(train.scene_aabb[1][a]));
-    EXPECT_EQ(train.scene_aabb[0][a], test.scene_aabb[0][a]);  // from every camera, whatever the split
+    EXPECT_EQ(train.scene_aabb[0][a],
+              test.scene_aabb[0][a]);  // from every camera, whatever the split
   }
   // Cameras look down -z, so the box reaches the far bound in front of them and stops behind.
   EXPECT_NEAR(train.scene_aabb[0][2], -Far(kImages - 1) * scale, 1e-9);
@@ -200,7 +208,8 @@ TEST_F(LlffTest, RecentringUndoesAGlobalRigidMotion) {
   ASSERT_EQ(moved.views.size(), plain.views.size());
   for (size_t v = 0; v < plain.views.size(); ++v) {
     for (int r = 0; r < 3; ++r) {
-      for (int k = 0; k < 4; ++k) EXPECT_NEAR(moved.views[v].camera.c2w[r][k], plain.views[v].camera.c2w[r][k], 1e-9);
+      for (int k = 0; k < 4; ++k)
+        EXPECT_NEAR(moved.views[v].camera.c2w[r][k], plain.views[v].camera.c2w[r][k], 1e-9);
     }
   }
 }
@@ -232,13 +241,18 @@ TEST_F(LlffTest, ErrorsNameTheFileAndTheProblem) {
   EXPECT_TRUE(Contains(error(), npy) && Contains(error(), "not a .npy file")) << error();
 
   std::vector<double> table = RigTable();
-  WriteBytes("poses_bounds.npy", NpyBytes(std::vector<double>(table.begin(), table.end() - 17), "(9, 17)"));
-  EXPECT_TRUE(Contains(error(), npy) && Contains(error(), "9 poses") && Contains(error(), "10 images")) << error();
+  WriteBytes("poses_bounds.npy",
+             NpyBytes(std::vector<double>(table.begin(), table.end() - 17), "(9, 17)"));
+  EXPECT_TRUE(Contains(error(), npy) && Contains(error(), "9 poses") &&
+              Contains(error(), "10 images"))
+      << error();
 
-  WriteBytes("poses_bounds.npy", NpyBytes(std::vector<double>(table.begin(), table.begin() + 150), "(10, 15)"));
+  WriteBytes("poses_bounds.npy",
+             NpyBytes(std::vector<double>(table.begin(), table.begin() + 150), "(10, 15)"));
   EXPECT_TRUE(Contains(error(), "10 x 15") && Contains(error(), "N x 17")) << error();
 
-  WriteBytes("poses_bounds.npy", NpyBytes(std::vector<double>(table.begin(), table.end() - 5), "(10, 17)"));
+  WriteBytes("poses_bounds.npy",
+             NpyBytes(std::vector<double>(table.begin(), table.end() - 5), "(10, 17)"));
   EXPECT_TRUE(Contains(error(), npy) && Contains(error(), "truncated")) << error();
 
   WriteBytes("poses_bounds.npy", NpyBytes(table, "(10, 17)", "<i8"));
@@ -250,7 +264,8 @@ TEST_F(LlffTest, ErrorsNameTheFileAndTheProblem) {
   std::vector<double> bad = table;
   bad[3 * 17 + 7] = std::numeric_limits<double>::quiet_NaN();
   WriteBytes("poses_bounds.npy", NpyBytes(bad, "(10, 17)"));
-  EXPECT_TRUE(Contains(error(), npy) && Contains(error(), "row 3, column 7 is not finite")) << error();
+  EXPECT_TRUE(Contains(error(), npy) && Contains(error(), "row 3, column 7 is not finite"))
+      << error();
 
   bad = table;
   bad[2 * 17 + 15] = -1.0;  // near bound
@@ -280,7 +295,8 @@ TEST(LlffNpy, ReadsFloat32AndVersion3Headers) {
   std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': (2, 2), }";
   while ((12 + header.size() + 1) % 64 != 0) header += ' ';
   header += '\n';
-  std::vector<uint8_t> bytes = {0x93, 'N', 'U', 'M', 'P', 'Y', 3, 0, uint8_t(header.size()), 0, 0, 0};
+  std::vector<uint8_t> bytes = {0x93, 'N', 'U', 'M', 'P', 'Y', 3, 0, uint8_t(header.size()),
+                                0,    0,   0};
   bytes.insert(bytes.end(), header.begin(), header.end());
   for (float v : {1.5f, -2.0f, 0.25f, 8.0f}) {
     uint32_t bits;

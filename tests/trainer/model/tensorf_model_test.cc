@@ -143,7 +143,8 @@ TEST(TensorfModelTest, AlphaMaskCoversBlobAndShrinkKeepsValues) {
   std::vector<std::array<float, 3>> pts;
   for (int i = 0; i < 200; ++i) {
     std::array<float, 3> p;
-    for (int a = 0; a < 3; ++a) p[a] = box.min[a] + (box.max[a] - box.min[a]) * (0.5f * (u(rng) + 1.f));
+    for (int a = 0; a < 3; ++a)
+      p[a] = box.min[a] + (box.max[a] - box.min[a]) * (0.5f * (u(rng) + 1.f));
     pts.push_back(p);
   }
   std::vector<float> before;
@@ -198,8 +199,8 @@ TEST(TensorfModelTest, FilterRays) {
   c.near = 0.f;  // the third ray starts inside the box
   TensorfModel model(c);
   model.Initialize({21, 21, 21}, 2);
-  const float o[] = {-3.f, 0.f, 0.f,  -3.f, 3.f, 0.f,  0.f, 0.f, 0.f,  -3.f, 0.6f, 0.3f};
-  const float d[] = {1.f, 0.f, 0.f,   1.f, 0.f, 0.f,   0.f, 0.f, 1.f,  1.f, 0.f, 0.f};
+  const float o[] = {-3.f, 0.f, 0.f, -3.f, 3.f, 0.f, 0.f, 0.f, 0.f, -3.f, 0.6f, 0.3f};
+  const float d[] = {1.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 0.f, 1.f, 1.f, 0.f, 0.f};
   auto keep = model.FilterRays(4, o, d, true);
   EXPECT_EQ(keep, (std::vector<uint8_t>{1, 0, 1, 1}));
   // With a mask holding a blob at the centre only rays through it survive.

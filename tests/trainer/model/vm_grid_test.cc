@@ -127,7 +127,8 @@ void CheckScatterAgainstFd(int threads) {
       LocateGridPoint(pts[k].data(), grid.res(), &gp);
       L += static_cast<double>(a[k]) * grid.Density(gp);
       grid.Products(gp, prod.data());
-      for (int r = 0; r < grid.total_rank(); ++r) L += static_cast<double>(b[k * grid.total_rank() + r]) * prod[r];
+      for (int r = 0; r < grid.total_rank(); ++r)
+        L += static_cast<double>(b[k * grid.total_rank() + r]) * prod[r];
     }
     return L;
   };
@@ -199,11 +200,13 @@ TEST(VmGridTest, ScatterCacheAlongMonotoneRayEqualsDirectSum) {
           const double wc = ((c & 1) ? gp.f[u] : 1 - gp.f[u]) * ((c >> 1) ? gp.f[v] : 1 - gp.f[v]);
           p += wc * ref.PlaneAt(m, y, x, r);
         }
-        for (int c = 0; c < 2; ++c) l += (c ? gp.f[w] : 1 - gp.f[w]) * ref.LineAt(m, gp.i0[w] + c, r);
+        for (int c = 0; c < 2; ++c)
+          l += (c ? gp.f[w] : 1 - gp.f[w]) * ref.LineAt(m, gp.i0[w] + c, r);
         for (int c = 0; c < 4; ++c) {
           const int x = gp.i0[u] + (c & 1), y = gp.i0[v] + (c >> 1);
           const double wc = ((c & 1) ? gp.f[u] : 1 - gp.f[u]) * ((c >> 1) ? gp.f[v] : 1 - gp.f[v]);
-          direct[ref.plane_offset(m) + (static_cast<size_t>(y) * ref.res()[u] + x) * R + r] += gr * wc * l;
+          direct[ref.plane_offset(m) + (static_cast<size_t>(y) * ref.res()[u] + x) * R + r] +=
+              gr * wc * l;
         }
         for (int c = 0; c < 2; ++c)
           direct[ref.line_offset(m) + static_cast<size_t>(gp.i0[w] + c) * R + r] +=
@@ -227,8 +230,9 @@ TEST(VmGridTest, UpsampleOfLinearFunctionIsExact) {
       for (int y = 0; y < grid.res()[v]; ++y)
         for (int x = 0; x < grid.res()[u]; ++x)
           for (int r = 0; r < grid.ranks()[m]; ++r)
-            grid.PlaneAt(m, y, x, r) = static_cast<float>(0.3 * (r + 1) + 0.7 * coord(x, grid.res()[u]) -
-                                                          0.4 * (m + 1) * coord(y, grid.res()[v]));
+            grid.PlaneAt(m, y, x, r) =
+                static_cast<float>(0.3 * (r + 1) + 0.7 * coord(x, grid.res()[u]) -
+                                   0.4 * (m + 1) * coord(y, grid.res()[v]));
       for (int i = 0; i < grid.res()[w]; ++i)
         for (int r = 0; r < grid.ranks()[m]; ++r)
           grid.LineAt(m, i, r) = static_cast<float>(0.5 - 0.25 * r + 0.6 * coord(i, grid.res()[w]));
@@ -264,7 +268,8 @@ TEST(VmGridTest, UpsampleKeepsVertexValuesWhenDoublingMinusOne) {
     const int u = kMatMode[m][0], v = kMatMode[m][1], w = kVecMode[m];
     for (int y = 0; y < g.res()[v]; ++y)
       for (int x = 0; x < g.res()[u]; ++x)
-        for (int r = 0; r < 3; ++r) EXPECT_NEAR(up.PlaneAt(m, 2 * y, 2 * x, r), g.PlaneAt(m, y, x, r), 1e-6);
+        for (int r = 0; r < 3; ++r)
+          EXPECT_NEAR(up.PlaneAt(m, 2 * y, 2 * x, r), g.PlaneAt(m, y, x, r), 1e-6);
     for (int i = 0; i < g.res()[w]; ++i)
       for (int r = 0; r < 3; ++r) EXPECT_NEAR(up.LineAt(m, 2 * i, r), g.LineAt(m, i, r), 1e-6);
   }
@@ -280,7 +285,8 @@ TEST(VmGridTest, CropKeepsSubGrid) {
     const std::array<int, 3> lo{1, 2, 3};
     for (int y = 0; y < c.res()[v]; ++y)
       for (int x = 0; x < c.res()[u]; ++x)
-        for (int r = 0; r < 2; ++r) EXPECT_EQ(c.PlaneAt(m, y, x, r), g.PlaneAt(m, y + lo[v], x + lo[u], r));
+        for (int r = 0; r < 2; ++r)
+          EXPECT_EQ(c.PlaneAt(m, y, x, r), g.PlaneAt(m, y + lo[v], x + lo[u], r));
     for (int i = 0; i < c.res()[w]; ++i)
       for (int r = 0; r < 2; ++r) EXPECT_EQ(c.LineAt(m, i, r), g.LineAt(m, i + lo[w], r));
   }

@@ -107,8 +107,7 @@ void ExpectSamples(const TensorfModel& model, const float o[3], const float d[3]
     const float x[3] = {o[0] + d[0] * expect[k], o[1] + d[1] * expect[k], o[2] + d[2] * expect[k]};
     const double sigma = model.Sigma(x);
     EXPECT_NEAR(samples[k].sigma, sigma, 1e-6 * (1 + sigma));
-    const double alpha =
-        1 - std::exp(-sigma * model.step_size() * model.config().distance_scale);
+    const double alpha = 1 - std::exp(-sigma * model.step_size() * model.config().distance_scale);
     EXPECT_NEAR(samples[k].alpha, alpha, 1e-6);
     EXPECT_NEAR(samples[k].weight, alpha * T, 1e-6);
     EXPECT_EQ(samples[k].colour, samples[k].weight > model.config().weight_threshold);
@@ -130,7 +129,7 @@ TEST(VolumeRenderTest, RaySamplingAxisParallelAndInside) {
   }
   {
     const float o[3] = {0.1f, 0.2f, 0.f}, d[3] = {0.f, 0.f, -1.f};  // starts inside, t_min = near
-    EXPECT_EQ(TraceRay(model, o, d, 0.5f).size(), 10u);  // z = -0.1 (i + 0.5) >= -1
+    EXPECT_EQ(TraceRay(model, o, d, 0.5f).size(), 10u);             // z = -0.1 (i + 0.5) >= -1
     ExpectSamples(model, o, d, 0.5f);
   }
   {
@@ -320,11 +319,14 @@ TEST(VolumeRenderTest, HeadChunkingAndMaskKeepResults) {
   EXPECT_EQ(sa.appearance_samples, sb.appearance_samples);
   EXPECT_NEAR(sa.loss, sb.loss, 1e-7);
   for (size_t i = 0; i < a.density().grads().size(); ++i)
-    ASSERT_NEAR(a.density().grads()[i], b.density().grads()[i], 1e-7 + 1e-4 * std::fabs(a.density().grads()[i]));
+    ASSERT_NEAR(a.density().grads()[i], b.density().grads()[i],
+                1e-7 + 1e-4 * std::fabs(a.density().grads()[i]));
   for (size_t i = 0; i < a.appearance().grads().size(); ++i)
-    ASSERT_NEAR(a.appearance().grads()[i], b.appearance().grads()[i], 1e-7 + 1e-4 * std::fabs(a.appearance().grads()[i]));
+    ASSERT_NEAR(a.appearance().grads()[i], b.appearance().grads()[i],
+                1e-7 + 1e-4 * std::fabs(a.appearance().grads()[i]));
   for (size_t i = 0; i < a.head().grads().size(); ++i)
-    ASSERT_NEAR(a.head().grads()[i], b.head().grads()[i], 1e-6 + 1e-3 * std::fabs(a.head().grads()[i]));
+    ASSERT_NEAR(a.head().grads()[i], b.head().grads()[i],
+                1e-6 + 1e-3 * std::fabs(a.head().grads()[i]));
   // Masked-out samples are skipped: every traced sample lies in an occupied mask cell.
   for (int r = 0; r < 150; ++r)
     for (const auto& smp : TraceRay(a, &o[3 * r], &d[3 * r], RayJitter(3, r))) {

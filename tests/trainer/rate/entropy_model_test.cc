@@ -124,7 +124,8 @@ TEST(EntropyModelTest, FloatPathMatchesDoublePath) {
     EXPECT_NEAR(m.grads()[i], 0.5 * ref_g[i], 1e-3 * (1.0 + std::abs(ref_g[i]))) << "param " << i;
   }
   // Model 1 has no samples: no gradient.
-  for (int i = 0; i < kEntropyParamsPerModel; ++i) EXPECT_EQ(m.grads()[kEntropyParamsPerModel + i], 0.f);
+  for (int i = 0; i < kEntropyParamsPerModel; ++i)
+    EXPECT_EQ(m.grads()[kEntropyParamsPerModel + i], 0.f);
   // Without gradient outputs the value is the same and grads stay untouched.
   const std::vector<float> before = m.grads();
   EXPECT_DOUBLE_EQ(m.Bits(x.data(), segs, 2, nullptr, nullptr, 1.f, false), total);
@@ -156,7 +157,8 @@ TEST(EntropyModelTest, LikelihoodsOfAllIntegersSumToOne) {
     EXPECT_NEAR(sum, 1.0, 1e-3) << "seed " << seed;
     // bits = -log2(likelihood) on both paths.
     const float x = 1.f;
-    EXPECT_NEAR(m.Bits(0, &x, 1, nullptr, nullptr, 0.f, false), -std::log2(m.Likelihood(0, 1.0)), 1e-4);
+    EXPECT_NEAR(m.Bits(0, &x, 1, nullptr, nullptr, 0.f, false), -std::log2(m.Likelihood(0, 1.0)),
+                1e-4);
   }
 }
 
@@ -225,7 +227,8 @@ TEST(EntropyModelTest, TrainingOnLaplacianApproachesEmpiricalEntropy) {
       for (size_t i = 0; i < n; ++i) noisy[i] = samples[i] + u(rng);
       m.ZeroGrads();
       m.Bits(0, noisy.data(), n, nullptr, nullptr, 1.f / n, true);
-      adam.Step(m.params().data(), m.grads().data(), m.params().size(), step < 300 ? 0.02f : 0.005f);
+      adam.Step(m.params().data(), m.grads().data(), m.params().size(),
+                step < 300 ? 0.02f : 0.005f);
     }
     const double bits = m.Bits(0, rounded.data(), n, nullptr, nullptr, 0.f, false) / n;
     std::printf("[laplace b=%.1f] empirical entropy %.4f bits, model %.4f bits/sample\n", b,
@@ -261,9 +264,10 @@ TEST(EntropyModelTest, SpeedPerCoefficient) {
     cpu_fb = std::min(cpu_fb, double(c1 - c0) / CLOCKS_PER_SEC);
     cpu_f = std::min(cpu_f, double(c2 - c1) / CLOCKS_PER_SEC);
   }
-  std::printf("[speed] entropy model: forward+backward %.2f ns/coef wall (%.2f CPU-ns), forward "
-              "only %.2f ns/coef wall (%.2f CPU-ns)\n", best_fb * 1e9 / n, cpu_fb * 1e9 / n,
-              best_f * 1e9 / n, cpu_f * 1e9 / n);
+  std::printf(
+      "[speed] entropy model: forward+backward %.2f ns/coef wall (%.2f CPU-ns), forward "
+      "only %.2f ns/coef wall (%.2f CPU-ns)\n",
+      best_fb * 1e9 / n, cpu_fb * 1e9 / n, best_f * 1e9 / n, cpu_f * 1e9 / n);
   EXPECT_GT(best_fb, 0.0);
 }
 

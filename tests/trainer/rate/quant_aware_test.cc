@@ -10,13 +10,13 @@
 #include <vector>
 
 #include "decoder/scene_decoder.h"
-#include "format/container.h"
-#include "format/mlp_coder.h"
-#include "format/int_idct.h"
 #include "encoder/coef_quantizer.h"
-#include "trainer/train/rate_state.h"
 #include "encoder/scene_encoder.h"
+#include "format/container.h"
+#include "format/int_idct.h"
+#include "format/mlp_coder.h"
 #include "trainer/model/volume_render.h"
+#include "trainer/train/rate_state.h"
 
 namespace ecrf {
 namespace trainer {
@@ -67,7 +67,8 @@ TEST_P(QuantAwareOffset, ReconstructionIsWhatTheDecoderDecodes) {
   o.drop_zero_components = false;
   const std::vector<uint8_t> bytes = EncodeScene(model, o);
   dec::SceneField field;
-  const Status status = dec::DecodeScene(bytes.data(), bytes.size(), dec::DecodeOptions(), &field, nullptr);
+  const Status status =
+      dec::DecodeScene(bytes.data(), bytes.size(), dec::DecodeOptions(), &field, nullptr);
   ASSERT_TRUE(status.ok()) << status.message();
 
   const VmGrid* grids[2] = {&model.density(), &model.appearance()};
@@ -79,7 +80,8 @@ TEST_P(QuantAwareOffset, ReconstructionIsWhatTheDecoderDecodes) {
     ASSERT_EQ(q.size(), grids[g]->params().size());
     for (int t = 0; t < 6; ++t) {
       const float* mine = q.data() + (RateTensorData(*grids[g], t) - grids[g]->params().data());
-      const float* theirs = t < 3 ? decoded[g]->plane_f32[t].data() : decoded[g]->line_f32[t - 3].data();
+      const float* theirs =
+          t < 3 ? decoded[g]->plane_f32[t].data() : decoded[g]->line_f32[t - 3].data();
       const float* original = RateTensorData(*grids[g], t);
       const size_t n = t < 3 ? grids[g]->plane_size(t) : grids[g]->line_size(t - 3);
       const double step = steps[6 * g + t];
@@ -108,7 +110,8 @@ TEST(CoefQuantizer, OffsetWidensTheDeadZone) {
   EXPECT_EQ(QuantizeLevel(-0.71, 1.0, 0.3), -1.0);
   EXPECT_EQ(QuantizeLevel(-1.69, 1.0, 0.3), -1.0);
   EXPECT_EQ(QuantizeLevel(3.4, 2.0, 0.3), 2.0);  // 1.7 + 0.3
-  EXPECT_EQ(QuantizeLevel(0.49999999999999994, 1.0, 0.5), 0.0);  // as std::round, not floor(x + 0.5)
+  EXPECT_EQ(QuantizeLevel(0.49999999999999994, 1.0, 0.5),
+            0.0);  // as std::round, not floor(x + 0.5)
 
   const TensorfModel model = SmallModel(4);
   EncodeOptions o;
@@ -154,7 +157,8 @@ TEST(QuantAware, StraightThroughStepIsTheStepOnTheDecodedModel) {
   // Reference: a model whose grids are replaced by their reconstruction.
   TensorfModel decoded = model;
   ReconstructQuantizedGrid(model.density(), steps.data(), blocks, &decoded.density().params());
-  ReconstructQuantizedGrid(model.appearance(), steps.data() + 6, blocks, &decoded.appearance().params());
+  ReconstructQuantizedGrid(model.appearance(), steps.data() + 6, blocks,
+                           &decoded.appearance().params());
   ReconstructQuantizedHead(model, mlp_levels, &decoded.head().params());
   decoded.ZeroGrads();
   const TrainStepStats want = TrainStep(decoded, b.n, b.o.data(), b.d.data(), b.rgb.data(), 17);
@@ -175,7 +179,8 @@ TEST(QuantAware, StraightThroughStepIsTheStepOnTheDecodedModel) {
   EXPECT_EQ(got.density_samples, want.density_samples);
   // The loss differs from the float model's: the test exercises real quantization.
   TensorfModel float_model = model;
-  const TrainStepStats plain = TrainStep(float_model, b.n, b.o.data(), b.d.data(), b.rgb.data(), 17);
+  const TrainStepStats plain =
+      TrainStep(float_model, b.n, b.o.data(), b.d.data(), b.rgb.data(), 17);
   EXPECT_GT(std::fabs(plain.loss - want.loss), 1e-4 * want.loss);
 
   auto max_rel = [](const std::vector<float>& a, const std::vector<float>& b) {

@@ -10,9 +10,9 @@
 
 #include "tests/common/held_out_frames.h"
 #include "trainer/data/camera.h"
+#include "trainer/data/ray_set.h"
 #include "trainer/scenes/capture_room.h"
 #include "trainer/scenes/still_life.h"
-#include "trainer/data/ray_set.h"
 
 namespace ecrf::trainer {
 namespace {
@@ -85,7 +85,8 @@ TEST(CaptureScene, EveryEighthFrameIsATestView) {
   ExpectEveryEighthFrameHeldOut(train, test, val, frames, "capture");
   // Neighbouring frames of the loop are close: test frame 8 sits between train frames 7 and 9.
   auto distance = [](const Camera& a, const Camera& b) {
-    return std::hypot(a.c2w[0][3] - b.c2w[0][3], a.c2w[1][3] - b.c2w[1][3], a.c2w[2][3] - b.c2w[2][3]);
+    return std::hypot(a.c2w[0][3] - b.c2w[0][3], a.c2w[1][3] - b.c2w[1][3],
+                      a.c2w[2][3] - b.c2w[2][3]);
   };
   EXPECT_LT(distance(test.views[1].camera, train.views[6].camera), 0.5);  // frame 8 vs frame 7
   EXPECT_LT(distance(test.views[1].camera, train.views[7].camera), 0.5);  // frame 8 vs frame 9
@@ -119,7 +120,8 @@ TEST(CaptureScene, TheRoomFillsEveryViewAndTheObjectIsInIt) {
         ASSERT_EQ(r, float(colour.x)) << view.name << " at " << x << "," << y;
         ASSERT_EQ(g, float(colour.y));
         ASSERT_EQ(b, float(colour.z));
-        ASSERT_FALSE(r == 1 && g == 1 && b == 1) << view.name << " shows background at " << x << "," << y;
+        ASSERT_FALSE(r == 1 && g == 1 && b == 1)
+            << view.name << " shows background at " << x << "," << y;
         ++room;
         room_colours.insert(int(r * 15) * 256 + int(g * 15) * 16 + int(b * 15));
       }
@@ -160,7 +162,8 @@ TEST(CaptureScene, IsFastAndRejectsBadArguments) {
   const auto start = std::chrono::steady_clock::now();
   const Dataset train = MakeCaptureScene("train", 120, 90, 50, 0);
   const Dataset test = MakeCaptureScene("test", 120, 90, 50, 0);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   EXPECT_EQ(train.views.size() + test.views.size(), 50u);
   EXPECT_LT(seconds, 2.0);
   EXPECT_THROW(MakeCaptureScene("dev", 16, 12, 8, 0), std::runtime_error);

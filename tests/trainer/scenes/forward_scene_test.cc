@@ -11,9 +11,9 @@
 
 #include "tests/common/held_out_frames.h"
 #include "trainer/data/camera.h"
+#include "trainer/data/scene_fit.h"
 #include "trainer/scenes/capture_room.h"
 #include "trainer/scenes/capture_scene.h"
-#include "trainer/data/scene_fit.h"
 #include "trainer/scenes/still_life.h"
 #include "trainer/train/train_options.h"
 #include "trainer/train/trainer.h"
@@ -76,7 +76,8 @@ TEST(ForwardScene, EveryEighthFrameIsATestView) {
   EXPECT_EQ(train.far, test.far);
   // The sweep moves a hand's width between frames: test frame 8 sits between train frames 7 and 9.
   auto distance = [](const Camera& a, const Camera& b) {
-    return std::hypot(a.c2w[0][3] - b.c2w[0][3], a.c2w[1][3] - b.c2w[1][3], a.c2w[2][3] - b.c2w[2][3]);
+    return std::hypot(a.c2w[0][3] - b.c2w[0][3], a.c2w[1][3] - b.c2w[1][3],
+                      a.c2w[2][3] - b.c2w[2][3]);
   };
   EXPECT_LT(distance(test.views[1].camera, train.views[6].camera), 0.15);  // frame 8 vs frame 7
   EXPECT_LT(distance(test.views[1].camera, train.views[7].camera), 0.15);  // frame 8 vs frame 9
@@ -88,7 +89,8 @@ TEST(ForwardScene, CamerasFaceOneWayFromASmallPatch) {
   EXPECT_TRUE(CamerasFaceOneWay(cameras));
   // The check tells layouts apart: the capture's loop round the object does not face one way.
   std::vector<Camera> loop;
-  for (const View& view : MakeCaptureScene("train", 8, 6, 64, 20211202).views) loop.push_back(view.camera);
+  for (const View& view : MakeCaptureScene("train", 8, 6, 64, 20211202).views)
+    loop.push_back(view.camera);
   EXPECT_FALSE(CamerasFaceOneWay(loop));
 
   const Vec3 target{kForwardTarget[0], kForwardTarget[1], kForwardTarget[2]};
@@ -162,7 +164,8 @@ TEST(ForwardScene, CamerasArePinholesWithAnOffCentrePrincipalPoint) {
     on_face |= std::abs(v - kCaptureRoomMin[a]) < 1e-9 || std::abs(v - kCaptureRoomMax[a]) < 1e-9;
   }
   if (!inside || !on_face) {
-    return ::testing::AssertionFailure() << "room hit " << p.x << "," << p.y << "," << p.z << " is off the walls";
+    return ::testing::AssertionFailure()
+           << "room hit " << p.x << "," << p.y << "," << p.z << " is off the walls";
   }
   return ::testing::AssertionSuccess();
 }
@@ -240,7 +243,8 @@ TEST(ForwardScene, TheTrainerLoadsItAsSceneForward) {
   ASSERT_EQ(test.views.size(), 3u);  // frames 0, 8, 16
   EXPECT_EQ(test.views[2].name, "forward/frame_016");
   EXPECT_EQ(test.views[2].rgb.width, 20);
-  EXPECT_EQ(test.views[2].rgb.pixels, MakeForwardScene("test", 20, 15, 17, o.seed).views[2].rgb.pixels);
+  EXPECT_EQ(test.views[2].rgb.pixels,
+            MakeForwardScene("test", 20, 15, 17, o.seed).views[2].rgb.pixels);
   EXPECT_TRUE(FitScene("auto", test).forward_facing);
   EXPECT_THROW(SelectProceduralScene("sideways", &o), std::invalid_argument);
 }
@@ -249,7 +253,8 @@ TEST(ForwardScene, IsFastAndRejectsBadArguments) {
   const auto start = std::chrono::steady_clock::now();
   const Dataset train = MakeForwardScene("train", 120, 90, 50, 0);
   const Dataset test = MakeForwardScene("test", 120, 90, 50, 0);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   EXPECT_EQ(train.views.size() + test.views.size(), 50u);
   EXPECT_LT(seconds, 2.0);
   EXPECT_THROW(MakeForwardScene("dev", 16, 12, 8, 0), std::runtime_error);

@@ -15,9 +15,7 @@ namespace ecrf {
 namespace trainer {
 namespace {
 
-std::string TempPath(const char* name) {
-  return std::string(::testing::TempDir()) + "/" + name;
-}
+std::string TempPath(const char* name) { return std::string(::testing::TempDir()) + "/" + name; }
 
 TEST(Checkpoint, RoundTrip) {
   Checkpoint ck;
@@ -72,8 +70,10 @@ TEST(Checkpoint, EveryFlippedByteAndHugeSizeFieldIsRefused) {
       WriteFileAtomically(path, bad.data(), bad.size());
       try {
         const Checkpoint back = ReadCheckpoint(path);
-        EXPECT_TRUE(back.json == ck.json && back.arrays.size() == 1 && back.arrays[0].data == values)
-            << "byte " << at << " of " << good.size() << " flipped (bit " << int(bit) << ") read as other content";
+        EXPECT_TRUE(back.json == ck.json && back.arrays.size() == 1 &&
+                    back.arrays[0].data == values)
+            << "byte " << at << " of " << good.size() << " flipped (bit " << int(bit)
+            << ") read as other content";
       } catch (const std::runtime_error& e) {
         EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
       }
@@ -101,7 +101,8 @@ TEST(Checkpoint, ReadsVersionOneFilesWithoutChecksum) {
   std::vector<uint8_t> v1(16 + ZSTD_compressBound(raw.size()));
   std::memcpy(v1.data(), "ECRFCKP1", 8);
   std::memcpy(v1.data() + 8, &raw_size, 8);
-  const size_t z = ZSTD_compress(v1.data() + 16, v1.size() - 16, raw.data(), raw.size(), 3);  // no checksum
+  const size_t z =
+      ZSTD_compress(v1.data() + 16, v1.size() - 16, raw.data(), raw.size(), 3);  // no checksum
   ASSERT_FALSE(ZSTD_isError(z));
   v1.resize(16 + z);
   WriteFileAtomically(path, v1.data(), v1.size());

@@ -4,9 +4,9 @@
 
 #include <stdexcept>
 
-#include "trainer/scenes/builtin_scene.h"
 #include "trainer/data/camera.h"
 #include "trainer/data/dataset.h"
+#include "trainer/scenes/builtin_scene.h"
 
 namespace ecrf {
 namespace trainer {
@@ -23,7 +23,8 @@ TEST(EvalProgress, CountsTheViewsAStrideAndBudgetLeave) {
 TEST(EvalProgress, LineStatesViewsTimePerViewAndWhatIsLeft) {
   EvalProgress progress("evaluating", 8, 1e9);
   EXPECT_EQ(progress.Line(2, 30.0, ""), "evaluating: view 2/8, 15.0 s/view, 90 s left");
-  EXPECT_EQ(progress.Line(8, 8.0, "3.0 samples per ray"), "evaluating: view 8/8, 1.0 s/view, 0 s left, 3.0 samples per ray");
+  EXPECT_EQ(progress.Line(8, 8.0, "3.0 samples per ray"),
+            "evaluating: view 8/8, 1.0 s/view, 0 s left, 3.0 samples per ray");
 }
 
 TEST(DownscaleViews, ShrinksImagesAndCamerasTogether) {

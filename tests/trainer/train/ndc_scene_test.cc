@@ -12,6 +12,7 @@
 #include "decoder/ndc.h"
 #include "decoder/ray_marcher.h"
 #include "decoder/scene_decoder.h"
+#include "encoder/scene_encoder.h"
 #include "format/byte_io.h"
 #include "format/container.h"
 #include "format/ndc_frame.h"
@@ -19,7 +20,6 @@
 #include "tests/common/decode_or_die.h"
 #include "tests/common/renderer_agreement.h"
 #include "trainer/data/camera.h"
-#include "encoder/scene_encoder.h"
 #include "trainer/data/scene_fit.h"
 #include "trainer/model/volume_render.h"
 
@@ -79,7 +79,8 @@ TEST(NdcRay, IsTheStraightImageOfTheWorldRayBeyondTheNearPlane) {
       const double s = (q[2] - ndc_o[2]) / ndc_d[2];
       EXPECT_GT(s, previous);
       previous = s;
-      for (int a = 0; a < 2; ++a) EXPECT_NEAR(q[a], ndc_o[a] + ndc_d[a] * s, 2e-5 * (1 + std::fabs(q[a]))) << r;
+      for (int a = 0; a < 2; ++a)
+        EXPECT_NEAR(q[a], ndc_o[a] + ndc_d[a] * s, 2e-5 * (1 + std::fabs(q[a]))) << r;
       ++checked;
     }
   }
@@ -190,7 +191,8 @@ TensorfModel SmallForwardModel(uint64_t seed) {
   return model;
 }
 
-std::vector<uint8_t> EncodeForward(const TensorfModel& model, int max_version_minor = kVersionMinor) {
+std::vector<uint8_t> EncodeForward(const TensorfModel& model,
+                                   int max_version_minor = kVersionMinor) {
   EncodeOptions o;
   o.max_version_minor = max_version_minor;
   o.mlp_float32 = true;
@@ -229,11 +231,13 @@ TEST(ForwardScene, StreamIsVersion13WithAnNdcpChunkAndTheDecoderRendersWhatTheTr
   const std::vector<uint8_t> bytes = EncodeForward(model, 3);
   EXPECT_EQ(bytes[5], 3);  // version_minor: the forward-facing model is a 1.3 feature
   // HEAD (12 + 90 bytes after the 8-byte file header), then NDCP.
-  EXPECT_EQ(std::string(bytes.begin() + 8 + 12 + kSceneHeaderBytes, bytes.begin() + 8 + 12 + kSceneHeaderBytes + 4),
+  EXPECT_EQ(std::string(bytes.begin() + 8 + 12 + kSceneHeaderBytes,
+                        bytes.begin() + 8 + 12 + kSceneHeaderBytes + 4),
             "NDCP");
   const dec::SceneField field = DecodeOrDie(bytes);
   ASSERT_EQ(field.scene_model, SceneModel::kForward);
-  for (int k = 0; k < 12; ++k) EXPECT_EQ(field.ndc.world_to_ref[k], model.config().ndc.world_to_ref[k]);
+  for (int k = 0; k < 12; ++k)
+    EXPECT_EQ(field.ndc.world_to_ref[k], model.config().ndc.world_to_ref[k]);
   EXPECT_EQ(field.ndc.scale[0], model.config().ndc.scale[0]);
   EXPECT_EQ(field.ndc.scale[1], model.config().ndc.scale[1]);
   EXPECT_EQ(field.ndc.near_plane, model.config().ndc.near_plane);

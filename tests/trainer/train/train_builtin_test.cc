@@ -11,10 +11,10 @@
 
 #include "decoder/ray_marcher.h"
 #include "decoder/scene_decoder.h"
-#include "trainer/data/camera.h"
 #include "encoder/encode_rate_control.h"
-#include "trainer/data/image_metrics.h"
 #include "encoder/scene_encoder.h"
+#include "trainer/data/camera.h"
+#include "trainer/data/image_metrics.h"
 #include "trainer/train/trainer.h"
 
 namespace ecrf {
@@ -29,14 +29,16 @@ TrainOptions SmallRun() {
   o.iters = 400;
   o.batch_rays = 1024;
   o.progress_every = 100;
-  o.score_float = true;  // the tests compare the decoded file and the checkpoint with the float model
+  o.score_float =
+      true;  // the tests compare the decoded file and the checkpoint with the float model
   return o;
 }
 
 // Mean PSNR over the test views of the stream decoded and rendered by the embeddable decoder.
 double DecodedPsnr(const std::vector<uint8_t>& bytes, const Dataset& test) {
   dec::SceneField field;
-  const Status st = dec::DecodeScene(bytes.data(), bytes.size(), dec::DecodeOptions(), &field, nullptr);
+  const Status st =
+      dec::DecodeScene(bytes.data(), bytes.size(), dec::DecodeOptions(), &field, nullptr);
   EXPECT_TRUE(st.ok()) << st.message();
   dec::RayMarcher marcher;
   EXPECT_TRUE(marcher.Init(&field, dec::RenderOptions()).ok());
@@ -50,7 +52,9 @@ double DecodedPsnr(const std::vector<uint8_t>& bytes, const Dataset& test) {
     img.height = v.camera.height;
     img.channels = 3;
     img.pixels.resize(size_t(n) * 3);
-    EXPECT_TRUE(marcher.RenderRays(size_t(n), origins.data(), dirs.data(), img.pixels.data(), nullptr).ok());
+    EXPECT_TRUE(
+        marcher.RenderRays(size_t(n), origins.data(), dirs.data(), img.pixels.data(), nullptr)
+            .ok());
     psnr += Psnr(img, v.rgb) / double(test.views.size());
   }
   return psnr;
@@ -96,8 +100,8 @@ TEST(TrainBuiltin, ReachesHeldOutPsnrAndCheckpointsRestore) {
   const double decoded_psnr = DecodedPsnr(bytes, test);
   size_t float_bytes = 0;
   for (const auto& p : model.NamedParameters()) float_bytes += p.size * sizeof(float);
-  std::printf("  encoded %zu bytes (float32 %zu): decoded PSNR %.2f dB vs float %.2f dB\n", bytes.size(),
-              float_bytes, decoded_psnr, r.test.psnr);
+  std::printf("  encoded %zu bytes (float32 %zu): decoded PSNR %.2f dB vs float %.2f dB\n",
+              bytes.size(), float_bytes, decoded_psnr, r.test.psnr);
   EXPECT_GT(decoded_psnr, r.test.psnr - 0.3);
   EXPECT_LT(bytes.size() * 8, float_bytes);
 }
@@ -156,10 +160,12 @@ TEST(TrainBuiltin, TargetSizeLands) {
   const TargetSizeResult fit = EncodeToTargetSize(model, RunEncodeOptions(t, rate), t.target_bytes);
   const double trained_psnr = DecodedPsnr(trained, test);
   const double fit_psnr = DecodedPsnr(fit.bytes, test);
-  std::printf("  plain file %zu bytes; target %zu: trained to %zu bytes (lambda_e %g, %.2f dB decoded), encoded "
-              "%zu bytes (steps x%.3f, %.2f dB decoded); float model %.2f dB\n",
-              plain_bytes, t.target_bytes, trained.size(), r.final_lambda_e, trained_psnr, fit.bytes.size(),
-              fit.step_scale, fit_psnr, r.test.psnr);
+  std::printf(
+      "  plain file %zu bytes; target %zu: trained to %zu bytes (lambda_e %g, %.2f dB decoded), "
+      "encoded "
+      "%zu bytes (steps x%.3f, %.2f dB decoded); float model %.2f dB\n",
+      plain_bytes, t.target_bytes, trained.size(), r.final_lambda_e, trained_psnr, fit.bytes.size(),
+      fit.step_scale, fit_psnr, r.test.psnr);
   EXPECT_LE(fit.bytes.size(), t.target_bytes);
   EXPECT_GE(double(fit.bytes.size()), 0.95 * double(t.target_bytes));
   // The training controller did most of the work (here from a starting lambda_e 2000x too
@@ -187,7 +193,8 @@ TEST(TrainBuiltin, NonFiniteInputsStopTrainingAndKeepTheLastGoodCheckpoint) {
     std::remove(ckpt.c_str());
     Dataset train = LoadTrainingViews(o, "train");
     if (kind == 0) {
-      for (View& v : train.views) std::fill(v.rgb.pixels.begin(), v.rgb.pixels.begin() + 3 * v.rgb.width, NAN);
+      for (View& v : train.views)
+        std::fill(v.rgb.pixels.begin(), v.rgb.pixels.begin() + 3 * v.rgb.width, NAN);
     } else {
       train.views[3].camera.c2w[0][0] = NAN;
     }
@@ -201,7 +208,9 @@ TEST(TrainBuiltin, NonFiniteInputsStopTrainingAndKeepTheLastGoodCheckpoint) {
       EXPECT_NE(what.find("training diverged at iteration "), std::string::npos) << what;
       EXPECT_NE(what.find("not finite"), std::string::npos) << what;
       // NaN pixels poison the first batch; a NaN pose only its own rays, a few batches later.
-      if (kind == 1) EXPECT_NE(what.find("the last good checkpoint stays in " + ckpt), std::string::npos) << what;
+      if (kind == 1)
+        EXPECT_NE(what.find("the last good checkpoint stays in " + ckpt), std::string::npos)
+            << what;
     }
     // Whatever checkpoint exists holds finite parameters only.
     if (std::FILE* f = std::fopen(ckpt.c_str(), "rb")) {
@@ -255,7 +264,8 @@ TEST(TrainBuiltin, ResumedRunEqualsTheUninterruptedOneBitForBit) {
       EXPECT_TRUE(b.head().params() == a.head().params());
       EXPECT_EQ(rb.test.psnr, ra.test.psnr);
       ASSERT_EQ(rb.psnr_curve.size(), ra.psnr_curve.size());  // the curve survives the stops
-      for (size_t k = 0; k < ra.psnr_curve.size(); ++k) EXPECT_EQ(rb.psnr_curve[k].second, ra.psnr_curve[k].second);
+      for (size_t k = 0; k < ra.psnr_curve.size(); ++k)
+        EXPECT_EQ(rb.psnr_curve[k].second, ra.psnr_curve[k].second);
       EXPECT_EQ(EncodeScene(b, RunEncodeOptions(o, RateState())).size() > 0, true);
     } else {
       EXPECT_THROW(Train(parts, train, test, &b, nullptr), TrainingStopped);

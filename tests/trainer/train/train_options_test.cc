@@ -4,8 +4,8 @@
 
 #include <random>
 
-#include "trainer/scenes/builtin_scene.h"
 #include "trainer/data/ray_set.h"
+#include "trainer/scenes/builtin_scene.h"
 #include "trainer/train/trainer.h"
 
 namespace ecrf {
@@ -60,7 +60,10 @@ TEST(RaySet, BatchesCoverEveryRayOncePerEpochAndFilterKeepsMatches) {
   for (const View& v : d.views)
     for (float c : v.rgb.pixels) expected += c;
   EXPECT_NEAR(sum, expected, 1e-3);
-  for (int i = 0; i < 144; ++i) EXPECT_NEAR(dir[3 * i] * dir[3 * i] + dir[3 * i + 1] * dir[3 * i + 1] + dir[3 * i + 2] * dir[3 * i + 2], 1.0, 1e-5);
+  for (int i = 0; i < 144; ++i)
+    EXPECT_NEAR(
+        dir[3 * i] * dir[3 * i] + dir[3 * i + 1] * dir[3 * i + 1] + dir[3 * i + 2] * dir[3 * i + 2],
+        1.0, 1e-5);
   rays.Filter([](const float*, const float* d) { return d[0] > 0; });
   EXPECT_GT(rays.size(), 0u);
   EXPECT_LT(rays.size(), 144u);

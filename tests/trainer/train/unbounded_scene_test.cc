@@ -11,17 +11,17 @@
 #include "decoder/contraction.h"
 #include "decoder/ray_marcher.h"
 #include "decoder/scene_decoder.h"
+#include "encoder/scene_encoder.h"
 #include "format/byte_io.h"
 #include "format/scene_header.h"
 #include "tests/common/decode_or_die.h"
 #include "tests/common/renderer_agreement.h"
+#include "trainer/data/scene_fit.h"
+#include "trainer/model/volume_render.h"
 #include "trainer/scenes/builtin_scene.h"
 #include "trainer/scenes/capture_scene.h"
-#include "encoder/scene_encoder.h"
-#include "trainer/data/scene_fit.h"
 #include "trainer/scenes/still_life.h"
 #include "trainer/train/trainer.h"
-#include "trainer/model/volume_render.h"
 
 namespace ecrf {
 namespace trainer {
@@ -38,7 +38,8 @@ TEST(Contraction, IsMonotoneContinuousAndInvertible) {
   EXPECT_NEAR(ContractCoordinate(1.0001f), 1.0001f, 1e-7f);
   EXPECT_NEAR(ContractCoordinate(-1.0001f), -1.0001f, 1e-7f);
   float previous = -2.f;
-  for (float x = -1e6f; x < 1e6f; x = x < 0 ? (x < -2.f ? x / 1.1f : x + 0.01f) : (x < 2.f ? x + 0.01f : x * 1.1f)) {
+  for (float x = -1e6f; x < 1e6f;
+       x = x < 0 ? (x < -2.f ? x / 1.1f : x + 0.01f) : (x < 2.f ? x + 0.01f : x * 1.1f)) {
     const float y = ContractCoordinate(x);
     ASSERT_GE(y, previous) << x;
     ASSERT_GT(y, -2.f);
@@ -93,8 +94,9 @@ TEST(SceneFit, CaptureIsUnboundedWithASmallBoxAroundTheStillLife) {
   EXPECT_GE(fit.roi.max[2], 0.95f);
   // And a small part of the aabb_scale 4 cube (about 12.1 units a side).
   EXPECT_LT(fit.roi_share, 0.03);
-  std::printf("  fitted box [%.2f %.2f %.2f] - [%.2f %.2f %.2f], %.2f%% of the cube\n", fit.roi.min[0],
-              fit.roi.min[1], fit.roi.min[2], fit.roi.max[0], fit.roi.max[1], fit.roi.max[2], 100 * fit.roi_share);
+  std::printf("  fitted box [%.2f %.2f %.2f] - [%.2f %.2f %.2f], %.2f%% of the cube\n",
+              fit.roi.min[0], fit.roi.min[1], fit.roi.min[2], fit.roi.max[0], fit.roi.max[1],
+              fit.roi.max[2], 100 * fit.roi_share);
 }
 
 TEST(SceneFit, BlenderLayoutStaysAnObjectAndNamesAreChecked) {
@@ -151,7 +153,8 @@ TEST(UnboundedScene, StreamIsVersion12AndTheDecoderRendersWhatTheTrainerRenders)
   std::vector<float> origins, dirs;
   for (int r = 0; r < 200; ++r) {
     const float u = float(r) * 0.61803f, v = float(r) * 0.2719f;
-    const float o3[3] = {r % 2 ? 0.3f : 2.5f * std::cos(u), r % 2 ? -0.2f : 2.5f * std::sin(u), 0.1f * (r % 5)};
+    const float o3[3] = {r % 2 ? 0.3f : 2.5f * std::cos(u), r % 2 ? -0.2f : 2.5f * std::sin(u),
+                         0.1f * (r % 5)};
     float d3[3] = {std::cos(u + v) * std::cos(v), std::sin(u + v) * std::cos(v), std::sin(v)};
     const float n = std::sqrt(d3[0] * d3[0] + d3[1] * d3[1] + d3[2] * d3[2]);
     for (int a = 0; a < 3; ++a) {
