@@ -9,7 +9,7 @@ if(ECRF_BUILD_TRAINER)
   get_property(ECRF_TRAINER_LIBRARIES GLOBAL PROPERTY ECRF_TRAINER_LIBRARIES)
   install(TARGETS ecrf_trainer ${ECRF_TRAINER_LIBRARIES} ecrf_format_encoder EXPORT ecrfTargets
           ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR})
-  foreach(dir trainer/data trainer/scenes trainer/model trainer/rate trainer/train encoder decoder format)
+  foreach(dir trainer/data trainer/scenes trainer/model trainer/rate trainer/train encoder decoder format format/entropy format/coefficients)
     file(GLOB headers ${PROJECT_SOURCE_DIR}/${dir}/*.h)
     install(FILES ${headers} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/ecrf-trainer/${dir})
   endforeach()

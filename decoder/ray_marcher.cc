@@ -336,20 +336,6 @@ uint8_t ToByte(float v) { return static_cast<uint8_t>(ClipUnit(v) * 255.f + 0.5f
 
 }  // namespace
 
-void CameraRay(const Camera& camera, int i, int j, float origin[3], float dir[3]) {
-  const float x = (static_cast<float>(i) + 0.5f - camera.cx) / camera.fx;
-  const float y = -(static_cast<float>(j) + 0.5f - camera.cy) / camera.fy;
-  const float z = -1.f;
-  const float* m = camera.c2w;
-  float d[3];
-  for (int a = 0; a < 3; ++a) d[a] = m[4 * a] * x + m[4 * a + 1] * y + m[4 * a + 2] * z;
-  const float inv = 1.f / std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-  for (int a = 0; a < 3; ++a) {
-    dir[a] = d[a] * inv;
-    origin[a] = m[4 * a + 3];
-  }
-}
-
 // Samples per ray after the speed knobs of SPEC.md 7.8: ceil(n / step_scale) in float64, then
 // the max_samples cap. Init checks it against the sample budget; Run marches that many.
 namespace {

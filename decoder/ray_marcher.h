@@ -23,22 +23,12 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "decoder/camera.h"
 #include "decoder/field.h"
 #include "format/status.h"
 
 namespace ecrf {
 namespace dec {
-
-// Pinhole camera. c2w: 3x4 row-major camera-to-world (OpenGL: the camera looks down -z, +y up).
-// Pixel (i, j) (column i, row j from the top) has direction
-// c2w[:3,:3] * ((i + 0.5 - cx) / fx, -(j + 0.5 - cy) / fy, -1), normalized; origin c2w[:,3].
-struct Camera {
-  float c2w[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
-  float fx = 1.f, fy = 1.f, cx = 0.f, cy = 0.f;
-  int width = 0, height = 0;
-};
-
-void CameraRay(const Camera& camera, int i, int j, float origin[3], float dir[3]);
 
 inline constexpr int kMaxRenderThreads = 64;
 inline constexpr int64_t kMaxImagePixels = int64_t{1} << 26;

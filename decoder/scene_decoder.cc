@@ -5,12 +5,12 @@
 #include <cstring>
 
 #include "decoder/field_sampler.h"
-#include "format/block_shape.h"
 #include "format/byte_io.h"
-#include "format/coef_coder.h"
+#include "format/coefficients/block_shape.h"
+#include "format/coefficients/coef_coder.h"
+#include "format/coefficients/int_idct.h"
 #include "format/container.h"
 #include "format/half_float.h"
-#include "format/int_idct.h"
 #include "format/mlp_coder.h"
 #include "format/ndc_frame.h"
 #include "format/occupancy_coder.h"

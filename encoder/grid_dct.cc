@@ -5,8 +5,8 @@
 #include <string>
 
 #include "decoder/multiversion.h"
-#include "format/block_shape.h"
-#include "format/float_dct.h"
+#include "format/coefficients/block_shape.h"
+#include "format/coefficients/float_dct.h"
 
 namespace ecrf {
 namespace trainer {

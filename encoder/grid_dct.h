@@ -2,7 +2,7 @@
 //
 // A tensor is viewed through three "block axes" (a0, a1, a2), each with a logical extent and a
 // memory stride; a block is an n0 x n1 x n2 tile over them, transformed by the orthonormal DCT of
-// format/float_dct.h and stored in raster order [n0][n1][n2] (n2 fastest):
+// format/coefficients/float_dct.h and stored in raster order [n0][n1][n2] (n2 fastest):
 //   plane m ([res[v]][res[u]][rank], channels-last): a0 = channel, a1 = v (H), a2 = u (W);
 //                                                   default block 16 x 16 x 16.
 //   line m  ([res[w]][rank]):                        a0 = (none, extent 1), a1 = channel,

@@ -10,7 +10,7 @@
 #include "encoder/coef_quantizer.h"
 #include "encoder/grid_dct.h"
 #include "format/byte_io.h"
-#include "format/coef_coder.h"
+#include "format/coefficients/coef_coder.h"
 #include "format/container.h"
 #include "format/half_float.h"
 #include "format/mlp_coder.h"

@@ -16,7 +16,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "format/range_coder.h"
+#include "format/entropy/range_coder.h"
 #include "format/status.h"
 
 namespace ecrf {

@@ -6,8 +6,8 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "format/entropy/range_coder.h"
 #include "format/occupancy_coder.h"
-#include "format/range_coder.h"
 
 namespace ecrf {
 namespace occupancy_internal {

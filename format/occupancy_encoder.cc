@@ -4,8 +4,8 @@
 #include <cstdlib>
 #include <cstring>
 
+#include "format/entropy/range_coder.h"
 #include "format/occupancy_contexts.h"
-#include "format/range_coder.h"
 
 namespace ecrf {
 

@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "decoder/orbit_camera.h"
+#include "decoder/camera.h"
 
 namespace py = pybind11;
 
@@ -269,7 +269,7 @@ py::array Render(Scene& s, const py::array_t<float, py::array::c_style | py::arr
   return std::move(out);
 }
 
-// The reference tools' orbit (decoder/orbit_camera.h, SPEC.md 7.1): the camera `ecrf render
+// The reference tools' orbit (decoder/camera.h, SPEC.md 7.1): the camera `ecrf render
 // --orbit` uses, bit for bit, as (c2w, fx, fy, cx, cy).
 py::tuple OrbitCamera(int width, int height, double azimuth_deg, double elevation_deg,
                       float radius) {

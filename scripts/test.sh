@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Builds and runs every test suite: the formatting and clang-tidy checks, an optimised build of
-# everything, then format/ and decoder/ again under AddressSanitizer + UndefinedBehaviorSanitizer (they parse untrusted bytes), then the
+# everything, then format/ and decoder/ again under AddressSanitizer + UndefinedBehaviorSanitizer
+# (they parse untrusted bytes), then the
 # conformance vectors decoded by g++, clang++ and WebAssembly builds (identical checksums), the
 # installed tree (examples, ABI, Python), the web viewer in headless chromium, then a short run of
 # every fuzz target.

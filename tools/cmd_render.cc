@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "decoder/orbit_camera.h"
+#include "decoder/camera.h"
 #include "tools/cli.h"
 #include "tools/cli_args.h"
 #include "tools/commands.h"

@@ -6,11 +6,11 @@
 #include <random>
 #include <vector>
 
-#include "format/coef_coder.h"
+#include "format/coefficients/coef_coder.h"
+#include "format/coefficients/float_dct.h"
+#include "format/coefficients/int_idct.h"
 #include "format/container.h"
-#include "format/float_dct.h"
-#include "format/int_idct.h"
-#include "format/range_coder.h"
+#include "format/entropy/range_coder.h"
 #include "tools/cli.h"
 #include "tools/commands.h"
 

@@ -12,9 +12,9 @@
 #include <string>
 #include <vector>
 
-#include "format/coef_coder.h"
-#include "format/int_idct.h"
-#include "format/range_coder.h"
+#include "format/coefficients/coef_coder.h"
+#include "format/coefficients/int_idct.h"
+#include "format/entropy/range_coder.h"
 #include "tests/common/md5.h"
 
 namespace ecrf {

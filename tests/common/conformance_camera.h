@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "decoder/orbit_camera.h"
+#include "decoder/camera.h"
 #include "decoder/ray_marcher.h"
 
 namespace ecrf {

@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "format/byte_io.h"
-#include "format/coef_coder.h"
+#include "format/coefficients/coef_coder.h"
 #include "format/container.h"
 #include "format/half_float.h"
 #include "format/mlp_coder.h"

@@ -11,9 +11,9 @@
 #include <random>
 #include <vector>
 
+#include "decoder/camera.h"
 #include "decoder/field.h"
 #include "decoder/field_sampler.h"
-#include "decoder/orbit_camera.h"
 #include "tests/common/naive_renderer.h"
 
 namespace ecrf {

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "decoder/orbit_camera.h"
+#include "decoder/camera.h"
 #include "decoder/ray_marcher.h"
 #include "decoder/scene_decoder.h"
 #include "ecrf/decoder.h"

@@ -12,7 +12,7 @@
 #include <random>
 #include <vector>
 
-#include "format/float_dct.h"
+#include "format/coefficients/float_dct.h"
 #include "trainer/rate/entropy_model.h"
 #include "trainer/rate/rate_objective.h"
 

@@ -9,12 +9,12 @@
 #include <string>
 #include <vector>
 
-#include "decoder/orbit_camera.h"
+#include "decoder/camera.h"
 #include "decoder/ray_marcher.h"
 #include "decoder/scene_decoder.h"
 #include "encoder/grid_dct.h"
 #include "encoder/scene_encoder.h"
-#include "format/int_idct.h"
+#include "format/coefficients/int_idct.h"
 #include "tests/common/decode_or_die.h"
 #include "tests/common/grid_md5.h"
 #include "trainer/data/image_io.h"

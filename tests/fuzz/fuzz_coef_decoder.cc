@@ -5,9 +5,9 @@
 #include <cstdlib>
 #include <vector>
 
-#include "format/coef_coder.h"
-#include "format/int_idct.h"
-#include "format/range_coder.h"
+#include "format/coefficients/coef_coder.h"
+#include "format/coefficients/int_idct.h"
+#include "format/entropy/range_coder.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size < 2) return 0;

@@ -6,7 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "decoder/orbit_camera.h"
+#include "decoder/camera.h"
 #include "decoder/ray_marcher.h"
 #include "decoder/scene_decoder.h"
 

@@ -11,8 +11,8 @@
 #include <utility>
 #include <vector>
 
-#include "format/coef_coder.h"
-#include "format/range_coder.h"
+#include "format/coefficients/coef_coder.h"
+#include "format/entropy/range_coder.h"
 #include "tools/bench/bench_json.h"
 #include "tools/bench/benches.h"
 

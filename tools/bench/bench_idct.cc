@@ -5,11 +5,11 @@
 #include <random>
 #include <vector>
 
-#include "format/block_shape.h"
-#include "format/coef_coder.h"
-#include "format/float_dct.h"
-#include "format/int_idct.h"
-#include "format/range_coder.h"
+#include "format/coefficients/block_shape.h"
+#include "format/coefficients/coef_coder.h"
+#include "format/coefficients/float_dct.h"
+#include "format/coefficients/int_idct.h"
+#include "format/entropy/range_coder.h"
 #include "tools/bench/bench_json.h"
 #include "tools/bench/benches.h"
 

@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "decoder/camera.h"
 #include "decoder/field_sampler.h"
-#include "decoder/orbit_camera.h"
 #include "tools/bench/bench_json.h"
 #include "tools/bench/benches.h"
 

@@ -5,14 +5,14 @@
 // end-of-block position in scan order, then, in reverse scan order down to DC, each level as a
 // base symbol, range symbols and an Exp-Golomb remainder, followed by a bypass sign bit.
 // Decoding work is proportional to the end-of-block position, not to the block volume.
-#ifndef ECRF_FORMAT_COEF_CODER_H_
-#define ECRF_FORMAT_COEF_CODER_H_
+#ifndef ECRF_FORMAT_COEFFICIENTS_COEF_CODER_H_
+#define ECRF_FORMAT_COEFFICIENTS_COEF_CODER_H_
 
 #include <cstdint>
 
-#include "format/coef_contexts.h"
-#include "format/coef_scan.h"
-#include "format/range_coder.h"
+#include "format/coefficients/coef_contexts.h"
+#include "format/coefficients/coef_scan.h"
+#include "format/entropy/range_coder.h"
 #include "format/status.h"
 
 namespace ecrf {
@@ -31,4 +31,4 @@ Status DecodeCoefBlock(RangeDecoder& decoder, CoefContexts& contexts, int32_t ma
 
 }  // namespace ecrf
 
-#endif  // ECRF_FORMAT_COEF_CODER_H_
+#endif  // ECRF_FORMAT_COEFFICIENTS_COEF_CODER_H_

@@ -9,8 +9,8 @@
 // CDF layout: a context for an alphabet of N symbols (2 <= N <= 16) is uint16_t cdf[N + 1].
 // cdf[i] = 32768 * P(symbol > i) ("inverse CDF"), so cdf[N - 1] is always 0, and cdf[N] is
 // the adaptation counter (starts at 0, saturates at 32).
-#ifndef ECRF_FORMAT_RANGE_CODER_H_
-#define ECRF_FORMAT_RANGE_CODER_H_
+#ifndef ECRF_FORMAT_ENTROPY_RANGE_CODER_H_
+#define ECRF_FORMAT_ENTROPY_RANGE_CODER_H_
 
 #include <cstddef>
 #include <cstdint>
@@ -176,4 +176,4 @@ inline void RangeDecoder::Normalize(uint32_t dif, uint32_t rng) {
 
 }  // namespace ecrf
 
-#endif  // ECRF_FORMAT_RANGE_CODER_H_
+#endif  // ECRF_FORMAT_ENTROPY_RANGE_CODER_H_

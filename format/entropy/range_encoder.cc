@@ -1,6 +1,6 @@
 #include <cassert>
 
-#include "format/range_coder.h"
+#include "format/entropy/range_coder.h"
 
 namespace ecrf {
 

@@ -10,8 +10,8 @@
 // divisor, shifts right arithmetically and clips to int32. Intermediates keep P + 6 fractional
 // bits (6 guard bits), so the result stays within one output unit of the float64 orthonormal
 // inverse DCT. Every step is exact integer arithmetic: all platforms produce the same bits.
-#ifndef ECRF_FORMAT_INT_IDCT_H_
-#define ECRF_FORMAT_INT_IDCT_H_
+#ifndef ECRF_FORMAT_COEFFICIENTS_INT_IDCT_H_
+#define ECRF_FORMAT_COEFFICIENTS_INT_IDCT_H_
 
 #include <cstdint>
 
@@ -38,4 +38,4 @@ void InverseDctInt(const int32_t* coeffs, const int dims[3], int coef_bits, int3
 
 }  // namespace ecrf
 
-#endif  // ECRF_FORMAT_INT_IDCT_H_
+#endif  // ECRF_FORMAT_COEFFICIENTS_INT_IDCT_H_

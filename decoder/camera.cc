@@ -1,9 +1,23 @@
-#include "decoder/orbit_camera.h"
+#include "decoder/camera.h"
 
 #include <cmath>
 
 namespace ecrf {
 namespace dec {
+
+void CameraRay(const Camera& camera, int i, int j, float origin[3], float dir[3]) {
+  const float x = (static_cast<float>(i) + 0.5f - camera.cx) / camera.fx;
+  const float y = -(static_cast<float>(j) + 0.5f - camera.cy) / camera.fy;
+  const float z = -1.f;
+  const float* m = camera.c2w;
+  float d[3];
+  for (int a = 0; a < 3; ++a) d[a] = m[4 * a] * x + m[4 * a + 1] * y + m[4 * a + 2] * z;
+  const float inv = 1.f / std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  for (int a = 0; a < 3; ++a) {
+    dir[a] = d[a] * inv;
+    origin[a] = m[4 * a + 3];
+  }
+}
 
 Camera OrbitCamera(int width, int height, float azimuth_rad, float elevation_rad, float radius) {
   Camera cam;

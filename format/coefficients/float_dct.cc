@@ -1,8 +1,8 @@
-#include "format/float_dct.h"
+#include "format/coefficients/float_dct.h"
 
 #include <cmath>
 
-#include "format/block_shape.h"
+#include "format/coefficients/block_shape.h"
 
 namespace ecrf {
 namespace {

@@ -5,8 +5,8 @@
 // Forward: X[k] = a_k * sum_n x[n] cos(pi (2n+1) k / 2N), a_0 = sqrt(1/N), a_k = sqrt(2/N).
 // Separable over the axes of an n0 x n1 x n2 block (n2 contiguous); axes of length 1 are identity.
 // The transform is orthonormal, so InverseDct is also the gradient (adjoint) of ForwardDct.
-#ifndef ECRF_FORMAT_FLOAT_DCT_H_
-#define ECRF_FORMAT_FLOAT_DCT_H_
+#ifndef ECRF_FORMAT_COEFFICIENTS_FLOAT_DCT_H_
+#define ECRF_FORMAT_COEFFICIENTS_FLOAT_DCT_H_
 
 namespace ecrf {
 
@@ -22,4 +22,4 @@ void InverseDct(float* data, const int dims[3]);
 
 }  // namespace ecrf
 
-#endif  // ECRF_FORMAT_FLOAT_DCT_H_
+#endif  // ECRF_FORMAT_COEFFICIENTS_FLOAT_DCT_H_

@@ -1,8 +1,8 @@
-#include "format/coef_contexts.h"
+#include "format/coefficients/coef_contexts.h"
 
 #include <algorithm>
 
-#include "format/range_coder.h"
+#include "format/entropy/range_coder.h"
 
 namespace ecrf {
 

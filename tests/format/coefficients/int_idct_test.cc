@@ -1,6 +1,6 @@
 // The integer inverse DCT against the float64 orthonormal inverse: error bounds per block shape,
 // worst-case magnitudes, exact zero handling, and the normative tables.
-#include "format/int_idct.h"
+#include "format/coefficients/int_idct.h"
 
 #include <gtest/gtest.h>
 
@@ -9,8 +9,8 @@
 #include <random>
 #include <vector>
 
-#include "format/block_shape.h"
-#include "format/float_dct.h"
+#include "format/coefficients/block_shape.h"
+#include "format/coefficients/float_dct.h"
 
 namespace ecrf {
 namespace {

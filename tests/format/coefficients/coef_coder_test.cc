@@ -1,4 +1,4 @@
-#include "format/coef_coder.h"
+#include "format/coefficients/coef_coder.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "format/coef_scan.h"
+#include "format/coefficients/coef_scan.h"
 
 #include <cstddef>
 

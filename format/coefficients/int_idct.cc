@@ -1,8 +1,8 @@
-#include "format/int_idct.h"
+#include "format/coefficients/int_idct.h"
 
 #include <cstring>
 
-#include "format/block_shape.h"
+#include "format/coefficients/block_shape.h"
 
 namespace ecrf {
 namespace {

@@ -3,13 +3,13 @@
 // The scan visits coefficients from low to high frequency so that the zeros of a quantized DCT
 // block gather at the end, where a single end-of-block position codes them all. The order is a
 // pure function of the shape (SPEC.md section 4, "Scan order").
-#ifndef ECRF_FORMAT_COEF_SCAN_H_
-#define ECRF_FORMAT_COEF_SCAN_H_
+#ifndef ECRF_FORMAT_COEFFICIENTS_COEF_SCAN_H_
+#define ECRF_FORMAT_COEFFICIENTS_COEF_SCAN_H_
 
 #include <cstdint>
 #include <vector>
 
-#include "format/block_shape.h"
+#include "format/coefficients/block_shape.h"
 
 namespace ecrf {
 
@@ -62,4 +62,4 @@ void BuildScanTable(const BlockShape& shape, ScanTable* table);
 
 }  // namespace ecrf
 
-#endif  // ECRF_FORMAT_COEF_SCAN_H_
+#endif  // ECRF_FORMAT_COEFFICIENTS_COEF_SCAN_H_

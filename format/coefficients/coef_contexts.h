@@ -1,12 +1,12 @@
 // The adaptive state of the coefficient coder for one block shape, and the context derivations
 // that encoder and decoder must share exactly (SPEC.md section 4, "Contexts").
-#ifndef ECRF_FORMAT_COEF_CONTEXTS_H_
-#define ECRF_FORMAT_COEF_CONTEXTS_H_
+#ifndef ECRF_FORMAT_COEFFICIENTS_COEF_CONTEXTS_H_
+#define ECRF_FORMAT_COEFFICIENTS_COEF_CONTEXTS_H_
 
 #include <cstdint>
 #include <vector>
 
-#include "format/coef_scan.h"
+#include "format/coefficients/coef_scan.h"
 #include "format/status.h"
 
 namespace ecrf {
@@ -99,4 +99,4 @@ inline void UpdateEscapeStat(int* escape_stat, uint32_t remainder) {
 
 }  // namespace ecrf
 
-#endif  // ECRF_FORMAT_COEF_CONTEXTS_H_
+#endif  // ECRF_FORMAT_COEFFICIENTS_COEF_CONTEXTS_H_

@@ -1,6 +1,6 @@
 #include <cstdlib>
 
-#include "format/coef_coder.h"
+#include "format/coefficients/coef_coder.h"
 
 namespace ecrf {
 namespace {

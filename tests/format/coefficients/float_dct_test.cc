@@ -1,4 +1,4 @@
-#include "format/float_dct.h"
+#include "format/coefficients/float_dct.h"
 
 #include <gtest/gtest.h>
 
@@ -6,7 +6,7 @@
 #include <random>
 #include <vector>
 
-#include "format/block_shape.h"
+#include "format/coefficients/block_shape.h"
 
 namespace ecrf {
 namespace {

@@ -1,7 +1,7 @@
 // Block shapes of the block DCT: n0 x n1 x n2 (n2 varies fastest in memory), each axis a power
 // of two from 1 to 32. Planes use channel x H x W blocks, lines channel x L (n0 = 1).
-#ifndef ECRF_FORMAT_BLOCK_SHAPE_H_
-#define ECRF_FORMAT_BLOCK_SHAPE_H_
+#ifndef ECRF_FORMAT_COEFFICIENTS_BLOCK_SHAPE_H_
+#define ECRF_FORMAT_COEFFICIENTS_BLOCK_SHAPE_H_
 
 namespace ecrf {
 
@@ -23,4 +23,4 @@ inline int BlockVolume(const int dims[3]) { return dims[0] * dims[1] * dims[2]; 
 
 }  // namespace ecrf
 
-#endif  // ECRF_FORMAT_BLOCK_SHAPE_H_
+#endif  // ECRF_FORMAT_COEFFICIENTS_BLOCK_SHAPE_H_

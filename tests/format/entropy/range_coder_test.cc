@@ -1,4 +1,4 @@
-#include "format/range_coder.h"
+#include "format/entropy/range_coder.h"
 
 #include <gtest/gtest.h>
 
