@@ -9,7 +9,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <string>
@@ -17,6 +16,7 @@
 
 #include "tools/bench/bench_json.h"
 #include "tools/bench/cpu_peak.h"
+#include "trainer/data/file_io.h"
 #include "trainer/model/appearance_head.h"
 #include "trainer/model/small_gemm.h"
 #include "trainer/train/adam.h"
@@ -165,10 +165,10 @@ int RunMlpBench(int argc, char** argv) {
   omp_set_num_threads(saved_threads);
   Eigen::setNbThreads(saved_eigen_threads);
   if (!json_path.empty()) {
-    std::ofstream out(json_path);
-    out << report.dump(2) << "\n";
-    if (!out) {
-      std::fprintf(stderr, "bench mlp: cannot write %s\n", json_path.c_str());
+    try {
+      trainer::WriteFileAtomically(json_path, report.dump(2) + "\n");
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "bench mlp: %s\n", e.what());
       return 1;
     }
   }
