@@ -8,56 +8,17 @@
 #include <random>
 #include <vector>
 
+#include "tests/common/naive_renderer.h"
+
 namespace ecrf {
 namespace dec {
 namespace {
 
-// Naive double-precision MLPRender_Fea on the trainer's flat parameter layout.
+// Naive double-precision MLPRender_Fea on the trainer's flat parameter layout (the naive
+// reference renderer's, tests/common/naive_renderer.h).
 void NaiveMlp(const MlpConfig& cfg, const std::vector<float>& params, const float* prod,
               const float* vd, double rgb[3]) {
-  const int P = cfg.num_products, F = cfg.feature_dim, H = cfg.hidden, in_dim = cfg.input_dim();
-  size_t o = 0;
-  const size_t o_basis = o;
-  o += static_cast<size_t>(F) * P;
-  const size_t o_w1 = o;
-  o += static_cast<size_t>(H) * in_dim;
-  const size_t o_b1 = o;
-  o += H;
-  const size_t o_w2 = o;
-  o += static_cast<size_t>(H) * H;
-  const size_t o_b2 = o;
-  o += H;
-  const size_t o_w3 = o;
-  o += 3 * static_cast<size_t>(H);
-  const size_t o_b3 = o;
-  std::vector<double> feat(F, 0.0);
-  for (int j = 0; j < F; ++j)
-    for (int k = 0; k < P; ++k) feat[j] += double(params[o_basis + j * P + k]) * prod[k];
-  std::vector<double> x(feat);
-  for (int c = 0; c < 3; ++c) x.push_back(vd[c]);
-  auto pe = [&](const std::vector<double>& v, int freqs) {
-    std::vector<double> args;
-    for (double a : v)
-      for (int f = 0; f < freqs; ++f) args.push_back(a * std::ldexp(1.0, f));
-    for (double a : args) x.push_back(std::sin(a));
-    for (double a : args) x.push_back(std::cos(a));
-  };
-  pe(feat, cfg.feature_pe_freqs);
-  pe(std::vector<double>(vd, vd + 3), cfg.viewdir_pe_freqs);
-  EXPECT_EQ(static_cast<int>(x.size()), in_dim);
-  auto layer = [&](const std::vector<double>& a, size_t ow, size_t ob, int out, bool relu) {
-    std::vector<double> y(out);
-    for (int j = 0; j < out; ++j) {
-      double s = params[ob + j];
-      for (size_t k = 0; k < a.size(); ++k) s += double(params[ow + j * a.size() + k]) * a[k];
-      y[j] = relu ? std::max(s, 0.0) : s;
-    }
-    return y;
-  };
-  const std::vector<double> h1 = layer(x, o_w1, o_b1, H, true);
-  const std::vector<double> h2 = layer(h1, o_w2, o_b2, H, true);
-  const std::vector<double> z = layer(h2, o_w3, o_b3, 3, false);
-  for (int c = 0; c < 3; ++c) rgb[c] = 1.0 / (1.0 + std::exp(-z[c]));
+  naive::NaiveMlp(cfg, params, std::vector<double>(prod, prod + cfg.num_products), vd, rgb);
 }
 
 std::vector<float> RandomParams(const AppearanceMlp& mlp, uint32_t seed, float scale) {
