@@ -204,6 +204,17 @@ int RunRender(int argc, char** argv) {
     }
   }
   if (max_views > 0 && cameras.size() > size_t(max_views)) cameras.resize(size_t(max_views));
+  // The decoder's image limit, applied before anything is decoded or allocated.
+  for (const auto& [name, camera] : cameras) {
+    const int64_t pixels = int64_t(camera.width) * camera.height;
+    if (pixels > dec::kMaxImagePixels) {
+      return UsageError(*app, "view " + name + " is " + std::to_string(camera.width) + "x" +
+                                  std::to_string(camera.height) + " = " + std::to_string(pixels) +
+                                  " pixels; the decoder renders at most " +
+                                  std::to_string(dec::kMaxImagePixels) +
+                                  " pixels per image (lower -W / -H)");
+    }
+  }
   const LoadedScene s = LoadScene(c);
   MakeDirectory(out);
   double seconds = 0.0;

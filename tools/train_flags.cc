@@ -289,6 +289,10 @@ void AddTrainFlags(CLI::App* app, TrainFlags* f) {
   app->add_flag("--accept-config-change", o.accept_config_change,
                 "with --resume: continue although settings differ from the checkpoint's")
       ->group(run);
+  app->add_flag("--overwrite", o.overwrite,
+                "replace the run RUN_DIR already holds (without it, or --resume, such a RUN_DIR "
+                "is refused)")
+      ->group(run);
   app->add_option("--stop-after", o.stop_after,
                   "leave after N iterations (continue later with --resume)")
       ->type_name("N")

@@ -58,6 +58,19 @@ void CheckResumedSettings(const trainer::TrainOptions& o) {
                list.c_str());
 }
 
+// A finished or started run is work a second `ecrf train -o` into its directory would silently
+// replace: refused, naming what is there, unless the user resumes or overwrites it.
+void RefuseExistingRun(const std::string& out_dir) {
+  std::string found;
+  for (const char* name : {"checkpoint.ckpt", "scene.ecrf", "metrics.json", "config.json"}) {
+    if (FileExists(out_dir + "/" + name)) found += std::string(found.empty() ? "" : ", ") + name;
+  }
+  if (found.empty()) return;
+  throw std::invalid_argument(out_dir + " already holds a run (" + found +
+                              "): --resume continues it, --overwrite replaces it, or choose "
+                              "another -o");
+}
+
 }  // namespace
 
 nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
@@ -70,6 +83,7 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
                                 "/checkpoint.ckpt does not exist)");
   }
   if (options.resume) CheckResumedSettings(options);
+  if (!options.resume && !options.overwrite) RefuseExistingRun(options.out_dir);
   const OutputDirectory out_dir(options.out_dir);  // before the data: a bad -o fails now
   std::printf("settings: %s\n", DescribeSettings(options).c_str());
   std::fflush(stdout);

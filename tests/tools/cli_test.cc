@@ -243,6 +243,14 @@ TEST(Cli, BadValuesAndMissingChoicesAreUsageErrors) {
                      "render", "--step-scale");
   ExpectOneLineError(Capture(RunConformance, {"conformance"}), "conformance",
                      "needs --write DIR or --check DIR");
+  // The decoder's 2^26-pixel image limit holds before anything is allocated: 8192 x 8193 is
+  // one row over it, 100000 x 100000 would need 40 GB for the image alone.
+  ExpectOneLineError(Capture(RunRender, {"render", kScene, "--orbit", "1", "-W", "8192", "-H",
+                                         "8193", "-o", "/nonexistent/x"}),
+                     "render", "view orbit_000 is 8192x8193 = 67117056 pixels");
+  ExpectOneLineError(Capture(RunRender, {"render", kScene, "--orbit", "1", "-W", "65536", "-H",
+                                         "65536", "-o", "/nonexistent/x"}),
+                     "render", "at most 67108864 pixels per image");
   ExpectOneLineError(Capture(RunBench, {"bench", "train", "--threads", "1,x"}), "bench train",
                      "--threads");
 }

@@ -15,6 +15,7 @@
 #include "tests/common/invoke.h"
 #include "tools/cli_args.h"
 #include "tools/commands.h"
+#include "trainer/data/file_io.h"
 
 namespace ecrf {
 namespace tools {
@@ -72,6 +73,27 @@ TEST_F(TrainOutputTest, ResumeWithoutCheckpointSaysSo) {
       ErrorOf({"train", "--scene", "builtin", "--resume", "-o", root_ + "/fresh"});
   EXPECT_NE(error.find("--resume: no checkpoint"), std::string::npos) << error;
   EXPECT_FALSE(FileExists(root_ + "/fresh"));
+}
+
+// A directory that holds a run is not overwritten silently: refused before the data is read
+// (the data directory does not exist), naming what is there and the two ways on; its files stay.
+TEST_F(TrainOutputTest, ExistingRunIsRefusedUnlessResumedOrOverwritten) {
+  const std::string dir = root_ + "/run";
+  ASSERT_EQ(mkdir(dir.c_str(), 0755), 0);
+  for (const char* name : {"scene.ecrf", "metrics.json"}) {
+    trainer::WriteFileAtomically(dir + "/" + name, std::string("kept"));
+  }
+  const std::string error = ErrorOf({"train", "--data", root_ + "/no_such_scene", "-o", dir});
+  EXPECT_NE(error.find(dir + " already holds a run (scene.ecrf, metrics.json): --resume "
+                             "continues it, --overwrite replaces it"),
+            std::string::npos)
+      << error;
+  EXPECT_EQ(trainer::ReadWholeFile(dir + "/scene.ecrf").size(), 4u);
+  // With --overwrite the run starts (and here fails on the missing data, as any new run would).
+  const std::string overwrite =
+      ErrorOf({"train", "--data", root_ + "/no_such_scene", "--overwrite", "-o", dir});
+  EXPECT_EQ(overwrite.find("already holds a run"), std::string::npos) << overwrite;
+  EXPECT_NE(overwrite.find("no_such_scene"), std::string::npos) << overwrite;
 }
 
 // --eval-downscale: a short run scored at half size records it, with the renderer's samples per

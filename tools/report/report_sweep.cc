@@ -362,6 +362,7 @@ int RunReportSweep(int argc, char** argv) {
       std::fprintf(stderr, "report: point %zu/%zu (%s): training into %s; %zu to train, %s\n",
                    k + 1, runs.size(), names[k].c_str(), run_dir.c_str(), left, eta.c_str());
       run.out_dir = run_dir;
+      run.overwrite = true;  // a point the sweep left unfinished is trained again from the start
       const auto start = std::chrono::steady_clock::now();
       metrics = TrainEncodeEvaluate(run);
       trained_seconds +=

@@ -125,7 +125,9 @@ std::vector<uint8_t> Decompress(const std::string& path, const uint8_t* data, si
     }
   }
   ZSTD_freeDCtx(dctx);
-  if (error.empty() && (raw.size() != raw_size || in.pos != size)) {
+  if (error.empty() && in.pos != size) {
+    error = std::to_string(size - in.pos) + " bytes follow its zstd frame";
+  } else if (error.empty() && raw.size() != raw_size) {
     error = "it holds " + std::to_string(raw.size()) + " bytes, its header says " +
             std::to_string(raw_size);
   }

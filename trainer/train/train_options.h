@@ -100,6 +100,9 @@ struct TrainOptions {
   bool resume = false;
   // With resume: continue although the checkpoint's settings differ (train_config.h).
   bool accept_config_change = false;
+  // Replace a run already in out_dir (its checkpoint, file and scores); without it (or resume)
+  // such a directory is refused before any work.
+  bool overwrite = false;
   // Leave after this many iterations as if killed (after the checkpoint due then, if any), by
   // throwing TrainingStopped: tests of exact resume, and a run split over sessions. 0 = never.
   int stop_after = 0;

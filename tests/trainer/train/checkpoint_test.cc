@@ -3,9 +3,8 @@
 #include <gtest/gtest.h>
 #include <zstd.h>
 
-#include <cstring>
-
 #include <cstdio>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
@@ -49,6 +48,26 @@ TEST(Checkpoint, DamagedFilesGiveErrorsNamingThePath) {
     }
   }
   EXPECT_THROW(ReadCheckpoint(TempPath("does_not_exist.ckpt")), std::runtime_error);
+}
+
+// Bytes after the frame are named as such (it used to say "holds N bytes, its header says N").
+TEST(Checkpoint, BytesAfterTheFrameAreNamed) {
+  Checkpoint ck;
+  ck.arrays.push_back({"a", {100}, std::vector<float>(100, 1.5f)});
+  const std::string path = TempPath("ck_appended.ckpt");
+  WriteCheckpoint(path, ck);
+  std::vector<uint8_t> bytes = ReadWholeFile(path);
+  bytes.insert(bytes.end(), {1, 2, 3, 4, 5});
+  WriteFileAtomically(path, bytes);
+  try {
+    ReadCheckpoint(path);
+    FAIL() << "accepted a checkpoint with bytes appended";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(
+        std::string(e.what()).find(path + ": checkpoint is damaged: 5 bytes follow its zstd frame"),
+        std::string::npos)
+        << e.what();
+  }
 }
 
 // zstd's content checksum turns every flipped byte into an error or, where the flip hits a bit
