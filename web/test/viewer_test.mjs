@@ -228,7 +228,7 @@ try {
     consoleCheck('missing', (e) => /404/.test(e.text) && /no_such_scene/.test(e.url));
     await page.goto(pathToFileURL(join(root, PAGE)).href);
     const hint = await waitError(page);
-    check(/python3 -m http\.server/.test(hint) && /localhost:8000\/tools\/web\//.test(hint), `file:// shows the hint: ${hint}`);
+    check(/python3 -m http\.server/.test(hint) && /localhost:8000\/web\//.test(hint), `file:// shows the hint: ${hint}`);
     await page.context().close();
   }
 
