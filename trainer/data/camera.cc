@@ -1,10 +1,88 @@
 #include "trainer/data/camera.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 
 namespace ecrf::trainer {
+
+std::string PoseProblem(const double c2w[3][4]) {
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 4; ++c) {
+      if (!std::isfinite(c2w[r][c])) return "the pose has a non-finite entry";
+    }
+  }
+  // A degenerate rotation gives rays of NaN or zero direction, which train a NaN model; a
+  // scaled one stretches every ray.
+  double worst = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b) {
+      double dot = 0.0;
+      for (int r = 0; r < 3; ++r) dot += c2w[r][a] * c2w[r][b];
+      worst = std::max(worst, std::abs(dot - (a == b ? 1.0 : 0.0)));
+    }
+  }
+  char text[160];
+  if (!(worst <= kRotationTolerance)) {
+    std::snprintf(text, sizeof(text),
+                  "the rotation is not orthonormal (|R^T R - I| reaches %.3g, tolerance %g)", worst,
+                  kRotationTolerance);
+    return text;
+  }
+  const double det = c2w[0][0] * (c2w[1][1] * c2w[2][2] - c2w[1][2] * c2w[2][1]) -
+                     c2w[0][1] * (c2w[1][0] * c2w[2][2] - c2w[1][2] * c2w[2][0]) +
+                     c2w[0][2] * (c2w[1][0] * c2w[2][1] - c2w[1][1] * c2w[2][0]);
+  if (!(det > 0.0)) return "the rotation is a reflection (det < 0)";
+  return "";
+}
+
+std::string IntrinsicsProblem(const Camera& camera) {
+  char text[200];
+  if (camera.width <= 0 || camera.height <= 0) {
+    std::snprintf(text, sizeof(text), "the image size %dx%d is not positive", camera.width,
+                  camera.height);
+    return text;
+  }
+  const double pi = 3.14159265358979323846;
+  const struct {
+    const char* axis;
+    double focal, extent;
+  } axes[2] = {{"horizontal", camera.fx, double(camera.width)},
+               {"vertical", camera.fy, double(camera.height)}};
+  for (const auto& a : axes) {
+    const double degrees = 2.0 * std::atan(0.5 * a.extent / a.focal) * 180.0 / pi;
+    if (!(a.focal > 0.0 && std::isfinite(a.focal) && degrees >= kMinFieldOfViewDegrees &&
+          degrees <= kMaxFieldOfViewDegrees)) {
+      std::snprintf(text, sizeof(text),
+                    "the focal length %g px gives a %s field of view of %.4g degrees over %g px "
+                    "(need %g to %g)",
+                    a.focal, a.axis, a.focal > 0.0 ? degrees : 180.0, a.extent,
+                    kMinFieldOfViewDegrees, kMaxFieldOfViewDegrees);
+      return text;
+    }
+  }
+  if (!(camera.cx >= -camera.width && camera.cx <= 2.0 * camera.width &&
+        camera.cy >= -camera.height && camera.cy <= 2.0 * camera.height)) {
+    std::snprintf(text, sizeof(text),
+                  "the principal point (%g, %g) lies more than an image size outside the %dx%d "
+                  "image",
+                  camera.cx, camera.cy, camera.width, camera.height);
+    return text;
+  }
+  const double distortion[4] = {camera.k1, camera.k2, camera.p1, camera.p2};
+  const char* names[4] = {"k1", "k2", "p1", "p2"};
+  for (int k = 0; k < 4; ++k) {
+    if (!(std::abs(distortion[k]) <= kMaxDistortion)) {
+      std::snprintf(text, sizeof(text),
+                    "the distortion coefficient %s = %g is not a lens (|%s| <= %g)", names[k],
+                    distortion[k], names[k], kMaxDistortion);
+      return text;
+    }
+  }
+  return "";
+}
 
 double FocalFromFieldOfView(double extent_pixels, double field_of_view) {
   return 0.5 * extent_pixels / std::tan(0.5 * field_of_view);

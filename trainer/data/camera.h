@@ -2,6 +2,7 @@
 #ifndef ECRF_TRAINER_DATA_CAMERA_H_
 #define ECRF_TRAINER_DATA_CAMERA_H_
 
+#include <string>
 #include <vector>
 
 namespace ecrf::trainer {
@@ -21,6 +22,24 @@ struct Camera {
 
   bool HasDistortion() const { return k1 != 0 || k2 != 0 || p1 != 0 || p2 != 0; }
 };
+
+// What every dataset loader checks before training (Blender, Instant-NGP and LLFF alike): each
+// returns "" for a camera that can be trained on, else the problem with its value, for the
+// loader to prefix with the file and the frame.
+// Largest |R^T R - I| entry accepted for a camera rotation: poses written with 6 or more
+// significant digits (COLMAP, Blender, nerfstudio) are orthonormal far within it.
+inline constexpr double kRotationTolerance = 1e-3;
+// A pinhole camera's field of view on either axis, in degrees (camera_angle_x = pi, or a focal
+// length of 1e-300, leaves no ray inside the scene).
+inline constexpr double kMinFieldOfViewDegrees = 0.1, kMaxFieldOfViewDegrees = 175.0;
+// |k1| |k2| |p1| |p2| above this are not a lens (real ones stay well below 1).
+inline constexpr double kMaxDistortion = 10.0;
+// The rotation orthonormal within kRotationTolerance and proper (det > 0), the translation finite.
+std::string PoseProblem(const double c2w[3][4]);
+// A positive size, the field of view within [kMinFieldOfViewDegrees, kMaxFieldOfViewDegrees] on
+// both axes, the principal point within one image size of the image, finite distortion of at
+// most kMaxDistortion.
+std::string IntrinsicsProblem(const Camera& camera);
 
 // Focal length in pixels for a horizontal (or vertical) field of view in radians spanning
 // `extent` pixels, as NeRF's camera_angle_x defines it.

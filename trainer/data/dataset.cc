@@ -24,10 +24,6 @@ enum class Layout { kBlender, kNgp };
 // NeRF/LLFF hold-out convention for captures that ship a single transforms.json.
 constexpr int kNgpTestEvery = 8;
 
-// Largest |R^T R - I| entry accepted for a camera rotation: poses written with 6 or more
-// significant digits (COLMAP, Blender, nerfstudio) are orthonormal far within it.
-constexpr double kRotationTolerance = 1e-3;
-
 // Keeps samples off the lens when a camera sits inside the box (as a fraction of its diagonal).
 constexpr double kMinNearFraction = 0.01;
 
@@ -121,30 +117,8 @@ void ReadTransform(const json& frame, size_t index, const JsonContext& context, 
         context.FailFrame(index, "'transform_matrix' has a non-finite entry");
     }
   }
-  // A degenerate rotation gives rays of NaN or zero direction, which train a NaN model.
-  double worst = 0.0;
-  for (int a = 0; a < 3; ++a) {
-    for (int b = 0; b < 3; ++b) {
-      double dot = 0.0;
-      for (int r = 0; r < 3; ++r) dot += camera->c2w[r][a] * camera->c2w[r][b];
-      worst = std::max(worst, std::abs(dot - (a == b ? 1.0 : 0.0)));
-    }
-  }
-  if (!(worst <= kRotationTolerance)) {
-    char detail[160];
-    std::snprintf(
-        detail, sizeof(detail),
-        "the rotation part of 'transform_matrix' is not orthonormal (|R^T R - I| reaches %.3g, "
-        "tolerance %g)",
-        worst, kRotationTolerance);
-    context.FailFrame(index, detail);
-  }
-  const double(*m)[4] = camera->c2w;
-  const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
-                     m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
-                     m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-  if (!(det > 0.0))
-    context.FailFrame(index, "the rotation part of 'transform_matrix' is a reflection (det < 0)");
+  const std::string problem = PoseProblem(camera->c2w);
+  if (!problem.empty()) context.FailFrame(index, "'transform_matrix': " + problem);
 }
 
 std::string StripDotSlash(std::string path) {
@@ -215,6 +189,8 @@ Camera ResolveIntrinsics(const IntrinsicFields& fields, const std::string& image
       context.FailFrame(
           index, "principal point and distortion ('cx' 'cy' 'k1' 'k2' 'p1' 'p2') must be finite");
   }
+  const std::string problem = IntrinsicsProblem(camera);
+  if (!problem.empty()) context.FailFrame(index, "intrinsics: " + problem);
   return camera;
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <stdexcept>
 #include <vector>
@@ -22,6 +23,9 @@ constexpr double kBoundFactor = 0.75;
 constexpr double kNearMargin = 0.9;
 // Image sizes may differ from hwf * scale by rounding when images_N were made.
 constexpr double kAspectTolerance = 0.01;
+// Camera centres farther from the origin than this, in the units where the nearest bound is
+// 1 / kBoundFactor, mean bounds that do not belong to the poses (real captures: below 10).
+constexpr double kMaxCameraDistance = 1e4;
 
 using Mat34 = double[3][4];
 
@@ -190,11 +194,31 @@ DatasetManifest ReadLlffManifest(const std::string& dir, const std::string& spli
     camera.fx = camera.fy = focal * size.width / width;
     camera.cx = 0.5 * size.width;
     camera.cy = 0.5 * size.height;
+    // The same checks as the JSON loaders, on the pose as given (the axis turn above keeps
+    // orthonormality and the sign of det).
+    for (const std::string& problem : {PoseProblem(camera.c2w), IntrinsicsProblem(camera)}) {
+      if (!problem.empty()) fail("row " + std::to_string(i) + ": " + problem);
+    }
   }
 
   const double scale = 1.0 / (min_bound * kBoundFactor);
-  for (Camera& camera : cameras) {
+  for (size_t i = 0; i < cameras.size(); ++i) {
+    Camera& camera = cameras[i];
     for (int r = 0; r < 3; ++r) camera.c2w[r][3] *= scale;
+    // In units of the nearest bound the cameras sit within a few scene sizes of each other; a
+    // bound of 1e-300 would put them at infinity.
+    const double distance =
+        std::sqrt(camera.c2w[0][3] * camera.c2w[0][3] + camera.c2w[1][3] * camera.c2w[1][3] +
+                  camera.c2w[2][3] * camera.c2w[2][3]);
+    if (!(distance <= kMaxCameraDistance)) {
+      char text[200];
+      std::snprintf(
+          text, sizeof(text),
+          "row %zu: scaled so that the nearest bound (%g) is 1/0.75, the camera lies %.3g "
+          "from the origin (at most %g): the bounds do not fit the poses",
+          i, min_bound, distance, kMaxCameraDistance);
+      fail(text);
+    }
   }
   Mat34 avg;
   AveragePose(cameras, avg);

@@ -219,6 +219,25 @@ TEST_F(DatasetTest, RefusesDegenerateAndMirroredPoses) {
   error = error_for(mirrored);
   EXPECT_TRUE(Contains(error, "frame 2") && Contains(error, "reflection")) << error;
 
+  // Intrinsics out of any lens's range are refused before training, with the value.
+  json intrinsics = root;
+  intrinsics["camera_angle_x"] = 3.141592653589793;  // 180 degrees: no ray inside the scene
+  error = error_for(intrinsics);
+  EXPECT_TRUE(Contains(error, file) && Contains(error, "intrinsics: the focal length") &&
+              Contains(error, "field of view"))
+      << error;
+  intrinsics = root;
+  intrinsics.erase("camera_angle_x");
+  intrinsics["fl_x"] = 1e-300;
+  EXPECT_TRUE(Contains(error_for(intrinsics), "the focal length 1e-300 px"))
+      << error_for(intrinsics);
+  intrinsics = root;
+  intrinsics["cx"] = 1e308;
+  EXPECT_TRUE(Contains(error_for(intrinsics), "the principal point")) << error_for(intrinsics);
+  intrinsics = root;
+  intrinsics["k1"] = 1e30;
+  EXPECT_TRUE(Contains(error_for(intrinsics), "k1 = 1e+30 is not a lens")) << error_for(intrinsics);
+
   json slightly_off = root;  // rounding in written poses stays accepted
   slightly_off["frames"][0]["transform_matrix"][0][0] = 1.0 + 2e-5;
   WriteJson("transforms_train.json", slightly_off);

@@ -282,6 +282,46 @@ TEST_F(LlffTest, ErrorsNameTheFileAndTheProblem) {
   EXPECT_TRUE(Contains(error(), "images") && Contains(error(), "no such directory")) << error();
 }
 
+// The poses and intrinsics pass the checks of the JSON loaders (trainer/data/camera.h) before any
+// training: a zero, scaled or mirrored rotation, a focal length that leaves no field of view, and
+// bounds that put the cameras at infinity are refused, naming the file and the row.
+TEST_F(LlffTest, PosesAndIntrinsicsAreValidatedAsInTheJsonLoaders) {
+  WriteImages("images", 32, 24, 0.25f);
+  const std::string npy = (dir_ / "poses_bounds.npy").string();
+  auto error_for = [&](const std::vector<double>& rows) {
+    WriteBytes("poses_bounds.npy", NpyBytes(rows, "(10, 17)"));
+    return ErrorOf([&] { ReadDatasetManifest(Dir(), "train"); });
+  };
+  const std::vector<double> table = RigTable();
+  auto rotation = [](std::vector<double>& rows, int row, double scale) {
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) rows[size_t(row) * 17 + r * 5 + c] *= scale;
+  };
+  std::vector<double> bad = table;
+  rotation(bad, 3, 0.0);
+  std::string error = error_for(bad);
+  EXPECT_TRUE(Contains(error, npy) && Contains(error, "row 3: the rotation is not orthonormal"))
+      << error;
+  bad = table;
+  rotation(bad, 4, 5.0);
+  EXPECT_TRUE(Contains(error_for(bad), "row 4: the rotation is not orthonormal")) << error_for(bad);
+  bad = table;
+  for (int r = 0; r < 3; ++r) bad[size_t(5) * 17 + r * 5 + 2] *= -1.0;  // mirror the back axis
+  EXPECT_TRUE(Contains(error_for(bad), "row 5: the rotation is a reflection")) << error_for(bad);
+  bad = table;
+  bad[size_t(6) * 17 + 14] = 1e-300;  // focal length
+  EXPECT_TRUE(Contains(error_for(bad), "row 6: the focal length")) << error_for(bad);
+  bad = table;
+  for (int row = 0; row < 10; ++row) {
+    bad[size_t(row) * 17 + 15] = 1e-300;
+    bad[size_t(row) * 17 + 16] = 2e-300;
+  }
+  error = error_for(bad);
+  EXPECT_TRUE(Contains(error, npy) && Contains(error, "the bounds do not fit the poses")) << error;
+  EXPECT_NO_THROW(error_for(table));
+  EXPECT_EQ(error_for(table), "");
+}
+
 TEST_F(LlffTest, LayoutIsDetectedAndAnEmptyDirectorySaysWhatItLookedFor) {
   const std::string message = ErrorOf([&] { ReadDatasetManifest(Dir(), "train"); });
   EXPECT_TRUE(Contains(message, "transforms_train.json") && Contains(message, "transforms.json") &&
