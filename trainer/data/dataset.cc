@@ -332,6 +332,19 @@ std::vector<View> LoadViewsImpl(const std::vector<ViewSource>& sources, int down
                                 bool* any_alpha) {
   if (downscale < 1)
     throw std::runtime_error("downscale must be >= 1, got " + std::to_string(downscale));
+  int64_t pixels = 0;
+  for (const ViewSource& source : sources) {
+    pixels += int64_t{source.camera.width / downscale} * (source.camera.height / downscale);
+  }
+  if (pixels > kMaxDatasetPixels) {
+    throw std::runtime_error(std::to_string(sources.size()) + " views of " +
+                             std::to_string(sources.front().camera.width) + "x" +
+                             std::to_string(sources.front().camera.height) +
+                             " (first view; downscale " + std::to_string(downscale) + ") hold " +
+                             std::to_string(pixels) + " pixels; a dataset may hold at most " +
+                             std::to_string(kMaxDatasetPixels) +
+                             " (12 GiB as float RGB): use a larger --downscale");
+  }
   const int count = static_cast<int>(sources.size());
   std::vector<View> views(sources.size());
   std::vector<std::string> errors(sources.size());

@@ -3,6 +3,7 @@
 #ifndef ECRF_TRAINER_DATA_DATASET_H_
 #define ECRF_TRAINER_DATA_DATASET_H_
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -57,6 +58,10 @@ DatasetManifest ReadDatasetManifest(const std::string& dir, const std::string& s
 // Decodes the images in parallel (OpenMP), composites them on white and downscales them with
 // DownscaleArea; the cameras are scaled to match. Throws the first failing view's error
 // (by view order, so the message does not depend on thread timing).
+// The pixels a dataset may hold once loaded and downscaled, over all its views: 2^30 (12 GiB as
+// float RGB), checked from the cameras' sizes before any image is read.
+inline constexpr int64_t kMaxDatasetPixels = int64_t{1} << 30;
+
 std::vector<View> LoadViews(const std::vector<ViewSource>& sources, int downscale);
 
 // Instant-NGP maps the NeRF world into its unit cube as p * scale + offset, defaulting to

@@ -329,6 +329,13 @@ Image MakeImage(int width, int height, int channels, float value) {
 }
 
 Image LoadImage(const std::string& path) {
+  const ImageSize size = ReadImageSize(path);  // the header alone: before anything is allocated
+  if (int64_t{size.width} * size.height > kMaxImagePixels) {
+    Fail(path, "image is " + std::to_string(size.width) + "x" + std::to_string(size.height) +
+                   " = " + std::to_string(int64_t{size.width} * size.height) +
+                   " pixels; ecrf loads at most " + std::to_string(kMaxImagePixels) +
+                   " pixels per image (shrink it first)");
+  }
   std::vector<uint8_t> bytes = ReadBytes(path);
   switch (DetectFormat(bytes)) {
     case Format::kPng:

@@ -2,6 +2,7 @@
 #ifndef ECRF_TRAINER_DATA_IMAGE_IO_H_
 #define ECRF_TRAINER_DATA_IMAGE_IO_H_
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,11 @@ struct ImageSize {
 // magic bytes, not its extension. Colour values are returned as stored: no gamma conversion.
 // Throws std::runtime_error naming the path for a missing, unrecognised, corrupt or truncated file.
 Image LoadImage(const std::string& path);
+
+// The largest image LoadImage decodes, checked from the file's header before decoding: 2^26
+// pixels (8192 x 8192), the decoder's image limit too. A 16384^2 PNG of 1 MB would otherwise
+// cost 7 GiB while loading.
+inline constexpr int64_t kMaxImagePixels = int64_t{1} << 26;
 
 // Width and height from the file header only (PNG reads 24 bytes), for datasets whose JSON
 // leaves the image size implicit. Same errors as LoadImage.

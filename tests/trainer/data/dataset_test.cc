@@ -190,6 +190,23 @@ TEST_F(DatasetTest, BlenderErrorsNameFileFrameAndField) {
   EXPECT_TRUE(Contains(error, file) && Contains(error, "invalid JSON")) << error;
 }
 
+// The dataset's pixel budget is checked from the cameras before any image is read (these
+// images do not even exist): 600 views of 2000x1000 are 1.2 G pixels.
+TEST(DatasetBudget, TooManyPixelsAreRefusedBeforeLoading) {
+  std::vector<ViewSource> sources(600);
+  for (ViewSource& source : sources) {
+    source.camera.width = 2000;
+    source.camera.height = 1000;
+    source.image_path = "/nonexistent/view.png";
+  }
+  const std::string error = ErrorOf([&] { LoadViews(sources, 1); });
+  EXPECT_TRUE(Contains(error, "600 views of 2000x1000") && Contains(error, "1200000000 pixels") &&
+              Contains(error, "use a larger --downscale"))
+      << error;
+  // Downscaled by 2 they fit the budget, and loading goes on to the (missing) image.
+  EXPECT_TRUE(Contains(ErrorOf([&] { LoadViews(sources, 2); }), "/nonexistent/view.png"));
+}
+
 // Degenerate poses train NaN models (rays of NaN direction), so the loader refuses them.
 TEST_F(DatasetTest, RefusesDegenerateAndMirroredPoses) {
   json root = WriteBlender();

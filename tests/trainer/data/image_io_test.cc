@@ -225,6 +225,26 @@ TEST_F(ImageIoTest, NonImageNamesPath) {
   EXPECT_NE(ErrorOf([&] { LoadImage(Path("empty.png")); }).find("empty file"), std::string::npos);
 }
 
+// A small file whose header claims a huge image is refused from the header, before decoding
+// allocates anything (a 1 MB PNG of 16384^2 pixels used to cost 7 GiB while loading).
+TEST_F(ImageIoTest, HugeImagesAreRefusedFromTheHeader) {
+  const std::string path = Path("huge.png");
+  SavePng(path, Ramp(64, 64, 3, 255));
+  std::vector<uint8_t> bytes = ReadAll(path);
+  for (size_t at : {size_t(16), size_t(20)}) {  // IHDR width and height, big-endian
+    bytes[at] = 0;
+    bytes[at + 1] = 0;
+    bytes[at + 2] = 0x40;  // 16384
+    bytes[at + 3] = 0;
+  }
+  WriteAll(path, bytes);
+  const std::string error = ErrorOf([&] { LoadImage(path); });
+  EXPECT_NE(error.find(path + ": image is 16384x16384 = 268435456 pixels; ecrf loads at most "
+                              "67108864 pixels per image"),
+            std::string::npos)
+      << error;
+}
+
 TEST_F(ImageIoTest, TruncatedPngIsAnError) {
   const std::string path = Path("cut.png");
   SavePng(path, Ramp(64, 64, 3, 255));
