@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Proves that decoding does not depend on the platform (SPEC.md 6.5): builds format/ + decoder/ +
 # tests/decoder/conformance_checksums.cc with every available compiler at -O0 and at -O3
-# -march=native, and for WebAssembly under node when em++ is installed, decodes every vector of
+# -march=native, for WebAssembly under node when em++ is installed, and for 64-bit and 32-bit ARM
+# (aarch64, armhf) under qemu-user when the cross compilers are installed, decodes every vector of
 # tests/conformance with each build, and fails unless all builds print the same checksums (grids,
 # occupancy, MLP, coefficient outputs) and those match the checked-in ones. The reference-camera
 # renders must be bit-identical too: SPEC.md 7.7 allows differences between renderers, but ours,
@@ -9,7 +10,7 @@
 # build it, and a difference means a compiler changed the arithmetic (ECRF_MATRIX_RENDERS=report
 # only reports them, e.g. for a platform whose libm rounds exp differently).
 #
-#   bash scripts/conformance-matrix.sh            # ECRF_MATRIX_WASM=0 skips WebAssembly
+#   bash scripts/conformance-matrix.sh   # ECRF_MATRIX_WASM=0 skips WebAssembly, ECRF_MATRIX_ARM=0 ARM
 set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT=build-matrix
@@ -64,6 +65,24 @@ if [ "${ECRF_MATRIX_WASM:-1}" != 0 ] && command -v em++ >/dev/null; then
   configs+=("wasm:em++:-O3")
 else
   echo "(em++ not installed or ECRF_MATRIX_WASM=0: WebAssembly skipped)"
+fi
+
+# 64-bit and 32-bit ARM, the small devices the decoder is for: Debian's cross compilers, the
+# checker linked statically and run under qemu-user (no target sysroot needed at run time).
+if [ "${ECRF_MATRIX_ARM:-1}" != 0 ]; then
+  for target in aarch64-linux-gnu:qemu-aarch64 arm-linux-gnueabihf:qemu-arm; do
+    IFS=: read -r triple qemu <<<"$target"
+    if command -v "$triple-g++" >/dev/null && command -v "$qemu" >/dev/null; then
+      name="$triple-O2"
+      echo "== $name (under $qemu)"
+      LINK_EXTRA=(-static -pthread)
+      build "$name" "$triple-g++" checker -O2
+      "$qemu" "$OUT/$name/checker" tests/conformance >"$OUT/$name/out.txt" || status=1
+      configs+=("$name:$triple-g++:-O2")
+    else
+      echo "($triple-g++ or $qemu not installed: $triple skipped)"
+    fi
+  done
 fi
 
 for c in "${configs[@]}"; do

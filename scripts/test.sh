@@ -35,7 +35,7 @@ cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DECRF_SANIT
 cmake --build build-asan -j"$jobs"
 ctest --test-dir build-asan -j"$jobs" --output-on-failure
 
-echo "== conformance checksums on every compiler, -O0 / -O3 -march=native, and WebAssembly (node)"
+echo "== conformance checksums on every compiler, -O0 / -O3 -march=native, WebAssembly (node), aarch64 and armhf (qemu)"
 bash scripts/conformance-matrix.sh
 
 echo "== web viewer: WebAssembly build, node smoke test, headless chromium (GPU and CPU paths, UI)"
