@@ -24,6 +24,11 @@ constexpr uint64_t kMaxArrays = 1 << 16;
 // Larger than any model this trainer builds (the paper preset's checkpoint is ~0.3 GB); a size
 // field beyond it is damage, refused before anything is allocated.
 constexpr uint64_t kMaxRawBytes = uint64_t(16) << 30;
+// Trained weights and Adam moments compress by less than 2x; a frame that claims to expand more
+// than this (beyond a small allowance for near-empty models) is a bomb, refused before it is
+// decompressed.
+constexpr uint64_t kMaxExpansion = 1000;
+constexpr uint64_t kExpansionAllowance = uint64_t(64) << 20;
 
 void Put(std::vector<uint8_t>& out, const void* p, size_t n) {
   const uint8_t* b = static_cast<const uint8_t*>(p);
@@ -149,6 +154,13 @@ Checkpoint ReadCheckpoint(const std::string& path) {
   if (frame == ZSTD_CONTENTSIZE_ERROR || frame == ZSTD_CONTENTSIZE_UNKNOWN || frame != raw_size ||
       raw_size > kMaxRawBytes) {
     throw std::runtime_error(path + ": checkpoint is damaged (zstd frame size)");
+  }
+  const uint64_t compressed = file.size() - 16;
+  if (raw_size > kExpansionAllowance && raw_size / kMaxExpansion > compressed) {
+    throw std::runtime_error(path + ": checkpoint is damaged: its " + std::to_string(compressed) +
+                             "-byte zstd frame claims " + std::to_string(raw_size) +
+                             " bytes, more than " + std::to_string(kMaxExpansion) +
+                             " times its size");
   }
   // RFC 8878 3.1.1.1.1: bit 2 of the frame header descriptor (after the 4-byte frame magic).
   if (!v1 && (file.size() < 21 || !(file[16 + 4] & 0x04))) {

@@ -50,6 +50,43 @@ TEST(Checkpoint, DamagedFilesGiveErrorsNamingThePath) {
   EXPECT_THROW(ReadCheckpoint(TempPath("does_not_exist.ckpt")), std::runtime_error);
 }
 
+// A small file whose zstd frame expands to a gigabyte (zeros compress 30000:1) is refused from
+// its sizes, before anything is decompressed; weights never compress like that.
+TEST(Checkpoint, DecompressionBombsAreRefusedFromTheirSizes) {
+  const uint64_t raw_size = uint64_t(1) << 30;
+  std::vector<uint8_t> file = {'E', 'C', 'R', 'F', 'C', 'K', 'P', '2'};
+  for (int b = 0; b < 8; ++b) file.push_back(uint8_t(raw_size >> (8 * b)));
+  ZSTD_CCtx* cctx = ZSTD_createCCtx();
+  ASSERT_NE(cctx, nullptr);
+  ZSTD_CCtx_setParameter(cctx, ZSTD_c_checksumFlag, 1);
+  ZSTD_CCtx_setPledgedSrcSize(cctx, raw_size);
+  const std::vector<uint8_t> zeros(size_t(1) << 20, 0);
+  std::vector<uint8_t> out(ZSTD_CStreamOutSize());
+  for (uint64_t done = 0; done < raw_size; done += zeros.size()) {
+    const bool last = done + zeros.size() == raw_size;
+    ZSTD_inBuffer in{zeros.data(), zeros.size(), 0};
+    size_t left;
+    do {
+      ZSTD_outBuffer o{out.data(), out.size(), 0};
+      left = ZSTD_compressStream2(cctx, &o, &in, last ? ZSTD_e_end : ZSTD_e_continue);
+      ASSERT_FALSE(ZSTD_isError(left));
+      file.insert(file.end(), out.begin(), out.begin() + o.pos);
+    } while (last ? left != 0 : in.pos < in.size);
+  }
+  ZSTD_freeCCtx(cctx);
+  ASSERT_LT(file.size(), size_t(1) << 20);
+  const std::string path = TempPath("ck_bomb.ckpt");
+  WriteFileAtomically(path, file);
+  try {
+    ReadCheckpoint(path);
+    FAIL() << "accepted a decompression bomb";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("claims 1073741824 bytes, more than 1000 times its size"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 // Bytes after the frame are named as such (it used to say "holds N bytes, its header says N").
 TEST(Checkpoint, BytesAfterTheFrameAreNamed) {
   Checkpoint ck;
