@@ -174,21 +174,13 @@ Camera ResolveIntrinsics(const IntrinsicFields& fields, const std::string& image
   } else {
     camera.fy = camera.fx;  // square pixels
   }
-  if (!(camera.fx > 0) || !(camera.fy > 0) || !std::isfinite(camera.fx) ||
-      !std::isfinite(camera.fy)) {
-    context.FailFrame(index, "focal length must be positive and finite");
-  }
   camera.cx = fields.cx.value_or(0.5 * camera.width);
   camera.cy = fields.cy.value_or(0.5 * camera.height);
   camera.k1 = fields.k1.value_or(0.0);
   camera.k2 = fields.k2.value_or(0.0);
   camera.p1 = fields.p1.value_or(0.0);
   camera.p2 = fields.p2.value_or(0.0);
-  for (double v : {camera.cx, camera.cy, camera.k1, camera.k2, camera.p1, camera.p2}) {
-    if (!std::isfinite(v))
-      context.FailFrame(
-          index, "principal point and distortion ('cx' 'cy' 'k1' 'k2' 'p1' 'p2') must be finite");
-  }
+  // Finite, positive and in range: the one camera check every loader applies.
   const std::string problem = IntrinsicsProblem(camera);
   if (!problem.empty()) context.FailFrame(index, "intrinsics: " + problem);
   return camera;

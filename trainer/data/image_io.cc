@@ -328,31 +328,14 @@ Image MakeImage(int width, int height, int channels, float value) {
   return image;
 }
 
-Image LoadImage(const std::string& path) {
-  const ImageSize size = ReadImageSize(path);  // the header alone: before anything is allocated
-  if (int64_t{size.width} * size.height > kMaxImagePixels) {
-    Fail(path, "image is " + std::to_string(size.width) + "x" + std::to_string(size.height) +
-                   " = " + std::to_string(int64_t{size.width} * size.height) +
-                   " pixels; ecrf loads at most " + std::to_string(kMaxImagePixels) +
-                   " pixels per image (shrink it first)");
-  }
-  std::vector<uint8_t> bytes = ReadBytes(path);
-  switch (DetectFormat(bytes)) {
-    case Format::kPng:
-      return DecodePng(path, bytes);
-    case Format::kJpeg:
-      return DecodeJpeg(path, bytes);
-    case Format::kUnknown:
-      break;
-  }
-  FailUnknownFormat(path, bytes.size());
-}
+namespace {
 
-ImageSize ReadImageSize(const std::string& path) {
-  // Signature, IHDR length and tag, then width and height: 24 bytes.
-  std::vector<uint8_t> bytes = ReadBytes(path, 24);
+// The size an image's header declares, from its first bytes (PNG: 24) or, for JPEG, the whole
+// file (the SOF marker can sit after large EXIF blocks, so libjpeg finds it).
+ImageSize SizeFromHeader(const std::string& path, const std::vector<uint8_t>& bytes) {
   switch (DetectFormat(bytes)) {
     case Format::kPng: {
+      // Signature, IHDR length and tag, then width and height: 24 bytes.
       if (bytes.size() < 24 || std::memcmp(bytes.data() + 12, "IHDR", 4) != 0) {
         Fail(path, "corrupt or truncated PNG: missing IHDR header");
       }
@@ -367,9 +350,8 @@ ImageSize ReadImageSize(const std::string& path) {
       return {static_cast<int>(width), static_cast<int>(height)};
     }
     case Format::kJpeg: {
-      // The SOF marker can sit after large EXIF blocks, so let libjpeg find it.
       JpegRaw raw;
-      if (!DecodeJpegRaw(ReadBytes(path), /*header_only=*/true, &raw)) {
+      if (!DecodeJpegRaw(bytes, /*header_only=*/true, &raw)) {
         Fail(path, std::string("corrupt or truncated JPEG: ") + raw.error);
       }
       return {raw.width, raw.height};
@@ -378,6 +360,28 @@ ImageSize ReadImageSize(const std::string& path) {
       break;
   }
   FailUnknownFormat(path, bytes.size());
+}
+
+}  // namespace
+
+Image LoadImage(const std::string& path) {
+  const std::vector<uint8_t> bytes = ReadBytes(path);
+  // The header alone, before decoding allocates anything.
+  const ImageSize size = SizeFromHeader(path, bytes);
+  if (int64_t{size.width} * size.height > kMaxImagePixels) {
+    Fail(path, "image is " + std::to_string(size.width) + "x" + std::to_string(size.height) +
+                   " = " + std::to_string(int64_t{size.width} * size.height) +
+                   " pixels; ecrf loads at most " + std::to_string(kMaxImagePixels) +
+                   " pixels per image (shrink it first)");
+  }
+  if (DetectFormat(bytes) == Format::kPng) return DecodePng(path, bytes);
+  return DecodeJpeg(path, bytes);  // SizeFromHeader refused every other format
+}
+
+ImageSize ReadImageSize(const std::string& path) {
+  std::vector<uint8_t> bytes = ReadBytes(path, 24);
+  if (DetectFormat(bytes) == Format::kJpeg) bytes = ReadBytes(path);
+  return SizeFromHeader(path, bytes);
 }
 
 void SavePng(const std::string& path, const Image& image, int bit_depth) {
