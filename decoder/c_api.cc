@@ -13,7 +13,8 @@ struct ecrf_scene {
   ecrf::dec::SceneInfo info;
   bool decoded = false;
   uint64_t memory_budget = ecrf::dec::kDefaultDecodeMemoryBudget;
-  char message[256] = {0};
+  uint64_t decode_work_per_byte = ecrf::dec::kDefaultDecodeWorkPerByte;
+  char message[512] = {0};
 };
 
 namespace {
@@ -26,6 +27,21 @@ int Record(ecrf_scene* scene, const ecrf::Status& status) {
   std::snprintf(scene->message, sizeof(scene->message), "%s: %s",
                 ecrf::ErrorCodeName(status.code()), status.message());
   return status.code();
+}
+
+ecrf::dec::RenderOptions ToRenderOptions(const ecrf_render_options* options) {
+  ecrf::dec::RenderOptions o;
+  if (options) {
+    o.num_threads = options->num_threads;
+    o.skip_empty_space = options->skip_empty_space != 0;
+    o.early_stop_transmittance = options->early_stop_transmittance;
+    o.max_samples = options->max_samples;
+    o.step_scale = options->step_scale;
+    o.weight_threshold = options->weight_threshold;
+    o.sample_budget = options->sample_budget;
+    o.work_budget = options->work_budget;
+  }
+  return o;
 }
 
 }  // namespace
@@ -42,6 +58,7 @@ void ecrf_render_options_default(ecrf_render_options* o) {
   o->step_scale = d.step_scale;
   o->weight_threshold = d.weight_threshold;
   o->sample_budget = d.sample_budget;
+  o->work_budget = d.work_budget;
 }
 
 ecrf_scene* ecrf_scene_create(void) { return new (std::nothrow) ecrf_scene(); }
@@ -49,6 +66,13 @@ ecrf_scene* ecrf_scene_create(void) { return new (std::nothrow) ecrf_scene(); }
 int ecrf_scene_set_memory_budget(ecrf_scene* scene, uint64_t bytes) {
   if (!scene) return ECRF_ERR_INVALID_ARGUMENT;
   scene->memory_budget = bytes == 0 ? ecrf::dec::kDefaultDecodeMemoryBudget : bytes;
+  scene->message[0] = '\0';
+  return ECRF_OK;
+}
+
+int ecrf_scene_set_decode_budget(ecrf_scene* scene, uint64_t units_per_byte) {
+  if (!scene) return ECRF_ERR_INVALID_ARGUMENT;
+  scene->decode_work_per_byte = units_per_byte;
   scene->message[0] = '\0';
   return ECRF_OK;
 }
@@ -66,6 +90,7 @@ int ecrf_scene_decode(ecrf_scene* scene, const void* data, size_t size, int stor
   }
   ecrf::dec::DecodeOptions options;
   options.max_memory_bytes = scene->memory_budget;
+  options.work_per_byte = scene->decode_work_per_byte;
   options.storage = storage == ECRF_STORAGE_INT16 ? ecrf::dec::GridStorage::kInt16
                                                   : ecrf::dec::GridStorage::kFloat32;
   const ecrf::Status s = ecrf::dec::DecodeScene(static_cast<const uint8_t*>(data), size, options,
@@ -187,6 +212,19 @@ int ecrf_scene_mlp_params(const ecrf_scene* scene, float* params, size_t count) 
   return scene->field.mlp.GetParams(params, count).code();
 }
 
+int ecrf_scene_check_render(ecrf_scene* scene, const ecrf_render_options* options) {
+  if (!scene) return ECRF_ERR_INVALID_ARGUMENT;
+  if (!scene->decoded) {
+    return Record(scene,
+                  ecrf::Status::Error(ecrf::kErrInvalidArgument, "render: no decoded scene"));
+  }
+  ecrf::dec::RenderOptions o = ToRenderOptions(options);
+  // One workspace is enough to check.
+  if (o.num_threads >= 0 && o.num_threads <= ecrf::dec::kMaxRenderThreads) o.num_threads = 1;
+  ecrf::dec::RayMarcher marcher;
+  return Record(scene, marcher.Init(&scene->field, o));
+}
+
 int ecrf_scene_render(ecrf_scene* scene, const ecrf_camera* camera,
                       const ecrf_render_options* options, uint8_t* rgba8, float* rgb) {
   if (!scene) return ECRF_ERR_INVALID_ARGUMENT;
@@ -194,16 +232,7 @@ int ecrf_scene_render(ecrf_scene* scene, const ecrf_camera* camera,
     return Record(scene, ecrf::Status::Error(ecrf::kErrInvalidArgument,
                                              "render: no decoded scene or no camera"));
   }
-  ecrf::dec::RenderOptions o;
-  if (options) {
-    o.num_threads = options->num_threads;
-    o.skip_empty_space = options->skip_empty_space != 0;
-    o.early_stop_transmittance = options->early_stop_transmittance;
-    o.max_samples = options->max_samples;
-    o.step_scale = options->step_scale;
-    o.weight_threshold = options->weight_threshold;
-    o.sample_budget = options->sample_budget;
-  }
+  const ecrf::dec::RenderOptions o = ToRenderOptions(options);
   ecrf::dec::Camera cam;
   std::memcpy(cam.c2w, camera->c2w, sizeof(cam.c2w));
   cam.fx = camera->fx;

@@ -25,6 +25,7 @@
 
 #include "decoder/camera.h"
 #include "decoder/field.h"
+#include "decoder/render_work.h"
 #include "format/status.h"
 
 namespace ecrf {
@@ -53,6 +54,10 @@ struct RenderOptions {
   // step_scale and max_samples (0: no limit). The format allows 2^20 samples per ray, which makes a
   // 32x32 view of a few-hundred-byte stream take half a minute; the default keeps that cheap.
   int sample_budget = kDefaultSampleBudget;
+  // Multiply-adds a view may spend per pixel on average (decoder/render_work.h; 0: no limit).
+  // Init refuses a scene one colour sample of which costs more; a render that spends
+  // pixels x work_budget stops and returns kErrLimit.
+  uint64_t work_budget = kDefaultWorkBudget;
   int tile_size = 8;     // image tiles are tile_size^2 pixels; RenderRays uses tile_size^2 rays
   int batch_rows = 256;  // appearance samples per MLP batch
 };
@@ -61,8 +66,10 @@ struct RenderStats {
   uint64_t rays = 0;
   uint64_t samples = 0;        // samples whose density was evaluated (inside aabb and mask)
   uint64_t color_samples = 0;  // samples that went through the MLP
+  uint64_t work = 0;           // multiply-adds charged to the work budget (render_work.h)
   void Add(const RenderStats& o) {
     rays += o.rays;
+    work += o.work;
     samples += o.samples;
     color_samples += o.color_samples;
   }
@@ -94,11 +101,12 @@ class RayMarcher {
   struct Job;
 
  private:
-  Status Run(Job* job, RenderStats* stats);
+  Status Run(Job* job, uint64_t pixels, RenderStats* stats);
 
   const SceneField* scene_ = nullptr;
   RenderOptions options_;
   int threads_ = 1;
+  SampleCosts costs_;
   Workspace* workspaces_ = nullptr;  // threads_ of them
 };
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 
 #include "decoder/field_sampler.h"
@@ -33,10 +34,51 @@ class MemoryBudget {
     left_ -= bytes;
     return Status::Ok();
   }
+  uint64_t spent() const { return total_ - left_; }
 
  private:
   uint64_t total_, left_;
 };
+
+// DecodeOptions::work_per_byte: the work a stream may cost, spent as it is decoded.
+class WorkBudget {
+ public:
+  WorkBudget(uint64_t per_byte, size_t stream_bytes) : per_byte_(per_byte) {
+    const uint64_t bytes = stream_bytes;
+    total_ = per_byte == 0 || bytes > (~uint64_t{0} - kDecodeWorkBase) / per_byte
+                 ? ~uint64_t{0}
+                 : kDecodeWorkBase + per_byte * bytes;
+    left_ = total_;
+    bytes_ = bytes;
+  }
+  bool Take(uint64_t units) {
+    if (units > left_) return false;
+    left_ -= units;
+    return true;
+  }
+  uint64_t* left() { return &left_; }
+  uint64_t spent() const { return total_ - left_; }
+  Status Refuse(const char* where) const {
+    return Status::Error(kErrLimit,
+                         "%s: decoding costs more than this stream's decode budget of %llu units "
+                         "(2^24 + %llu per byte of its %llu bytes; DecodeOptions::work_per_byte, "
+                         "ecrf --decode-budget N, 0 for no limit)",
+                         where, static_cast<unsigned long long>(total_),
+                         static_cast<unsigned long long>(per_byte_),
+                         static_cast<unsigned long long>(bytes_));
+  }
+
+ private:
+  uint64_t per_byte_, total_, left_, bytes_;
+};
+
+// Decode work of a coded block: its coefficients' symbols, and its inverse DCT, measured at about
+// 16 multiply-adds of the IDCT per symbol's time (`ecrf bench idct`, `ecrf bench coder`).
+uint64_t CodedBlockWork(const int dims[3], int eob) {
+  const uint64_t volume = static_cast<uint64_t>(dims[0]) * dims[1] * dims[2];
+  return static_cast<uint64_t>(eob) +
+         volume * static_cast<uint64_t>(dims[0] + dims[1] + dims[2]) / 16;
+}
 
 const char* const kGridNames[kNumSceneGrids] = {"density", "appearance"};
 const char* const kTensorNames[kTensorsPerSceneGrid] = {"plane 0", "plane 1", "plane 2",
@@ -69,7 +111,8 @@ TensorTarget TargetOf(VmGrid* grid, const SceneHeader& h, int g, int t) {
 }
 
 Status DecodeCoefficientChunk(const ChunkView& chunk, const SceneHeader& h, int g, int t,
-                              int version_minor, VmGrid* grid, TensorChunkInfo* info) {
+                              int version_minor, WorkBudget* work, VmGrid* grid,
+                              TensorChunkInfo* info) {
   ByteReader r(chunk.data, chunk.size);
   uint8_t grid_index = 0, tensor_index = 0, coef_bits = 0, contexts_byte = 0, reserved1 = 0;
   uint8_t block[3] = {0, 0, 0};
@@ -86,9 +129,10 @@ Status DecodeCoefficientChunk(const ChunkView& chunk, const SceneHeader& h, int 
                        chunk.offset, grid_index, tensor_index, kGridNames[g], kTensorNames[t]);
   ECRF_CHECK_OR_RETURN(reserved1 == 0, kErrCorrupt, "COEF %s %s: reserved byte must be 0",
                        kGridNames[g], kTensorNames[t]);
-  // Before 1.4 the byte was reserved (0); 1.0-1.3 decoders refuse wide chunks as corrupt.
+  // The version rule (SPEC.md 2.1): before 1.4 the byte was reserved (0).
   ECRF_CHECK_OR_RETURN(contexts_byte == 0 || version_minor >= 4, kErrCorrupt,
-                       "COEF %s %s: contexts %u in a version 1.%d stream (reserved, 0, before 1.4)",
+                       "COEF %s %s: contexts %u needs version_minor >= 4, the stream says %d "
+                       "(SPEC.md 2.1; the byte was reserved, 0, before 1.4)",
                        kGridNames[g], kTensorNames[t], contexts_byte, version_minor);
   ECRF_CHECK_OR_RETURN(contexts_byte <= static_cast<uint8_t>(CoefContextSet::kWide),
                        kErrUnsupported, "COEF %s %s: unknown coefficient context set %u",
@@ -123,10 +167,10 @@ Status DecodeCoefficientChunk(const ChunkView& chunk, const SceneHeader& h, int 
 
   CoefContexts contexts;
   ECRF_RETURN_IF_ERROR(contexts.Init(BlockShape{dims[0], dims[1], dims[2]}, context_set));
-  HeapArray<int32_t> work;
-  ECRF_RETURN_IF_ERROR(work.Allocate(2 * static_cast<size_t>(kMaxBlockVolume)));
-  int32_t* coeffs = work.data();
-  int32_t* samples = work.data() + kMaxBlockVolume;
+  HeapArray<int32_t> block_buffers;
+  ECRF_RETURN_IF_ERROR(block_buffers.Allocate(2 * static_cast<size_t>(kMaxBlockVolume)));
+  int32_t* coeffs = block_buffers.data();
+  int32_t* samples = block_buffers.data() + kMaxBlockVolume;
   RangeDecoder decoder(r.current(), r.remaining());
   for (int b0 = 0; b0 < blocks[0]; ++b0) {
     for (int b1 = 0; b1 < blocks[1]; ++b1) {
@@ -136,6 +180,13 @@ Status DecodeCoefficientChunk(const ChunkView& chunk, const SceneHeader& h, int 
         if (!s.ok()) {
           return Status::Error(s.code(), "COEF %s %s, block (%d, %d, %d): %s", kGridNames[g],
                                kTensorNames[t], b0, b1, b2, s.message());
+        }
+        // A block costs its `coded` symbol; a coded one its coefficients and inverse DCT.
+        if (!work->Take(eob == 0 ? 1 : CodedBlockWork(dims, eob))) {
+          char where[96];
+          std::snprintf(where, sizeof(where), "COEF %s %s, block (%d, %d, %d)", kGridNames[g],
+                        kTensorNames[t], b0, b1, b2);
+          return work->Refuse(where);
         }
         if (eob == 0) continue;  // the grid is zero-initialised
         ++info->coded_blocks;
@@ -165,8 +216,8 @@ Status DecodeCoefficientChunk(const ChunkView& chunk, const SceneHeader& h, int 
   return Status::Ok();
 }
 
-Status DecodeOccupancyChunk(const ChunkView& chunk, MemoryBudget* budget, SceneField* scene,
-                            SceneInfo* info) {
+Status DecodeOccupancyChunk(const ChunkView& chunk, MemoryBudget* budget, WorkBudget* work,
+                            SceneField* scene, SceneInfo* info) {
   ByteReader r(chunk.data, chunk.size);
   float lo[3] = {0.f, 0.f, 0.f}, hi[3] = {0.f, 0.f, 0.f};
   uint16_t res16[3] = {0, 0, 0}, reserved = 0;
@@ -194,8 +245,13 @@ Status DecodeOccupancyChunk(const ChunkView& chunk, MemoryBudget* budget, SceneF
   // The bits, plus one byte per 4^3 and per 16^3 cells for the acceleration levels.
   ECRF_RETURN_IF_ERROR(
       budget->Take((voxels + 7) / 8 + voxels / 64 + voxels / 4096 + 2, "OCCU: the occupancy mask"));
+  // Clearing the mask and building its acceleration levels: one unit per 64 voxels.
+  if (!work->Take(voxels / 64)) return work->Refuse("OCCU");
   ECRF_RETURN_IF_ERROR(scene->mask.Init(lo, hi, res));
-  ECRF_RETURN_IF_ERROR(DecodeOccupancy(r.current(), r.remaining(), res, scene->mask.bits()));
+  const Status decoded =
+      DecodeOccupancy(r.current(), r.remaining(), res, scene->mask.bits(), work->left());
+  if (decoded.code() == kErrLimit) return work->Refuse(decoded.message());
+  ECRF_RETURN_IF_ERROR(decoded);
   ECRF_RETURN_IF_ERROR(scene->mask.BuildAcceleration());
   scene->has_mask = true;
   info->occupancy_bytes = chunk.size;
@@ -205,7 +261,7 @@ Status DecodeOccupancyChunk(const ChunkView& chunk, MemoryBudget* budget, SceneF
 }
 
 Status DecodeMlpChunk(const ChunkView& chunk, const SceneHeader& h, MemoryBudget* budget,
-                      SceneField* scene, SceneInfo* info) {
+                      WorkBudget* work, int version_minor, SceneField* scene, SceneInfo* info) {
   ByteReader r(chunk.data, chunk.size);
   uint8_t precision = 0, reserved[3] = {0, 0, 0};
   ECRF_RETURN_IF_ERROR(r.ReadU8(&precision, "MLPW precision"));
@@ -214,6 +270,10 @@ Status DecodeMlpChunk(const ChunkView& chunk, const SceneHeader& h, MemoryBudget
                        "MLPW: reserved bytes must be 0");
   ECRF_CHECK_OR_RETURN(precision <= kMlpPrecisionQuantized, kErrUnsupported,
                        "MLPW: precision %u (0 = float16, 1 = float32, 2 = quantized)", precision);
+  ECRF_CHECK_OR_RETURN(precision != kMlpPrecisionQuantized || version_minor >= 1, kErrCorrupt,
+                       "MLPW: precision 2 (quantized) needs version_minor >= 1, the stream says %d "
+                       "(SPEC.md 2.1)",
+                       version_minor);
   MlpConfig config;
   config.num_products = h.total_rank(1);
   config.feature_dim = h.feature_dim;
@@ -226,6 +286,10 @@ Status DecodeMlpChunk(const ChunkView& chunk, const SceneHeader& h, MemoryBudget
     const uint64_t in = F + 3 + 2 * F * h.feature_pe_freqs + 6 * uint64_t{h.viewdir_pe_freqs};
     const uint64_t count = F * P + H * in + H * H + 5 * H + 3;
     ECRF_RETURN_IF_ERROR(budget->Take(count * 4 * 3, "MLPW: the MLP parameters"));
+    // A quantized weight is at least one symbol; binary16 and binary32 ones are read in bulk.
+    if (!work->Take(precision == kMlpPrecisionQuantized ? count : count / 8)) {
+      return work->Refuse("MLPW");
+    }
   }
   ECRF_RETURN_IF_ERROR(scene->mlp.Init(config));
   const size_t count = scene->mlp.num_params();
@@ -286,17 +350,10 @@ enum class Expect { kHead, kNdcFrame, kOccupancy, kCoefficients, kMlp, kDone };
 
 }  // namespace
 
-Status DecodeScene(const uint8_t* data, size_t size, const DecodeOptions& options,
-                   SceneField* scene, SceneInfo* info_out) {
-  ECRF_CHECK_OR_RETURN(scene != nullptr, kErrInvalidArgument, "DecodeScene: null scene");
-  ECRF_CHECK_OR_RETURN(
-      options.storage == GridStorage::kFloat32 || options.storage == GridStorage::kInt16,
-      kErrInvalidArgument, "DecodeScene: unknown grid storage");
-  SceneInfo local_info;
-  SceneInfo& info = info_out ? *info_out : local_info;
-  info = SceneInfo();
-  info.stream_bytes = size;
-  MemoryBudget budget(options.max_memory_bytes);
+namespace {
+
+Status DecodeChunks(const uint8_t* data, size_t size, const DecodeOptions& options,
+                    MemoryBudget& budget, WorkBudget& work, SceneField* scene, SceneInfo& info) {
   ContainerReader reader;
   ECRF_RETURN_IF_ERROR(reader.Open(data, size));
   info.version_major = reader.version_major();
@@ -343,6 +400,14 @@ Status DecodeScene(const uint8_t* data, size_t size, const DecodeOptions& option
     }
     if (chunk.type == kChunkHead && expect == Expect::kHead) {
       ECRF_RETURN_IF_ERROR(ParseSceneHeader(chunk.data, chunk.size, &h));
+      // The version rule (SPEC.md 2.1): a feature of a later minor version than the stream's.
+      const int model_minor = h.scene_model == static_cast<uint8_t>(SceneModel::kUnbounded) ? 2
+                              : h.scene_model == static_cast<uint8_t>(SceneModel::kForward) ? 3
+                                                                                            : 0;
+      ECRF_CHECK_OR_RETURN(info.version_minor >= model_minor, kErrCorrupt,
+                           "HEAD: scene_model %u needs version_minor >= %d, the stream says %u "
+                           "(SPEC.md 2.1)",
+                           h.scene_model, model_minor, info.version_minor);
       // The 16-bit conversion holds both copies for a moment.
       const uint64_t grid_bytes =
           SceneGridValues(h) * (options.storage == GridStorage::kInt16 ? 6 : 4);
@@ -372,17 +437,18 @@ Status DecodeScene(const uint8_t* data, size_t size, const DecodeOptions& option
         advance_tensor();
       }
     } else if (chunk.type == kChunkOccupancy && expect == Expect::kOccupancy) {
-      ECRF_RETURN_IF_ERROR(DecodeOccupancyChunk(chunk, &budget, scene, &info));
+      ECRF_RETURN_IF_ERROR(DecodeOccupancyChunk(chunk, &budget, &work, scene, &info));
       advance_tensor();
     } else if (chunk.type == kChunkCoefficients && expect == Expect::kCoefficients) {
       const int g = next_tensor / kTensorsPerSceneGrid, t = next_tensor % kTensorsPerSceneGrid;
       VmGrid* grid = g == 0 ? &scene->density : &scene->appearance;
-      ECRF_RETURN_IF_ERROR(
-          DecodeCoefficientChunk(chunk, h, g, t, info.version_minor, grid, &info.tensors[g][t]));
+      ECRF_RETURN_IF_ERROR(DecodeCoefficientChunk(chunk, h, g, t, info.version_minor, &work, grid,
+                                                  &info.tensors[g][t]));
       ++next_tensor;
       advance_tensor();
     } else if (chunk.type == kChunkMlpWeights && expect == Expect::kMlp) {
-      ECRF_RETURN_IF_ERROR(DecodeMlpChunk(chunk, h, &budget, scene, &info));
+      ECRF_RETURN_IF_ERROR(
+          DecodeMlpChunk(chunk, h, &budget, &work, info.version_minor, scene, &info));
       expect = Expect::kDone;
     } else {
       const bool known = chunk.type == kChunkHead || chunk.type == kChunkNdcFrame ||
@@ -395,6 +461,8 @@ Status DecodeScene(const uint8_t* data, size_t size, const DecodeOptions& option
     }
   }
   if (options.storage == GridStorage::kInt16) {
+    // The conversion reads and writes every grid value: one unit per 16.
+    if (!work.Take(SceneGridValues(h) / 16)) return work.Refuse("16-bit grid storage");
     VmGrid converted;
     ECRF_RETURN_IF_ERROR(QuantizeGridInt16(scene->density, &converted));
     scene->density = static_cast<VmGrid&&>(converted);
@@ -406,6 +474,27 @@ Status DecodeScene(const uint8_t* data, size_t size, const DecodeOptions& option
   // construction, so the renderer need not scan (and page in) every value again.
   scene->grids_known_finite = true;
   return scene->Validate();
+}
+
+}  // namespace
+
+Status DecodeScene(const uint8_t* data, size_t size, const DecodeOptions& options,
+                   SceneField* scene, SceneInfo* info_out) {
+  ECRF_CHECK_OR_RETURN(scene != nullptr, kErrInvalidArgument, "DecodeScene: null scene");
+  ECRF_CHECK_OR_RETURN(
+      options.storage == GridStorage::kFloat32 || options.storage == GridStorage::kInt16,
+      kErrInvalidArgument, "DecodeScene: unknown grid storage");
+  SceneInfo local_info;
+  SceneInfo& info = info_out ? *info_out : local_info;
+  info = SceneInfo();
+  info.stream_bytes = size;
+  MemoryBudget budget(options.max_memory_bytes);
+  WorkBudget work(options.work_per_byte, size);
+  const Status s = DecodeChunks(data, size, options, budget, work, scene, info);
+  // Also after a refusal: what the stream had cost when it was refused.
+  info.decode_work = work.spent();
+  info.memory_bytes = budget.spent();
+  return s;
 }
 
 }  // namespace dec

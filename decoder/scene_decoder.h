@@ -18,6 +18,10 @@ namespace ecrf {
 namespace dec {
 
 inline constexpr uint64_t kDefaultDecodeMemoryBudget = uint64_t{256} << 20;
+// Decode work (SPEC.md 8), in range-decoded symbols or what takes as long: a stream may cost
+// kDecodeWorkBase plus DecodeOptions::work_per_byte per byte of its size.
+inline constexpr uint64_t kDecodeWorkBase = uint64_t{1} << 24;
+inline constexpr uint64_t kDefaultDecodeWorkPerByte = 1024;
 
 struct DecodeOptions {
   // kInt16 halves the grid memory (values rounded to 16-bit fixed point with one scale per
@@ -30,6 +34,13 @@ struct DecodeOptions {
   // mask, so the default (256 MiB, 10x a 400x400 Synthetic-NeRF scene) keeps hostile files cheap;
   // applications that decode larger scenes raise it, small devices lower it.
   uint64_t max_memory_bytes = kDefaultDecodeMemoryBudget;
+  // Decode work budget: kDecodeWorkBase + work_per_byte x the stream's size, in symbols (a coded
+  // block's inverse DCT counts what it costs in symbols' time); 0: no limit. Within the format's
+  // limits 30 KB of OCCU can flag 2^31 voxels for decoding and 8 KB of COEF can code 65,536
+  // blocks to their last position; trained streams cost 10-50 per byte (docs/
+  // benchmarks-and-fuzzing.md), so the default (1024) leaves them unchanged and keeps any stream
+  // of 64 KB under a second. Checked as the work comes, before it is spent (kErrLimit).
+  uint64_t work_per_byte = kDefaultDecodeWorkPerByte;
 };
 
 // What the stream held, for `ecrf info` and reports.
@@ -58,6 +69,8 @@ struct SceneInfo {
   // The meta chunk (UTF-8 JSON), pointing into the caller's buffer; null if absent.
   const uint8_t* metadata = nullptr;
   uint32_t metadata_size = 0;
+  uint64_t decode_work = 0;   // what the stream cost against the decode work budget
+  uint64_t memory_bytes = 0;  // what it took of the memory budget (grids, mask, MLP)
 };
 
 // Decodes `data` into *scene (replacing its contents). info may be null.

@@ -10,8 +10,8 @@ static_assert(ECRF_ERR_TRUNCATED == ecrf::kErrTruncated && ECRF_ERR_CORRUPT == e
 
 extern "C" {
 
-unsigned ecrf_version(void) { return (0u << 16) | (1u << 8) | 0u; }
-const char* ecrf_version_string(void) { return "0.1.0"; }
+unsigned ecrf_version(void) { return (0u << 16) | (2u << 8) | 0u; }
+const char* ecrf_version_string(void) { return "0.2.0"; }
 int ecrf_bitstream_version(void) { return ecrf::kVersionMajor; }
 const char* ecrf_error_name(int code) { return ecrf::ErrorCodeName(code); }
 

@@ -10,7 +10,8 @@ namespace ecrf {
 
 using namespace occupancy_internal;
 
-Status DecodeOccupancy(const uint8_t* stream, size_t size, const int res[3], uint8_t* bits) {
+Status DecodeOccupancy(const uint8_t* stream, size_t size, const int res[3], uint8_t* bits,
+                       uint64_t* symbol_budget) {
   const int nx = res[0], ny = res[1], nz = res[2];
   std::memset(bits, 0, OccupancyBytes(res));
   // One flag per row: at most 4096^2 bytes, bounded by the caller's resolution check.
@@ -19,11 +20,24 @@ Status DecodeOccupancy(const uint8_t* stream, size_t size, const int res[3], uin
   const Volume volume(bits, res);
   OccupancyContexts ctx;
   RangeDecoder dec(stream, size);
+  uint64_t unlimited = ~uint64_t{0};
+  uint64_t& left = symbol_budget != nullptr ? *symbol_budget : unlimited;
   for (int z = 0; z < nz && !dec.HasError(); ++z) {
     for (int y = 0; y < ny; ++y) {
+      // The row flag, and the row's voxels when it is flagged.
+      if (left == 0) {
+        std::free(row_any);
+        return Status::Error(kErrLimit, "OCCU: decode budget spent at row (y %d, z %d)", y, z);
+      }
+      --left;
       const int any = dec.DecodeBool(ctx.row[RowContext(row_any, ny, y, z)]);
       row_any[static_cast<size_t>(z) * ny + y] = static_cast<uint8_t>(any);
       if (!any) continue;
+      if (left < static_cast<uint64_t>(nx)) {
+        std::free(row_any);
+        return Status::Error(kErrLimit, "OCCU: decode budget spent at row (y %d, z %d)", y, z);
+      }
+      left -= static_cast<uint64_t>(nx);
       const size_t base = (static_cast<size_t>(z) * ny + y) * nx;
       for (int x = 0; x < nx; ++x) {
         if (dec.DecodeBool(ctx.voxel[volume.VoxelContext(x, y, z)])) {

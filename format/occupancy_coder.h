@@ -24,8 +24,11 @@ inline size_t OccupancyBytes(const int res[3]) {
 std::vector<uint8_t> EncodeOccupancy(const uint8_t* occupancy, const int res[3]);
 
 // bits: OccupancyBytes(res) bytes, which the decoder overwrites. The caller has checked res
-// against the limits. kErrTruncated / kErrCorrupt for a bad stream.
-Status DecodeOccupancy(const uint8_t* stream, size_t size, const int res[3], uint8_t* bits);
+// against the limits. kErrTruncated / kErrCorrupt for a bad stream. symbol_budget (optional): the
+// symbols the caller lets this chunk decode, decreased by those it does; a row whose voxels would
+// take more is not decoded (kErrLimit), so the work is bounded before it is spent (SPEC.md 8).
+Status DecodeOccupancy(const uint8_t* stream, size_t size, const int res[3], uint8_t* bits,
+                       uint64_t* symbol_budget = nullptr);
 
 }  // namespace ecrf
 

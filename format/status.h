@@ -39,7 +39,7 @@ class Status {
   const char* message() const { return message_; }
 
  private:
-  static constexpr int kMessageCapacity = 240;
+  static constexpr int kMessageCapacity = 480;
   int code_;
   char message_[kMessageCapacity];
 };

@@ -191,7 +191,7 @@ bool ReadFile(const std::string& path, std::vector<uint8_t>* bytes) {
 }
 
 std::unique_ptr<Scene> Decode(const py::object& source, const std::string& storage,
-                              const py::object& memory_budget) {
+                              const py::object& memory_budget, const py::object& decode_budget) {
   int kind;
   if (storage == "float32") {
     kind = ECRF_STORAGE_FLOAT32;
@@ -206,6 +206,12 @@ std::unique_ptr<Scene> Decode(const py::object& source, const std::string& stora
     if (budget <= 0) throw py::value_error("memory_budget must be positive (None: the default)");
     std::lock_guard<std::mutex> lock(scene->mutex());
     ecrf_scene_set_memory_budget(scene->get(), static_cast<uint64_t>(budget));
+  }
+  if (!decode_budget.is_none()) {
+    const long long per_byte = decode_budget.cast<long long>();
+    if (per_byte < 0) throw py::value_error("decode_budget must be >= 0 (0: no limit)");
+    std::lock_guard<std::mutex> lock(scene->mutex());
+    ecrf_scene_set_decode_budget(scene->get(), static_cast<uint64_t>(per_byte));
   }
   if (py::isinstance<py::str>(source) || py::hasattr(source, "__fspath__")) {
     const std::string path = py::module_::import("os").attr("fspath")(source).cast<std::string>();
@@ -235,7 +241,8 @@ std::unique_ptr<Scene> Decode(const py::object& source, const std::string& stora
 py::array Render(Scene& s, const py::array_t<float, py::array::c_style | py::array::forcecast>& c2w,
                  float fx, float fy, float cx, float cy, int width, int height, int threads,
                  float early_stop, float step_scale, const py::object& weight_threshold,
-                 bool skip_empty_space, int max_samples, int sample_budget, bool rgb) {
+                 bool skip_empty_space, int max_samples, int sample_budget, uint64_t work_budget,
+                 bool rgb) {
   if (c2w.size() != 12 && c2w.size() != 16) throw py::value_error("c2w must be 3x4 or 4x4");
   if (width <= 0 || height <= 0) throw py::value_error("width and height must be positive");
   ecrf_camera cam;
@@ -255,6 +262,7 @@ py::array Render(Scene& s, const py::array_t<float, py::array::c_style | py::arr
   o.skip_empty_space = skip_empty_space ? 1 : 0;
   o.max_samples = max_samples;
   o.sample_budget = sample_budget;
+  o.work_budget = work_budget;
   if (rgb) {
     py::array_t<float> out({height, width, 3});
     float* p = out.mutable_data();
@@ -321,11 +329,12 @@ PYBIND11_MODULE(ecrf, m) {
            py::arg("step_scale") = defaults.step_scale, py::arg("weight_threshold") = py::none(),
            py::arg("skip_empty_space") = defaults.skip_empty_space != 0,
            py::arg("max_samples") = defaults.max_samples,
-           py::arg("sample_budget") = defaults.sample_budget, py::arg("rgb") = false,
+           py::arg("sample_budget") = defaults.sample_budget,
+           py::arg("work_budget") = defaults.work_budget, py::arg("rgb") = false,
            "Renders one view: uint8 [height][width][4] RGBA, or with rgb=True float32 "
            "[height][width][3] in [0, 1]. threads=0: all hardware threads.");
   m.def("decode", &Decode, py::arg("data"), py::arg("storage") = "float32",
-        py::arg("memory_budget") = py::none(),
+        py::arg("memory_budget") = py::none(), py::arg("decode_budget") = py::none(),
         "Decodes an .ecrf stream from bytes-like data or a path; raises ecrf.DecodeError");
   m.def("orbit_camera", &OrbitCamera, py::arg("width"), py::arg("height"), py::arg("azimuth_deg"),
         py::arg("elevation_deg"), py::arg("radius"),

@@ -48,14 +48,14 @@ done
 EXPORTS='["_ecrf_version","_ecrf_version_string","_ecrf_bitstream_version","_ecrf_error_name",'
 EXPORTS+='"_ecrf_scene_create","_ecrf_scene_destroy","_ecrf_scene_message","_ecrf_scene_decode",'
 EXPORTS+='"_ecrf_scene_get_info","_ecrf_scene_render","_ecrf_render_options_default",'
-EXPORTS+='"_ecrf_scene_set_memory_budget","_ecrf_scene_tensor","_ecrf_scene_get_field","_ecrf_scene_model","_ecrf_scene_ndc_frame","_ecrf_scene_occupancy",'
+EXPORTS+='"_ecrf_scene_set_memory_budget","_ecrf_scene_set_decode_budget","_ecrf_scene_check_render","_ecrf_scene_tensor","_ecrf_scene_get_field","_ecrf_scene_model","_ecrf_scene_ndc_frame","_ecrf_scene_occupancy",'
 EXPORTS+='"_ecrf_scene_mlp_params","_malloc","_free"]'
-RUNTIME='["cwrap","ccall","UTF8ToString","HEAPU8","HEAP32","HEAPF32"]'
+RUNTIME='["cwrap","ccall","UTF8ToString","HEAPU8","HEAP32","HEAPU32","HEAPF32"]'
 
 echo "link $OUT/ecrf_decoder.js"
 em++ "$OPT" "${SIMD[@]}" -fno-exceptions -fno-rtti "${objs[@]}" -o "$OUT/ecrf_decoder.js" \
   -sMODULARIZE=1 -sEXPORT_NAME=createEcrfDecoder -sENVIRONMENT=web,worker,node \
-  -sALLOW_MEMORY_GROWTH=1 -sFILESYSTEM=0 \
+  -sALLOW_MEMORY_GROWTH=1 -sFILESYSTEM=0 -sWASM_BIGINT=0 \
   -sEXPORTED_FUNCTIONS="$EXPORTS" -sEXPORTED_RUNTIME_METHODS="$RUNTIME"
 
 ls -l "$OUT/ecrf_decoder.js" "$OUT/ecrf_decoder.wasm"

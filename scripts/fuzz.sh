@@ -22,16 +22,17 @@ for exe in build-fuzz/tests/fuzz/fuzz_*; do
   corpus="build-fuzz/corpus/$name"
   findings="build-fuzz/findings/$name"
   mkdir -p "$corpus" "$findings"
-  # Seeds: the scene streams for the scene targets (the render target reads a mode byte first),
-  # the raw coefficient streams for the coefficient target; the others start from them too.
+  # Seeds: the scene streams and the must-reject streams for the scene targets (the render target
+  # reads a mode byte first), the raw coefficient streams for the coefficient target; the others
+  # start from them too. A timeout (-timeout, 10 s) is a finding like a crash.
   case "$name" in
     fuzz_scene_render)
-      for f in tests/conformance/*.ecrf; do
+      for f in tests/conformance/*.ecrf tests/conformance/reject/*.ecrf; do
         { printf '\000'; cat "$f"; } >"$corpus/seed0_$(basename "$f")"
         { printf '\001'; cat "$f"; } >"$corpus/seed1_$(basename "$f")"
       done ;;
     fuzz_coef_decoder) cp tests/conformance/*.bin "$corpus/" ;;
-    *) cp tests/conformance/*.ecrf "$corpus/" ;;
+    *) cp tests/conformance/*.ecrf tests/conformance/reject/*.ecrf "$corpus/" ;;
   esac
   log="build-fuzz/$name.log"
   echo "== $name: ${seconds} s"

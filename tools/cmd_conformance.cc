@@ -21,8 +21,10 @@
 #include "encoder/scene_encoder.h"
 #include "tests/common/coef_vectors.h"
 #include "tests/common/conformance_camera.h"
+#include "tests/common/reject_vectors.h"
 #include "tests/common/scene_vectors.h"
 #include "tools/cli.h"
+#include "tools/cli_args.h"
 #include "tools/commands.h"
 #include "tools/conformance_manifest.h"
 #include "tools/decoded_scene.h"
@@ -188,6 +190,54 @@ int CheckOrWriteScenes(const std::string& dir, bool write, bool retrain, json* m
 
 }  // namespace
 
+// The must-reject streams of tests/common/reject_vectors.h in DIR/reject/: written, or checked
+// byte for byte against this encoder's and refused with their category by this decoder.
+int CheckOrWriteRejects(const std::string& dir, bool write, json* manifest_rejects) {
+  const std::vector<conformance::RejectVector> vectors = conformance::RejectVectors();
+  const std::string reject_dir = dir + "/reject";
+  if (write) MakeDirectory(reject_dir);
+  int failures = 0;
+  for (const conformance::RejectVector& r : vectors) {
+    const std::string file = r.name + ".ecrf";
+    manifest_rejects->push_back({{"file", "reject/" + file},
+                                 {"stage", r.stage},
+                                 {"error", ErrorCodeName(r.code)},
+                                 {"code", r.code},
+                                 {"kind", r.budget ? "budget" : "normative"},
+                                 {"why", r.why},
+                                 {"bytes", r.bytes.size()}});
+    if (write) {
+      trainer::WriteFileAtomically(reject_dir + "/" + file, r.bytes.data(), r.bytes.size());
+      continue;
+    }
+    const std::vector<uint8_t> stored = trainer::ReadWholeFile(reject_dir + "/" + file);
+    // A decode-stage stream fails to decode; a render-stage one decodes and is refused when the
+    // renderer is prepared.
+    const bool at_render = std::string(r.stage) == "render";
+    dec::SceneField field;
+    Status s =
+        dec::DecodeScene(stored.data(), stored.size(), dec::DecodeOptions(), &field, nullptr);
+    const bool stage_ok = at_render ? s.ok() : !s.ok();
+    if (s.ok() && at_render) {
+      dec::RayMarcher marcher;
+      s = marcher.Init(&field, dec::RenderOptions());
+    }
+    const bool refused = stage_ok && !s.ok() && s.code() == r.code;
+    const bool same_bytes = stored == r.bytes;
+    std::printf("%-44s %s %s (%s), encoder output %s\n", ("reject/" + file).c_str(), r.stage,
+                refused ? "refused as expected:" : "NOT REFUSED AS EXPECTED:",
+                s.ok() ? "ok" : s.message(), same_bytes ? "identical" : "CHANGED");
+    failures += !refused || !same_bytes;
+  }
+  if (write) {
+    const std::string text = conformance::RejectExpectedText(vectors);
+    trainer::WriteFileAtomically(reject_dir + "/expected.txt", text.data(), text.size());
+    std::printf("wrote %zu must-reject streams and expected.txt into %s\n", vectors.size(),
+                reject_dir.c_str());
+  }
+  return failures;
+}
+
 int RunConformance(int argc, char** argv) {
   std::string write_dir, check_dir;
   bool retrain = false;
@@ -225,11 +275,12 @@ int RunConformance(int argc, char** argv) {
       throw std::runtime_error(dir + "/manifest.json: not a JSON object");
   }
   json manifest = {
-      {"spec", "SPEC.md 1.3"},
+      {"spec", "SPEC.md 1.5"},
       {"note",
        "written by `ecrf conformance --write`; checksums as in SPEC.md 6.5, cameras exact (7.1)"},
       {"coefficient_vectors", json::array()},
-      {"scene_vectors", json::array()}};
+      {"scene_vectors", json::array()},
+      {"reject_vectors", json::array()}};
   const json stored_coefs = stored.value("coefficient_vectors", json::array());
   const json stored_scenes = stored.value("scene_vectors", json::array());
   std::ostringstream coef_md5_text;
@@ -245,7 +296,8 @@ int RunConformance(int argc, char** argv) {
          {"block", {v.shape.n0, v.shape.n1, v.shape.n2}},
          {"blocks", v.blocks},
          {"coef_bits", v.coef_bits},
-         {"contexts", v.contexts == CoefContextSet::kWide ? "wide (1.4)" : "narrow (1.0-1.3)"},
+         // The value of a COEF payload's `contexts` byte (SPEC.md 6.4.2): 0 narrow, 1 wide.
+         {"contexts", static_cast<int>(v.contexts)},
          {"bytes", stream.size()},
          {"md5", md5}});
     if (write) {
@@ -269,6 +321,7 @@ int RunConformance(int argc, char** argv) {
     trainer::WriteFileAtomically(dir + "/coefficients.md5", text.data(), text.size());
   }
   failures += CheckOrWriteScenes(dir, write, retrain, &manifest["scene_vectors"], stored_scenes);
+  failures += CheckOrWriteRejects(dir, write, &manifest["reject_vectors"]);
   if (write) {
     const std::string text = ManifestText(manifest);
     trainer::WriteFileAtomically(dir + "/manifest.json", text.data(), text.size());

@@ -28,6 +28,7 @@ struct CommonArgs {
   int threads = 0;  // 0: all cores
   bool int16 = false;
   int max_memory_mb = int(dec::kDefaultDecodeMemoryBudget >> 20);
+  uint64_t decode_budget = dec::kDefaultDecodeWorkPerByte;
   dec::RenderOptions render;
 };
 
@@ -74,10 +75,22 @@ void AddCommonFlags(CLI::App* app, CommonArgs* c) {
       ->check(CLI::Range(1, 1 << 20))
       ->capture_default_str()
       ->group(budgets);
+  app->add_option("--decode-budget", c->decode_budget,
+                  "refuse streams whose decoding costs more than 2^24 + N symbols per byte of "
+                  "the file (0 = no limit)")
+      ->type_name("N")
+      ->capture_default_str()
+      ->group(budgets);
   app->add_option("--sample-budget", c->render.sample_budget,
                   "refuse scenes whose rays take more samples (0 = no limit)")
       ->type_name("N")
       ->check(CLI::NonNegativeNumber)
+      ->capture_default_str()
+      ->group(budgets);
+  app->add_option("--work-budget", c->render.work_budget,
+                  "refuse views that cost more multiply-adds per pixel on average, and scenes "
+                  "one sample of which costs more (0 = no limit)")
+      ->type_name("N")
       ->capture_default_str()
       ->group(budgets);
 }
@@ -96,7 +109,7 @@ dec::RenderOptions RenderOptionsFor(const CommonArgs& c) {
 
 LoadedScene LoadScene(const CommonArgs& c) {
   return LoadSceneFile(c.scene, c.int16 ? dec::GridStorage::kInt16 : dec::GridStorage::kFloat32,
-                       uint64_t(c.max_memory_mb) << 20);
+                       uint64_t(c.max_memory_mb) << 20, c.decode_budget);
 }
 
 // "DIR/transforms_test.json" -> DIR, "test".
@@ -217,12 +230,16 @@ int RunRender(int argc, char** argv) {
   }
   const LoadedScene s = LoadScene(c);
   MakeDirectory(out);
-  double seconds = 0.0;
+  double seconds = 0.0, max_work = 0.0;
   dec::RenderStats stats;
   for (const auto& [name, camera] : cameras) {
     const auto start = std::chrono::steady_clock::now();
-    const trainer::Image img = RenderDecoded(*s.field, camera, RenderOptionsFor(c), &stats);
+    dec::RenderStats view;
+    const trainer::Image img = RenderDecoded(*s.field, camera, RenderOptionsFor(c), &view);
     seconds += Seconds(start);
+    stats.Add(view);
+    max_work = std::max(max_work, static_cast<double>(view.work) /
+                                      (static_cast<double>(camera.width) * camera.height));
     trainer::SavePng(out + "/" + name + ".png", img);
   }
   std::printf(
@@ -232,6 +249,8 @@ int RunRender(int argc, char** argv) {
       RenderThreads(c), RenderThreads(c) == 1 ? "" : "s", 1e3 * s.decode_seconds,
       stats.samples / 1e6 / std::max<size_t>(1, cameras.size()),
       stats.color_samples / 1e6 / std::max<size_t>(1, cameras.size()));
+  std::printf("work: %.0f multiply-adds per pixel on the costliest view (work budget %llu)\n",
+              max_work, static_cast<unsigned long long>(c.render.work_budget));
   return 0;
 }
 

@@ -22,13 +22,15 @@ double SecondsSince(std::chrono::steady_clock::time_point start) {
 }  // namespace
 
 LoadedScene DecodeSceneBytes(std::vector<uint8_t> bytes, const std::string& name,
-                             dec::GridStorage storage, uint64_t max_memory_bytes) {
+                             dec::GridStorage storage, uint64_t max_memory_bytes,
+                             uint64_t work_per_byte) {
   LoadedScene s;
   s.bytes = std::move(bytes);
   s.field = std::make_unique<dec::SceneField>();
   dec::DecodeOptions options;
   options.storage = storage;
   options.max_memory_bytes = max_memory_bytes;
+  options.work_per_byte = work_per_byte;
   const auto start = std::chrono::steady_clock::now();
   const Status st =
       dec::DecodeScene(s.bytes.data(), s.bytes.size(), options, s.field.get(), &s.info);
@@ -41,8 +43,9 @@ LoadedScene DecodeSceneBytes(std::vector<uint8_t> bytes, const std::string& name
 }
 
 LoadedScene LoadSceneFile(const std::string& path, dec::GridStorage storage,
-                          uint64_t max_memory_bytes) {
-  return DecodeSceneBytes(trainer::ReadWholeFile(path), path, storage, max_memory_bytes);
+                          uint64_t max_memory_bytes, uint64_t work_per_byte) {
+  return DecodeSceneBytes(trainer::ReadWholeFile(path), path, storage, max_memory_bytes,
+                          work_per_byte);
 }
 
 trainer::Image RenderDecoded(const dec::SceneField& scene, const trainer::Camera& camera,

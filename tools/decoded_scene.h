@@ -28,12 +28,15 @@ struct LoadedScene {
 // max_memory_bytes: DecodeOptions::max_memory_bytes (files from elsewhere keep the default
 // budget; a stream ecrf just wrote itself may pass kUnlimitedMemory).
 inline constexpr uint64_t kUnlimitedMemory = ~uint64_t{0};
+// work_per_byte: DecodeOptions::work_per_byte.
 LoadedScene DecodeSceneBytes(std::vector<uint8_t> bytes, const std::string& name,
                              dec::GridStorage storage = dec::GridStorage::kFloat32,
-                             uint64_t max_memory_bytes = dec::kDefaultDecodeMemoryBudget);
+                             uint64_t max_memory_bytes = dec::kDefaultDecodeMemoryBudget,
+                             uint64_t work_per_byte = dec::kDefaultDecodeWorkPerByte);
 LoadedScene LoadSceneFile(const std::string& path,
                           dec::GridStorage storage = dec::GridStorage::kFloat32,
-                          uint64_t max_memory_bytes = dec::kDefaultDecodeMemoryBudget);
+                          uint64_t max_memory_bytes = dec::kDefaultDecodeMemoryBudget,
+                          uint64_t work_per_byte = dec::kDefaultDecodeWorkPerByte);
 
 // RGB render of one camera; stats accumulate when given.
 trainer::Image RenderDecoded(const dec::SceneField& scene, const trainer::Camera& camera,

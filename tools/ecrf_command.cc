@@ -32,6 +32,8 @@ const SubcommandTable& BenchTable() {
       "ecrf bench",
       "benchmark",
       {
+          {"budgets", RunBudgetBench,
+           "the costliest small streams against the decode and render budgets"},
           {"coder", RunCoderBench, "entropy coder and coefficient coding"},
           {"idct", RunIdctBench, "integer inverse DCT"},
           {"mlp", RunMlpBench,

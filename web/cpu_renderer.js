@@ -14,8 +14,10 @@
   const scriptBase = document.currentScript ? document.currentScript.src : location.href;
 
   class CpuRenderer {
-    constructor(canvas, {workers = 2, onFrame = () => {}, onError = () => {}} = {}) {
+    // budgets: {workBudget, decodeBudget} (SPEC.md 8; omitted: the decoder's defaults).
+    constructor(canvas, {workers = 2, onFrame = () => {}, onError = () => {}, budgets = {}} = {}) {
       this.kind = 'cpu';
+      this.budgets = budgets;
       this.canvas = canvas;
       this.ctx = canvas.getContext('2d');
       if (!this.ctx) throw new Error('no 2D canvas context');
@@ -67,7 +69,7 @@
             }
           };
           w.worker.onerror = (ev) => { ev.preventDefault(); fail(`render worker: ${ev.message || 'failed to start'}`); };
-          w.worker.postMessage({type: 'load', sceneId, bytes});
+          w.worker.postMessage({type: 'load', sceneId, bytes, budgets: this.budgets});
           this.workers.push(w);
         }
       });

@@ -2,7 +2,8 @@
 // and posts what a renderer of its own needs (EcrfDecoder.sceneData) back as transferables, so
 // that the page never blocks on a decode and never holds a second copy of the grids.
 //
-// Message in:   {id, bytes}
+// Message in:   {id, bytes, budgets}   (budgets: {workBudget, decodeBudget}, optional; the scene is
+//                refused as the CPU renderer would refuse it: SPEC.md 8)
 // Messages out: {type: 'decoded', id, version, decodeMs, scene} | {type: 'error', id, message}
 'use strict';
 importScripts('../build-wasm/ecrf_decoder.js', 'viewer.js');
@@ -21,12 +22,15 @@ function transferables(scene) {
 
 self.onmessage = async (ev) => {
   const {id, bytes} = ev.data;
+  const budgets = ev.data.budgets || {};
   let decoder = null;
   try {
     decoder = new ecrfWeb.EcrfDecoder(await modulePromise);
     const t0 = performance.now();
+    if (budgets.decodeBudget !== undefined) decoder.setDecodeBudget(budgets.decodeBudget);
     decoder.decode(bytes);
     const decodeMs = performance.now() - t0;
+    decoder.checkRender(budgets.workBudget === undefined ? {} : {workBudget: budgets.workBudget});
     const scene = decoder.sceneData();
     const version = decoder.version();
     decoder.destroy();  // before posting: the wasm heap is the larger copy

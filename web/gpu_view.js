@@ -31,8 +31,11 @@
       }
     }
 
-    constructor(canvas, {onFrame = () => {}, onError = () => {}} = {}) {
+    // budgets: {workBudget, decodeBudget} (SPEC.md 8): the decode worker refuses what the CPU
+    // renderer would refuse.
+    constructor(canvas, {onFrame = () => {}, onError = () => {}, budgets = {}} = {}) {
       this.kind = 'gpu';
+      this.budgets = budgets;
       this.canvas = canvas;
       this.r = new ecrfGpu.GpuRenderer(canvas);
       this.onFrame = onFrame;
@@ -85,7 +88,8 @@
             reject(err);
           }
         };
-        worker.postMessage({id, bytes});  // a copy: the page may fall back to the CPU path with it
+        // A copy: the page may fall back to the CPU path with it.
+        worker.postMessage({id, bytes, budgets: this.budgets});
       });
     }
 

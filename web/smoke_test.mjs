@@ -101,6 +101,23 @@ const r400 = time(Math.max(1, Math.min(reps, 3)), () => dec.render(cam400));
 console.log(`render 400x400 (default options, as the viewer): ${r400.ms.toFixed(1)} ms`);
 check(r400.result.length === 400 * 400 * 4, '400x400 image');
 
+// Budgets (SPEC.md 8) reach the C API: a work budget below what one sample costs refuses the
+// scene before anything is rendered (checkRender is the GPU path's check), 0 lifts the limit.
+const refusal = (fn) => { try { fn(); return ''; } catch (e) { return e.message; } };
+const checked = refusal(() => dec.checkRender({workBudget: 1}));
+check(checked.includes('(-5)') && checked.includes('work budget of 1 per pixel'),
+      `checkRender refuses a work budget of 1: ${checked}`);
+check(refusal(() => dec.render(cam64, {workBudget: 1})).includes('work budget'), 'so does render');
+check(refusal(() => dec.checkRender()) === '', 'the default budgets accept scene_builtin');
+const unlimited = dec.render(cam64, {workBudget: 0});
+check(unlimited.every((v, i) => v === d64.result[i]), 'no work limit: the same image, bit for bit');
+const wide = dec.render(cam64, {workBudget: 2 ** 40});  // above 2^32: both halves of the uint64
+check(wide.every((v, i) => v === d64.result[i]), 'a work budget of 2^40: the same image');
+const budgeted = new EcrfDecoder(module);
+budgeted.setDecodeBudget(0);
+check(refusal(() => budgeted.decode(stream)) === '', 'a decode budget of 0 (no limit) decodes');
+budgeted.destroy();
+
 let threw = '';
 const bad = new EcrfDecoder(module);
 try { bad.decode(stream.subarray(0, stream.length >> 1)); } catch (e) { threw = e.message; }

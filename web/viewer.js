@@ -44,7 +44,9 @@
   }
 
   // Byte layouts of the C structs on wasm32 (int, float, size_t and pointers are 4 bytes).
-  const INFO_BYTES = 112, CAMERA_BYTES = 72, OPTIONS_BYTES = 28, FIELD_BYTES = 64;
+  const INFO_BYTES = 112, CAMERA_BYTES = 72, OPTIONS_BYTES = 40, FIELD_BYTES = 64;
+  // Offset of ecrf_render_options.work_budget (a uint64_t, 8-byte aligned after seven 4-byte fields).
+  const WORK_BUDGET_OFFSET = 32;
 
   // One decoded scene over the C API of include/ecrf/decoder.h. `module` is the
   // instance that createEcrfDecoder() (build-wasm/ecrf_decoder.js) resolves to.
@@ -60,6 +62,13 @@
     version() { return this.m.UTF8ToString(this.m._ecrf_version_string()); }
 
     message() { return this.m.UTF8ToString(this.m._ecrf_scene_message(this.scene)); }
+
+    // Decode work budget of the next decodes (SPEC.md 8): units per byte of the stream, 0 no limit.
+    // (A uint64_t argument is passed as two 32-bit halves, low first: -sWASM_BIGINT=0.)
+    setDecodeBudget(unitsPerByte) {
+      const v = Math.max(0, Math.floor(unitsPerByte));
+      this.m._ecrf_scene_set_decode_budget(this.scene, v % 4294967296, Math.floor(v / 4294967296));
+    }
 
     // bytes: Uint8Array of a whole .ecrf file. Throws with the decoder's message on failure.
     decode(bytes, storage = 0) {
@@ -101,10 +110,38 @@
       return info;
     }
 
+    // ecrf_render_options for `options` in the wasm heap at `opt` (one thread: no pthreads here).
+    writeOptions(opt, options) {
+      const m = this.m;
+      m._ecrf_render_options_default(opt);
+      const o = opt >> 2;
+      m.HEAP32[o + 0] = 1;  // num_threads
+      if (options.skipEmptySpace !== undefined) m.HEAP32[o + 1] = options.skipEmptySpace ? 1 : 0;
+      if (options.earlyStopTransmittance !== undefined) m.HEAPF32[o + 2] = options.earlyStopTransmittance;
+      if (options.maxSamples !== undefined) m.HEAP32[o + 3] = options.maxSamples;
+      if (options.workBudget !== undefined) {
+        const v = Math.max(0, Math.floor(options.workBudget));
+        m.HEAPU32[(opt + WORK_BUDGET_OFFSET) >> 2] = v % 4294967296;
+        m.HEAPU32[((opt + WORK_BUDGET_OFFSET) >> 2) + 1] = Math.floor(v / 4294967296);
+      }
+    }
+
+    // Throws with the decoder's message when ecrf_scene_render would refuse the scene with these
+    // options before rendering (the sample budget, the work budget of one sample: SPEC.md 8); for
+    // renderers of their own (the GPU path).
+    checkRender(options = {}) {
+      const m = this.m;
+      const opt = m._malloc(OPTIONS_BYTES);
+      this.writeOptions(opt, options);
+      const rc = m._ecrf_scene_check_render(this.scene, opt);
+      m._free(opt);
+      if (rc < 0) throw new Error(`render refused (${rc}): ${this.message()}`);
+    }
+
     // Renders `camera` (orbitCamera's shape) and returns a fresh Uint8ClampedArray of
     // width*height*4 RGBA bytes (alpha = opacity). Always one thread: no pthreads in this build.
-    // options: {skipEmptySpace, earlyStopTransmittance, maxSamples}; omitted fields keep
-    // ecrf_render_options_default's values.
+    // options: {skipEmptySpace, earlyStopTransmittance, maxSamples, workBudget}; omitted fields
+    // keep ecrf_render_options_default's values.
     render(camera, options = {}) {
       const m = this.m;
       const bytes = camera.width * camera.height * 4;
@@ -124,12 +161,7 @@
       m.HEAPF32[c + 15] = camera.cy;
       m.HEAP32[c + 16] = camera.width;
       m.HEAP32[c + 17] = camera.height;
-      m._ecrf_render_options_default(opt);
-      const o = opt >> 2;
-      m.HEAP32[o + 0] = 1;  // num_threads
-      if (options.skipEmptySpace !== undefined) m.HEAP32[o + 1] = options.skipEmptySpace ? 1 : 0;
-      if (options.earlyStopTransmittance !== undefined) m.HEAPF32[o + 2] = options.earlyStopTransmittance;
-      if (options.maxSamples !== undefined) m.HEAP32[o + 3] = options.maxSamples;
+      this.writeOptions(opt, options);
       const rc = m._ecrf_scene_render(this.scene, cam, opt, this.image, 0);
       m._free(cam);
       if (rc < 0) throw new Error(`render failed (${rc}): ${this.message()}`);

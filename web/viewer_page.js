@@ -10,6 +10,13 @@
   const IDLE_MS = 200;  // no camera change for this long: render at full resolution
 
   const params = new URLSearchParams(location.search);
+  // ?work-budget=N (multiply-adds per pixel) and ?decode-budget=N (units per byte), SPEC.md 8; 0
+  // lifts a limit. Omitted: the decoder's defaults.
+  const budgets = {};
+  for (const [key, name] of [['work-budget', 'workBudget'], ['decode-budget', 'decodeBudget']]) {
+    const v = Number(params.get(key));
+    if (params.has(key) && Number.isFinite(v) && v >= 0) budgets[name] = v;
+  }
   const state = {
     renderer: null, scene: null, view: null, size: 0, loading: false, error: null,
     frames: 0, lastFrame: null, frameLog: [], status: '',
@@ -151,14 +158,14 @@
     fitCanvas();
     if (kind === 'gpu') {
       try {
-        renderer = new ecrfGpuView.GpuView(canvas, {onFrame, onError: onRenderError});
+        renderer = new ecrfGpuView.GpuView(canvas, {onFrame, onError: onRenderError, budgets});
       } catch (e) {
         status(`${e.message}: using the CPU renderer`);
         return makeRenderer('cpu');
       }
     } else {
       const workers = Number(params.get('workers')) || Math.min(navigator.hardwareConcurrency || 2, 4);
-      renderer = new ecrfCpu.CpuRenderer(canvas, {workers, onFrame, onError: onRenderError});
+      renderer = new ecrfCpu.CpuRenderer(canvas, {workers, onFrame, onError: onRenderError, budgets});
     }
     state.renderer = kind;
     state.rendererNote = kind === 'cpu' && state.softwareGl ? ` (WebGL2 is software here: ${state.softwareGl}; ?renderer=gpu forces it)` : '';

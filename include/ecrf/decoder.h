@@ -96,6 +96,10 @@ typedef struct ecrf_render_options {
   int sample_budget;              /* refuse (ECRF_ERR_LIMIT) scenes whose rays take more samples
                                      than this after step_scale and max_samples (0: no limit;
                                      default 16384) */
+  uint64_t work_budget;           /* multiply-adds a view may spend per pixel on average
+                                     (SPEC.md 8; 0: no limit; default 2,000,000): refuse
+                                     (ECRF_ERR_LIMIT) a scene one colour sample of which costs
+                                     more, and a view that spends width x height x this */
 } ecrf_render_options;
 
 ECRF_API void ecrf_render_options_default(ecrf_render_options* options);
@@ -106,6 +110,11 @@ ECRF_API void ecrf_scene_destroy(ecrf_scene* scene);
 /* Memory the next decodes may use for grids, occupancy mask and MLP (0: the default, 256 MiB);
  * a stream that needs more fails with ECRF_ERR_LIMIT before anything is allocated. */
 ECRF_API int ecrf_scene_set_memory_budget(ecrf_scene* scene, uint64_t bytes);
+/* Work the next decodes may spend (SPEC.md 8): 2^24 + units_per_byte x the stream's size, in
+ * range-decoded symbols (a coded block's inverse DCT counts its time in symbols); 0: no limit;
+ * default 1024, 20 times what trained streams cost. A stream that costs more fails with
+ * ECRF_ERR_LIMIT as soon as its work passes the budget. */
+ECRF_API int ecrf_scene_set_decode_budget(ecrf_scene* scene, uint64_t units_per_byte);
 /* Message of the last failed call on this scene ("" after a success). */
 ECRF_API const char* ecrf_scene_message(const ecrf_scene* scene);
 
@@ -168,6 +177,12 @@ ECRF_API int ecrf_scene_mlp_params(const ecrf_scene* scene, float* params, size_
  * in [0, 1]; row-major from the top row; either may be NULL (not both). */
 ECRF_API int ecrf_scene_render(ecrf_scene* scene, const ecrf_camera* camera,
                                const ecrf_render_options* options, uint8_t* rgba8, float* rgb);
+
+/* Checks options against the decoded scene as ecrf_scene_render does before it renders anything
+ * (option ranges, the sample budget, the work budget of one sample: SPEC.md 8), for renderers of
+ * their own (a GPU shader) that want the same refusals. 0 or the error ecrf_scene_render would
+ * return before rendering. */
+ECRF_API int ecrf_scene_check_render(ecrf_scene* scene, const ecrf_render_options* options);
 
 #ifdef __cplusplus
 }

@@ -9,6 +9,10 @@
 // from outside its region of interest, a forward-facing scene (bitstream 1.3: NDC, 7.2.2) seen
 // from in front of its reference camera. Those carry the lowest version of their features and
 // the narrow coefficient contexts of 1.0-1.3; the `*_wide_contexts*` vectors are 1.4 streams.
+// Added with SPEC.md 1.5: a quantized MLP whose levels reach every magnitude class up to 24 (the
+// class escape with extra values up to 2^23), an unbounded scene whose rays end at their sample
+// limit inside the contracted cube, and a forward-facing scene seen from the side, so that a
+// quarter of the rays never reach the reference camera's far side and miss the NDC mapping.
 #ifndef ECRF_TESTS_COMMON_SCENE_VECTORS_H_
 #define ECRF_TESTS_COMMON_SCENE_VECTORS_H_
 
@@ -44,6 +48,8 @@ struct SceneVector {
   uint32_t seed;
   SceneModel scene_model;
   bool wide_contexts = false;  // a 1.4 stream: wide coefficient contexts in the plane chunks
+  int num_samples = 0;         // samples per ray instead of the model's default (0)
+  bool mlp_escapes = false;    // quantized MLP rows whose levels span classes 0..24
 };
 
 inline const std::vector<SceneVector>& SceneVectors() {
@@ -140,6 +146,41 @@ inline const std::vector<SceneVector>& SceneVectors() {
        19,
        SceneModel::kObject,
        true},
+      {"scene_quantized_mlp_escapes",
+       {10, 12, 8},
+       {{2, 2, 2}, {2, 3, 2}},
+       {2, 4, 4},
+       {1, 2, 8},
+       8,
+       2,
+       OccupancyKind::kSphere,
+       20,
+       SceneModel::kObject,
+       false,
+       0,
+       true},
+      {"scene_unbounded_sample_limit",
+       {16, 16, 16},
+       {{2, 2, 2}, {2, 2, 2}},
+       {2, 4, 4},
+       {1, 2, 8},
+       8,
+       0,
+       OccupancyKind::kSphere,
+       21,
+       SceneModel::kUnbounded,
+       false,
+       50},
+      {"scene_forward_side_view",
+       {16, 16, 16},
+       {{2, 2, 2}, {2, 2, 2}},
+       {2, 4, 4},
+       {1, 2, 8},
+       8,
+       0,
+       OccupancyKind::kSphere,
+       22,
+       SceneModel::kForward},
   };
   return v;
 }
@@ -188,12 +229,14 @@ inline SceneHeader SceneVectorHeader(const SceneVector& v) {
     h.near_far[0] = 0.f;
     h.near_far[1] = 10.f;
   }
+  if (v.num_samples > 0) h.num_samples = static_cast<uint32_t>(v.num_samples);
   return h;
 }
 
 // The forward vector's reference camera: about the conformance camera OrbitCamera(48, 48, 0.7,
 // 0.5, 3.5) moved back by 0.5 (the world origin at depth 4), in decimal constants so that every
-// platform writes the same bytes; scale 2.75 is about its 2 fx / width.
+// platform writes the same bytes. Scale 2.75 is its own 2 fx / width, not the render camera's
+// (2.7778): the reference camera is a camera of its own (SPEC.md 7.7).
 inline NdcFrame SceneVectorNdcFrame() {
   NdcFrame f;
   const float m[12] = {-0.644218f, 0.764842f, 0.f,       0.f,       -0.366685f, -0.308854f,
@@ -317,7 +360,20 @@ inline std::vector<uint8_t> BuildSceneVector(const SceneVector& v) {
   mlp.U8(0);
   mlp.U8(0);
   mlp.U8(0);
-  if (v.mlp_precision == kMlpPrecisionQuantized) {
+  if (v.mlp_precision == kMlpPrecisionQuantized && v.mlp_escapes) {
+    // Magnitudes 2^(11 - k) (k = i % 25) times a factor in [1, 2) so that with 2^24 - 1 levels
+    // each row of 25 or more weights holds levels of every class 0..24: escapes with every extra
+    // value up to 2^23 - 1. The largest weights set the row steps near 2^-12, normal binary16
+    // numbers (smaller weights would need steps below binary16's range); the colours saturate.
+    std::vector<float> w(count);
+    for (size_t i = 0; i < count; ++i) {
+      const float m = 1.f + float(rng.Below(256)) / 256.f;
+      const float sign = (rng.Next() & 1) ? -1.f : 1.f;
+      w[i] = sign * std::ldexp(m, 11 - int(i % 25));
+    }
+    const MlpLayout layout = MakeMlpLayout(F, P, H, h.feature_pe_freqs, h.viewdir_pe_freqs);
+    mlp.Bytes(EncodeQuantizedMlp(layout, w.data(), kMlpMaxLevel, nullptr));
+  } else if (v.mlp_precision == kMlpPrecisionQuantized) {
     // Rows of very different scale (one step each); 20000 levels per row reach class 15.
     std::vector<float> w(count);
     for (size_t i = 0; i < count; ++i) {

@@ -111,6 +111,35 @@ int main(int argc, char** argv) {
                 render.empty() ? ("ERROR " + error).c_str() : render.c_str());
     failures += render.empty();
   }
+  // Must-reject streams (SPEC.md 7.7): "FILE STAGE CODE KIND" per line of reject/expected.txt. A
+  // decode-stage stream fails to decode with CODE; a render-stage one decodes and its renderer
+  // refuses it with CODE when prepared. Printed with the code so that every build agrees.
+  std::ifstream expected(dir + "reject/expected.txt");
+  if (!expected) {
+    std::fprintf(stderr, "%sreject/expected.txt: missing\n", dir.c_str());
+    return 2;
+  }
+  std::string file, stage, kind;
+  int code = 0;
+  while (expected >> file >> stage >> code >> kind) {
+    std::vector<uint8_t> bytes;
+    if (!ReadFile(dir + "reject/" + file, &bytes)) {
+      std::fprintf(stderr, "%sreject/%s: cannot read\n", dir.c_str(), file.c_str());
+      return 2;
+    }
+    ecrf::dec::SceneField field;
+    Status s = ecrf::dec::DecodeScene(bytes.data(), bytes.size(), ecrf::dec::DecodeOptions(),
+                                      &field, nullptr);
+    const bool stage_ok = stage == "render" ? s.ok() : !s.ok();
+    if (s.ok() && stage == "render") {
+      ecrf::dec::RayMarcher marcher;
+      s = marcher.Init(&field, ecrf::dec::RenderOptions());
+    }
+    const bool ok = stage_ok && s.code() == code;
+    failures += !ok;
+    std::printf("reject %s %s %d %s%s\n", file.c_str(), stage.c_str(), s.code(), kind.c_str(),
+                ok ? "" : " NOT AS EXPECTED");
+  }
   std::printf("%s\n",
               failures ? "conformance checksums: FAILED" : "conformance checksums: all match");
   return failures ? 1 : 0;

@@ -227,6 +227,40 @@ TEST(SceneDecoder, CoefficientContextSetIsCheckedAgainstTheVersion) {
   EXPECT_EQ(Decode(build(5, 2), &field).code(), kErrUnsupported);
 }
 
+// SPEC.md 2.1, the version rule: a stream that uses a feature of a later minor version than its
+// version_minor is corrupt, whichever feature; a later minor version than the decoder knows is
+// accepted when the stream uses only known features.
+TEST(SceneDecoder, EveryFeatureNeedsItsMinorVersion) {
+  const std::map<std::string, int> feature_minor = {{"scene_quantized_mlp", 1},
+                                                    {"scene_unbounded", 2},
+                                                    {"scene_forward", 3},
+                                                    {"scene_wide_contexts", 4}};
+  int checked = 0;
+  for (const conformance::SceneVector& v : conformance::SceneVectors()) {
+    const auto it = feature_minor.find(v.name);
+    if (it == feature_minor.end()) continue;
+    const std::vector<uint8_t> good = conformance::BuildSceneVector(v);
+    ASSERT_EQ(good[5], it->second) << v.name;  // the encoder writes the lowest minor version
+    const Chunks chunks = SplitChunks(good);
+    auto relabel = [&chunks](uint8_t minor) {
+      ContainerWriter w(minor);
+      for (const auto& [type, payload] : chunks) {
+        if (type != kChunkDone) w.AddChunk(type, payload);
+      }
+      return w.Finish();
+    };
+    SceneField field;
+    const Status below = Decode(relabel(static_cast<uint8_t>(it->second - 1)), &field);
+    EXPECT_EQ(below.code(), kErrCorrupt) << v.name << ": " << below.message();
+    EXPECT_NE(std::string(below.message()).find("version_minor"), std::string::npos)
+        << below.message();
+    EXPECT_TRUE(Decode(relabel(static_cast<uint8_t>(it->second)), &field).ok()) << v.name;
+    EXPECT_TRUE(Decode(relabel(200), &field).ok()) << v.name;
+    ++checked;
+  }
+  EXPECT_EQ(checked, 4);
+}
+
 // A stream of a few hundred bytes that claims what the format allows but a device cannot afford.
 std::vector<uint8_t> HostileStream(const uint16_t res[3], int rank, const int occ_res[3]) {
   SceneHeader h;

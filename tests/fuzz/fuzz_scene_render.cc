@@ -2,6 +2,9 @@
 // The first byte picks the grid storage (float32 or int16) and the camera; the rest is the stream.
 // A scene that decodes must render without crashing, within the decoder's default budgets, and
 // every output value must be finite and in [0, 1] (SPEC.md 7.2, 1.2). Seed with tests/conformance.
+// The budgets bound every execution: decode work (2^24 + 1024 per byte), 64 MiB of memory, 4096
+// samples per ray and the default render work budget (30 pixels x 6 M multiply-adds, ~10 ms), so
+// an execution that runs past libFuzzer's -timeout (scripts/fuzz.sh: 10 s) is a finding.
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -20,6 +23,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (!ecrf::dec::DecodeScene(data + 1, size - 1, options, &scene, nullptr).ok()) return 0;
   ecrf::dec::RenderOptions render;
   render.sample_budget = 4096;
+  render.work_budget = ecrf::dec::kDefaultWorkBudget;
   render.early_stop_transmittance = (mode & 2) ? 0.f : 1e-4f;
   render.skip_empty_space = (mode & 4) == 0;
   ecrf::dec::RayMarcher marcher;

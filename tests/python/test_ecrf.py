@@ -222,6 +222,21 @@ class RenderTest(unittest.TestCase):
         with self.assertRaises(ValueError):
             s.render(np.eye(3), 1, 1, 1, 1, 8, 8)
 
+    def test_work_and_decode_budgets(self):
+        # SPEC.md 8: a work budget below one sample's cost refuses the scene, 0 lifts the limit
+        # and leaves the image unchanged; the decode budget is per byte of the stream.
+        s = ecrf.decode(SCENE)
+        cam = ecrf.orbit_camera(24, 24, 17.0, 29.0, 4.0)
+        with self.assertRaises(ecrf.Error) as cm:
+            s.render(*cam, 24, 24, work_budget=1)
+        self.assertEqual(cm.exception.code, ecrf.ERR_LIMIT)
+        self.assertIn("work budget", str(cm.exception))
+        np.testing.assert_array_equal(s.render(*cam, 24, 24, work_budget=0), s.render(*cam, 24, 24))
+        unlimited = ecrf.decode(SCENE, decode_budget=0)
+        np.testing.assert_array_equal(unlimited.tensor(0, 0), s.tensor(0, 0))
+        with self.assertRaises(ValueError):
+            ecrf.decode(SCENE, decode_budget=-1)
+
     def test_render_releases_the_gil(self):
         s = ecrf.decode(SCENE)
         cam = ecrf.orbit_camera(128, 128, 17.0, 29.0, 4.0)

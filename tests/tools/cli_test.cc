@@ -97,6 +97,8 @@ void ExpectRenderFlags(const std::string& help) {
   ExpectFlag(help, "--weight-threshold", "the scene's");
   ExpectFlag(help, "--max-memory-mb", Text(dec::kDefaultDecodeMemoryBudget >> 20));
   ExpectFlag(help, "--sample-budget", Text(dec::kDefaultSampleBudget));
+  ExpectFlag(help, "--work-budget", Text(dec::kDefaultWorkBudget));
+  ExpectFlag(help, "--decode-budget", Text(dec::kDefaultDecodeWorkPerByte));
 }
 
 // A parse error: exit code 2 and one line on stderr, "ecrf CMD: error: ..." ("ecrf: error: ..."

@@ -68,7 +68,7 @@ TEST(ConformanceManifest, ListsEveryVectorWithItsParameters) {
   }
   EXPECT_EQ(m.at("coefficient_vectors").size(), 9u);  // five narrow-context, four wide-context
   int wide = 0;
-  for (const auto& c : m.at("coefficient_vectors")) wide += c.at("contexts") == "wide (1.4)";
+  for (const auto& c : m.at("coefficient_vectors")) wide += c.at("contexts") == 1;
   EXPECT_EQ(wide, 4);
 }
 
@@ -99,8 +99,16 @@ TEST(ConformanceManifest, ScenesMatchEveryChecksumAndRenderWithinTolerance) {
     EXPECT_GE(a.psnr_db, 40.0) << file;
     ++checked;
   }
-  // Nine hand-made scenes (one unbounded, one forward-facing, two 1.4 streams) and the trained one.
-  EXPECT_EQ(checked, 10);
+  // Twelve hand-made scenes (two unbounded, two forward-facing, two 1.4 streams, two quantized
+  // MLPs) and the trained one.
+  EXPECT_EQ(checked, 13);
+  // And the must-reject streams (SPEC.md 7.7): sixteen, each with its stage, code and reason.
+  EXPECT_EQ(manifest.at("reject_vectors").size(), 16u);
+  for (const nlohmann::json& r : manifest.at("reject_vectors")) {
+    EXPECT_TRUE(r.at("stage") == "decode" || r.at("stage") == "render") << r.dump();
+    EXPECT_LT(r.at("code").get<int>(), 0) << r.dump();
+    EXPECT_FALSE(r.at("why").get<std::string>().empty()) << r.dump();
+  }
 }
 
 TEST(ConformanceManifest, RenderAgreementCountsPixelsByTheirWorstChannel) {

@@ -13,6 +13,7 @@ int RunCoderBench(int argc, char** argv);
 int RunIdctBench(int argc, char** argv);
 int RunMlpBench(int argc, char** argv);
 int RunRenderBench(int argc, char** argv);
+int RunBudgetBench(int argc, char** argv);
 int RunTrainStepBench(int argc, char** argv);
 
 }  // namespace tools

@@ -1,0 +1,62 @@
+// The work budget of a render (SPEC.md section 8): what a view may cost, counted in multiply-adds
+// of the reference process, so that a stream cannot make a renderer spend minutes on a pixel.
+//
+// The sample budget bounds samples per ray; what a sample costs depends on the stream: its density
+// ranks, and for a coloured sample the appearance ranks and the MLP (F, H, P, Ff, Fv). The widest
+// head the format allows (F 256, H 1024, P 3072) costs 10.6 M multiply-adds per coloured sample,
+// 4000 times a trained scene's. The renderer therefore charges every ray for what it does
+// (marched positions, density evaluations, colour evaluations) against a budget of
+// `work_budget` multiply-adds per pixel on average over the view, and refuses:
+//   - when preparing (Init): a scene one colour sample of which costs more than a pixel's budget;
+//   - while rendering: a view that spends its budget (pixels x work_budget); the render stops
+//     within one sample of the limit and returns kErrLimit, naming the count and the remedy.
+// Work is counted per sample, so the count, and whether a view is accepted, does not depend on
+// the thread count or the tiling. The unit is one multiply-add of the MLP; the other steps count
+// what they take in time against it (measured with `ecrf bench budgets` on this project's 2-core
+// x86-64 machine: a marched position ~100 ns, a density evaluation ~200 ns plus ~3 ns per rank in
+// a large grid, an MLP multiply-add ~0.16 ns).
+#ifndef ECRF_DECODER_RENDER_WORK_H_
+#define ECRF_DECODER_RENDER_WORK_H_
+
+#include <cstdint>
+
+#include "decoder/field.h"
+
+namespace ecrf {
+namespace dec {
+
+// Default RenderOptions::work_budget, per pixel on average over a view. Trained Synthetic-NeRF
+// scenes spend at most ~1/10 of it on their most expensive views (docs/benchmarks-and-fuzzing.md).
+inline constexpr uint64_t kDefaultWorkBudget = 6000000;
+
+struct SampleCosts {
+  uint64_t position = 0;  // a marched sample position: box, mask and contraction tests
+  uint64_t density = 0;   // its density: grid location, 7 taps per density rank, softplus, exp
+  uint64_t color = 0;     // its colour: appearance taps, the basis, positional encoding and MLP
+  // The most one ray of n samples can cost: every sample evaluated and coloured.
+  uint64_t WorstRay(int n) const { return static_cast<uint64_t>(n) * (position + density + color); }
+};
+
+// Costs of the scene's samples (the weights of the work budget). Overflow-free for every scene
+// the format allows: each cost is below 2^26.
+inline SampleCosts SceneSampleCosts(const SceneField& s) {
+  constexpr uint64_t kRank = 16;  // the 7 taps of one rank of one mode (gathers)
+  const MlpConfig& m = s.mlp.config();
+  const uint64_t F = static_cast<uint64_t>(m.feature_dim), H = static_cast<uint64_t>(m.hidden);
+  const uint64_t P = static_cast<uint64_t>(s.appearance.total_rank());
+  const uint64_t in = static_cast<uint64_t>(m.input_dim());
+  SampleCosts c;
+  c.position = 768;
+  c.density = 1024 + kRank * static_cast<uint64_t>(s.density.total_rank());
+  // Sines and cosines of the positional encoding count 8 each.
+  const uint64_t pe = 8 * 2 *
+                      (F * static_cast<uint64_t>(m.feature_pe_freqs) +
+                       3 * static_cast<uint64_t>(m.viewdir_pe_freqs));
+  c.color = kRank * P + F * P + pe + in * H + H * H + 3 * H + 256;
+  return c;
+}
+
+}  // namespace dec
+}  // namespace ecrf
+
+#endif  // ECRF_DECODER_RENDER_WORK_H_

@@ -1,0 +1,171 @@
+// `ecrf bench budgets`: the costliest small streams of each class (tests/common/costly_streams.h)
+// against the default budgets of SPEC.md 8: their size, what decoding them costs (seconds, the
+// memory the decoder's budget granted) and what a 64x64 view costs (seconds), with the outcome.
+// The budgets' goal: no stream of at most 64 KB takes more than 2 s to decode or 1 s to render
+// at 64x64 on 2 cores, while trained scenes decode and render unchanged.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "decoder/camera.h"
+#include "decoder/ray_marcher.h"
+#include "decoder/render_work.h"
+#include "decoder/scene_decoder.h"
+#include "tests/common/costly_streams.h"
+#include "tools/bench/bench_json.h"
+#include "tools/bench/benches.h"
+
+namespace ecrf {
+namespace tools {
+namespace {
+
+double Seconds(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+struct CostlyCase {
+  const char* name;
+  const char* what;
+  costly::CostlyScene scene;
+};
+
+std::vector<CostlyCase> Cases() {
+  std::vector<CostlyCase> v;
+  auto add = [&v](const char* name, const char* what, auto configure) {
+    CostlyCase c{name, what, {}};
+    configure(c.scene);
+    v.push_back(c);
+  };
+  add("widest_head", "F 256, H 1024, P 3072, 16 frequencies, every sample coloured",
+      [](costly::CostlyScene& s) {
+        s.appearance_rank = 1024;
+        s.feature_dim = 256;
+        s.hidden = 1024;
+        s.pe_freqs = 16;
+      });
+  add("wide_head_many_samples", "H 1024 (1.2 M per sample), 16384 samples, all coloured",
+      [](costly::CostlyScene& s) {
+        s.appearance_rank = 48;
+        s.feature_dim = 27;
+        s.hidden = 1024;
+        s.pe_freqs = 2;
+      });
+  add("small_head_many_samples", "H 64, 16384 samples, all coloured", [](costly::CostlyScene& s) {
+    s.appearance_rank = 8;
+    s.feature_dim = 8;
+    s.hidden = 64;
+    s.pe_freqs = 2;
+  });
+  add("dense_density", "density ranks 3 x 1024, 16384 samples, none coloured",
+      [](costly::CostlyScene& s) {
+        s.density_rank = 1024;
+        s.weight_threshold = 1.f;
+      });
+  add("big_grid_density", "256^3 grid, rank 1, 16384 samples, none coloured",
+      [](costly::CostlyScene& s) {
+        s.res = 256;
+        s.weight_threshold = 1.f;
+      });
+  add("unbounded_empty_mask", "unbounded, empty 64^3 mask: 16384 positions per ray",
+      [](costly::CostlyScene& s) {
+        s.unbounded = true;
+        s.occupancy = 2;
+        s.occupancy_res = 64;
+      });
+  add("occupancy_empty_rows_512", "OCCU 512^3, every row flagged, no voxel set",
+      [](costly::CostlyScene& s) {
+        s.occupancy = 1;
+        s.occupancy_res = 512;
+      });
+  add("occupancy_empty_rows_1024", "OCCU 1024^3, every row flagged, no voxel set",
+      [](costly::CostlyScene& s) {
+        s.occupancy = 1;
+        s.occupancy_res = 1024;
+      });
+  add("full_length_blocks", "512^2 planes, rank 16, 16^3 blocks coded to their last position",
+      [](costly::CostlyScene& s) {
+        s.res = 512;
+        s.density_rank = 16;
+        s.appearance_rank = 16;
+        s.blocks = 1;
+        s.block = 16;
+      });
+  add("full_length_small_blocks", "512^2 planes, rank 16, 4^3 blocks coded to their last position",
+      [](costly::CostlyScene& s) {
+        s.res = 512;
+        s.density_rank = 16;
+        s.appearance_rank = 16;
+        s.blocks = 1;
+        s.block = 4;
+      });
+  return v;
+}
+
+}  // namespace
+
+int RunBudgetBench(int argc, char** argv) {
+  std::string json;
+  if (const int rc = ParseJsonOnlyCommandLine(
+          "bench budgets",
+          "the costliest small streams of each class against the default decode and render "
+          "budgets (SPEC.md 8): bytes, decode seconds and memory, 64x64 render seconds on 2 "
+          "threads",
+          argc, argv, &json);
+      rc >= 0) {
+    return rc;
+  }
+  BenchReport report;
+  std::printf("%-26s %8s %9s %10s %10s %9s %10s  %s\n", "stream", "bytes", "decode s", "units/B",
+              "memory MiB", "render s", "work/px", "outcome");
+  for (const CostlyCase& c : Cases()) {
+    const std::vector<uint8_t> bytes = costly::BuildCostlyStream(c.scene);
+    dec::SceneField field;
+    dec::SceneInfo info;
+    auto start = std::chrono::steady_clock::now();
+    const Status decoded =
+        dec::DecodeScene(bytes.data(), bytes.size(), dec::DecodeOptions(), &field, &info);
+    const double decode_s = Seconds(start);
+    double render_s = 0.0, work_per_pixel = 0.0;
+    Status rendered = decoded;
+    if (decoded.ok()) {
+      dec::RenderOptions options;
+      options.num_threads = 2;
+      dec::RayMarcher marcher;
+      const dec::Camera camera = dec::OrbitCameraDegrees(64, 64, 0.0, 0.0, 3.f);
+      std::vector<uint8_t> rgba(64 * 64 * 4);
+      dec::RenderStats stats;
+      start = std::chrono::steady_clock::now();
+      rendered = marcher.Init(&field, options);
+      if (rendered.ok()) rendered = marcher.RenderImage(camera, rgba.data(), nullptr, &stats);
+      render_s = Seconds(start);
+      work_per_pixel = static_cast<double>(stats.work) / (64.0 * 64.0);
+    }
+    const std::string outcome = !decoded.ok()    ? "decode refused"
+                                : !rendered.ok() ? "render refused"
+                                                 : "rendered";
+    const double memory_mib = static_cast<double>(info.memory_bytes) / (1 << 20);
+    const double units_per_byte =
+        static_cast<double>(info.decode_work) / static_cast<double>(bytes.size());
+    std::printf("%-26s %8zu %9.3f %10.0f %10.1f %9.3f %10.0f  %s (%s)\n", c.name, bytes.size(),
+                decode_s, units_per_byte, memory_mib, render_s, work_per_pixel, outcome.c_str(),
+                c.what);
+    const std::string key = std::string("budgets.") + c.name;
+    if (!json.empty()) {
+      report.Add(key + ".bytes", static_cast<double>(bytes.size()), "B");
+      report.Add(key + ".decode_s", decode_s, "s");
+      report.Add(key + ".memory_mib", memory_mib, "MiB");
+      report.Add(key + ".render_64x64_s", render_s, "s");
+      report.Add(key + ".refused", decoded.ok() && rendered.ok() ? 0.0 : 1.0, "");
+    }
+  }
+  if (!json.empty() && !report.WriteJson(json)) {
+    std::fprintf(stderr, "ecrf bench budgets: cannot write %s\n", json.c_str());
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace tools
+}  // namespace ecrf
