@@ -43,11 +43,12 @@ class MemoryBudget {
 // DecodeOptions::work_per_byte: the work a stream may cost, spent as it is decoded.
 class WorkBudget {
  public:
-  WorkBudget(uint64_t per_byte, size_t stream_bytes) : per_byte_(per_byte) {
+  WorkBudget(uint64_t base, uint64_t per_byte, size_t stream_bytes)
+      : base_(base), per_byte_(per_byte) {
     const uint64_t bytes = stream_bytes;
-    total_ = per_byte == 0 || bytes > (~uint64_t{0} - kDecodeWorkBase) / per_byte
+    total_ = per_byte == 0 || base > ~uint64_t{0} / 2 || bytes > (~uint64_t{0} / 2) / per_byte
                  ? ~uint64_t{0}
-                 : kDecodeWorkBase + per_byte * bytes;
+                 : base + per_byte * bytes;
     left_ = total_;
     bytes_ = bytes;
   }
@@ -59,17 +60,17 @@ class WorkBudget {
   uint64_t* left() { return &left_; }
   uint64_t spent() const { return total_ - left_; }
   Status Refuse(const char* where) const {
-    return Status::Error(kErrLimit,
-                         "%s: decoding costs more than this stream's decode budget of %llu units "
-                         "(2^24 + %llu per byte of its %llu bytes; DecodeOptions::work_per_byte, "
-                         "ecrf --decode-budget N, 0 for no limit)",
-                         where, static_cast<unsigned long long>(total_),
-                         static_cast<unsigned long long>(per_byte_),
-                         static_cast<unsigned long long>(bytes_));
+    return Status::Error(
+        kErrLimit,
+        "%s: decoding costs more than this stream's decode budget of %llu units "
+        "(%llu + %llu per byte of its %llu bytes; DecodeOptions::work_per_byte, "
+        "ecrf --decode-budget N, 0 for no limit)",
+        where, static_cast<unsigned long long>(total_), static_cast<unsigned long long>(base_),
+        static_cast<unsigned long long>(per_byte_), static_cast<unsigned long long>(bytes_));
   }
 
  private:
-  uint64_t per_byte_, total_, left_, bytes_;
+  uint64_t base_, per_byte_, total_, left_, bytes_;
 };
 
 // Decode work of a coded block: its coefficients' symbols, and its inverse DCT, measured at about
@@ -489,7 +490,7 @@ Status DecodeScene(const uint8_t* data, size_t size, const DecodeOptions& option
   info = SceneInfo();
   info.stream_bytes = size;
   MemoryBudget budget(options.max_memory_bytes);
-  WorkBudget work(options.work_per_byte, size);
+  WorkBudget work(options.work_base, options.work_per_byte, size);
   const Status s = DecodeChunks(data, size, options, budget, work, scene, info);
   // Also after a refusal: what the stream had cost when it was refused.
   info.decode_work = work.spent();

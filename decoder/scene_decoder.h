@@ -41,6 +41,8 @@ struct DecodeOptions {
   // benchmarks-and-fuzzing.md), so the default (1024) leaves them unchanged and keeps any stream
   // of 64 KB under a second. Checked as the work comes, before it is spent (kErrLimit).
   uint64_t work_per_byte = kDefaultDecodeWorkPerByte;
+  // The units every stream may spend whatever its size (with work_per_byte > 0).
+  uint64_t work_base = kDecodeWorkBase;
 };
 
 // What the stream held, for `ecrf info` and reports.

@@ -2,7 +2,8 @@
 // The first byte picks the grid storage (float32 or int16) and the camera; the rest is the stream.
 // A scene that decodes must render without crashing, within the decoder's default budgets, and
 // every output value must be finite and in [0, 1] (SPEC.md 7.2, 1.2). Seed with tests/conformance.
-// The budgets bound every execution: decode work (2^24 + 1024 per byte), 64 MiB of memory, 4096
+// The budgets bound every execution: decode work (2^20 + 64 per byte, fuzz_scene_decoder.cc), 64
+// MiB of memory, 4096
 // samples per ray and the default render work budget (30 pixels x 6 M multiply-adds, ~10 ms), so
 // an execution that runs past libFuzzer's -timeout (scripts/fuzz.sh: 10 s) is a finding.
 #include <cmath>
@@ -19,6 +20,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   ecrf::dec::DecodeOptions options;
   options.storage = (mode & 1) ? ecrf::dec::GridStorage::kInt16 : ecrf::dec::GridStorage::kFloat32;
   options.max_memory_bytes = uint64_t{64} << 20;  // keep each execution small
+  options.work_base = uint64_t{1} << 20;
+  options.work_per_byte = 64;
   ecrf::dec::SceneField scene;
   if (!ecrf::dec::DecodeScene(data + 1, size - 1, options, &scene, nullptr).ok()) return 0;
   ecrf::dec::RenderOptions render;
