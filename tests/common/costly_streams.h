@@ -43,6 +43,35 @@ struct CostlyScene {
   bool unbounded = false;  // scene_model 1: samples spaced in contracted distance (SPEC.md 7.2.1)
 };
 
+// The classes the budgets of SPEC.md 8 were made for (tests, must-reject vectors, `ecrf bench
+// budgets`).
+// The widest head the limits allow (F 256, H 1024, P 3072, 16 frequencies): 10.7 M per sample.
+inline CostlyScene WidestHead() {
+  CostlyScene s;
+  s.appearance_rank = 1024;
+  s.feature_dim = 256;
+  s.hidden = 1024;
+  s.pe_freqs = 16;
+  return s;
+}
+// An n^3 OCCU that flags every row and sets no voxel.
+inline CostlyScene EmptyFlaggedRows(int n) {
+  CostlyScene s;
+  s.occupancy = 1;
+  s.occupancy_res = n;
+  return s;
+}
+// 512^2 planes of rank 16 in block^3 blocks (4^2 for lines), each coded to its last position.
+inline CostlyScene FullLengthBlocks(int block) {
+  CostlyScene s;
+  s.res = 512;
+  s.density_rank = 16;
+  s.appearance_rank = 16;
+  s.blocks = 1;
+  s.block = block;
+  return s;
+}
+
 // The MLPW chunk: quantized, every weight 0 (a few bytes however wide the head is).
 inline std::vector<uint8_t> ZeroMlpChunk(const SceneHeader& h) {
   const MlpLayout layout = MakeMlpLayout(h.feature_dim, h.total_rank(1), h.hidden,

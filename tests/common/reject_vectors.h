@@ -178,21 +178,14 @@ inline std::vector<RejectVector> RejectVectors() {
         "wide coefficient contexts (1.4) in a stream labelled 1.3 (2.1)", Join(Split(w), 3));
   }
   {
-    costly::CostlyScene cs;
-    cs.occupancy = 1;
-    cs.occupancy_res = 512;
+    const costly::CostlyScene cs = costly::EmptyFlaggedRows(512);
     add("reject_budget_occupancy_rows", "decode", kErrLimit, true,
         "OCCU 512^3 flagging every row and setting no voxel: 2^27 symbols from 3 KB, beyond the "
         "decode work budget (8)",
         costly::BuildCostlyStream(cs));
   }
   {
-    costly::CostlyScene cs;
-    cs.res = 512;
-    cs.density_rank = 16;
-    cs.appearance_rank = 16;
-    cs.blocks = 1;
-    cs.block = 16;
+    const costly::CostlyScene cs = costly::FullLengthBlocks(16);
     add("reject_budget_full_length_blocks", "decode", kErrLimit, true,
         "6,144 blocks of 16^3 coded to their last position from 20 KB, beyond the decode work "
         "budget (8)",
@@ -210,11 +203,7 @@ inline std::vector<RejectVector> RejectVectors() {
         costly::BuildCostlyStream(cs));
   }
   {
-    costly::CostlyScene cs;
-    cs.appearance_rank = 1024;
-    cs.feature_dim = 256;
-    cs.hidden = 1024;
-    cs.pe_freqs = 16;
+    const costly::CostlyScene cs = costly::WidestHead();
     add("reject_budget_render_work", "render", kErrLimit, true,
         "the widest head (F 256, H 1024, P 3072, 16 frequencies): 10.7 M multiply-adds per "
         "sample, beyond the work budget of one pixel (8)",

@@ -28,12 +28,7 @@ Camera FrontCamera(int size) { return OrbitCameraDegrees(size, size, 0.0, 0.0, 3
 // The widest head the limits allow (F 256, H 1024, P 3072, 16 frequencies): 10.6 M multiply-adds
 // per coloured sample. Before the work budget one pixel of it took 39 s.
 TEST(WorkBudget, TheWidestHeadIsRefusedWhenTheSceneIsPrepared) {
-  CostlyScene cs;
-  cs.appearance_rank = 1024;
-  cs.feature_dim = 256;
-  cs.hidden = 1024;
-  cs.pe_freqs = 16;
-  const std::vector<uint8_t> bytes = BuildCostlyStream(cs);
+  const std::vector<uint8_t> bytes = BuildCostlyStream(costly::WidestHead());
   ASSERT_FALSE(bytes.empty());
   EXPECT_LT(bytes.size(), 64u * 1024u);
   SceneField field;
@@ -154,9 +149,7 @@ Status DecodeWith(const std::vector<uint8_t>& bytes, uint64_t work_per_byte, Sce
 // symbol that costs next to nothing. At 512^3, 3 KB asked for 2^27 symbols (~1.5 s; 1024^3 in
 // 18 KB, ~11 s).
 TEST(DecodeBudget, AnOccupancyMaskOfEmptyFlaggedRowsIsRefusedAsItDecodes) {
-  CostlyScene cs;
-  cs.occupancy = 1;
-  cs.occupancy_res = 512;
+  CostlyScene cs = costly::EmptyFlaggedRows(512);
   const std::vector<uint8_t> bomb = BuildCostlyStream(cs);
   ASSERT_FALSE(bomb.empty());
   EXPECT_LT(bomb.size(), 8u * 1024u);
@@ -186,12 +179,7 @@ TEST(DecodeBudget, AnOccupancyMaskOfEmptyFlaggedRowsIsRefusedAsItDecodes) {
 // Coefficient blocks coded to their last position: 16^3 blocks of 4095 zeros and one 1 cost
 // ~15 bits each but their symbols and inverse DCT ~16,000 units; ~12 KB of them ~100 M units.
 TEST(DecodeBudget, BlocksCodedToTheirFullLengthAreRefusedAsTheyDecode) {
-  CostlyScene cs;
-  cs.res = 512;
-  cs.density_rank = 16;
-  cs.appearance_rank = 16;
-  cs.blocks = 1;
-  cs.block = 16;
+  CostlyScene cs = costly::FullLengthBlocks(16);
   const std::vector<uint8_t> bomb = BuildCostlyStream(cs);
   ASSERT_FALSE(bomb.empty());
   EXPECT_LT(bomb.size(), 64u * 1024u);

@@ -39,12 +39,7 @@ std::vector<CostlyCase> Cases() {
     v.push_back(c);
   };
   add("widest_head", "F 256, H 1024, P 3072, 16 frequencies, every sample coloured",
-      [](costly::CostlyScene& s) {
-        s.appearance_rank = 1024;
-        s.feature_dim = 256;
-        s.hidden = 1024;
-        s.pe_freqs = 16;
-      });
+      [](costly::CostlyScene& s) { s = costly::WidestHead(); });
   add("wide_head_many_samples", "H 1024 (1.2 M per sample), 16384 samples, all coloured",
       [](costly::CostlyScene& s) {
         s.appearance_rank = 48;
@@ -75,31 +70,13 @@ std::vector<CostlyCase> Cases() {
         s.occupancy_res = 64;
       });
   add("occupancy_empty_rows_512", "OCCU 512^3, every row flagged, no voxel set",
-      [](costly::CostlyScene& s) {
-        s.occupancy = 1;
-        s.occupancy_res = 512;
-      });
+      [](costly::CostlyScene& s) { s = costly::EmptyFlaggedRows(512); });
   add("occupancy_empty_rows_1024", "OCCU 1024^3, every row flagged, no voxel set",
-      [](costly::CostlyScene& s) {
-        s.occupancy = 1;
-        s.occupancy_res = 1024;
-      });
+      [](costly::CostlyScene& s) { s = costly::EmptyFlaggedRows(1024); });
   add("full_length_blocks", "512^2 planes, rank 16, 16^3 blocks coded to their last position",
-      [](costly::CostlyScene& s) {
-        s.res = 512;
-        s.density_rank = 16;
-        s.appearance_rank = 16;
-        s.blocks = 1;
-        s.block = 16;
-      });
+      [](costly::CostlyScene& s) { s = costly::FullLengthBlocks(16); });
   add("full_length_small_blocks", "512^2 planes, rank 16, 4^3 blocks coded to their last position",
-      [](costly::CostlyScene& s) {
-        s.res = 512;
-        s.density_rank = 16;
-        s.appearance_rank = 16;
-        s.blocks = 1;
-        s.block = 4;
-      });
+      [](costly::CostlyScene& s) { s = costly::FullLengthBlocks(4); });
   return v;
 }
 
