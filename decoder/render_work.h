@@ -10,11 +10,14 @@
 //   - when preparing (Init): a scene one colour sample of which costs more than a pixel's budget;
 //   - while rendering: a view that spends its budget (pixels x work_budget); the render stops
 //     within one sample of the limit and returns kErrLimit, naming the count and the remedy.
-// Work is counted per sample, so the count, and whether a view is accepted, does not depend on
-// the thread count or the tiling. The unit is one multiply-add of the MLP; the other steps count
-// what they take in time against it (measured with `ecrf bench budgets` on this project's 2-core
-// x86-64 machine: a marched position ~100 ns, a density evaluation ~200 ns plus ~3 ns per rank in
-// a large grid, an MLP multiply-add ~0.16 ns).
+// Work is counted per sample, so a view's count does not depend on the thread count or the
+// tiling. Threads take the budget from a shared pool in shares of 2^22, so a view whose work comes
+// within threads x 2^22 of its budget may be refused with more threads and accepted with fewer;
+// below that margin every thread count accepts it, above its budget every one refuses it.
+// The unit is one multiply-add of the MLP; the other steps count what they take in time against
+// it (measured with `ecrf bench budgets` on this project's 2-core x86-64 machine: a marched
+// position ~100 ns, a density evaluation ~200 ns plus ~3 ns per rank in a large grid, an MLP
+// multiply-add ~0.16 ns).
 #ifndef ECRF_DECODER_RENDER_WORK_H_
 #define ECRF_DECODER_RENDER_WORK_H_
 
