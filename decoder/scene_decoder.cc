@@ -131,10 +131,11 @@ Status DecodeCoefficientChunk(const ChunkView& chunk, const SceneHeader& h, int 
   ECRF_CHECK_OR_RETURN(reserved1 == 0, kErrCorrupt, "COEF %s %s: reserved byte must be 0",
                        kGridNames[g], kTensorNames[t]);
   // The version rule (SPEC.md 2.1): before 1.4 the byte was reserved (0).
-  ECRF_CHECK_OR_RETURN(contexts_byte == 0 || version_minor >= 4, kErrCorrupt,
-                       "COEF %s %s: contexts %u needs version_minor >= 4, the stream says %d "
-                       "(SPEC.md 2.1; the byte was reserved, 0, before 1.4)",
-                       kGridNames[g], kTensorNames[t], contexts_byte, version_minor);
+  ECRF_CHECK_OR_RETURN(
+      contexts_byte == 0 || version_minor >= kWideContextsMinVersionMinor, kErrCorrupt,
+      "COEF %s %s: contexts %u needs version_minor >= %d, the stream says %d "
+      "(SPEC.md 2.1; the byte was reserved, 0, before 1.4)",
+      kGridNames[g], kTensorNames[t], contexts_byte, kWideContextsMinVersionMinor, version_minor);
   ECRF_CHECK_OR_RETURN(contexts_byte <= static_cast<uint8_t>(CoefContextSet::kWide),
                        kErrUnsupported, "COEF %s %s: unknown coefficient context set %u",
                        kGridNames[g], kTensorNames[t], contexts_byte);
@@ -271,10 +272,11 @@ Status DecodeMlpChunk(const ChunkView& chunk, const SceneHeader& h, MemoryBudget
                        "MLPW: reserved bytes must be 0");
   ECRF_CHECK_OR_RETURN(precision <= kMlpPrecisionQuantized, kErrUnsupported,
                        "MLPW: precision %u (0 = float16, 1 = float32, 2 = quantized)", precision);
-  ECRF_CHECK_OR_RETURN(precision != kMlpPrecisionQuantized || version_minor >= 1, kErrCorrupt,
-                       "MLPW: precision 2 (quantized) needs version_minor >= 1, the stream says %d "
-                       "(SPEC.md 2.1)",
-                       version_minor);
+  ECRF_CHECK_OR_RETURN(
+      precision != kMlpPrecisionQuantized || version_minor >= kQuantizedMlpMinVersionMinor,
+      kErrCorrupt,
+      "MLPW: precision 2 (quantized) needs version_minor >= %d, the stream says %d (SPEC.md 2.1)",
+      kQuantizedMlpMinVersionMinor, version_minor);
   MlpConfig config;
   config.num_products = h.total_rank(1);
   config.feature_dim = h.feature_dim;
@@ -402,9 +404,8 @@ Status DecodeChunks(const uint8_t* data, size_t size, const DecodeOptions& optio
     if (chunk.type == kChunkHead && expect == Expect::kHead) {
       ECRF_RETURN_IF_ERROR(ParseSceneHeader(chunk.data, chunk.size, &h));
       // The version rule (SPEC.md 2.1): a feature of a later minor version than the stream's.
-      const int model_minor = h.scene_model == static_cast<uint8_t>(SceneModel::kUnbounded) ? 2
-                              : h.scene_model == static_cast<uint8_t>(SceneModel::kForward) ? 3
-                                                                                            : 0;
+      // (ParseSceneHeader has refused unknown scene models.)
+      const int model_minor = kSceneModelMinVersionMinor[h.scene_model];
       ECRF_CHECK_OR_RETURN(info.version_minor >= model_minor, kErrCorrupt,
                            "HEAD: scene_model %u needs version_minor >= %d, the stream says %u "
                            "(SPEC.md 2.1)",

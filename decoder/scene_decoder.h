@@ -37,7 +37,7 @@ struct DecodeOptions {
   // Decode work budget: kDecodeWorkBase + work_per_byte x the stream's size, in symbols (a coded
   // block's inverse DCT counts what it costs in symbols' time); 0: no limit. Within the format's
   // limits 30 KB of OCCU can flag 2^31 voxels for decoding and 8 KB of COEF can code 65,536
-  // blocks to their last position; trained streams cost 10-50 per byte (docs/
+  // blocks to their last position; trained streams cost 14-110 per byte (docs/
   // benchmarks-and-fuzzing.md), so the default (1024) leaves them unchanged and keeps any stream
   // of 64 KB under a second. Checked as the work comes, before it is spent (kErrLimit).
   uint64_t work_per_byte = kDefaultDecodeWorkPerByte;

@@ -120,7 +120,8 @@ SceneTensors DropComponents(const SceneTensors& in, const std::vector<uint8_t> k
 // The lowest minor version of the features used, wide contexts aside: 1.1 for the quantized MLP,
 // 1.2 unbounded, 1.3 forward-facing.
 uint8_t FeatureVersionMinor(const SceneHeader& h, const EncodeOptions& o) {
-  return std::max<uint8_t>(o.mlp_max_level > 0 ? 1 : 0, kSceneModelMinVersionMinor[h.scene_model]);
+  return std::max<uint8_t>(o.mlp_max_level > 0 ? kQuantizedMlpMinVersionMinor : 0,
+                           kSceneModelMinVersionMinor[h.scene_model]);
 }
 
 std::vector<uint8_t> CodeLevels(const std::vector<int32_t>& levels, const GridBlockLayout& layout,
@@ -168,7 +169,7 @@ std::vector<uint8_t> EncodeCoefficients(const SceneTensors& s, int g, int t, flo
   // only where 1.4 is allowed), so no tensor ever grows over its 1.3 size.
   std::vector<uint8_t> code = CodeLevels(levels, layout, CoefContextSet::kNarrow);
   CoefContextSet set = CoefContextSet::kNarrow;
-  if (o.max_version_minor >= 4) {
+  if (o.max_version_minor >= kWideContextsMinVersionMinor) {
     std::vector<uint8_t> wide = CodeLevels(levels, layout, CoefContextSet::kWide);
     if (wide.size() < code.size()) {
       code = std::move(wide);

@@ -24,6 +24,9 @@ namespace ecrf {
 constexpr uint8_t kMlpPrecisionFloat16 = 0;
 constexpr uint8_t kMlpPrecisionFloat32 = 1;
 constexpr uint8_t kMlpPrecisionQuantized = 2;
+// The container minor version a stream with a quantized MLP needs at least (the version rule of
+// SPEC.md 2.1; kSceneModelMinVersionMinor and kWideContextsMinVersionMinor are the others).
+constexpr uint8_t kQuantizedMlpMinVersionMinor = 1;
 
 // Magnitude classes: 0 for level 0, else the bit length of |level| (1 for 1, 2 for 2..3, 3 for
 // 4..7, ...). Classes 0..14 are symbols of a 16-symbol alphabet; symbol 15 escapes to

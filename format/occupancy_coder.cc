@@ -22,22 +22,24 @@ Status DecodeOccupancy(const uint8_t* stream, size_t size, const int res[3], uin
   RangeDecoder dec(stream, size);
   uint64_t unlimited = ~uint64_t{0};
   uint64_t& left = symbol_budget != nullptr ? *symbol_budget : unlimited;
+  // Takes the symbols of what comes next (the row flag, or a flagged row's voxels) from the
+  // budget before they are decoded.
+  auto take = [&left](uint64_t symbols) {
+    if (left < symbols) return false;
+    left -= symbols;
+    return true;
+  };
   for (int z = 0; z < nz && !dec.HasError(); ++z) {
     for (int y = 0; y < ny; ++y) {
-      // The row flag, and the row's voxels when it is flagged.
-      if (left == 0) {
-        std::free(row_any);
-        return Status::Error(kErrLimit, "OCCU: decode budget spent at row (y %d, z %d)", y, z);
-      }
-      --left;
-      const int any = dec.DecodeBool(ctx.row[RowContext(row_any, ny, y, z)]);
+      bool within = take(1);
+      const int any = within ? dec.DecodeBool(ctx.row[RowContext(row_any, ny, y, z)]) : 0;
       row_any[static_cast<size_t>(z) * ny + y] = static_cast<uint8_t>(any);
-      if (!any) continue;
-      if (left < static_cast<uint64_t>(nx)) {
+      if (any) within = take(static_cast<uint64_t>(nx));
+      if (!within) {
         std::free(row_any);
         return Status::Error(kErrLimit, "OCCU: decode budget spent at row (y %d, z %d)", y, z);
       }
-      left -= static_cast<uint64_t>(nx);
+      if (!any) continue;
       const size_t base = (static_cast<size_t>(z) * ny + y) * nx;
       for (int x = 0; x < nx; ++x) {
         if (dec.DecodeBool(ctx.voxel[volume.VoxelContext(x, y, z)])) {

@@ -52,10 +52,11 @@ int RunInfo(int argc, char** argv) {
   const SceneHeader& h = in.header;
   std::printf(
       "%s: ecrf stream version %u.%u, %zu bytes, decoded in %.1f ms (decode work %.1f per byte; "
-      "budget 2^24 + %llu per byte)\n",
+      "budget %llu + %llu per byte)\n",
       path.c_str(), in.version_major, in.version_minor, in.stream_bytes, s.decode_seconds * 1e3,
       static_cast<double>(in.decode_work) /
           static_cast<double>(std::max<size_t>(1, in.stream_bytes)),
+      static_cast<unsigned long long>(dec::kDecodeWorkBase),
       static_cast<unsigned long long>(dec::kDefaultDecodeWorkPerByte));
   const bool unbounded = h.scene_model == static_cast<uint8_t>(SceneModel::kUnbounded);
   const bool forward = h.scene_model == static_cast<uint8_t>(SceneModel::kForward);

@@ -30,6 +30,8 @@ constexpr int kMaxEscapeStat = 63;
 // significance is told by a wider neighbourhood; on trained chair grids the wide set saves
 // 2-3.5% of the coefficient bytes.
 enum class CoefContextSet : uint8_t { kNarrow = 0, kWide = 1 };
+// The container minor version a stream with a wide COEF chunk needs at least (SPEC.md 2.1).
+constexpr uint8_t kWideContextsMinVersionMinor = 4;
 
 // All CDFs of one tensor chunk and one block shape. Init() once per shape, Reset() at the start
 // of each chunk; the members are the state the block coder reads and adapts.

@@ -16,6 +16,7 @@
 #ifndef ECRF_TESTS_COMMON_SCENE_VECTORS_H_
 #define ECRF_TESTS_COMMON_SCENE_VECTORS_H_
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -281,11 +282,10 @@ inline std::vector<uint8_t> BuildSceneVector(const SceneVector& v) {
   Lcg rng(v.seed);
   // 1.1: quantized MLP; 1.2: unbounded scene model; 1.3: forward-facing scene model; 1.4: wide
   // coefficient contexts.
-  const uint8_t version_minor = v.wide_contexts                             ? 4
-                                : v.scene_model == SceneModel::kForward     ? 3
-                                : v.scene_model == SceneModel::kUnbounded   ? 2
-                                : v.mlp_precision == kMlpPrecisionQuantized ? 1
-                                                                            : 0;
+  const uint8_t version_minor = std::max<uint8_t>(
+      {v.wide_contexts ? kWideContextsMinVersionMinor : uint8_t{0},
+       kSceneModelMinVersionMinor[static_cast<int>(v.scene_model)],
+       v.mlp_precision == kMlpPrecisionQuantized ? kQuantizedMlpMinVersionMinor : uint8_t{0}});
   ContainerWriter writer(version_minor);
   ByteWriter head;
   WriteSceneHeader(h, &head);
