@@ -21,6 +21,7 @@
 #include "encoder/scene_encoder.h"
 #include "tests/common/coef_vectors.h"
 #include "tests/common/conformance_camera.h"
+#include "tests/common/reject_check.h"
 #include "tests/common/reject_vectors.h"
 #include "tests/common/scene_vectors.h"
 #include "tools/cli.h"
@@ -211,18 +212,10 @@ int CheckOrWriteRejects(const std::string& dir, bool write, json* manifest_rejec
       continue;
     }
     const std::vector<uint8_t> stored = trainer::ReadWholeFile(reject_dir + "/" + file);
-    // A decode-stage stream fails to decode; a render-stage one decodes and is refused when the
-    // renderer is prepared.
-    const bool at_render = std::string(r.stage) == "render";
-    dec::SceneField field;
-    Status s =
-        dec::DecodeScene(stored.data(), stored.size(), dec::DecodeOptions(), &field, nullptr);
-    const bool stage_ok = at_render ? s.ok() : !s.ok();
-    if (s.ok() && at_render) {
-      dec::RayMarcher marcher;
-      s = marcher.Init(&field, dec::RenderOptions());
-    }
-    const bool refused = stage_ok && !s.ok() && s.code() == r.code;
+    const conformance::RejectOutcome out =
+        conformance::CheckReject(stored.data(), stored.size(), r.stage);
+    const bool refused = out.RefusedWith(r.code);
+    const Status& s = out.status;
     const bool same_bytes = stored == r.bytes;
     std::printf("%-44s %s %s (%s), encoder output %s\n", ("reject/" + file).c_str(), r.stage,
                 refused ? "refused as expected:" : "NOT REFUSED AS EXPECTED:",

@@ -15,6 +15,7 @@
 #include "tests/common/coef_vectors.h"
 #include "tests/common/conformance_camera.h"
 #include "tests/common/grid_md5.h"
+#include "tests/common/reject_check.h"
 
 namespace {
 
@@ -127,18 +128,12 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "%sreject/%s: cannot read\n", dir.c_str(), file.c_str());
       return 2;
     }
-    ecrf::dec::SceneField field;
-    Status s = ecrf::dec::DecodeScene(bytes.data(), bytes.size(), ecrf::dec::DecodeOptions(),
-                                      &field, nullptr);
-    const bool stage_ok = stage == "render" ? s.ok() : !s.ok();
-    if (s.ok() && stage == "render") {
-      ecrf::dec::RayMarcher marcher;
-      s = marcher.Init(&field, ecrf::dec::RenderOptions());
-    }
-    const bool ok = stage_ok && s.code() == code;
+    const ecrf::conformance::RejectOutcome out =
+        ecrf::conformance::CheckReject(bytes.data(), bytes.size(), stage);
+    const bool ok = out.RefusedWith(code);
     failures += !ok;
-    std::printf("reject %s %s %d %s%s\n", file.c_str(), stage.c_str(), s.code(), kind.c_str(),
-                ok ? "" : " NOT AS EXPECTED");
+    std::printf("reject %s %s %d %s%s\n", file.c_str(), stage.c_str(), out.status.code(),
+                kind.c_str(), ok ? "" : " NOT AS EXPECTED");
   }
   std::printf("%s\n",
               failures ? "conformance checksums: FAILED" : "conformance checksums: all match");
