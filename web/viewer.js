@@ -48,6 +48,12 @@
   // Offset of ecrf_render_options.work_budget (a uint64_t, 8-byte aligned after seven 4-byte fields).
   const WORK_BUDGET_OFFSET = 32;
 
+  // A non-negative integer (below 2^53) as the [low, high] 32-bit halves of a uint64_t.
+  function u64Halves(value) {
+    const v = Math.max(0, Math.floor(value));
+    return [v % 4294967296, Math.floor(v / 4294967296)];
+  }
+
   // One decoded scene over the C API of include/ecrf/decoder.h. `module` is the
   // instance that createEcrfDecoder() (build-wasm/ecrf_decoder.js) resolves to.
   class EcrfDecoder {
@@ -66,8 +72,7 @@
     // Decode work budget of the next decodes (SPEC.md 8): units per byte of the stream, 0 no limit.
     // (A uint64_t argument is passed as two 32-bit halves, low first: -sWASM_BIGINT=0.)
     setDecodeBudget(unitsPerByte) {
-      const v = Math.max(0, Math.floor(unitsPerByte));
-      this.m._ecrf_scene_set_decode_budget(this.scene, v % 4294967296, Math.floor(v / 4294967296));
+      this.m._ecrf_scene_set_decode_budget(this.scene, ...u64Halves(unitsPerByte));
     }
 
     // bytes: Uint8Array of a whole .ecrf file. Throws with the decoder's message on failure.
@@ -120,9 +125,7 @@
       if (options.earlyStopTransmittance !== undefined) m.HEAPF32[o + 2] = options.earlyStopTransmittance;
       if (options.maxSamples !== undefined) m.HEAP32[o + 3] = options.maxSamples;
       if (options.workBudget !== undefined) {
-        const v = Math.max(0, Math.floor(options.workBudget));
-        m.HEAPU32[(opt + WORK_BUDGET_OFFSET) >> 2] = v % 4294967296;
-        m.HEAPU32[((opt + WORK_BUDGET_OFFSET) >> 2) + 1] = Math.floor(v / 4294967296);
+        m.HEAPU32.set(u64Halves(options.workBudget), (opt + WORK_BUDGET_OFFSET) >> 2);
       }
     }
 
