@@ -34,6 +34,8 @@ class MemoryBudget {
     left_ -= bytes;
     return Status::Ok();
   }
+  // Returns memory taken for the length of one chunk (at most what was taken).
+  void Give(uint64_t bytes) { left_ = bytes < total_ - left_ ? left_ + bytes : total_; }
   uint64_t spent() const { return total_ - left_; }
 
  private:
@@ -112,8 +114,8 @@ TensorTarget TargetOf(VmGrid* grid, const SceneHeader& h, int g, int t) {
 }
 
 Status DecodeCoefficientChunk(const ChunkView& chunk, const SceneHeader& h, int g, int t,
-                              int version_minor, WorkBudget* work, VmGrid* grid,
-                              TensorChunkInfo* info) {
+                              int version_minor, MemoryBudget* budget, WorkBudget* work,
+                              VmGrid* grid, TensorChunkInfo* info) {
   ByteReader r(chunk.data, chunk.size);
   uint8_t grid_index = 0, tensor_index = 0, coef_bits = 0, contexts_byte = 0, reserved1 = 0;
   uint8_t block[3] = {0, 0, 0};
@@ -130,15 +132,18 @@ Status DecodeCoefficientChunk(const ChunkView& chunk, const SceneHeader& h, int 
                        chunk.offset, grid_index, tensor_index, kGridNames[g], kTensorNames[t]);
   ECRF_CHECK_OR_RETURN(reserved1 == 0, kErrCorrupt, "COEF %s %s: reserved byte must be 0",
                        kGridNames[g], kTensorNames[t]);
-  // The version rule (SPEC.md 2.1): before 1.4 the byte was reserved (0).
-  ECRF_CHECK_OR_RETURN(
-      contexts_byte == 0 || version_minor >= kWideContextsMinVersionMinor, kErrCorrupt,
-      "COEF %s %s: contexts %u needs version_minor >= %d, the stream says %d "
-      "(SPEC.md 2.1; the byte was reserved, 0, before 1.4)",
-      kGridNames[g], kTensorNames[t], contexts_byte, kWideContextsMinVersionMinor, version_minor);
-  ECRF_CHECK_OR_RETURN(contexts_byte <= static_cast<uint8_t>(CoefContextSet::kWide),
-                       kErrUnsupported, "COEF %s %s: unknown coefficient context set %u",
-                       kGridNames[g], kTensorNames[t], contexts_byte);
+  // Values above the known sets are unsupported; a known set of a later minor version than
+  // the stream's is corrupt (the version rule, SPEC.md 2.1: before 1.4 the byte was reserved, 0).
+  ECRF_CHECK_OR_RETURN(contexts_byte <= kMaxCoefContextSet, kErrUnsupported,
+                       "COEF %s %s: unknown coefficient context set %u", kGridNames[g],
+                       kTensorNames[t], contexts_byte);
+  const uint8_t contexts_minor =
+      CoefContextSetMinVersionMinor(static_cast<CoefContextSet>(contexts_byte));
+  ECRF_CHECK_OR_RETURN(version_minor >= contexts_minor, kErrCorrupt,
+                       "COEF %s %s: contexts %u needs version_minor >= %d, the stream says %d "
+                       "(SPEC.md 2.1)",
+                       kGridNames[g], kTensorNames[t], contexts_byte, contexts_minor,
+                       version_minor);
   const CoefContextSet context_set = static_cast<CoefContextSet>(contexts_byte);
   ECRF_CHECK_OR_RETURN(coef_bits == 8 || coef_bits == 16, kErrUnsupported,
                        "COEF %s %s: coef_bits %u (8 or 16)", kGridNames[g], kTensorNames[t],
@@ -167,8 +172,17 @@ Status DecodeCoefficientChunk(const ChunkView& chunk, const SceneHeader& h, int 
   info->blocks = static_cast<uint32_t>(blocks[0]) * blocks[1] * blocks[2];
   info->coded_blocks = 0;
 
+  // The neighbour contexts keep one block per (b1, b2) column while the chunk decodes: charged
+  // to the memory budget (never more than a quarter of the tensor's own bytes and the padding).
+  const BlockShape shape{dims[0], dims[1], dims[2]};
+  const uint64_t context_bytes = NeighbourBytes(shape, blocks);
+  if (context_set == CoefContextSet::kNeighbour) {
+    ECRF_RETURN_IF_ERROR(budget->Take(context_bytes, "COEF: the neighbour contexts"));
+  }
   CoefContexts contexts;
-  ECRF_RETURN_IF_ERROR(contexts.Init(BlockShape{dims[0], dims[1], dims[2]}, context_set));
+  ECRF_RETURN_IF_ERROR(
+      contexts.Init(shape, context_set, blocks, static_cast<size_t>(context_bytes)));
+  if (context_set == CoefContextSet::kNeighbour) budget->Give(context_bytes);
   HeapArray<int32_t> block_buffers;
   ECRF_RETURN_IF_ERROR(block_buffers.Allocate(2 * static_cast<size_t>(kMaxBlockVolume)));
   int32_t* coeffs = block_buffers.data();
@@ -444,8 +458,8 @@ Status DecodeChunks(const uint8_t* data, size_t size, const DecodeOptions& optio
     } else if (chunk.type == kChunkCoefficients && expect == Expect::kCoefficients) {
       const int g = next_tensor / kTensorsPerSceneGrid, t = next_tensor % kTensorsPerSceneGrid;
       VmGrid* grid = g == 0 ? &scene->density : &scene->appearance;
-      ECRF_RETURN_IF_ERROR(DecodeCoefficientChunk(chunk, h, g, t, info.version_minor, &work, grid,
-                                                  &info.tensors[g][t]));
+      ECRF_RETURN_IF_ERROR(DecodeCoefficientChunk(chunk, h, g, t, info.version_minor, &budget,
+                                                  &work, grid, &info.tensors[g][t]));
       ++next_tensor;
       advance_tensor();
     } else if (chunk.type == kChunkMlpWeights && expect == Expect::kMlp) {

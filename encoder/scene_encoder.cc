@@ -127,8 +127,8 @@ uint8_t FeatureVersionMinor(const SceneHeader& h, const EncodeOptions& o) {
 std::vector<uint8_t> CodeLevels(const std::vector<int32_t>& levels, const GridBlockLayout& layout,
                                 CoefContextSet set) {
   CoefContexts contexts;
-  const Status st =
-      contexts.Init(BlockShape{layout.block[0], layout.block[1], layout.block[2]}, set);
+  const Status st = contexts.Init(BlockShape{layout.block[0], layout.block[1], layout.block[2]},
+                                  set, layout.blocks, static_cast<size_t>(-1));
   if (!st.ok()) throw std::invalid_argument(st.message());
   RangeEncoder enc;
   const size_t volume = size_t(layout.block_volume());
@@ -165,15 +165,16 @@ std::vector<uint8_t> EncodeCoefficients(const SceneTensors& s, int g, int t, flo
     }
     report->tensor_zero_blocks[index] += zero;
   }
-  // Both context sets code the same levels; the chunk keeps the shorter code (the wide set
-  // only where 1.4 is allowed), so no tensor ever grows over its 1.3 size.
+  // Every context set the asked version allows codes the same levels; the chunk keeps the
+  // shortest code, so no tensor ever grows over its size in an older version.
   std::vector<uint8_t> code = CodeLevels(levels, layout, CoefContextSet::kNarrow);
   CoefContextSet set = CoefContextSet::kNarrow;
-  if (o.max_version_minor >= kWideContextsMinVersionMinor) {
-    std::vector<uint8_t> wide = CodeLevels(levels, layout, CoefContextSet::kWide);
-    if (wide.size() < code.size()) {
-      code = std::move(wide);
-      set = CoefContextSet::kWide;
+  for (CoefContextSet candidate : {CoefContextSet::kWide, CoefContextSet::kNeighbour}) {
+    if (o.max_version_minor < CoefContextSetMinVersionMinor(candidate)) continue;
+    std::vector<uint8_t> other = CodeLevels(levels, layout, candidate);
+    if (other.size() < code.size()) {
+      code = std::move(other);
+      set = candidate;
     }
   }
   report->tensor_blocks[index] = size_t(layout.num_blocks());
@@ -239,16 +240,18 @@ std::vector<uint8_t> Assemble(const SceneTensors& s, const std::vector<float>& s
                                 "), above the asked 1." + std::to_string(o.max_version_minor));
   }
   std::vector<uint8_t> coef_chunks[2][6];
-  bool wide_contexts = false;
+  uint8_t version_minor = feature_minor;
   for (int g = 0; g < 2; ++g) {
     for (int t = 0; t < 6; ++t) {
       if (h.ranks[g][t % 3] == 0) continue;
       coef_chunks[g][t] = EncodeCoefficients(s, g, t, steps[g * 6 + t], o, report);
-      wide_contexts |= coef_chunks[g][t][3] == static_cast<uint8_t>(CoefContextSet::kWide);
+      version_minor = std::max(
+          version_minor,
+          CoefContextSetMinVersionMinor(static_cast<CoefContextSet>(coef_chunks[g][t][3])));
     }
   }
-  // 1.4 when a chunk uses the wide contexts, else the lowest version of the other features.
-  ContainerWriter writer(wide_contexts ? uint8_t{4} : feature_minor);
+  // The lowest version of the features used: 1.4 for wide contexts, 1.5 for neighbour contexts.
+  ContainerWriter writer(version_minor);
   h.has_occupancy = (o.include_occupancy && s.mask) ? 1 : 0;
   ByteWriter head;
   WriteSceneHeader(h, &head);

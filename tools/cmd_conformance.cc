@@ -268,7 +268,7 @@ int RunConformance(int argc, char** argv) {
       throw std::runtime_error(dir + "/manifest.json: not a JSON object");
   }
   json manifest = {
-      {"spec", "SPEC.md 1.5"},
+      {"spec", "SPEC.md 1.6"},
       {"note",
        "written by `ecrf conformance --write`; checksums as in SPEC.md 6.5, cameras exact (7.1)"},
       {"coefficient_vectors", json::array()},
@@ -284,15 +284,16 @@ int RunConformance(int argc, char** argv) {
     const std::string file = std::string(v.name) + ".bin";
     const std::string path = dir + "/" + file;
     coef_md5_text << file << " " << md5 << "\n";
-    manifest["coefficient_vectors"].push_back(
-        {{"file", file},
-         {"block", {v.shape.n0, v.shape.n1, v.shape.n2}},
-         {"blocks", v.blocks},
-         {"coef_bits", v.coef_bits},
-         // The value of a COEF payload's `contexts` byte (SPEC.md 6.4.2): 0 narrow, 1 wide.
-         {"contexts", static_cast<int>(v.contexts)},
-         {"bytes", stream.size()},
-         {"md5", md5}});
+    manifest["coefficient_vectors"].push_back({{"file", file},
+                                               {"block", {v.shape.n0, v.shape.n1, v.shape.n2}},
+                                               {"blocks", v.blocks},
+                                               {"coef_bits", v.coef_bits},
+                                               // The value of a COEF payload's `contexts` byte
+                                               // (SPEC.md 6.4.2): 0 narrow, 1 wide, 2 neighbour.
+                                               {"contexts", static_cast<int>(v.contexts)},
+                                               {"grid", {v.grid[0], v.grid[1], v.grid[2]}},
+                                               {"bytes", stream.size()},
+                                               {"md5", md5}});
     if (write) {
       trainer::WriteFileAtomically(path, stream.data(), stream.size());
       std::printf("wrote %s (%zu bytes, output md5 %s)\n", path.c_str(), stream.size(),

@@ -105,7 +105,9 @@ int RunInfo(int argc, char** argv) {
       std::snprintf(coded, sizeof(coded), "%u/%u", ti.coded_blocks, ti.blocks);
       std::printf("%-20s %10u %8d %10s %10.4g %12s %8s", trainer::RateTensorName(g * 6 + t),
                   ti.payload_bytes, ti.coef_bits, block, double(ti.step), coded,
-                  ti.contexts == 1 ? "wide" : "narrow");
+                  ti.contexts == 2   ? "neighbour"
+                  : ti.contexts == 1 ? "wide"
+                                     : "narrow");
       if (md5) {
         std::printf(
             "  %s",

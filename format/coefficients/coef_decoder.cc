@@ -20,7 +20,7 @@ int DecodeEob(RangeDecoder& decoder, CoefContexts& contexts) {
 // Everything of a level above the base symbol (called for base level 3 only).
 uint32_t DecodeLevelTail(RangeDecoder& decoder, CoefContexts& contexts, const uint8_t* level_slot,
                          const ScanEntry& entry) {
-  uint16_t* cdf = contexts.range_cdf[RangeContext(level_slot, contexts.scan, entry.range_band)];
+  uint16_t* cdf = contexts.range_cdf[RangeContext(level_slot, contexts.scan, entry)];
   uint32_t level = kBaseLevelCap;
   for (int i = 0; i < kMaxRangeSymbols; ++i) {
     const int step = decoder.DecodeSymbol(cdf, kRangeSymbols);
@@ -41,11 +41,16 @@ Status DecodeCoefBlock(RangeDecoder& decoder, CoefContexts& contexts, int32_t ma
   std::memset(coeffs_out, 0, sizeof(int32_t) * static_cast<size_t>(volume));
   if (eob_out != nullptr) *eob_out = 0;
 
+  const bool neighbour = contexts.set == CoefContextSet::kNeighbour;
+  if (neighbour) contexts.BeginNeighbourBlock();
   const int coded =
       decoder.DecodeBool(contexts.coded_cdf[contexts.prev_coded[0] + contexts.prev_coded[1]]);
   contexts.prev_coded[1] = contexts.prev_coded[0];
   contexts.prev_coded[0] = static_cast<uint8_t>(coded);
-  if (!coded) return decoder.status();
+  if (!coded) {
+    if (neighbour) contexts.EndNeighbourBlock(coeffs_out, 0);
+    return decoder.status();
+  }
 
   const int eob = DecodeEob(decoder, contexts);
   if (eob_out != nullptr) *eob_out = eob;
@@ -62,7 +67,7 @@ Status DecodeCoefBlock(RangeDecoder& decoder, CoefContexts& contexts, int32_t ma
                       contexts.last_base_cdf[entry.base_band], kLastBaseSymbols));
     } else {
       level = static_cast<uint32_t>(decoder.DecodeSymbol(
-          contexts.base_cdf[BaseContext(slot, contexts, entry.base_band)], kBaseSymbols));
+          contexts.base_cdf[BaseContext(slot, contexts, entry)], kBaseSymbols));
       if (level == 0) continue;  // the slot is already zero
     }
     if (level == kBaseLevelCap) level = DecodeLevelTail(decoder, contexts, slot, entry);
@@ -77,6 +82,7 @@ Status DecodeCoefBlock(RangeDecoder& decoder, CoefContexts& contexts, int32_t ma
   }
   for (int s = 0; s < eob; ++s) levels[entries[s].padded] = 0;
   if (!status.ok()) return status;
+  if (neighbour) contexts.EndNeighbourBlock(coeffs_out, eob);
   return decoder.status();
 }
 

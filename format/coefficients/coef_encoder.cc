@@ -25,7 +25,7 @@ void EncodeEob(RangeEncoder& encoder, CoefContexts& contexts, int eob) {
 void EncodeLevelTail(RangeEncoder& encoder, CoefContexts& contexts, const uint8_t* level_slot,
                      const ScanEntry& entry, uint32_t level, int32_t value) {
   if (level >= kBaseLevelCap) {
-    uint16_t* cdf = contexts.range_cdf[RangeContext(level_slot, contexts.scan, entry.range_band)];
+    uint16_t* cdf = contexts.range_cdf[RangeContext(level_slot, contexts.scan, entry)];
     uint32_t coded = kBaseLevelCap;
     for (int i = 0; i < kMaxRangeSymbols; ++i) {
       const uint32_t step = MinU32(level - coded, kRangeSymbols - 1);
@@ -50,10 +50,15 @@ void EncodeCoefBlock(RangeEncoder& encoder, CoefContexts& contexts, const int32_
   while (eob > 0 && coeffs[entries[eob - 1].raster] == 0) --eob;
 
   const int coded = eob > 0;
+  const bool neighbour = contexts.set == CoefContextSet::kNeighbour;
+  if (neighbour) contexts.BeginNeighbourBlock();
   encoder.EncodeBool(coded, contexts.coded_cdf[contexts.prev_coded[0] + contexts.prev_coded[1]]);
   contexts.prev_coded[1] = contexts.prev_coded[0];
   contexts.prev_coded[0] = static_cast<uint8_t>(coded);
-  if (!coded) return;
+  if (!coded) {
+    if (neighbour) contexts.EndNeighbourBlock(coeffs, 0);
+    return;
+  }
   EncodeEob(encoder, contexts, eob);
 
   uint8_t* levels = contexts.levels.data();
@@ -68,13 +73,13 @@ void EncodeCoefBlock(RangeEncoder& encoder, CoefContexts& contexts, const int32_
                            kLastBaseSymbols);
     } else {
       encoder.EncodeSymbol(static_cast<int>(base),
-                           contexts.base_cdf[BaseContext(slot, contexts, entry.base_band)],
-                           kBaseSymbols);
+                           contexts.base_cdf[BaseContext(slot, contexts, entry)], kBaseSymbols);
     }
     if (level != 0) EncodeLevelTail(encoder, contexts, slot, entry, level, value);
     *slot = static_cast<uint8_t>(MinU32(level, kEscapeLevel));
   }
   for (int s = 0; s < eob; ++s) levels[entries[s].padded] = 0;
+  if (neighbour) contexts.EndNeighbourBlock(coeffs, eob);
 }
 
 }  // namespace ecrf

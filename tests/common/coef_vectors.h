@@ -1,7 +1,8 @@
 // Conformance vectors for coefficient decoding + integer IDCT (SPEC.md sections 3-5).
 //
 // Each vector is a raw range-coded stream of `blocks` coefficient blocks of one shape, decoded
-// with fresh contexts of its context set (narrow: streams 1.0-1.3, wide: 1.4) and max_abs = 127
+// with fresh contexts of its context set (narrow: streams 1.0-1.3, wide: 1.4, neighbour: 1.5, on
+// the vector's block grid) and max_abs = 127
 // (8-bit) or 32767 (16-bit). The normative output is the
 // concatenation of every block's InverseDctInt samples as int32 little endian; its MD5 is listed
 // in tests/conformance/coefficients.md5. Shared by the conformance test and `ecrf conformance`.
@@ -29,6 +30,9 @@ struct CoefVector {
   int zero_percent;  // share of all-zero blocks
   int scale;         // magnitude scale of the DC coefficient
   CoefContextSet contexts;
+  // The block grid the blocks lie on, raster order (b2 fastest), its product = blocks: what the
+  // neighbour contexts (1.5) read; the narrow and wide sets ignore it.
+  int grid[3] = {1, 1, 1};
 };
 
 inline const std::vector<CoefVector>& CoefVectors() {
@@ -42,6 +46,42 @@ inline const std::vector<CoefVector>& CoefVectors() {
       {"coef_1x8x8_lines_8bit_wide", {1, 8, 8}, 96, 8, 2, 30, 30, CoefContextSet::kWide},
       {"coef_4x8x32_16bit_wide", {4, 8, 32}, 12, 16, 3, 25, 9000, CoefContextSet::kWide},
       {"coef_32x32x4_extremes_16bit_wide", {32, 32, 4}, 6, 16, 5, 0, 32767, CoefContextSet::kWide},
+      {"coef_16x16x16_8bit_neighbour",
+       {16, 16, 16},
+       24,
+       8,
+       1,
+       50,
+       40,
+       CoefContextSet::kNeighbour,
+       {2, 3, 4}},
+      {"coef_1x8x8_lines_8bit_neighbour",
+       {1, 8, 8},
+       96,
+       8,
+       2,
+       30,
+       30,
+       CoefContextSet::kNeighbour,
+       {1, 8, 12}},
+      {"coef_4x8x32_16bit_neighbour",
+       {4, 8, 32},
+       12,
+       16,
+       3,
+       25,
+       9000,
+       CoefContextSet::kNeighbour,
+       {3, 2, 2}},
+      {"coef_32x32x4_extremes_16bit_neighbour",
+       {32, 32, 4},
+       6,
+       16,
+       5,
+       0,
+       32767,
+       CoefContextSet::kNeighbour,
+       {1, 2, 3}},
   };
   return v;
 }
@@ -112,7 +152,7 @@ inline std::vector<int32_t> MakeCoefficients(const CoefVector& v) {
 inline std::vector<uint8_t> EncodeVector(const CoefVector& v) {
   const std::vector<int32_t> c = MakeCoefficients(v);
   CoefContexts ctx;
-  if (!ctx.Init(v.shape, v.contexts).ok()) return {};
+  if (!ctx.Init(v.shape, v.contexts, v.grid, static_cast<size_t>(-1)).ok()) return {};
   RangeEncoder enc;
   for (int b = 0; b < v.blocks; ++b) EncodeCoefBlock(enc, ctx, &c[size_t(b) * v.shape.Volume()]);
   return enc.Finish();
@@ -122,7 +162,7 @@ inline std::vector<uint8_t> EncodeVector(const CoefVector& v) {
 // (int32 little endian), or "error: ..." if decoding fails.
 inline std::string DecodeVectorMd5(const CoefVector& v, const std::vector<uint8_t>& stream) {
   CoefContexts ctx;
-  Status s = ctx.Init(v.shape, v.contexts);
+  Status s = ctx.Init(v.shape, v.contexts, v.grid, static_cast<size_t>(-1));
   if (!s.ok()) return std::string("error: ") + s.message();
   RangeDecoder dec(stream.data(), stream.size());
   const int volume = v.shape.Volume();

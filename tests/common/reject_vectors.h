@@ -178,6 +178,11 @@ inline std::vector<RejectVector> RejectVectors() {
         "wide coefficient contexts (1.4) in a stream labelled 1.3 (2.1)", Join(Split(w), 3));
   }
   {
+    const std::vector<uint8_t> n = BuildSceneVector(Named("scene_neighbour_contexts"));
+    add("reject_neighbour_contexts_in_1_4", "decode", kErrCorrupt, false,
+        "neighbour coefficient contexts (1.5) in a stream labelled 1.4 (2.1)", Join(Split(n), 4));
+  }
+  {
     const costly::CostlyScene cs = costly::EmptyFlaggedRows(512);
     add("reject_budget_occupancy_rows", "decode", kErrLimit, true,
         "OCCU 512^3 flagging every row and setting no voxel: 2^27 symbols from 3 KB, beyond the "

@@ -8,7 +8,8 @@
 // take the class escape, an unbounded scene (bitstream 1.2: contracted space, SPEC.md 7.2.1) seen
 // from outside its region of interest, a forward-facing scene (bitstream 1.3: NDC, 7.2.2) seen
 // from in front of its reference camera. Those carry the lowest version of their features and
-// the narrow coefficient contexts of 1.0-1.3; the `*_wide_contexts*` vectors are 1.4 streams.
+// the narrow coefficient contexts of 1.0-1.3; the `*_wide_contexts*` vectors are 1.4 streams,
+// `scene_neighbour_contexts` a 1.5 stream.
 // Added with SPEC.md 1.5: a quantized MLP whose levels reach every magnitude class up to 24 (the
 // class escape with extra values up to 2^23), an unbounded scene whose rays end at their sample
 // limit inside the contracted cube, and a forward-facing scene seen from the side, so that a
@@ -51,6 +52,8 @@ struct SceneVector {
   bool wide_contexts = false;  // a 1.4 stream: wide coefficient contexts in the plane chunks
   int num_samples = 0;         // samples per ray instead of the model's default (0)
   bool mlp_escapes = false;    // quantized MLP rows whose levels span classes 0..24
+  // A 1.5 stream: neighbour coefficient contexts in the plane chunks, wide in the line chunks.
+  bool neighbour_contexts = false;
 };
 
 inline const std::vector<SceneVector>& SceneVectors() {
@@ -182,6 +185,23 @@ inline const std::vector<SceneVector>& SceneVectors() {
        OccupancyKind::kSphere,
        22,
        SceneModel::kForward},
+      // Bitstream 1.5: plane chunks with the neighbour contexts over block grids of 1 x 2 x 2
+      // (density) and 2 x 2 x 2 (appearance: ranks 5 and 6 in blocks of 4 channels, so the
+      // second channel block is padded), lines with the wide ones.
+      {"scene_neighbour_contexts",
+       {16, 14, 12},
+       {{2, 3, 2}, {5, 6, 5}},
+       {4, 8, 8},
+       {1, 4, 8},
+       8,
+       2,
+       OccupancyKind::kSphere,
+       23,
+       SceneModel::kObject,
+       false,
+       0,
+       false,
+       true},
   };
   return v;
 }
@@ -281,9 +301,11 @@ inline std::vector<uint8_t> BuildSceneVector(const SceneVector& v) {
   const SceneHeader h = SceneVectorHeader(v);
   Lcg rng(v.seed);
   // 1.1: quantized MLP; 1.2: unbounded scene model; 1.3: forward-facing scene model; 1.4: wide
-  // coefficient contexts.
+  // coefficient contexts; 1.5: neighbour coefficient contexts.
   const uint8_t version_minor = std::max<uint8_t>(
-      {v.wide_contexts ? kWideContextsMinVersionMinor : uint8_t{0},
+      {v.neighbour_contexts ? kNeighbourContextsMinVersionMinor
+       : v.wide_contexts    ? kWideContextsMinVersionMinor
+                            : uint8_t{0},
        kSceneModelMinVersionMinor[static_cast<int>(v.scene_model)],
        v.mlp_precision == kMlpPrecisionQuantized ? kQuantizedMlpMinVersionMinor : uint8_t{0}});
   ContainerWriter writer(version_minor);
@@ -323,14 +345,23 @@ inline std::vector<uint8_t> BuildSceneVector(const SceneVector& v) {
       const int* dims = t < 3 ? v.plane_block : v.line_block;
       int extent[3];
       SceneTensorExtent(h, g, t, extent);
-      int blocks = 1;
-      for (int a = 0; a < 3; ++a) blocks *= (extent[a] + dims[a] - 1) / dims[a];
+      int blocks = 1, grid[3];
+      for (int a = 0; a < 3; ++a) {
+        grid[a] = (extent[a] + dims[a] - 1) / dims[a];
+        blocks *= grid[a];
+      }
       CoefContexts ctx;
-      // The 1.4 vectors code planes with the wide set and lines with the narrow one: the set is
-      // chosen per chunk.
-      const CoefContextSet set =
-          v.wide_contexts && t < 3 ? CoefContextSet::kWide : CoefContextSet::kNarrow;
-      if (!ctx.Init(BlockShape{dims[0], dims[1], dims[2]}, set).ok()) return {};
+      // The 1.4 vectors code planes with the wide set and lines with the narrow one, the 1.5
+      // vector planes with the neighbour set and lines with the wide one: the set is chosen per
+      // chunk.
+      const CoefContextSet set = v.neighbour_contexts
+                                     ? (t < 3 ? CoefContextSet::kNeighbour : CoefContextSet::kWide)
+                                 : v.wide_contexts && t < 3 ? CoefContextSet::kWide
+                                                            : CoefContextSet::kNarrow;
+      if (!ctx.Init(BlockShape{dims[0], dims[1], dims[2]}, set, grid, static_cast<size_t>(-1))
+               .ok()) {
+        return {};
+      }
       RangeEncoder enc;
       std::vector<int32_t> q(size_t(dims[0]) * dims[1] * dims[2]);
       for (int b = 0; b < blocks; ++b) {

@@ -223,8 +223,10 @@ TEST(SceneDecoder, CoefficientContextSetIsCheckedAgainstTheVersion) {
   EXPECT_EQ(info.tensors[0][3].contexts, 0);  // lines narrow
   EXPECT_EQ(build(4, 1), good);
   EXPECT_EQ(Decode(build(3, 1), &field).code(), kErrCorrupt);
-  EXPECT_EQ(Decode(build(4, 2), &field).code(), kErrUnsupported);
-  EXPECT_EQ(Decode(build(5, 2), &field).code(), kErrUnsupported);
+  // The neighbour set (2) is known from 1.5 on; 3 is no set at all.
+  EXPECT_EQ(Decode(build(4, 2), &field).code(), kErrCorrupt);
+  EXPECT_EQ(Decode(build(5, 3), &field).code(), kErrUnsupported);
+  EXPECT_EQ(Decode(build(6, 3), &field).code(), kErrUnsupported);
 }
 
 // SPEC.md 2.1, the version rule: a stream that uses a feature of a later minor version than its
@@ -234,7 +236,8 @@ TEST(SceneDecoder, EveryFeatureNeedsItsMinorVersion) {
   const std::map<std::string, int> feature_minor = {{"scene_quantized_mlp", 1},
                                                     {"scene_unbounded", 2},
                                                     {"scene_forward", 3},
-                                                    {"scene_wide_contexts", 4}};
+                                                    {"scene_wide_contexts", 4},
+                                                    {"scene_neighbour_contexts", 5}};
   int checked = 0;
   for (const conformance::SceneVector& v : conformance::SceneVectors()) {
     const auto it = feature_minor.find(v.name);
@@ -258,7 +261,7 @@ TEST(SceneDecoder, EveryFeatureNeedsItsMinorVersion) {
     EXPECT_TRUE(Decode(relabel(200), &field).ok()) << v.name;
     ++checked;
   }
-  EXPECT_EQ(checked, 4);
+  EXPECT_EQ(checked, 5);
 }
 
 // A stream of a few hundred bytes that claims what the format allows but a device cannot afford.

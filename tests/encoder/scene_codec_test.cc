@@ -128,13 +128,13 @@ float MaxRenderDifference(const dec::SceneField& a, const dec::SceneField& b) {
   return worst;
 }
 
-// 1.4 changes only how the levels are entropy coded, so a 1.4 stream and the 1.3 stream of the
-// same model decode to the same grids, mask and MLP to the bit.
+// 1.4 and 1.5 change only how the levels are entropy coded, so the 1.5, 1.4 and 1.3 streams of
+// the same model decode to the same grids, mask and MLP to the bit.
 // Appearance planes made of smooth bumps of varied widths, like trained features: the spectra of
 // neighbouring blocks end at different frequencies.
-TensorfModel BumpyModel() {
+TensorfModel BumpyModel(int scale = 1, bool textured = false) {
   TensorfModel model = SmallModel(9);
-  model.Initialize({48, 40, 44}, 9);
+  model.Initialize({48 * scale, 40 * scale, 44 * scale}, 9);
   VmGrid& grid = model.appearance();
   uint32_t state = 12345;
   auto next = [&state] {
@@ -146,7 +146,7 @@ TensorfModel BumpyModel() {
     const int h = grid.res()[kMatMode[m][1]], w = grid.res()[kMatMode[m][0]];
     float* plane = grid.plane(m);
     std::fill(plane, plane + size_t(h) * w * rank, 0.f);
-    for (int bump = 0; bump < 30; ++bump) {
+    for (int bump = 0; bump < 30 * scale * scale; ++bump) {
       const float cy = next() * h, cx = next() * w, width = 0.7f + 4.f * next(),
                   amp = 2.f * next() - 1.f;
       for (int y = 0; y < h; ++y) {
@@ -158,31 +158,51 @@ TensorfModel BumpyModel() {
         }
       }
     }
+    // A periodic texture over the left part of the plane, each component with its own phase:
+    // the same DCT frequencies are significant in neighbouring blocks, as in trained planes.
+    for (int y = 0; textured && y < h; ++y) {
+      for (int x = 0; x < w / 2; ++x) {
+        for (int r = 0; r < rank; ++r) {
+          plane[(size_t(y) * w + x) * rank + r] +=
+              0.3f * std::sin(2.6f * float(x) + 1.7f * float(y) + 0.9f * float(r)) +
+              0.2f * std::sin(0.8f * float(x) - 2.2f * float(y) + 2.1f * float(r));
+        }
+      }
+    }
   }
   return model;
 }
 
-TEST(SceneCodec, Version14AndVersion13StreamsDecodeToTheSameScene) {
-  TensorfModel model = BumpyModel();
+TEST(SceneCodec, Version15And14And13StreamsDecodeToTheSameScene) {
+  TensorfModel model = BumpyModel(2, /*textured=*/true);
   model.UpdateAlphaMask({9, 8, 6});
   EncodeOptions o;
   o.mlp_max_level = 31;
   o.blocks.plane_block[0] = 4;
-  o.blocks.plane_block[1] = 16;
-  o.blocks.plane_block[2] = 16;
-  EncodeReport r14, r13;
+  o.blocks.plane_block[1] = 8;
+  o.blocks.plane_block[2] = 8;
+  EncodeReport r15, r14, r13;
+  const std::vector<uint8_t> v15 = EncodeScene(model, o, &r15);
+  o.max_version_minor = 4;
   const std::vector<uint8_t> v14 = EncodeScene(model, o, &r14);
   o.max_version_minor = 3;
   const std::vector<uint8_t> v13 = EncodeScene(model, o, &r13);
+  EXPECT_EQ(v15[5], 5);
   EXPECT_EQ(v14[5], 4);
   EXPECT_EQ(v13[5], 1);  // the quantized MLP's version
-  // Each chunk keeps the shorter of its two codes, so no tensor grows and some shrink.
-  for (int i = 0; i < 12; ++i) EXPECT_LE(r14.tensor_bytes[i], r13.tensor_bytes[i]) << i;
+  // Each chunk keeps the shortest of its codes, so no tensor grows and some shrink.
+  for (int i = 0; i < 12; ++i) {
+    EXPECT_LE(r14.tensor_bytes[i], r13.tensor_bytes[i]) << i;
+    EXPECT_LE(r15.tensor_bytes[i], r14.tensor_bytes[i]) << i;
+  }
   EXPECT_LT(r14.coefficient_bytes(), r13.coefficient_bytes());
-  const dec::SceneField a = DecodeOrDie(v14), b = DecodeOrDie(v13);
+  EXPECT_LT(r15.coefficient_bytes(), r14.coefficient_bytes());
+  const dec::SceneField a = DecodeOrDie(v14), b = DecodeOrDie(v13), c = DecodeOrDie(v15);
   EXPECT_EQ(conformance::SceneGridMd5(a), conformance::SceneGridMd5(b));
+  EXPECT_EQ(conformance::SceneGridMd5(c), conformance::SceneGridMd5(b));
   EXPECT_EQ(conformance::OccupancyMd5(a), conformance::OccupancyMd5(b));
   EXPECT_EQ(conformance::MlpMd5(a), conformance::MlpMd5(b));
+  EXPECT_EQ(conformance::MlpMd5(c), conformance::MlpMd5(b));
   o.max_version_minor = 0;  // the quantized MLP needs 1.1
   EXPECT_THROW(EncodeScene(model, o), std::invalid_argument);
 }

@@ -66,10 +66,18 @@ TEST(ConformanceManifest, ListsEveryVectorWithItsParameters) {
     EXPECT_EQ(cam.width, 48);
     EXPECT_EQ(cam.height, 48);
   }
-  EXPECT_EQ(m.at("coefficient_vectors").size(), 9u);  // five narrow-context, four wide-context
-  int wide = 0;
-  for (const auto& c : m.at("coefficient_vectors")) wide += c.at("contexts") == 1;
+  // Five narrow-context, four wide-context and four neighbour-context vectors; a neighbour
+  // vector's block grid holds its blocks.
+  EXPECT_EQ(m.at("coefficient_vectors").size(), 13u);
+  int wide = 0, neighbour = 0;
+  for (const auto& c : m.at("coefficient_vectors")) {
+    wide += c.at("contexts") == 1;
+    neighbour += c.at("contexts") == 2;
+    EXPECT_EQ(c.at("grid")[0].get<int>() * c.at("grid")[1].get<int>() * c.at("grid")[2].get<int>(),
+              c.at("contexts") == 2 ? c.at("blocks").get<int>() : 1);
+  }
   EXPECT_EQ(wide, 4);
+  EXPECT_EQ(neighbour, 4);
 }
 
 TEST(ConformanceManifest, ScenesMatchEveryChecksumAndRenderWithinTolerance) {
@@ -99,11 +107,11 @@ TEST(ConformanceManifest, ScenesMatchEveryChecksumAndRenderWithinTolerance) {
     EXPECT_GE(a.psnr_db, 40.0) << file;
     ++checked;
   }
-  // Twelve hand-made scenes (two unbounded, two forward-facing, two 1.4 streams, two quantized
-  // MLPs) and the trained one.
-  EXPECT_EQ(checked, 13);
-  // And the must-reject streams (SPEC.md 7.7): sixteen, each with its stage, code and reason.
-  EXPECT_EQ(manifest.at("reject_vectors").size(), 16u);
+  // Thirteen hand-made scenes (two unbounded, two forward-facing, two 1.4 streams, one 1.5
+  // stream, two quantized MLPs) and the trained one.
+  EXPECT_EQ(checked, 14);
+  // And the must-reject streams (SPEC.md 7.7): seventeen, each with its stage, code and reason.
+  EXPECT_EQ(manifest.at("reject_vectors").size(), 17u);
   for (const nlohmann::json& r : manifest.at("reject_vectors")) {
     EXPECT_TRUE(r.at("stage") == "decode" || r.at("stage") == "render") << r.dump();
     EXPECT_LT(r.at("code").get<int>(), 0) << r.dump();
