@@ -112,31 +112,39 @@ inline int EobClass(int eob) {
 
 inline uint32_t MinU32(uint32_t a, uint32_t b) { return a < b ? a : b; }
 
-// Neighbour set: the sum of the capped levels at raster position `raster` of the three
-// neighbour blocks (0..9).
-inline int NeighbourSum(const CoefContexts& contexts, int raster) {
-  return contexts.nbr[0][raster] + contexts.nbr[1][raster] + contexts.nbr[2][raster];
-}
+// The block's neighbour levels, copied out of CoefContexts so that the coder's loop keeps them
+// in registers (its byte stores to the level map may alias any member).
+struct NeighbourLevels {
+  const uint8_t* previous_channel;  // all three null outside the neighbour set
+  const uint8_t* above;
+  const uint8_t* left;
+  explicit NeighbourLevels(const CoefContexts& contexts)
+      : previous_channel(contexts.nbr[0]), above(contexts.nbr[1]), left(contexts.nbr[2]) {}
+  // The sum of the capped levels at raster position `raster` of the three blocks (0..9).
+  uint32_t Sum(int raster) const {
+    return uint32_t{previous_channel[raster]} + above[raster] + left[raster];
+  }
+};
 
 // `level` points at the coefficient's slot in the padded level map. Every neighbour read here
 // has a higher frequency sum, so it was coded before the coefficient in reverse scan order.
-inline int BaseContext(const uint8_t* level, const CoefContexts& contexts, const ScanEntry& entry) {
-  const ScanTable& scan = contexts.scan;
-  const int s1 = scan.padded_stride1, s0 = scan.padded_stride0;
+// `set` and the strides are the contexts' (passed by value for the same reason).
+inline int BaseContext(const uint8_t* level, CoefContextSet set, int s1, int s0,
+                       const NeighbourLevels& neighbours, const ScanEntry& entry) {
   uint32_t mag = MinU32(level[1], kBaseLevelCap) + MinU32(level[s1], kBaseLevelCap) +
                  MinU32(level[s0], kBaseLevelCap);
-  if (contexts.set == CoefContextSet::kNarrow) {
+  if (set == CoefContextSet::kNarrow) {
     return entry.base_band * kBaseMagContexts +
            static_cast<int>(MinU32((mag + 1) >> 1, kBaseMagContexts - 1));
   }
   mag += MinU32(level[2], kBaseLevelCap) + MinU32(level[2 * s1], kBaseLevelCap) +
          MinU32(level[2 * s0], kBaseLevelCap) + MinU32(level[s1 + 1], kBaseLevelCap) +
          MinU32(level[s0 + 1], kBaseLevelCap) + MinU32(level[s0 + s1], kBaseLevelCap);
-  if (contexts.set == CoefContextSet::kWide) {
+  if (set == CoefContextSet::kWide) {
     return entry.base_band * kWideBaseMagContexts +
            static_cast<int>(MinU32(mag, kWideBaseMagContexts - 1));
   }
-  mag += static_cast<uint32_t>(NeighbourSum(contexts, entry.raster));
+  mag += neighbours.Sum(entry.raster);
   return entry.base_band * kNeighbourBaseMagContexts +
          static_cast<int>(MinU32(mag, kNeighbourBaseMagContexts - 1));
 }

@@ -56,6 +56,9 @@ Status DecodeCoefBlock(RangeDecoder& decoder, CoefContexts& contexts, int32_t ma
   if (eob_out != nullptr) *eob_out = eob;
   const ScanEntry* entries = contexts.scan.entries.data();
   uint8_t* levels = contexts.levels.data();
+  const CoefContextSet set = contexts.set;
+  const int s1 = contexts.scan.padded_stride1, s0 = contexts.scan.padded_stride0;
+  const NeighbourLevels neighbours(contexts);
   const uint32_t max_level = static_cast<uint32_t>(max_abs);
   Status status;
   for (int s = eob - 1; s >= 0; --s) {
@@ -67,7 +70,7 @@ Status DecodeCoefBlock(RangeDecoder& decoder, CoefContexts& contexts, int32_t ma
                       contexts.last_base_cdf[entry.base_band], kLastBaseSymbols));
     } else {
       level = static_cast<uint32_t>(decoder.DecodeSymbol(
-          contexts.base_cdf[BaseContext(slot, contexts, entry)], kBaseSymbols));
+          contexts.base_cdf[BaseContext(slot, set, s1, s0, neighbours, entry)], kBaseSymbols));
       if (level == 0) continue;  // the slot is already zero
     }
     if (level == kBaseLevelCap) level = DecodeLevelTail(decoder, contexts, slot, entry);

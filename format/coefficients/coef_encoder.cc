@@ -62,6 +62,9 @@ void EncodeCoefBlock(RangeEncoder& encoder, CoefContexts& contexts, const int32_
   EncodeEob(encoder, contexts, eob);
 
   uint8_t* levels = contexts.levels.data();
+  const CoefContextSet set = contexts.set;
+  const int s1 = contexts.scan.padded_stride1, s0 = contexts.scan.padded_stride0;
+  const NeighbourLevels neighbours(contexts);
   for (int s = eob - 1; s >= 0; --s) {
     const ScanEntry& entry = entries[s];
     const int32_t value = coeffs[entry.raster];
@@ -73,7 +76,8 @@ void EncodeCoefBlock(RangeEncoder& encoder, CoefContexts& contexts, const int32_
                            kLastBaseSymbols);
     } else {
       encoder.EncodeSymbol(static_cast<int>(base),
-                           contexts.base_cdf[BaseContext(slot, contexts, entry)], kBaseSymbols);
+                           contexts.base_cdf[BaseContext(slot, set, s1, s0, neighbours, entry)],
+                           kBaseSymbols);
     }
     if (level != 0) EncodeLevelTail(encoder, contexts, slot, entry, level, value);
     *slot = static_cast<uint8_t>(MinU32(level, kEscapeLevel));
