@@ -61,7 +61,7 @@ int RunEncode(int argc, char** argv) {
   app->add_option("--max-version", max_version,
                   "write a stream decoders of 1.N read (default 1." +
                       std::to_string(kVersionMinor) +
-                      "; 1.4 leaves out the neighbour coefficient contexts, 1.7-1.8% more "
+                      "; 1.4 leaves out the neighbour coefficient contexts, 1.2-1.7% more "
                       "coefficient bytes; "
                       "1.0-1.3 also the wide ones, 2-3.5% more)")
       ->type_name("1.N");
