@@ -232,16 +232,23 @@ Status DecodeCoefficientChunk(const ChunkView& chunk, const SceneHeader& h, int 
   return Status::Ok();
 }
 
-Status DecodeOccupancyChunk(const ChunkView& chunk, MemoryBudget* budget, WorkBudget* work,
-                            SceneField* scene, SceneInfo* info) {
+Status DecodeOccupancyChunk(const ChunkView& chunk, int version_minor, MemoryBudget* budget,
+                            WorkBudget* work, SceneField* scene, SceneInfo* info) {
   ByteReader r(chunk.data, chunk.size);
   float lo[3] = {0.f, 0.f, 0.f}, hi[3] = {0.f, 0.f, 0.f};
-  uint16_t res16[3] = {0, 0, 0}, reserved = 0;
+  uint16_t res16[3] = {0, 0, 0}, contexts = 0;
   for (float& v : lo) ECRF_RETURN_IF_ERROR(r.ReadF32(&v, "OCCU aabb_min"));
   for (float& v : hi) ECRF_RETURN_IF_ERROR(r.ReadF32(&v, "OCCU aabb_max"));
   for (uint16_t& v : res16) ECRF_RETURN_IF_ERROR(r.ReadU16(&v, "OCCU resolution"));
-  ECRF_RETURN_IF_ERROR(r.ReadU16(&reserved, "OCCU reserved"));
-  ECRF_CHECK_OR_RETURN(reserved == 0, kErrCorrupt, "OCCU: reserved field must be 0");
+  ECRF_RETURN_IF_ERROR(r.ReadU16(&contexts, "OCCU contexts"));
+  // The version rule (SPEC.md 2.1): before 1.5 the field was reserved (0).
+  ECRF_CHECK_OR_RETURN(contexts <= kMaxOccupancyContextSet, kErrUnsupported,
+                       "OCCU: unknown occupancy context set %u", contexts);
+  ECRF_CHECK_OR_RETURN(contexts == 0 || version_minor >= kWideOccupancyContextsMinVersionMinor,
+                       kErrCorrupt,
+                       "OCCU: contexts %u needs version_minor >= %d, the stream says %d "
+                       "(SPEC.md 2.1; the field was reserved, 0, before 1.5)",
+                       contexts, kWideOccupancyContextsMinVersionMinor, version_minor);
   int res[3] = {0, 0, 0};
   uint64_t voxels = 1;
   for (int a = 0; a < 3; ++a) {
@@ -265,13 +272,15 @@ Status DecodeOccupancyChunk(const ChunkView& chunk, MemoryBudget* budget, WorkBu
   if (!work->Take(voxels / 64)) return work->Refuse("OCCU");
   ECRF_RETURN_IF_ERROR(scene->mask.Init(lo, hi, res));
   const Status decoded =
-      DecodeOccupancy(r.current(), r.remaining(), res, scene->mask.bits(), work->left());
+      DecodeOccupancy(r.current(), r.remaining(), res, static_cast<OccupancyContextSet>(contexts),
+                      scene->mask.bits(), work->left());
   if (decoded.code() == kErrLimit) return work->Refuse(decoded.message());
   ECRF_RETURN_IF_ERROR(decoded);
   ECRF_RETURN_IF_ERROR(scene->mask.BuildAcceleration());
   scene->has_mask = true;
   info->occupancy_bytes = chunk.size;
   for (int a = 0; a < 3; ++a) info->occupancy_res[a] = res[a];
+  info->occupancy_contexts = static_cast<uint8_t>(contexts);
   info->occupied_voxels = scene->mask.occupied_count();
   return Status::Ok();
 }
@@ -453,7 +462,8 @@ Status DecodeChunks(const uint8_t* data, size_t size, const DecodeOptions& optio
         advance_tensor();
       }
     } else if (chunk.type == kChunkOccupancy && expect == Expect::kOccupancy) {
-      ECRF_RETURN_IF_ERROR(DecodeOccupancyChunk(chunk, &budget, &work, scene, &info));
+      ECRF_RETURN_IF_ERROR(
+          DecodeOccupancyChunk(chunk, info.version_minor, &budget, &work, scene, &info));
       advance_tensor();
     } else if (chunk.type == kChunkCoefficients && expect == Expect::kCoefficients) {
       const int g = next_tensor / kTensorsPerSceneGrid, t = next_tensor % kTensorsPerSceneGrid;

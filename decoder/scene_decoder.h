@@ -67,6 +67,7 @@ struct SceneInfo {
   int mlp_precision_bits = 0;  // 16 or 32 for floating weights, 0 for quantized
   int occupancy_res[3] = {0, 0, 0};
   size_t occupied_voxels = 0;
+  uint8_t occupancy_contexts = 0;  // the OCCU contexts field: 0 narrow, 1 wide (1.5)
   TensorChunkInfo tensors[kNumSceneGrids][kTensorsPerSceneGrid];
   // The meta chunk (UTF-8 JSON), pointing into the caller's buffer; null if absent.
   const uint8_t* metadata = nullptr;

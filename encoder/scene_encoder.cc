@@ -191,14 +191,27 @@ std::vector<uint8_t> EncodeCoefficients(const SceneTensors& s, int g, int t, flo
   return std::move(w.bytes());
 }
 
-std::vector<uint8_t> EncodeOccupancyChunk(const AlphaMask& mask) {
+// The shorter of the narrow and (where the asked version allows it) the wide code.
+std::vector<uint8_t> EncodeOccupancyChunk(const AlphaMask& mask, int max_version_minor,
+                                          OccupancyContextSet* set_out) {
+  const int res[3] = {mask.res()[0], mask.res()[1], mask.res()[2]};
+  std::vector<uint8_t> code = EncodeOccupancy(mask.occupancy().data(), res);
+  OccupancyContextSet set = OccupancyContextSet::kNarrow;
+  if (max_version_minor >= kWideOccupancyContextsMinVersionMinor) {
+    std::vector<uint8_t> wide =
+        EncodeOccupancy(mask.occupancy().data(), res, OccupancyContextSet::kWide);
+    if (wide.size() < code.size()) {
+      code = std::move(wide);
+      set = OccupancyContextSet::kWide;
+    }
+  }
   ByteWriter w;
   for (float v : mask.aabb().min) w.F32(v);
   for (float v : mask.aabb().max) w.F32(v);
   for (int r : mask.res()) w.U16(uint16_t(r));
-  w.U16(0);
-  const int res[3] = {mask.res()[0], mask.res()[1], mask.res()[2]};
-  w.Bytes(EncodeOccupancy(mask.occupancy().data(), res));
+  w.U16(static_cast<uint16_t>(set));
+  w.Bytes(code);
+  *set_out = set;
   return std::move(w.bytes());
 }
 
@@ -250,9 +263,18 @@ std::vector<uint8_t> Assemble(const SceneTensors& s, const std::vector<float>& s
           CoefContextSetMinVersionMinor(static_cast<CoefContextSet>(coef_chunks[g][t][3])));
     }
   }
-  // The lowest version of the features used: 1.4 for wide contexts, 1.5 for neighbour contexts.
-  ContainerWriter writer(version_minor);
   h.has_occupancy = (o.include_occupancy && s.mask) ? 1 : 0;
+  std::vector<uint8_t> occupancy_chunk;
+  if (h.has_occupancy) {
+    OccupancyContextSet set = OccupancyContextSet::kNarrow;
+    occupancy_chunk = EncodeOccupancyChunk(*s.mask, o.max_version_minor, &set);
+    if (set == OccupancyContextSet::kWide) {
+      version_minor = std::max(version_minor, kWideOccupancyContextsMinVersionMinor);
+    }
+  }
+  // The lowest version of the features used: 1.4 for wide coefficient contexts, 1.5 for
+  // neighbour coefficient contexts and wide occupancy contexts.
+  ContainerWriter writer(version_minor);
   ByteWriter head;
   WriteSceneHeader(h, &head);
   writer.AddChunk(kChunkHead, head.bytes());
@@ -266,9 +288,8 @@ std::vector<uint8_t> Assemble(const SceneTensors& s, const std::vector<float>& s
     ++chunks;
   }
   if (h.has_occupancy) {
-    const std::vector<uint8_t> occ = EncodeOccupancyChunk(*s.mask);
-    writer.AddChunk(kChunkOccupancy, occ);
-    report->occupancy_bytes = occ.size();
+    writer.AddChunk(kChunkOccupancy, occupancy_chunk);
+    report->occupancy_bytes = occupancy_chunk.size();
   }
   for (int g = 0; g < 2; ++g) {
     for (int t = 0; t < 6; ++t) {

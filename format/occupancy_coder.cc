@@ -10,8 +10,8 @@ namespace ecrf {
 
 using namespace occupancy_internal;
 
-Status DecodeOccupancy(const uint8_t* stream, size_t size, const int res[3], uint8_t* bits,
-                       uint64_t* symbol_budget) {
+Status DecodeOccupancy(const uint8_t* stream, size_t size, const int res[3],
+                       OccupancyContextSet set, uint8_t* bits, uint64_t* symbol_budget) {
   const int nx = res[0], ny = res[1], nz = res[2];
   std::memset(bits, 0, OccupancyBytes(res));
   // One flag per row: at most 4096^2 bytes, bounded by the caller's resolution check.
@@ -42,7 +42,7 @@ Status DecodeOccupancy(const uint8_t* stream, size_t size, const int res[3], uin
       if (!any) continue;
       const size_t base = (static_cast<size_t>(z) * ny + y) * nx;
       for (int x = 0; x < nx; ++x) {
-        if (dec.DecodeBool(ctx.voxel[volume.VoxelContext(x, y, z)])) {
+        if (dec.DecodeBool(ctx.voxel[volume.VoxelContext(x, y, z, set)])) {
           const size_t i = base + x;
           bits[i >> 3] = static_cast<uint8_t>(bits[i >> 3] | (1u << (i & 7)));
         }

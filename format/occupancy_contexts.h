@@ -13,11 +13,12 @@ namespace ecrf {
 namespace occupancy_internal {
 
 constexpr int kRowContexts = 4;
-constexpr int kVoxelContexts = 16;
+constexpr int kVoxelContexts = 16;       // narrow set: four neighbours
+constexpr int kWideVoxelContexts = 512;  // wide set: nine
 
 struct OccupancyContexts {
   uint16_t row[kRowContexts][3];
-  uint16_t voxel[kVoxelContexts][3];
+  uint16_t voxel[kWideVoxelContexts][3];
   OccupancyContexts() {
     for (auto& c : row) InitUniformCdf(c, 2);
     for (auto& c : voxel) InitUniformCdf(c, 2);
@@ -28,12 +29,17 @@ struct OccupancyContexts {
 class Volume {
  public:
   Volume(const uint8_t* bits, const int res[3]) : bits_(bits), nx_(res[0]), ny_(res[1]) {}
+  // z < the slice being coded: only the (y + 1) read of the previous slice looks ahead in y.
   int At(int x, int y, int z) const {
     if (x < 0 || y < 0 || z < 0 || x >= nx_ || y >= ny_) return 0;
     return OccupancyBit(bits_, (static_cast<size_t>(z) * ny_ + y) * nx_ + x);
   }
-  int VoxelContext(int x, int y, int z) const {
-    return At(x - 1, y, z) + 2 * At(x, y - 1, z) + 4 * At(x, y, z - 1) + 8 * At(x + 1, y - 1, z);
+  int VoxelContext(int x, int y, int z, OccupancyContextSet set) const {
+    const int narrow =
+        At(x - 1, y, z) + 2 * At(x, y - 1, z) + 4 * At(x, y, z - 1) + 8 * At(x + 1, y - 1, z);
+    if (set == OccupancyContextSet::kNarrow) return narrow;
+    return narrow + 16 * At(x + 1, y, z - 1) + 32 * At(x - 1, y - 1, z) + 64 * At(x, y + 1, z - 1) +
+           128 * At(x - 1, y, z - 1) + 256 * At(x, y - 1, z - 1);
   }
 
  private:

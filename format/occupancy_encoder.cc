@@ -11,7 +11,8 @@ namespace ecrf {
 
 using namespace occupancy_internal;
 
-std::vector<uint8_t> EncodeOccupancy(const uint8_t* occupancy, const int res[3]) {
+std::vector<uint8_t> EncodeOccupancy(const uint8_t* occupancy, const int res[3],
+                                     OccupancyContextSet set) {
   const int nx = res[0], ny = res[1], nz = res[2];
   std::vector<uint8_t> bits(OccupancyBytes(res), 0);
   for (size_t i = 0, n = static_cast<size_t>(nx) * ny * nz; i < n; ++i) {
@@ -30,7 +31,7 @@ std::vector<uint8_t> EncodeOccupancy(const uint8_t* occupancy, const int res[3])
       row_any[static_cast<size_t>(z) * ny + y] = static_cast<uint8_t>(any);
       if (!any) continue;
       for (int x = 0; x < nx; ++x) {
-        enc.EncodeBool(row[x] != 0, ctx.voxel[volume.VoxelContext(x, y, z)]);
+        enc.EncodeBool(row[x] != 0, ctx.voxel[volume.VoxelContext(x, y, z, set)]);
       }
     }
   }

@@ -90,8 +90,9 @@ int RunInfo(int argc, char** argv) {
               "coded blocks", "contexts", md5 ? "  md5 of decoded float32 values" : "");
   std::printf("%-20s %10u\n", "HEAD", in.head_bytes);
   if (h.has_occupancy) {
-    std::printf("%-20s %10u   %dx%dx%d mask, %zu occupied voxels\n", "OCCU", in.occupancy_bytes,
-                in.occupancy_res[0], in.occupancy_res[1], in.occupancy_res[2], in.occupied_voxels);
+    std::printf("%-20s %10u   %dx%dx%d mask, %zu occupied voxels, %s contexts\n", "OCCU",
+                in.occupancy_bytes, in.occupancy_res[0], in.occupancy_res[1], in.occupancy_res[2],
+                in.occupied_voxels, in.occupancy_contexts ? "wide" : "narrow");
   }
   for (int g = 0; g < 2; ++g) {
     for (int t = 0; t < 6; ++t) {

@@ -180,7 +180,8 @@ inline std::vector<RejectVector> RejectVectors() {
   {
     const std::vector<uint8_t> n = BuildSceneVector(Named("scene_neighbour_contexts"));
     add("reject_neighbour_contexts_in_1_4", "decode", kErrCorrupt, false,
-        "neighbour coefficient contexts (1.5) in a stream labelled 1.4 (2.1)", Join(Split(n), 4));
+        "wide occupancy and neighbour coefficient contexts (1.5) in a stream labelled 1.4 (2.1)",
+        Join(Split(n), 4));
   }
   {
     const costly::CostlyScene cs = costly::EmptyFlaggedRows(512);

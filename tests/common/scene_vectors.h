@@ -52,7 +52,8 @@ struct SceneVector {
   bool wide_contexts = false;  // a 1.4 stream: wide coefficient contexts in the plane chunks
   int num_samples = 0;         // samples per ray instead of the model's default (0)
   bool mlp_escapes = false;    // quantized MLP rows whose levels span classes 0..24
-  // A 1.5 stream: neighbour coefficient contexts in the plane chunks, wide in the line chunks.
+  // A 1.5 stream: neighbour coefficient contexts in the plane chunks, wide in the line chunks,
+  // wide occupancy contexts.
   bool neighbour_contexts = false;
 };
 
@@ -187,7 +188,8 @@ inline const std::vector<SceneVector>& SceneVectors() {
        SceneModel::kForward},
       // Bitstream 1.5: plane chunks with the neighbour contexts over block grids of 1 x 2 x 2
       // (density) and 2 x 2 x 2 (appearance: ranks 5 and 6 in blocks of 4 channels, so the
-      // second channel block is padded), lines with the wide ones.
+      // second channel block is padded), lines with the wide ones, the mask with the wide
+      // occupancy contexts.
       {"scene_neighbour_contexts",
        {16, 14, 12},
        {{2, 3, 2}, {5, 6, 5}},
@@ -325,7 +327,10 @@ inline std::vector<uint8_t> BuildSceneVector(const SceneVector& v) {
     for (float x : lo) occ.F32(x);
     for (float x : hi) occ.F32(x);
     for (int r : mres) occ.U16(uint16_t(r));
-    occ.U16(0);
+    // The 1.5 vector codes its mask with the wide occupancy contexts.
+    const OccupancyContextSet occupancy_set =
+        v.neighbour_contexts ? OccupancyContextSet::kWide : OccupancyContextSet::kNarrow;
+    occ.U16(static_cast<uint16_t>(occupancy_set));
     std::vector<uint8_t> voxels(size_t(mres[0]) * mres[1] * mres[2], 0);
     if (v.occupancy == OccupancyKind::kSphere) {
       for (int z = 0; z < mres[2]; ++z)
@@ -335,7 +340,7 @@ inline std::vector<uint8_t> BuildSceneVector(const SceneVector& v) {
             voxels[(size_t(z) * mres[1] + y) * mres[0] + x] = dx * dx + dy * dy + dz * dz < 0.8;
           }
     }
-    occ.Bytes(EncodeOccupancy(voxels.data(), mres));
+    occ.Bytes(EncodeOccupancy(voxels.data(), mres, occupancy_set));
     writer.AddChunk(kChunkOccupancy, occ.bytes());
   }
   const int32_t max_abs = v.coef_bits == 16 ? 32767 : 127;

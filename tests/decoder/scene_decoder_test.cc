@@ -229,6 +229,45 @@ TEST(SceneDecoder, CoefficientContextSetIsCheckedAgainstTheVersion) {
   EXPECT_EQ(Decode(build(6, 3), &field).code(), kErrUnsupported);
 }
 
+// SPEC.md 6.3: the OCCU contexts field, 0 narrow, 1 wide (1.5); reserved (0) before 1.5.
+TEST(SceneDecoder, OccupancyContextSetIsCheckedAgainstTheVersion) {
+  const conformance::SceneVector* vector = nullptr;
+  for (const conformance::SceneVector& v : conformance::SceneVectors()) {
+    if (std::string(v.name) == "scene_neighbour_contexts") vector = &v;
+  }
+  ASSERT_NE(vector, nullptr);
+  const std::vector<uint8_t> good = conformance::BuildSceneVector(*vector);
+  ASSERT_EQ(good[5], 5);
+  const Chunks chunks = SplitChunks(good);
+  // Relabels the stream and sets the OCCU contexts field (offset 30, u16).
+  auto build = [&chunks](uint8_t minor, uint16_t contexts) {
+    ContainerWriter w(minor);
+    for (auto [type, payload] : chunks) {
+      if (type == kChunkDone) continue;
+      if (type == kChunkOccupancy) {
+        payload[30] = static_cast<uint8_t>(contexts);
+        payload[31] = static_cast<uint8_t>(contexts >> 8);
+      }
+      w.AddChunk(type, payload);
+    }
+    return w.Finish();
+  };
+  SceneField field;
+  SceneInfo info;
+  ASSERT_TRUE(DecodeScene(good.data(), good.size(), DecodeOptions(), &field, &info).ok());
+  EXPECT_EQ(info.occupancy_contexts, 1);
+  EXPECT_EQ(build(5, 1), good);
+  const Status old = Decode(build(4, 1), &field);
+  EXPECT_EQ(old.code(), kErrCorrupt);
+  EXPECT_NE(std::string(old.message()).find("OCCU"), std::string::npos) << old.message();
+  EXPECT_EQ(Decode(build(5, 2), &field).code(), kErrUnsupported);
+  EXPECT_EQ(Decode(build(5, 256), &field).code(), kErrUnsupported);
+  // The same mask read with the narrow contexts is another mask, or a damaged stream.
+  SceneField narrow;
+  const Status misread = Decode(build(5, 0), &narrow);
+  EXPECT_TRUE(!misread.ok() || narrow.mask.occupied_count() != field.mask.occupied_count());
+}
+
 // SPEC.md 2.1, the version rule: a stream that uses a feature of a later minor version than its
 // version_minor is corrupt, whichever feature; a later minor version than the decoder knows is
 // accepted when the stream uses only known features.

@@ -150,9 +150,10 @@ TEST(SceneHeader, RejectsInvalidFields) {
 }
 
 std::vector<uint8_t> DecodeVolume(const std::vector<uint8_t>& stream, const int res[3],
-                                  Status* status) {
+                                  Status* status,
+                                  OccupancyContextSet set = OccupancyContextSet::kNarrow) {
   std::vector<uint8_t> bits(OccupancyBytes(res), 0xAB);
-  *status = DecodeOccupancy(stream.data(), stream.size(), res, bits.data());
+  *status = DecodeOccupancy(stream.data(), stream.size(), res, set, bits.data());
   std::vector<uint8_t> voxels(size_t(res[0]) * res[1] * res[2]);
   for (size_t i = 0; i < voxels.size(); ++i) voxels[i] = OccupancyBit(bits.data(), i);
   return voxels;
@@ -181,6 +182,10 @@ TEST(OccupancyCoder, RoundTripsStructuredAndRandomVolumes) {
       EXPECT_EQ(DecodeVolume(stream, res, &s), v)
           << res[0] << "x" << res[1] << "x" << res[2] << " kind " << kind;
       EXPECT_TRUE(s.ok()) << s.message();
+      const std::vector<uint8_t> wide = EncodeOccupancy(v.data(), res, OccupancyContextSet::kWide);
+      EXPECT_EQ(DecodeVolume(wide, res, &s, OccupancyContextSet::kWide), v)
+          << res[0] << "x" << res[1] << "x" << res[2] << " kind " << kind << " wide";
+      EXPECT_TRUE(s.ok()) << s.message();
       if (kind == 0 && n >= 64 * 64 * 64) {
         EXPECT_LT(stream.size(), 40u) << "empty volumes must cost almost nothing";
       }
@@ -190,6 +195,28 @@ TEST(OccupancyCoder, RoundTripsStructuredAndRandomVolumes) {
       }
     }
   }
+}
+
+// Trained masks are shells and blobs whose outline drifts from slice to slice: the wide set sees
+// the previous slice around the voxel, the narrow set only the voxel below it.
+TEST(OccupancyCoder, WideContextsCodeDriftingOutlinesInFewerBytes) {
+  const int res[3] = {96, 80, 72};
+  std::vector<uint8_t> v(size_t(res[0]) * res[1] * res[2]);
+  for (int z = 0; z < res[2]; ++z)
+    for (int y = 0; y < res[1]; ++y)
+      for (int x = 0; x < res[0]; ++x) {
+        // A wobbly ellipsoid shell with a tilted axis, two voxels thick.
+        const double dx = (x - 48.0 - 0.2 * z) / 40, dy = (y - 40.0) / 30, dz = (z - 36.0) / 33;
+        const double r = std::sqrt(dx * dx + dy * dy + dz * dz) *
+                         (1 + 0.08 * std::sin(0.31 * x) * std::cos(0.27 * y + 0.1 * z));
+        v[(size_t(z) * res[1] + y) * res[0] + x] = r > 0.85 && r < 0.9;
+      }
+  const std::vector<uint8_t> narrow = EncodeOccupancy(v.data(), res);
+  const std::vector<uint8_t> wide = EncodeOccupancy(v.data(), res, OccupancyContextSet::kWide);
+  Status s;
+  EXPECT_EQ(DecodeVolume(wide, res, &s, OccupancyContextSet::kWide), v);
+  EXPECT_TRUE(s.ok()) << s.message();
+  EXPECT_LT(wide.size(), narrow.size() * 0.9) << wide.size() << " vs " << narrow.size();
 }
 
 TEST(OccupancyCoder, TruncatedStreamsAreErrors) {
