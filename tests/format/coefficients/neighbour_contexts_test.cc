@@ -8,24 +8,15 @@
 #include <vector>
 
 #include "format/coefficients/coef_coder.h"
+#include "tests/common/coef_test_blocks.h"
 
 namespace ecrf {
 namespace {
 
-class SplitMix {
- public:
-  explicit SplitMix(uint64_t seed) : state_(seed) {}
-  uint64_t Next() {
-    uint64_t z = (state_ += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-  }
-  uint32_t Below(uint32_t n) { return static_cast<uint32_t>(Next() % n); }
-
- private:
-  uint64_t state_;
-};
+using testing_blocks::AllValidShapes;
+using testing_blocks::ExpectedEob;
+using testing_blocks::Fnv1a;
+using testing_blocks::SplitMix;
 
 constexpr size_t kNoLimit = static_cast<size_t>(-1);
 
@@ -45,13 +36,6 @@ std::vector<uint8_t> EncodeGrid(const Grid& grid, const std::vector<std::vector<
   RangeEncoder encoder;
   for (const auto& block : blocks) EncodeCoefBlock(encoder, contexts, block.data());
   return encoder.Finish();
-}
-
-int ExpectedEob(const BlockShape& shape, const std::vector<int32_t>& block) {
-  const std::vector<uint16_t> scan = ComputeScanOrder(shape);
-  int eob = shape.Volume();
-  while (eob > 0 && block[scan[static_cast<size_t>(eob - 1)]] == 0) --eob;
-  return eob;
 }
 
 void ExpectDecodes(const Grid& grid, const std::vector<std::vector<int32_t>>& blocks,
@@ -100,15 +84,6 @@ std::vector<std::vector<int32_t>> MixedBlocks(SplitMix& rng, const BlockShape& s
     blocks.push_back(std::move(block));
   }
   return blocks;
-}
-
-std::vector<BlockShape> AllValidShapes() {
-  std::vector<BlockShape> shapes;
-  for (int n0 = 1; n0 <= 32; n0 *= 2)
-    for (int n1 = 1; n1 <= 32; n1 *= 2)
-      for (int n2 = 1; n2 <= 32; n2 *= 2)
-        if (IsValidBlockShape(BlockShape{n0, n1, n2})) shapes.push_back(BlockShape{n0, n1, n2});
-  return shapes;
 }
 
 TEST(NeighbourContexts, RoundTripEveryShapeOnSeveralBlockGrids) {
@@ -175,12 +150,6 @@ TEST(NeighbourContexts, CodeSpatiallyCoherentBlocksInFewerBytesThanTheWideSet) {
   ExpectDecodes(grid, blocks, neighbour, 127);
   EXPECT_LT(neighbour.size(), wide.size() * 0.9) <<  // measured: 6,824 against 8,353 bytes
       neighbour.size() << " vs " << wide.size();
-}
-
-uint64_t Fnv1a(const std::vector<uint8_t>& bytes) {
-  uint64_t hash = 0xCBF29CE484222325ull;
-  for (uint8_t b : bytes) hash = (hash ^ b) * 0x100000001B3ull;
-  return hash;
 }
 
 // The exact bitstream of the neighbour set. If this changes, the format changed.
