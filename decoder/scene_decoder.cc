@@ -172,17 +172,17 @@ Status DecodeCoefficientChunk(const ChunkView& chunk, const SceneHeader& h, int 
   info->blocks = static_cast<uint32_t>(blocks[0]) * blocks[1] * blocks[2];
   info->coded_blocks = 0;
 
-  // The neighbour contexts keep one block per (b1, b2) column while the chunk decodes: charged
-  // to the memory budget (never more than a quarter of the tensor's own bytes and the padding).
+  // The neighbour contexts keep the capped levels of one block per (b1, b2) column while the
+  // chunk decodes (about a quarter of a channel block's float32 bytes, more where the block
+  // pads the tensor): charged to the memory budget for the length of the chunk.
   const BlockShape shape{dims[0], dims[1], dims[2]};
-  const uint64_t context_bytes = NeighbourBytes(shape, blocks);
-  if (context_set == CoefContextSet::kNeighbour) {
-    ECRF_RETURN_IF_ERROR(budget->Take(context_bytes, "COEF: the neighbour contexts"));
-  }
+  const uint64_t context_bytes =
+      context_set == CoefContextSet::kNeighbour ? NeighbourBytes(shape, blocks) : 0;
+  ECRF_RETURN_IF_ERROR(budget->Take(context_bytes, "COEF: the neighbour contexts"));
   CoefContexts contexts;
   ECRF_RETURN_IF_ERROR(
       contexts.Init(shape, context_set, blocks, static_cast<size_t>(context_bytes)));
-  if (context_set == CoefContextSet::kNeighbour) budget->Give(context_bytes);
+  budget->Give(context_bytes);
   HeapArray<int32_t> block_buffers;
   ECRF_RETURN_IF_ERROR(block_buffers.Allocate(2 * static_cast<size_t>(kMaxBlockVolume)));
   int32_t* coeffs = block_buffers.data();

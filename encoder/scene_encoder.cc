@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <stdexcept>
 #include <string>
 
@@ -124,6 +125,26 @@ uint8_t FeatureVersionMinor(const SceneHeader& h, const EncodeOptions& o) {
                            kSceneModelMinVersionMinor[h.scene_model]);
 }
 
+// The shortest of the codes of `sets` (in order; the first wins ties) whose minimum version the
+// asked version allows: encode(set) codes the same data with one context set. The first set
+// must be allowed in every version.
+template <typename Set, typename Encode, typename MinVersion>
+std::vector<uint8_t> ShortestCode(std::initializer_list<Set> sets, int max_version_minor,
+                                  MinVersion min_version, Encode encode, Set* chosen) {
+  std::vector<uint8_t> best;
+  bool first = true;
+  for (Set set : sets) {
+    if (!first && max_version_minor < min_version(set)) continue;
+    std::vector<uint8_t> code = encode(set);
+    if (first || code.size() < best.size()) {
+      best = std::move(code);
+      *chosen = set;
+    }
+    first = false;
+  }
+  return best;
+}
+
 std::vector<uint8_t> CodeLevels(const std::vector<int32_t>& levels, const GridBlockLayout& layout,
                                 CoefContextSet set) {
   CoefContexts contexts;
@@ -167,16 +188,11 @@ std::vector<uint8_t> EncodeCoefficients(const SceneTensors& s, int g, int t, flo
   }
   // Every context set the asked version allows codes the same levels; the chunk keeps the
   // shortest code, so no tensor ever grows over its size in an older version.
-  std::vector<uint8_t> code = CodeLevels(levels, layout, CoefContextSet::kNarrow);
   CoefContextSet set = CoefContextSet::kNarrow;
-  for (CoefContextSet candidate : {CoefContextSet::kWide, CoefContextSet::kNeighbour}) {
-    if (o.max_version_minor < CoefContextSetMinVersionMinor(candidate)) continue;
-    std::vector<uint8_t> other = CodeLevels(levels, layout, candidate);
-    if (other.size() < code.size()) {
-      code = std::move(other);
-      set = candidate;
-    }
-  }
+  const std::vector<uint8_t> code = ShortestCode(
+      {CoefContextSet::kNarrow, CoefContextSet::kWide, CoefContextSet::kNeighbour},
+      o.max_version_minor, CoefContextSetMinVersionMinor,
+      [&](CoefContextSet candidate) { return CodeLevels(levels, layout, candidate); }, &set);
   report->tensor_blocks[index] = size_t(layout.num_blocks());
   report->tensor_coeffs[index] = layout.num_coeffs();
   ByteWriter w;
@@ -195,16 +211,16 @@ std::vector<uint8_t> EncodeCoefficients(const SceneTensors& s, int g, int t, flo
 std::vector<uint8_t> EncodeOccupancyChunk(const AlphaMask& mask, int max_version_minor,
                                           OccupancyContextSet* set_out) {
   const int res[3] = {mask.res()[0], mask.res()[1], mask.res()[2]};
-  std::vector<uint8_t> code = EncodeOccupancy(mask.occupancy().data(), res);
   OccupancyContextSet set = OccupancyContextSet::kNarrow;
-  if (max_version_minor >= kWideOccupancyContextsMinVersionMinor) {
-    std::vector<uint8_t> wide =
-        EncodeOccupancy(mask.occupancy().data(), res, OccupancyContextSet::kWide);
-    if (wide.size() < code.size()) {
-      code = std::move(wide);
-      set = OccupancyContextSet::kWide;
-    }
-  }
+  const std::vector<uint8_t> code = ShortestCode(
+      {OccupancyContextSet::kNarrow, OccupancyContextSet::kWide}, max_version_minor,
+      [](OccupancyContextSet candidate) {
+        return candidate == OccupancyContextSet::kWide ? kWideOccupancyContextsMinVersionMinor : 0;
+      },
+      [&](OccupancyContextSet candidate) {
+        return EncodeOccupancy(mask.occupancy().data(), res, candidate);
+      },
+      &set);
   ByteWriter w;
   for (float v : mask.aabb().min) w.F32(v);
   for (float v : mask.aabb().max) w.F32(v);
