@@ -1,6 +1,7 @@
 // WebGL2 renderer of a decoded ecrf scene (EcrfDecoder.sceneData() of web/viewer.js): the
-// reference process of SPEC.md section 7 in one fragment shader per pixel, with the 7.8
-// accelerations that keep the image (empty-space skipping) and the optional knobs (early stop,
+// reference process of SPEC.md section 7 in one fragment shader per pixel, for every scene model
+// (object 7.2; unbounded 7.2.1, contracted sampling; forward-facing 7.2.2, the NDC line), with the
+// 7.8 accelerations that keep the image (empty-space skipping) and the optional knobs (early stop,
 // step scale, weight threshold; deferred: MLP once per pixel on the weight-averaged products, an
 // approximation, off by default). Shader sources: web/gpu_shaders.js (load it first).
 //
@@ -12,7 +13,8 @@
 // All interpolation is done by hand with texelFetch, as 7.4 writes it. MLP weights: std140 UBOs
 // (uniform reads are broadcast to all lanes), split into blocks of at most MAX_UNIFORM_BLOCK_SIZE;
 // one RGBA32F texture instead when the blocks exceed the GPU's limits (or {mlpWeights: 'texture'}).
-// render() options beyond the documented ones: deferred (bool), bandRows (draw in bands of rows).
+// render() options beyond the documented ones: deferred (bool), bandRows (draw in bands of rows),
+// skipEmptySpace (default true; false: every sample tested one by one, as ecrf --no-skip).
 'use strict';
 
 (function () {
@@ -200,9 +202,9 @@
       const {info, field, density, appearance, occupancy, mlpParams} = sceneData;
       const res = info.gridRes;
       const check = (ok, what) => { if (!ok) throw new Error(`GpuRenderer.setScene: ${what}`); };
-      // The shaders march straight rays through the box (SPEC.md 7.2); the contracted sampling of
-      // 7.2.1 is not implemented here: the viewer falls back to its CPU (WebAssembly) renderer.
-      check(!info.sceneModel, 'unbounded and forward-facing scenes (SPEC.md 7.2.1, 7.2.2) are not implemented in the GPU renderer');
+      const model = info.sceneModel || 0;
+      check(model >= 0 && model <= 2, `scene model ${model} is not 0 (object), 1 (unbounded) or 2 (forward-facing)`);
+      check(model !== 2 || (info.ndcFrame && info.ndcFrame.length === 15), 'a forward-facing scene without its NDC frame (SPEC.md 6.2.1)');
       const MAT = [[0, 1], [0, 2], [1, 2]], VEC = [2, 1, 0];
       const ranksOf = (g) => g.planes.map((pl) => pl.shape[2]);
       const dRanks = ranksOf(density), aRanks = ranksOf(appearance);
@@ -339,7 +341,7 @@
       }
       gl.bindBuffer(gl.UNIFORM_BUFFER, null);
       s.cfg = {dGroups, aGroups, aGroupOff, dLineRow: dl.rowsOf, aLineRow: al.rowsOf, P4,
-               F4: mlp.F4, H4: mlp.H4, IN4: mlp.IN4, FF: mlp.FF, FV: mlp.FV, occupancy: !!occupancy,
+               F4: mlp.F4, H4: mlp.H4, IN4: mlp.IN4, FF: mlp.FF, FV: mlp.FV, occupancy: !!occupancy, model,
                blockLevels: BLOCK_LEVELS, weightTexture, blockSizes: mlp.blocks.map((b) => b.length / 4), layers: mlp.layers};
       s.mlp = mlp;
       s.info = info;
@@ -358,10 +360,10 @@
                     mlpFlopsPerSample: 2 * (4 * mlp.F4 * 4 * P4 + 4 * mlp.H4 * 4 * mlp.IN4 + 16 * mlp.H4 * mlp.H4 + 4 * 4 * mlp.H4)};
     }
 
-    _sceneProgram(deferred) {
-      const s = this.scene;
-      if (s.programs.has(deferred)) return s.programs.get(deferred);
-      const p = this._program(shaders.fieldShader({...s.cfg, deferred}));
+    _sceneProgram(deferred, skip = true) {
+      const s = this.scene, key = `${deferred} ${skip}`;
+      if (s.programs.has(key)) return s.programs.get(key);
+      const p = this._program(shaders.fieldShader({...s.cfg, deferred, skip}));
       const gl = this.gl;
       for (let b = 0; b < s.buffers.length; ++b) {
         const idx = gl.getUniformBlockIndex(p.prog, `MlpBlock${b}`);
@@ -369,7 +371,7 @@
       }
       gl.useProgram(p.prog);
       for (const [name, unit] of Object.entries(UNITS)) gl.uniform1i(p.u(name), unit);
-      s.programs.set(deferred, p);
+      s.programs.set(key, p);
       return p;
     }
 
@@ -416,7 +418,7 @@
       gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
       gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA32F, len, 1, 0, gl.RGBA, gl.FLOAT, cam);
 
-      const p = this._sceneProgram(!!options.deferred);
+      const p = this._sceneProgram(!!options.deferred, options.skipEmptySpace !== false);
       gl.useProgram(p.prog);
       const bind = (unit, target, tex) => { gl.activeTexture(gl.TEXTURE0 + unit); gl.bindTexture(target, tex); };
       for (let k = 0; k < 6; ++k) bind(k, gl.TEXTURE_2D_ARRAY, s.planes[k] || this.dummyArray);
@@ -432,9 +434,26 @@
       gl.uniform3f(p.u('uC2W1'), c[1], c[5], c[9]);
       gl.uniform3f(p.u('uC2W2'), c[2], c[6], c[10]);
       gl.uniform3f(p.u('uOrigin'), c[3], c[7], c[11]);
-      const mn = info.aabbMin, mx = info.aabbMax, res = info.gridRes;
+      const model = s.cfg.model, res = info.gridRes;
       // 7.4: c = (p - min) * ((1 / (max - min)) * 2) - 1, each operation rounded to float32.
       const inv = (a, b) => f32(f32(1 / f32(b - a)) * 2);
+      // Unbounded (7.2.1): the grids span the contracted cube [-2, 2]^3, the HEAD box is the
+      // region of interest that normalises world points before the contraction.
+      const mn = model === 1 ? [-2, -2, -2] : info.aabbMin, mx = model === 1 ? [2, 2, 2] : info.aabbMax;
+      if (model === 1) {
+        gl.uniform3fv(p.u('uRMin'), info.aabbMin);
+        gl.uniform3fv(p.u('uRScale'), [0, 1, 2].map((a) => inv(info.aabbMin[a], info.aabbMax[a])));
+      }
+      if (model === 2) {
+        // Forward-facing (7.2.2): the camera origin in the reference frame, A o + b, is the same
+        // for every pixel: here in float32, left to right, every operation rounded.
+        const M = info.ndcFrame, ro = [0, 1, 2].map((a) =>
+          f32(f32(f32(f32(M[4 * a] * c[3]) + f32(M[4 * a + 1] * c[7])) + f32(M[4 * a + 2] * c[11])) + M[4 * a + 3]));
+        gl.uniform3fv(p.u('uNdcRo'), ro);
+        for (let a = 0; a < 3; ++a) gl.uniform3fv(p.u(`uNdcA${a}`), M.slice(4 * a, 4 * a + 3));
+        gl.uniform2f(p.u('uNdcS'), M[12], M[13]);
+        gl.uniform1f(p.u('uNdcN'), M[14]);
+      }
       gl.uniform3fv(p.u('uMin'), mn);
       gl.uniform3fv(p.u('uMax'), mx);
       gl.uniform3fv(p.u('uInv'), [0, 1, 2].map((a) => inv(mn[a], mx[a])));

@@ -82,7 +82,9 @@ void main() {
   // cfg: {dGroups[3], aGroups[3] (rank groups of 4 per mode), aGroupOff[3], dLineRow[3], aLineRow[3]
   //       (first row of each mode in the line textures), P4, F4, H4, IN4 (vec4 counts), FF, FV,
   //       occupancy, blockLevels [2] (mask cells per block edge), weightTexture, blockSizes[]
-  //       (vec4s per UBO), layers: {basis, w1, w2, w3} ({runs, rows}), deferred, slots}
+  //       (vec4s per UBO), layers: {basis, w1, w2, w3} ({runs, rows}), deferred, slots,
+  //       model (HEAD scene_model: 0 object, 1 unbounded, 2 forward-facing), skip (false: no
+  //       empty-space skipping, the samples tested one by one)}
   function fieldShader(cfg) {
     const {dGroups, aGroups, aGroupOff, dLineRow, aLineRow, P4, F4, H4, IN4, FF, FV} = cfg;
     const K = cfg.slots || 8;
@@ -109,6 +111,10 @@ uniform vec3 uOMin, uOInv, uORes1, uOScale, uEps;
 uniform ivec3 uORes;
 uniform float uNear, uFar, uStep, uShift, uDScale, uWthr, uEarly, uOne;
 uniform int uN;
+uniform vec3 uRMin, uRScale;                  // unbounded (7.2.1): HEAD box min, (1 / size) * 2
+uniform vec3 uNdcRo, uNdcA0, uNdcA1, uNdcA2;  // forward (7.2.2): A o + b, rows of A
+uniform vec2 uNdcS;
+uniform float uNdcN;
 out vec4 outColor;
 
 // log1p(exp(x)) of PyTorch's softplus; log(1 + y) alone loses most digits of the small y that a
@@ -210,6 +216,189 @@ int skipEmpty(int i, float t, vec3 idx, vec3 o, vec3 d, float t0) {
 `;
     }
 
+    if (cfg.model === 1) {
+      s += `
+// SPEC 7.2.1: the world point normalised by the region of interest, and its per-axis contraction
+// into the cube [-2, 2]^3 that the grids and the mask span. uOne (see main) keeps the products
+// out of fused multiply-adds: the sample positions depend on the last bit of every step.
+vec3 normalised(vec3 p) { return ((p - uRMin) * uRScale) * uOne - 1.0; }
+float contract(float v) {
+  if (v >= -1.0 && v <= 1.0) return v;
+  return v > 0.0 ? 2.0 - 1.0 / v : -2.0 - 1.0 / v;
+}
+// increment(): step_size divided by the speed of the contracted point; +infinity at the edge.
+float increment(vec3 q, vec3 d) {
+  float sum = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    float qq = q[a] * q[a];
+    float g = d[a] * uRScale[a] / (qq > 1.0 ? qq : 1.0);
+    sum = sum + (g * g) * uOne;
+  }
+  return uStep / sqrt(sum);
+}
+bool finite(float v) { return abs(v) <= 3.4028235e38; }  // false for NaN too
+`;
+      if (cfg.occupancy) {
+        s += `
+// SPEC 7.8 in the contracted cube. The ray is curved there, but each contracted coordinate is
+// monotone in t (and so is its float evaluation), so the samples stay in an axis-aligned block of
+// mask corners until the first axis crosses the block's exit face; inverting the contraction on
+// that axis gives the ray parameter of the crossing. Returns the parameter below which the samples
+// stay in the all-empty block of the sample at mask index idx (margin uEps.x cells, far above the
+// float error of the inversion), or -3e38 when there is no such block.
+float skipContracted(vec3 idx, vec3 o, vec3 d) {
+  if (any(lessThan(idx, vec3(0.0))) || any(greaterThan(idx, uORes1))) return -3.0e38;
+  for (int level = 0; level < 2; ++level) {
+    int B = level == 0 ? ${cfg.blockLevels[0]} : ${cfg.blockLevels[1]};
+    ivec3 dims = level == 0 ? textureSize(uBlk0, 0) : textureSize(uBlk1, 0);
+    ivec3 b = min(ivec3(idx) / B, dims - 1);
+    uint v = level == 0 ? texelFetch(uBlk0, b, 0).r : texelFetch(uBlk1, b, 0).r;
+    if (v != 0u) continue;
+    vec3 lo = vec3(b * B) + uEps.x, hi = min(vec3(b * B) + float(B), uORes1) - uEps.x;
+    if (any(lessThan(idx, lo)) || any(greaterThan(idx, hi))) continue;
+    float tEnd = 3.0e38;
+    for (int a = 0; a < 3; ++a) {
+      if (d[a] == 0.0) continue;  // p[a] == o[a] for every sample
+      float X = uOMin[a] + (d[a] > 0.0 ? hi[a] : lo[a]) / uOScale[a];  // exit face, contracted
+      if (abs(X) >= 2.0) continue;  // outside the cube: never reached
+      float q = abs(X) <= 1.0 ? X : (X > 0.0 ? 1.0 / (2.0 - X) : -1.0 / (2.0 + X));
+      tEnd = min(tEnd, ((q + 1.0) / uRScale[a] + uRMin[a] - o[a]) / d[a]);
+    }
+    return tEnd;
+  }
+  return -3.0e38;
+}
+`;
+      }
+    }
+    if (cfg.model === 2) {
+      s += `
+// SPEC 7.2.2 ndc_ray(): the world ray (o, d) in the normalised device coordinates of the NDCP
+// reference camera, (O, u); false when it never reaches the far side or is not finite. The
+// reference-frame origin uNdcRo = A o + b is the same for every pixel: computed on the CPU.
+bool ndcRay(vec3 d, out vec3 O, out vec3 u) {
+  vec3 ro = uNdcRo;
+  vec3 rd = vec3(((uNdcA0.x * d.x) * uOne + (uNdcA0.y * d.y) * uOne) + (uNdcA0.z * d.z) * uOne,
+                 ((uNdcA1.x * d.x) * uOne + (uNdcA1.y * d.y) * uOne) + (uNdcA1.z * d.z) * uOne,
+                 ((uNdcA2.x * d.x) * uOne + (uNdcA2.y * d.y) * uOne) + (uNdcA2.z * d.z) * uOne);
+  if (!(rd.z < 0.0)) return false;
+  float n = uNdcN;
+  float s = -(n + ro.z) / rd.z;
+  vec3 on = ro + (s * rd) * uOne;
+  float x = on.x / on.z, y = on.y / on.z;
+  O = vec3(-uNdcS.x * x, -uNdcS.y * y, 1.0 + (2.0 * n) / on.z);
+  vec3 v = vec3(-uNdcS.x * (rd.x / rd.z - x), -uNdcS.y * (rd.y / rd.z - y), -(2.0 * n) / on.z);
+  float len2 = ((v.x * v.x) * uOne + (v.y * v.y) * uOne) + (v.z * v.z) * uOne;
+  u = v * (1.0 / sqrt(len2));
+  return all(lessThanEqual(abs(O), vec3(3.4028235e38))) && all(lessThanEqual(abs(u), vec3(3.4028235e38))) && len2 > 0.0;
+}
+`;
+    }
+
+    // One evaluated sample at grid-box point p with interval dist (SPEC 7.2, 7.5): colour samples
+    // are recorded in the slots (deferred: their products summed).
+    const composite = `      ivec3 i0;
+      vec3 fr;
+      locate(p, i0, fr);
+      float sigma = softplus(densityFeature(i0, fr) + uShift);
+      float alpha = 1.0 - exp(-sigma * (dist * uDScale));
+      float weight = alpha * T;
+      T = T * ((1.0 - alpha) + 1e-10);
+      acc += weight;
+      if (weight > uWthr) {
+${cfg.deferred ? `        vec4 pr[${P4}];
+${emitProducts('pr').replace(/^  /gm, '    ')}        for (int k = 0; k < ${P4}; ++k) ps[k] += weight * pr[k];
+        wSum += weight;
+` : `        slotP[cnt] = p;
+        slotW[cnt] = weight;
+        ++cnt;
+`}      }
+`;
+    // The MLP over the recorded slots; its view direction is the world direction d (all models).
+    const flush = cfg.deferred ? '' : `    for (int sl = 0; sl < cnt; ++sl) {
+      ivec3 i0;
+      vec3 fr;
+      locate(slotP[sl], i0, fr);
+      vec4 pr[${P4}];
+${emitProducts('pr')}      vec3 rgb;
+${emitMlp(cfg, 'pr').replace(/^  /gm, '      ')}      C += slotW[sl] * rgb;
+    }
+`;
+    // SPEC 7.2 (object model) and 7.2.2 (forward-facing: the same on the ray's NDC image): the
+    // straight line ro + rd t from the box entry, uStep apart.
+    const marchStraight = `  vec3 ro = o, rd = d;
+  bool miss = false;
+${cfg.model === 2 ? '  miss = !ndcRay(d, ro, rd);\n' : ''}  float tmin = -3.0e38;
+  for (int a = 0; a < 3; ++a) {
+    float dv = rd[a] == 0.0 ? 1e-6 : rd[a];
+    tmin = max(tmin, min((uMax[a] - ro[a]) / dv, (uMin[a] - ro[a]) / dv));
+  }
+  float t0 = min(max(tmin, uNear), uFar);
+  // Beyond tx every sample is outside the box: the exact exit, widened by a bound on the rounding
+  // of the sample positions over the ray's span (as the reference's slab test of 7.8).
+  float tspan = abs(t0) + uStep * float(uN), tx = 3.0e38;
+  for (int a = 0; a < 3; ++a) {
+    if (rd[a] == 0.0) {
+      miss = miss || ro[a] < uMin[a] || ro[a] > uMax[a];
+    } else {
+      float err = uEps.y * (abs(ro[a]) + abs(uMin[a]) + abs(uMax[a]) + tspan * abs(rd[a]) + 1.0) / abs(rd[a]);
+      tx = min(tx, max((uMax[a] - ro[a]) / rd[a], (uMin[a] - ro[a]) / rd[a]) + err);
+    }
+  }
+  int i = miss ? uN : 0;
+  while (i < uN) {
+    int cnt = 0;
+    while (i < uN && cnt < ${K}) {
+      float t = t0 + (uStep * float(i)) * uOne;
+      if (t > tx) { i = uN; break; }
+      vec3 p = ro + (rd * t) * uOne;
+      if (any(lessThan(p, uMin)) || any(greaterThan(p, uMax))) { ++i; continue; }
+${cfg.occupancy ? `      vec3 oidx = ((p - uOMin) * uOInv - 1.0 + 1.0) * 0.5 * uORes1;
+${cfg.skip === false ? '' : `      int j = skipEmpty(i, t, oidx, ro, rd, t0);
+      if (j > i) { i = j; continue; }
+`}      if (!occupied(oidx)) { ++i; continue; }
+` : ''}      float dist = i + 1 < uN ? (t0 + (uStep * float(i + 1)) * uOne) - t : 0.0;
+${composite}      ++i;
+      if (T < uEarly) i = uN;
+    }
+${flush}  }
+`;
+    // SPEC 7.2.1: from t = near, each step uStep in contracted distance, until the sample limit or
+    // the edge of the cube; p is the contracted point.
+    const marchUnbounded = `  float t = uNear;
+  int i = 0;
+  while (i < uN) {
+    int cnt = 0;
+    while (i < uN && cnt < ${K}) {
+      vec3 q = normalised(o + (d * t) * uOne);
+      vec3 p = vec3(contract(q.x), contract(q.y), contract(q.z));
+      float next = t + increment(q, d);
+      bool last = i + 1 >= uN || !finite(next);
+      float dist = last ? 0.0 : next - t;
+${cfg.occupancy ? `      vec3 oidx = ((p - uOMin) * uOInv - 1.0 + 1.0) * 0.5 * uORes1;
+      float tEnd = ${cfg.skip === false ? '-3.0e38' : 'skipContracted(oidx, o, d)'};
+      if (t < tEnd) {
+        // This sample and the next ones below tEnd are in an empty block: only their positions.
+        while (!last) {
+          t = next;
+          ++i;
+          if (!(t < tEnd)) break;
+          next = t + increment(normalised(o + (d * t) * uOne), d);
+          last = i + 1 >= uN || !finite(next);
+        }
+        if (last) i = uN;
+        continue;
+      }
+      if (!occupied(oidx)) {
+        if (last) i = uN; else { t = next; ++i; }
+        continue;
+      }
+` : ''}${composite}      if (last) i = uN; else { t = next; ++i; }
+      if (T < uEarly) i = uN;
+    }
+${flush}  }
+`;
+
     s += `
 // SPEC 7.4 locate(): grid cell i0 and fractions fr of a point of the box.
 void locate(vec3 p, out ivec3 i0, out vec3 fr) {
@@ -225,74 +414,18 @@ void main() {
   vec2 cam = vec2(texelFetch(uCam, ivec2(px.x, 0), 0).x, texelFetch(uCam, ivec2(px.y, 0), 0).y);
   vec3 D = (uC2W0 * cam.x + uC2W1 * cam.y) + uC2W2 * -1.0;
   float sc = 1.0 / sqrt((D.x * D.x + D.y * D.y) + D.z * D.z);
-  vec3 d = D * sc, o = uOrigin;
+  vec3 d = D * sc, o = uOrigin;  // the world ray; d is also the MLP's view direction
   float T = 1.0, acc = 0.0;
   vec3 C = vec3(0.0);
 ${cfg.deferred ? `  vec4 ps[${P4}];\n  for (int k = 0; k < ${P4}; ++k) ps[k] = vec4(0.0);\n  float wSum = 0.0;\n` : ''}
-  float tmin = -3.0e38;
-  float tx = 3.0e38;   // beyond tx (with a rounding margin) every sample is outside the box
-  bool miss = false;
-  for (int a = 0; a < 3; ++a) {
-    float dv = d[a] == 0.0 ? 1e-6 : d[a];
-    float ra = (uMax[a] - o[a]) / dv, rb = (uMin[a] - o[a]) / dv;
-    tmin = max(tmin, min(ra, rb));
-    if (d[a] == 0.0) {
-      miss = miss || o[a] < uMin[a] || o[a] > uMax[a];
-    } else {
-      float err = uEps.y * (abs(o[a]) + abs(uMin[a]) + abs(uMax[a]) + uFar * abs(d[a]) + 1.0) / abs(d[a]);
-      tx = min(tx, max(ra, rb) + err);
-    }
-  }
-  float t0 = min(max(tmin, uNear), uFar);
-  int i = miss ? uN : 0;
-  // Colour samples are batched: the march records up to ${K} (t, weight) pairs, then the MLP runs
-  // over them in a loop of its own, so the SIMD lanes of neighbouring rays share MLP iterations
-  // instead of each sample's MLP running whenever any lane needs one. Same sums, same order.
-  float slotT[${K}], slotW[${K}];
-  while (i < uN) {
-    int cnt = 0;
-    while (i < uN && cnt < ${K}) {
-      float t = t0 + uStep * float(i);
-      if (t > tx) { i = uN; break; }
-      // uOne (= 1.0, unknown to the compiler) keeps o + d * t from becoming one fused multiply-add:
-      // the closed box and mask tests below are discontinuous in the last bit of p.
-      vec3 p = o + (d * t) * uOne;
-      if (any(lessThan(p, uMin)) || any(greaterThan(p, uMax))) { ++i; continue; }
-${cfg.occupancy ? `      vec3 oidx = ((p - uOMin) * uOInv - 1.0 + 1.0) * 0.5 * uORes1;
-      int j = skipEmpty(i, t, oidx, o, d, t0);
-      if (j > i) { i = j; continue; }
-      if (!occupied(oidx)) { ++i; continue; }
-` : ''}      ivec3 i0;
-      vec3 fr;
-      locate(p, i0, fr);
-      float sigma = softplus(densityFeature(i0, fr) + uShift);
-      float dist = i + 1 < uN ? (t0 + uStep * float(i + 1)) - t : 0.0;
-      float alpha = 1.0 - exp(-sigma * (dist * uDScale));
-      float weight = alpha * T;
-      T = T * ((1.0 - alpha) + 1e-10);
-      acc += weight;
-      if (weight > uWthr) {
-${cfg.deferred ? `        vec4 pr[${P4}];
-${emitProducts('pr').replace(/^  /gm, '    ')}        for (int k = 0; k < ${P4}; ++k) ps[k] += weight * pr[k];
-        wSum += weight;
-` : `        slotT[cnt] = t;
-        slotW[cnt] = weight;
-        ++cnt;
-`}      }
-      ++i;
-      if (T < uEarly) i = uN;
-    }
-${cfg.deferred ? '' : `    for (int sl = 0; sl < cnt; ++sl) {
-      vec3 p = o + (d * slotT[sl]) * uOne;
-      ivec3 i0;
-      vec3 fr;
-      locate(p, i0, fr);
-      vec4 pr[${P4}];
-${emitProducts('pr')}      vec3 rgb;
-${emitMlp(cfg, 'pr').replace(/^  /gm, '      ')}      C += slotW[sl] * rgb;
-    }
-`}  }
-${cfg.deferred ? `  if (wSum > 0.0) {
+  // Colour samples are batched: the march records up to ${K} (point, weight) pairs, then the MLP
+  // runs over them in a loop of its own, so the SIMD lanes of neighbouring rays share MLP
+  // iterations instead of each sample's MLP running whenever any lane needs one. Same sums, same
+  // order. uOne (= 1.0, unknown to the compiler) keeps products such as d * t out of fused
+  // multiply-adds: the closed box and mask tests are discontinuous in the last bit of p.
+  vec3 slotP[${K}];
+  float slotW[${K}];
+${cfg.model === 1 ? marchUnbounded : marchStraight}${cfg.deferred ? `  if (wSum > 0.0) {
     vec4 pq[${P4}];
     for (int k = 0; k < ${P4}; ++k) pq[k] = ps[k] / wSum;
     vec3 rgb;
