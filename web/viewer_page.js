@@ -6,7 +6,11 @@
 (function () {
   const $ = (id) => document.getElementById(id);
   const SIZE_MIN = 16, SIZE_MAX = 4096;
-  const DEFAULT_SIZE = {cpu: 400, gpu: 1024};
+  // Without ?size= both paths render at the canvas's device resolution within a pixel budget
+  // (?max-pixels= changes it): the CPU path's final frame costs time in proportion to its pixels
+  // (its previews at 1/8, 1/4 and 1/2 come first), the GPU path keeps about the 1024-pixel cap it
+  // had.
+  const DEFAULT_MAX_PIXELS = {cpu: 1 << 19, gpu: 1 << 20};
   const IDLE_MS = 200;  // no camera change for this long: render at full resolution
 
   const params = new URLSearchParams(location.search);
@@ -18,10 +22,14 @@
     if (params.has(key) && Number.isFinite(v) && v >= 0) budgets[name] = v;
   }
   const state = {
-    renderer: null, scene: null, view: null, size: 0, loading: false, error: null,
+    renderer: null, scene: null, view: null, size: 0, maxPixels: 0, loading: false, error: null,
     frames: 0, lastFrame: null, frameLog: [], status: '',
   };
   let canvas = null, renderer = null, controls = null, resizeObserver = null;
+  // Whether the page was opened with a camera (?az= &el= &radius= or the #az=&el=&r= hash): a
+  // forward-facing scene then keeps it instead of starting at its reference camera. Read once: the
+  // viewer writes the hash itself from then on.
+  const openedWithView = ['az', 'el', 'radius'].some((k) => params.has(k)) || /(^#|&)(az|el|r)=/.test(location.hash);
   let loadSeq = 0, idleTimer = 0, download = null;
 
   // An empty parameter, or no number at all, means the default; anything else is clamped.
@@ -56,10 +64,23 @@
     return true;
   }
 
-  // The full render resolution: the canvas's drawing buffer, scaled down to the size cap.
+  // The full render resolution: the canvas's drawing buffer (device pixels), scaled down to the
+  // size cap (?size= or the panel: the long side) or, without one, to the pixel budget.
   function renderSize() {
-    const s = Math.min(1, state.size / Math.max(canvas.width, canvas.height));
-    return [Math.max(1, Math.round(canvas.width * s)), Math.max(1, Math.round(canvas.height * s))];
+    const w = canvas.width, h = canvas.height;
+    let s = state.size ? state.size / Math.max(w, h) : Math.sqrt(state.maxPixels / (w * h));
+    s = Math.min(1, s);
+    return [Math.max(1, Math.round(w * s)), Math.max(1, Math.round(h * s))];
+  }
+
+  // What limits the frame, for the HUD: nothing (the canvas's resolution), the size cap or the
+  // pixel budget.
+  function capText(width, height) {
+    if (width >= canvas.width && height >= canvas.height) return '';
+    const canvasSize = `${canvas.width}×${canvas.height}`;
+    if (state.size) return ` (size cap ${state.size} of ${canvasSize})`;
+    const budget = state.maxPixels >= 1e5 ? `${(state.maxPixels / 1e6).toFixed(2)} MP` : `${state.maxPixels.toLocaleString()} pixels`;
+    return ` (pixel budget ${budget} of ${canvasSize}; ?max-pixels= or the size cap)`;
   }
 
   function currentCamera() {
@@ -81,8 +102,34 @@
     renderer.request((cw, ch) => ecrfCamera.viewCamera(view, cw, ch), w, h, moving, viewKey());
   }
 
+  // The camera in the URL's hash (#az=&el=&r=&t=x,y,z) so that a view can be shared; four
+  // decimals, so that a view read back from its hash gives the same hash and the same image.
+  function viewToHash(v) {
+    const n = (x) => String(Number(x.toFixed(4)));
+    let h = `az=${n(v.az)}&el=${n(v.el)}&r=${n(v.radius)}`;
+    if (v.target.some((x) => x !== 0)) h += `&t=${v.target.map(n).join(',')}`;
+    return h;
+  }
+
+  function viewFromHash(hash) {
+    const p = new URLSearchParams(String(hash || '').replace(/^#/, ''));
+    if (!['az', 'el', 'r'].some((k) => p.has(k))) return null;
+    const d = ecrfCamera.DEFAULT_VIEW;
+    const num = (k, v) => (p.has(k) && Number.isFinite(Number(p.get(k))) ? Number(p.get(k)) : v);
+    const t = p.has('t') ? p.get('t').split(',').map(Number) : d.target;
+    return ecrfCamera.normalizeView({az: num('az', d.az), el: num('el', d.el), radius: num('r', d.radius),
+                                     target: t.length === 3 ? t : d.target});
+  }
+
+  // At the end of a gesture (not per pointer event: browsers throttle history updates).
+  function writeHash(view) {
+    const hash = `#${viewToHash(view)}`;
+    if (location.hash !== hash) history.replaceState(null, '', `${location.pathname}${location.search}${hash}`);
+  }
+
   function onViewChange(view, interactive) {
     state.view = view;
+    if (!interactive) writeHash(view);
     const t = view.target.some((v) => v !== 0) ? `, target ${view.target.map((v) => v.toFixed(2)).join(' ')}` : '';
     $('view-values').textContent = `az ${view.az.toFixed(0)}°, el ${view.el.toFixed(0)}°, r ${view.radius.toFixed(2)}${t}`;
     clearTimeout(idleTimer);
@@ -107,6 +154,7 @@
     } else {
       text = `CPU ${f.divisor > 1 ? `1/${f.divisor} ` : ''}${f.width}×${f.height} in ${f.ms.toFixed(0)} ms`;
     }
+    if (f.final) text += capText(f.width, f.height);
     $('hud').textContent = text;
     setInfoRow('frame', text);
     if (renderer.kind === 'gpu') setInfoRow('GPU textures', gpuTextureText());
@@ -168,9 +216,13 @@
       renderer = new ecrfCpu.CpuRenderer(canvas, {workers, onFrame, onError: onRenderError, budgets});
     }
     state.renderer = kind;
-    state.rendererNote = kind === 'cpu' && state.softwareGl ? ` (WebGL2 is software here: ${state.softwareGl}; ?renderer=gpu forces it)` : '';
-    if (!state.sizeSet) state.size = parseSize(params.get('size'), DEFAULT_SIZE[kind]);
-    $('size').value = String(state.size);
+    // One line: the driver's own name of a software WebGL2 can be a paragraph (the row's tooltip
+    // keeps it whole).
+    state.rendererNote = kind === 'cpu' && state.softwareGl ? '; WebGL2 is software here (?renderer=gpu forces it)' : '';
+    if (!state.sizeSet) state.size = params.get('size') === null ? 0 : parseSize(params.get('size'), 0);
+    const budget = Number(params.get('max-pixels'));
+    state.maxPixels = params.has('max-pixels') && budget >= 1 ? budget : DEFAULT_MAX_PIXELS[kind];
+    $('size').value = state.size ? String(state.size) : '';
     controls = new ecrfCamera.OrbitControls(canvas, view, onViewChange);
     onViewChange(controls.view, false);
     resizeObserver = new ResizeObserver(() => { if (fitCanvas()) requestRender(false); });
@@ -178,6 +230,8 @@
   }
 
   function viewFromParams() {
+    const fromHash = viewFromHash(location.hash);
+    if (fromHash) return fromHash;
     const d = ecrfCamera.DEFAULT_VIEW;
     const num = (k, v) => (params.has(k) && Number.isFinite(Number(params.get(k))) ? Number(params.get(k)) : v);
     return ecrfCamera.normalizeView({az: num('az', d.az), el: num('el', d.el), radius: num('radius', d.radius),
@@ -209,6 +263,7 @@
                       (res.uploadMs !== undefined ? ` (+ ${res.uploadMs.toFixed(1)} ms upload)` : '')],
       ['renderer', renderer.describe() + (state.rendererNote || '')],
     ];
+    const rendererTitle = state.softwareGl && renderer.kind === 'cpu' ? `WebGL2: ${state.softwareGl}` : '';
     if (renderer.kind === 'gpu') rows.push(['GPU textures', gpuTextureText()]);
     rows.push(['frame', '']);
     const table = $('info');
@@ -218,6 +273,7 @@
       tr.dataset.key = k;
       tr.insertCell().textContent = k;
       tr.insertCell().textContent = v;
+      if (k === 'renderer' && rendererTitle) tr.title = rendererTitle;
     }
   }
 
@@ -244,7 +300,7 @@
       state.scene = {name, info: res.info, version: res.version};
       state.lastLoad = {name, bytes};  // for a fallback to the CPU path
       showInfo(name, res);
-      if (res.info.ndcFrame && !['az', 'el', 'radius'].some((k) => params.has(k))) {
+      if (res.info.ndcFrame && !openedWithView) {
         // A forward-facing scene is seen from in front only: start at its reference camera.
         controls.home = ecrfCamera.forwardHomeView(res.info.ndcFrame);
         controls.setView(controls.home);
@@ -316,6 +372,30 @@
     history.replaceState(null, '', `${location.pathname}?${p}`);
   }
 
+  // The last full-resolution frame as a PNG download named after the scene and the view; resolves
+  // with {name, width, height, bytes}, or null before the first full frame.
+  async function screenshot() {
+    const px = renderer && renderer.readPixels();
+    if (!px || !state.scene) { status('no full-resolution frame to save yet'); return null; }
+    const c = document.createElement('canvas');
+    c.width = px.width;
+    c.height = px.height;
+    c.getContext('2d').putImageData(new ImageData(new Uint8ClampedArray(px.data), px.width, px.height), 0, 0);
+    const blob = await new Promise((resolve) => c.toBlob(resolve, 'image/png'));
+    if (!blob) { status('the browser could not encode the PNG', true); return null; }
+    const v = controls.view;
+    const base = state.scene.name.replace(/\.ecrf$/i, '').replace(/[^\w.-]+/g, '_');
+    const name = `${base}_az${v.az.toFixed(0)}_el${v.el.toFixed(0)}_${px.width}x${px.height}.png`;
+    const a = document.createElement('a');
+    a.href = URL.createObjectURL(blob);
+    a.download = name;
+    document.body.appendChild(a);
+    a.click();
+    a.remove();
+    setTimeout(() => URL.revokeObjectURL(a.href), 10000);
+    return {name, width: px.width, height: px.height, bytes: blob.size};
+  }
+
   // ---- start -----------------------------------------------------------------------------------
   function wireUi() {
     $('panel-toggle').addEventListener('click', () => {
@@ -341,11 +421,18 @@
       if (file) loadFile(file);
     });
     $('reset').addEventListener('click', () => controls.reset());
+    $('screenshot').addEventListener('click', () => { screenshot(); });
     $('size').addEventListener('change', () => {
-      state.size = parseSize($('size').value, state.size);
+      // An empty field goes back to the canvas's resolution (within the pixel budget).
+      state.size = $('size').value.trim() === '' ? 0 : parseSize($('size').value, state.size);
       state.sizeSet = true;
-      $('size').value = String(state.size);
+      $('size').value = state.size ? String(state.size) : '';
       requestRender(false);
+    });
+    // A pasted or edited #az=&el=&r= moves the camera.
+    window.addEventListener('hashchange', () => {
+      const v = viewFromHash(location.hash);
+      if (v && controls) controls.setView(v);
     });
     ecrfSource.installDropZone($('drop-overlay'), loadFile);
     window.addEventListener('resize', () => { if (fitCanvas()) requestRender(false); });  // DPR changes
@@ -362,6 +449,7 @@
       idle: () => !!state.scene && state.renderedKey === viewKey(),
       readPixels: () => renderer && renderer.readPixels(),
       setView: (v, interactive = false) => controls.setView(v, interactive),
+      screenshot, viewToHash, viewFromHash,
       loadUrl, loadFile,
     };
     if (location.protocol === 'file:') {

@@ -3,7 +3,7 @@
 // cap, bad and missing files, file://, a phone viewport, and no console errors.
 //
 //   node web/test/viewer_test.mjs         (needs build-wasm/ and web/test/node_modules)
-import {existsSync} from 'node:fs';
+import {existsSync, readFileSync} from 'node:fs';
 import {join} from 'node:path';
 import {pathToFileURL} from 'node:url';
 import {openBrowser, root} from './browser.mjs';
@@ -13,7 +13,7 @@ const PAGE = 'web/index.html';
 const hasGpu = existsSync(join(root, 'web', 'gpu_renderer.js'));
 const t0 = Date.now();
 let failures = 0;
-// ONLY=cpu,forward,size,missing,phone,gpu runs some sections (while debugging).
+// ONLY=cpu,forward,size,share,missing,phone,gpu runs some sections (while debugging).
 const only = process.env.ONLY ? new Set(process.env.ONLY.split(',')) : null;
 const run = (section) => !only || only.has(section);
 
@@ -212,6 +212,58 @@ try {
     await page.goto(b.url(`${PAGE}?renderer=cpu&size=0`));
     check(await page.evaluate(() => ecrfViewer.state.size) === 16, '?size=0 is clamped to 16');
     consoleCheck('size');
+    await page.context().close();
+  }
+
+  // ---- the canvas's resolution, a view shared by its address, a screenshot -----------------------
+  if (run('share')) {
+    // A small window: the CPU path's full frame costs time in proportion to its pixels.
+    const viewport = {width: 360, height: 260};
+    const {page, consoleCheck} = await open(b, `renderer=cpu&scene=${SCENE}`, {viewport, acceptDownloads: true});
+    await waitIdle(page, 120000);
+    const s = await state(page);
+    const dims = await page.evaluate(() => [document.getElementById('view').width, document.getElementById('view').height]);
+    check(s.last.width === dims[0] && s.last.height === dims[1],
+          `share: without ?size= the CPU path renders the canvas's ${dims.join('x')} device pixels (${s.last.width}x${s.last.height} in ${s.last.ms.toFixed(0)} ms)`);
+    await page.evaluate(() => ecrfViewer.setView({az: 33.3333, el: 12.5, radius: 3.21, target: [0.1, 0, -0.05]}));
+    await waitIdle(page, 120000);
+    const hash = await page.evaluate(() => location.hash);
+    check(hash === '#az=33.3333&el=12.5&r=3.21&t=0.1,0,-0.05', `share: the camera is in the address: ${hash}`);
+    const key = await pixelsKey(page);
+    const view = (await state(page)).view;
+    // Another page at that address: the same view, the same image.
+    const other = await b.newPage({viewport});
+    await other.goto(await page.evaluate(() => location.href));
+    await waitIdle(other, 120000);
+    const s2 = await state(other);
+    check(JSON.stringify(s2.view) === JSON.stringify(view) && (await pixelsKey(other)) === key,
+          `share: the address opens the same view and image elsewhere (${JSON.stringify(s2.view)})`);
+    await other.context().close();
+    // Editing the hash moves the camera.
+    await page.evaluate(() => { location.hash = '#az=90&el=10&r=5'; });
+    await page.waitForFunction(() => ecrfViewer.state.view.az === 90, null, {timeout: 5000}).catch(() => {});
+    const moved = (await state(page)).view;
+    check(moved.az === 90 && moved.el === 10 && moved.radius === 5 && moved.target.every((v) => v === 0),
+          `share: an edited hash sets the view (${JSON.stringify(moved)})`);
+    await waitIdle(page, 120000);
+    // The screenshot button downloads the full frame as PNG.
+    const last = (await state(page)).last;
+    const [download] = await Promise.all([page.waitForEvent('download', {timeout: 10000}), page.click('#screenshot')]);
+    const png = readFileSync(await download.path());
+    const name = download.suggestedFilename();
+    check(png.subarray(1, 4).toString() === 'PNG' && png.readUInt32BE(16) === last.width && png.readUInt32BE(20) === last.height &&
+          /^scene_builtin_az90_el10_\d+x\d+\.png$/.test(name),
+          `share: the screenshot button saves ${name} (${png.readUInt32BE(16)}x${png.readUInt32BE(20)}, ${png.length} bytes)`);
+    // A pixel budget caps the frame, and the HUD says so.
+    await page.goto(b.url(`${PAGE}?renderer=cpu&max-pixels=4000&scene=${SCENE}`));
+    await waitIdle(page, 120000);
+    const capped = await state(page);
+    const hud = await page.evaluate(() => document.getElementById('hud').textContent);
+    check(capped.last.width * capped.last.height <= 4000 * 1.05 && /pixel budget/.test(hud),
+          `share: ?max-pixels=4000 gives a ${capped.last.width}x${capped.last.height} frame, the HUD says: ${hud}`);
+    const row = await page.evaluate(() => document.querySelector('#info tr[data-key="renderer"]').cells[1].textContent);
+    check(!/\n/.test(row) && row.length < 120, `share: the renderer row is one line: ${row}`);
+    consoleCheck('share');
     await page.context().close();
   }
 
