@@ -196,6 +196,11 @@ void AddTrainFlags(CLI::App* app, TrainFlags* f) {
       ->type_name("S")
       ->capture_default_str()
       ->group(rate);
+  app->add_option("--density-step-factor", o.density_step_factor,
+                  "the density tensors' steps F times what --quant-step-scale gives them (> 0)")
+      ->type_name("F")
+      ->capture_default_str()
+      ->group(rate);
   app->add_option("--mlp-levels", o.mlp_levels,
                   "code the basis and MLP as integer levels, at most L per row (0 = binary16)")
       ->type_name("L")
@@ -336,6 +341,8 @@ trainer::TrainOptions FinishTrainFlags(const CLI::App& app, TrainFlags* f) {
   }
   if (given("--target-size")) o.target_bytes = ParseSizeWithUnit("--target-size", f->target_size);
   if (!(o.quant_step_scale > 0.f)) throw std::invalid_argument("--quant-step-scale must be > 0");
+  if (!(o.density_step_factor > 0.f) || !std::isfinite(o.density_step_factor))
+    throw std::invalid_argument("--density-step-factor must be > 0");
   if (!(o.rate_start >= 0.f && o.rate_start < 1.f))
     throw std::invalid_argument("--rate-start must be in [0, 1)");
   if (!(o.rounding_offset > 0.f && o.rounding_offset <= 0.5f)) {
@@ -385,7 +392,10 @@ trainer::TrainOptions ResolveTrainOptions(const std::vector<std::string>& args) 
 std::string DescribeSettings(const trainer::TrainOptions& o) {
   std::string s = "preset " + o.preset + ", rate point " + o.rate_point;
   if (o.target_bytes > 0) s += ", target " + std::to_string(o.target_bytes) + " B";
-  s += "; lambda_e " + FloatText(o.lambda_e) + ", steps x" + FloatText(o.quant_step_scale) + ", " +
+  s += "; lambda_e " + FloatText(o.lambda_e) + ", steps x" + FloatText(o.quant_step_scale) +
+       (o.density_step_factor != 1.f ? " (density x" + FloatText(o.density_step_factor) + " more)"
+                                     : std::string()) +
+       ", " +
        (o.mlp_levels > 0 ? std::to_string(o.mlp_levels) + " MLP levels"
                          : std::string("binary16 MLP")) +
        ", ranks " + std::to_string(o.density_rank) + "," + std::to_string(o.appearance_rank) +

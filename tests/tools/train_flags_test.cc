@@ -9,6 +9,7 @@
 #include "tools/train_flags.h"
 #include "trainer/data/dataset.h"
 #include "trainer/data/scene_fit.h"
+#include "trainer/train/rate_state.h"
 #include "trainer/train/train_config.h"
 #include "trainer/train/trainer.h"
 
@@ -160,10 +161,26 @@ TEST(TrainFlags, LambdaEAloneAdjustsTheDefaultPointAndZeroIsPlainTensorf) {
 }
 
 TEST(TrainFlags, ConfigJsonRoundTripsEverySetting) {
-  const trainer::TrainOptions o =
-      Parse({"--scene", "capture", "--rate", "low", "--lambda-e", "1.5e-10", "--dct-block",
-             "8x16x16", "--ranks", "8,20", "--upsample-at", "100,200", "--target-size", "123KB",
-             "--test-stride", "3", "-o", "run/x"});
+  const trainer::TrainOptions o = Parse({"--scene",
+                                         "capture",
+                                         "--rate",
+                                         "low",
+                                         "--lambda-e",
+                                         "1.5e-10",
+                                         "--dct-block",
+                                         "8x16x16",
+                                         "--ranks",
+                                         "8,20",
+                                         "--upsample-at",
+                                         "100,200",
+                                         "--target-size",
+                                         "123KB",
+                                         "--density-step-factor",
+                                         "0.4",
+                                         "--test-stride",
+                                         "3",
+                                         "-o",
+                                         "run/x"});
   const std::string text = trainer::TrainConfigToJson(o);
   const trainer::TrainOptions back = trainer::TrainConfigFromJson(text, "test");
   EXPECT_TRUE(trainer::ChangedSettings(o, back).empty());
@@ -171,12 +188,30 @@ TEST(TrainFlags, ConfigJsonRoundTripsEverySetting) {
   EXPECT_EQ(back.lambda_e, 1.5e-10f);  // bit for bit, through the shortest decimal
   EXPECT_NE(text.find("\"lambda_e\": 1.5e-10"), std::string::npos) << text;
   EXPECT_EQ(back.test_view_stride, 3);
+  EXPECT_EQ(back.density_step_factor, 0.4f);
   EXPECT_EQ(back.out_dir, "run/x");
   EXPECT_THROW(trainer::TrainConfigFromJson("{\"config_version\": 99, \"settings\": {}}", "x"),
                std::runtime_error);
   EXPECT_THROW(trainer::TrainConfigFromJson("[1, 2]", "x"), std::runtime_error);
   EXPECT_THROW(trainer::TrainConfigFromJson("{\"settings\": {\"iters\": \"many\"}}", "x"),
                std::runtime_error);
+}
+
+TEST(TrainFlags, DensityStepFactorScalesTheDensityStepsOnly) {
+  EXPECT_EQ(Parse({"--scene", "builtin"}).density_step_factor, 1.0f);
+  EXPECT_THROW(Parse({"--scene", "builtin", "--density-step-factor", "0"}), std::invalid_argument);
+  trainer::TrainOptions o = Parse({"--scene", "builtin", "--density-step-factor", "0.5"});
+  const trainer::Dataset data = trainer::LoadTrainingViews(o, "train");
+  trainer::TensorfModel model(trainer::ConfigFor(o, data));
+  model.Initialize({24, 20, 16}, 3);
+  trainer::RateState halved, plain;
+  halved.Activate(model, o);
+  o.density_step_factor = 1.0f;
+  plain.Activate(model, o);
+  ASSERT_EQ(halved.steps.size(), 12u);
+  for (int t = 0; t < 12; ++t) {
+    EXPECT_EQ(halved.steps[t], t < 6 ? plain.steps[t] * 0.5f : plain.steps[t]) << t;
+  }
 }
 
 TEST(TrainFlags, DefaultScoringIsAtMostTwentyEvenlySpacedViews) {

@@ -6,6 +6,7 @@
 
 #include "tools/cli.h"
 #include "tools/commands.h"
+#include "tools/report/quant_sensitivity.h"
 #include "tools/report/report.h"
 #include "tools/subcommands.h"
 
@@ -85,6 +86,8 @@ int RunReport(int argc, char** argv) {
           {"compare", RunReportCompare,
            "BD-rate and BD-PSNR of B against A: ecrf report compare A B [--json FILE] [--plot "
            "FILE.png]"},
+          {"sensitivity", RunReportSensitivity,
+           "where quantization costs PSNR, tensor by tensor: ecrf report sensitivity RUN"},
           {"plot", RunReportPlot,
            "redraw the plots and index.html from REPORT/report.json: ecrf report plot REPORT"},
       },

@@ -21,6 +21,9 @@ void RateState::Activate(const TensorfModel& model, const TrainOptions& o) {
   if (o.quant_step_scale > 0.f) {
     for (float& s : steps) s *= o.quant_step_scale;
   }
+  // Tensors 0..5 are the density grid's (coded_tensors.h).
+  for (int t = 0; t < 6 && t < static_cast<int>(steps.size()); ++t)
+    steps[t] *= o.density_step_factor;
   entropy.Init(NumRateModels(2), o.seed ^ 0x5eedULL);
   adam.Reset(entropy.params().size());
   active = true;

@@ -49,6 +49,7 @@ void VisitSettings(TrainOptions& o, F&& f) {
   f("entropy_lr", o.entropy_lr);
   f("coef_bits", o.coef_bits);
   f("quant_step_scale", o.quant_step_scale);
+  f("density_step_factor", o.density_step_factor);
   f("qat_start", o.qat_start);
   f("rounding_offset", o.rounding_offset);
   f("qat_refresh", o.qat_refresh);

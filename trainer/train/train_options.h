@@ -74,6 +74,10 @@ struct TrainOptions {
   // Each tensor's step is its largest block-DCT coefficient / the largest level (127 for 8
   // bits), times this factor, frozen when the rate terms switch on.
   float quant_step_scale = 1.0f;
+  // The density tensors' steps are this factor times what quant_step_scale gives them (the
+  // appearance tensors keep theirs): `ecrf report sensitivity` finds rendering more sensitive to
+  // the density grid's quantization noise per coded level than to the appearance grid's.
+  float density_step_factor = 1.0f;
   // Quantization-aware training (trainer/rate/quant_aware.h) from this share of the run on (>= 1:
   // never; < 0: from the start of the rate phase when the rate objective is on, else never),
   // the quantization error refreshed every qat_refresh iterations. The steps are frozen when it

@@ -1,0 +1,185 @@
+// `ecrf report sensitivity`: the cost of each tensor's quantization noise is what rendering pays
+// for it (zero where nothing is coded, quadratic in the noise), and the balanced steps keep the
+// rate while equalising the slopes.
+#include "tools/report/quant_sensitivity.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "trainer/model/volume_render.h"
+#include "trainer/rate/quant_aware.h"
+
+namespace ecrf {
+namespace tools {
+namespace {
+
+trainer::TensorfModel SmallModel() {
+  trainer::TensorfConfig c;
+  // Extents that are multiples of the block shapes: no edge padding, so the decoded model decodes
+  // to itself.
+  c.density_ranks = {4, 4, 4};
+  c.app_ranks = {4, 4, 4};
+  c.head.num_products = 12;
+  c.head.feature_dim = 6;
+  c.head.hidden = 16;
+  c.aabb.min = {-1.f, -1.f, -1.f};
+  c.aabb.max = {1.f, 1.f, 1.f};
+  c.near = 0.f;
+  c.far = 10.f;
+  c.density_shift = 1.f;  // a dense medium: every tensor shows in the colours
+  c.init_scale = 0.4f;
+  // Every sample coloured: no threshold that switches a sample on or off under the noise, so the
+  // rendered error is a smooth function of the grids.
+  c.weight_threshold = 0.f;
+  trainer::TensorfModel model(c);
+  model.Initialize({16, 16, 16}, 5);
+  // A fresh head maps every feature to about the same grey; a steeper one makes the colours
+  // depend on the grids, as a trained head does.
+  for (float& w : model.head().params()) w *= 6.f;
+  return model;
+}
+
+trainer::RateConfig SmallBlocks() {
+  trainer::RateConfig b;
+  b.plane_block[0] = 4;
+  b.plane_block[1] = 8;
+  b.plane_block[2] = 4;
+  b.line_block[1] = 2;
+  b.line_block[2] = 8;
+  return b;
+}
+
+// The steps of the float model, kept for its decoded copy (whose peaks differ), as training
+// freezes them.
+const std::vector<float>& Steps() {
+  static const std::vector<float> steps = [] {
+    std::vector<float> s = trainer::ChooseQuantSteps(SmallModel(), SmallBlocks(), 8);
+    for (float& v : s) v *= 4.f;  // coarse: most coefficients at level 0, as in trained runs
+    return s;
+  }();
+  return steps;
+}
+
+constexpr int kMlpMaxLevel = 7;
+
+// The model as its own file decodes it: quantizing it again changes nothing, so its renders are
+// the targets of a model at its optimum, where every perturbation costs (the curvature that the
+// measurement reads is positive, as at the end of a training run).
+trainer::TensorfModel DecodedModel(trainer::TensorfModel model) {
+  const std::vector<float>& steps = Steps();
+  trainer::VmGrid* grids[2] = {&model.density(), &model.appearance()};
+  for (int g = 0; g < 2; ++g) {
+    std::vector<float> q;
+    trainer::ReconstructQuantizedGrid(*grids[g], steps.data() + 6 * g, SmallBlocks(), &q);
+    grids[g]->params() = std::move(q);
+  }
+  std::vector<float> head;
+  trainer::ReconstructQuantizedHead(model, kMlpMaxLevel, &head);
+  model.head().params() = std::move(head);
+  return model;
+}
+
+struct Rays {
+  int n = 1024;
+  std::vector<float> origins, dirs, rgb;
+};
+
+// Rays from a sphere of radius 3 through the box; targets: the model's colours.
+Rays MakeRays(const trainer::TensorfModel& model) {
+  Rays r;
+  std::mt19937_64 rng(11);
+  std::normal_distribution<float> g;
+  for (int i = 0; i < r.n; ++i) {
+    float p[3] = {g(rng), g(rng), g(rng)}, q[3] = {0.3f * g(rng), 0.3f * g(rng), 0.3f * g(rng)};
+    const float len = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    float d[3], dl = 0.f;
+    for (int a = 0; a < 3; ++a) {
+      p[a] *= 3.f / len;
+      d[a] = q[a] - p[a];
+      dl += d[a] * d[a];
+    }
+    for (int a = 0; a < 3; ++a) {
+      r.origins.push_back(p[a]);
+      r.dirs.push_back(d[a] / std::sqrt(dl));
+    }
+  }
+  r.rgb.resize(static_cast<size_t>(r.n) * 3);
+  trainer::RenderRays(model, r.n, r.origins.data(), r.dirs.data(), r.rgb.data(), nullptr);
+  return r;
+}
+
+SensitivityReport Measure(const trainer::TensorfModel& model, double noise_scale = 1.0,
+                          uint64_t seed = 3) {
+  static const Rays rays = MakeRays(DecodedModel(SmallModel()));
+  return MeasureQuantSensitivity(model, Steps(), SmallBlocks(), kMlpMaxLevel, rays.n,
+                                 rays.origins.data(), rays.dirs.data(), rays.rgb.data(), seed,
+                                 noise_scale);
+}
+
+TEST(QuantSensitivity, EveryCodedTensorCostsAndAnUncodedOneNothing) {
+  const SensitivityReport r = Measure(DecodedModel(SmallModel()));
+  ASSERT_EQ(r.tensors.size(), 12u);
+  EXPECT_EQ(r.mse, 0.0);  // the targets are its own renders
+  for (const TensorSensitivity& s : r.tensors) {
+    ASSERT_GT(s.nonzero, 0) << s.name;
+    EXPECT_GT(s.dmse, 0.0) << s.name;
+    EXPECT_GE(s.mean_abs_level, 1.0) << s.name;
+  }
+  trainer::TensorfModel model = SmallModel();
+  float* line = model.appearance().line(0);
+  std::fill(line, line + model.appearance().line_size(0), 0.f);
+  const SensitivityReport z = Measure(model);
+  const TensorSensitivity& zero = z.tensors[9];
+  EXPECT_EQ(zero.name, "appearance.line.0");
+  EXPECT_EQ(zero.nonzero, 0);
+  EXPECT_EQ(zero.dmse, 0.0);
+  EXPECT_EQ(zero.balanced_step, zero.step);
+  // Mode 0's products are plane 0 times line 0: with the line at zero its plane cannot show.
+  EXPECT_EQ(z.tensors[6].name, "appearance.plane.0");
+  EXPECT_EQ(z.tensors[6].dmse, 0.0);
+}
+
+// The antithetic pair cancels the first-order term: half the noise costs a quarter (for noise
+// small enough that the second-order term dominates).
+TEST(QuantSensitivity, TheCostIsQuadraticInTheNoise) {
+  const trainer::TensorfModel model = DecodedModel(SmallModel());
+  const SensitivityReport full = Measure(model, 0.04), half = Measure(model, 0.02);
+  int checked = 0;
+  for (size_t t = 0; t < full.tensors.size(); ++t) {
+    if (full.tensors[t].nonzero == 0) continue;
+    ++checked;
+    const double ratio = full.tensors[t].dmse / half.tensors[t].dmse;
+    EXPECT_GT(ratio, 3.0) << full.tensors[t].name;
+    EXPECT_LT(ratio, 5.0) << full.tensors[t].name;
+  }
+  EXPECT_GE(checked, 6);
+}
+
+TEST(QuantSensitivity, BalancedStepsKeepTheRateAndEqualiseTheSlopes) {
+  const SensitivityReport r = Measure(DecodedModel(SmallModel()));
+  double rate_change = 0.0, lo = 1e300, hi = 0.0;
+  for (const TensorSensitivity& s : r.tensors) {
+    if (s.nonzero == 0) continue;
+    const double k = double(s.balanced_step) / s.step;
+    rate_change += static_cast<double>(s.nonzero) * std::log(k);
+    const double slope_after = s.slope * k * k;  // D scales with step^2
+    lo = std::min(lo, slope_after);
+    hi = std::max(hi, slope_after);
+  }
+  EXPECT_NEAR(rate_change, 0.0, 1e-3);
+  EXPECT_LT(hi / lo, 1.0 + 1e-4);
+  EXPECT_LE(r.balanced_quant_mse, r.quant_mse * (1.0 + 1e-12));
+}
+
+TEST(QuantSensitivity, TheSameSeedMeasuresTheSame) {
+  const trainer::TensorfModel model = SmallModel();
+  const SensitivityReport a = Measure(model, 1.0, 9), b = Measure(model, 1.0, 9);
+  for (size_t t = 0; t < a.tensors.size(); ++t) EXPECT_EQ(a.tensors[t].dmse, b.tensors[t].dmse);
+}
+
+}  // namespace
+}  // namespace tools
+}  // namespace ecrf
