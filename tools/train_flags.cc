@@ -393,8 +393,9 @@ std::string DescribeSettings(const trainer::TrainOptions& o) {
   std::string s = "preset " + o.preset + ", rate point " + o.rate_point;
   if (o.target_bytes > 0) s += ", target " + std::to_string(o.target_bytes) + " B";
   s += "; lambda_e " + FloatText(o.lambda_e) + ", steps x" + FloatText(o.quant_step_scale) +
-       (o.density_step_factor != 1.f ? " (density x" + FloatText(o.density_step_factor) + " more)"
-                                     : std::string()) +
+       (o.density_step_factor != 1.f
+            ? " (density x" + FloatText(o.quant_step_scale * o.density_step_factor) + ")"
+            : std::string()) +
        ", " +
        (o.mlp_levels > 0 ? std::to_string(o.mlp_levels) + " MLP levels"
                          : std::string("binary16 MLP")) +

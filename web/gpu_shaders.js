@@ -188,30 +188,44 @@ bool occupied(vec3 idx) {
   return false;
 }
 
-// Sample i (mask index idx) in an all-empty block of mask corners: the first sample index past
-// the samples that provably stay in the block (margin uEps.x cells covers both renderers' rounding).
-int skipEmpty(int i, float t, vec3 idx, vec3 o, vec3 d, float t0) {
-  if (any(lessThan(idx, vec3(0.0))) || any(greaterThan(idx, uORes1))) return i;
+// The all-empty block of mask corners, coarse level first, that holds mask index idx at least
+// margin cells inside its faces: its corner range [lo, hi]; false when there is none (an
+// occupied block at every level, or idx outside the mask).
+bool emptyBlock(vec3 idx, float margin, out vec3 lo, out vec3 hi) {
+  lo = hi = vec3(0.0);
+  if (any(lessThan(idx, vec3(0.0))) || any(greaterThan(idx, uORes1))) return false;
   for (int level = 0; level < 2; ++level) {
     int B = level == 0 ? ${cfg.blockLevels[0]} : ${cfg.blockLevels[1]};
     ivec3 dims = level == 0 ? textureSize(uBlk0, 0) : textureSize(uBlk1, 0);
     ivec3 b = min(ivec3(idx) / B, dims - 1);
     uint v = level == 0 ? texelFetch(uBlk0, b, 0).r : texelFetch(uBlk1, b, 0).r;
     if (v != 0u) continue;
-    vec3 lo = vec3(b * B), hi = min(lo + float(B), uORes1);
-    float tlo = -3.0e38, thi = 3.0e38;
-    for (int a = 0; a < 3; ++a) {
-      if (d[a] == 0.0) continue;
-      float A = (o[a] - uOMin[a]) * uOScale[a], D = d[a] * uOScale[a];
-      float ta = (lo[a] + uEps.x - A) / D, tb = (hi[a] - uEps.x - A) / D;
-      tlo = max(tlo, min(ta, tb));
-      thi = min(thi, max(ta, tb));
-    }
-    if (!(t >= tlo)) return i;
-    int j = int(min(floor((thi - t0) / uStep), float(uN))) - 1;
-    return j >= i ? j + 1 : i;
+    lo = vec3(b * B);
+    hi = min(lo + float(B), uORes1);
+    if (any(lessThan(idx, lo + margin)) || any(greaterThan(idx, hi - margin))) continue;
+    return true;
   }
-  return i;
+  return false;
+}
+
+// Sample i (mask index idx) in an all-empty block of mask corners: the first sample index past
+// the samples that provably stay in the block (margin uEps.x cells covers both renderers' rounding).
+int skipEmpty(int i, float t, vec3 idx, vec3 o, vec3 d, float t0) {
+  vec3 lo, hi;
+  // No margin: idx lies in its own block (b = floor(idx / B)); the margin goes into the exit
+  // parameters below.
+  if (!emptyBlock(idx, 0.0, lo, hi)) return i;
+  float tlo = -3.0e38, thi = 3.0e38;
+  for (int a = 0; a < 3; ++a) {
+    if (d[a] == 0.0) continue;
+    float A = (o[a] - uOMin[a]) * uOScale[a], D = d[a] * uOScale[a];
+    float ta = (lo[a] + uEps.x - A) / D, tb = (hi[a] - uEps.x - A) / D;
+    tlo = max(tlo, min(ta, tb));
+    thi = min(thi, max(ta, tb));
+  }
+  if (!(t >= tlo)) return i;
+  int j = int(min(floor((thi - t0) / uStep), float(uN))) - 1;
+  return j >= i ? j + 1 : i;
 }
 `;
     }
@@ -247,26 +261,19 @@ bool finite(float v) { return abs(v) <= 3.4028235e38; }  // false for NaN too
 // stay in the all-empty block of the sample at mask index idx (margin uEps.x cells, far above the
 // float error of the inversion), or -3e38 when there is no such block.
 float skipContracted(vec3 idx, vec3 o, vec3 d) {
-  if (any(lessThan(idx, vec3(0.0))) || any(greaterThan(idx, uORes1))) return -3.0e38;
-  for (int level = 0; level < 2; ++level) {
-    int B = level == 0 ? ${cfg.blockLevels[0]} : ${cfg.blockLevels[1]};
-    ivec3 dims = level == 0 ? textureSize(uBlk0, 0) : textureSize(uBlk1, 0);
-    ivec3 b = min(ivec3(idx) / B, dims - 1);
-    uint v = level == 0 ? texelFetch(uBlk0, b, 0).r : texelFetch(uBlk1, b, 0).r;
-    if (v != 0u) continue;
-    vec3 lo = vec3(b * B) + uEps.x, hi = min(vec3(b * B) + float(B), uORes1) - uEps.x;
-    if (any(lessThan(idx, lo)) || any(greaterThan(idx, hi))) continue;
-    float tEnd = 3.0e38;
-    for (int a = 0; a < 3; ++a) {
-      if (d[a] == 0.0) continue;  // p[a] == o[a] for every sample
-      float X = uOMin[a] + (d[a] > 0.0 ? hi[a] : lo[a]) / uOScale[a];  // exit face, contracted
-      if (abs(X) >= 2.0) continue;  // outside the cube: never reached
-      float q = abs(X) <= 1.0 ? X : (X > 0.0 ? 1.0 / (2.0 - X) : -1.0 / (2.0 + X));
-      tEnd = min(tEnd, ((q + 1.0) / uRScale[a] + uRMin[a] - o[a]) / d[a]);
-    }
-    return tEnd;
+  vec3 lo, hi;
+  if (!emptyBlock(idx, uEps.x, lo, hi)) return -3.0e38;
+  lo += uEps.x;
+  hi -= uEps.x;
+  float tEnd = 3.0e38;
+  for (int a = 0; a < 3; ++a) {
+    if (d[a] == 0.0) continue;  // p[a] == o[a] for every sample
+    float X = uOMin[a] + (d[a] > 0.0 ? hi[a] : lo[a]) / uOScale[a];  // exit face, contracted
+    if (abs(X) >= 2.0) continue;  // outside the cube: never reached
+    float q = abs(X) <= 1.0 ? X : (X > 0.0 ? 1.0 / (2.0 - X) : -1.0 / (2.0 + X));
+    tEnd = min(tEnd, ((q + 1.0) / uRScale[a] + uRMin[a] - o[a]) / d[a]);
   }
-  return -3.0e38;
+  return tEnd;
 }
 `;
       }

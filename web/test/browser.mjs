@@ -76,3 +76,24 @@ export async function openBrowser({args = []} = {}) {
     },
   };
 }
+
+// The viewer's last full frame (read back through its hook, not a screenshot) and
+// EcrfDecoder.render of the same camera by the wasm decoder in the page (build-wasm/):
+// {frame: RGBA bytes, or null when the frame is missing or of another size, reference: RGBA
+// bytes, width, height}.
+export async function viewerFrameAndWasmReference(page, scene) {
+  if (!(await page.evaluate(() => typeof createEcrfDecoder === 'function'))) {
+    await page.addScriptTag({url: '../build-wasm/ecrf_decoder.js'});
+  }
+  return page.evaluate(async (scene) => {
+    const module = await createEcrfDecoder({locateFile: (f) => new URL(`../build-wasm/${f}`, location.href).href});
+    const d = new ecrfWeb.EcrfDecoder(module);
+    d.decode(new Uint8Array(await (await fetch(scene)).arrayBuffer()));
+    const cam = ecrfViewer.camera();
+    const ref = d.render(cam);
+    d.destroy();
+    const img = ecrfViewer.readPixels();
+    return {frame: img && img.width === cam.width && img.height === cam.height ? Array.from(img.data) : null,
+            reference: Array.from(ref), width: cam.width, height: cam.height};
+  }, scene);
+}

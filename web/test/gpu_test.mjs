@@ -9,7 +9,7 @@
 //   node web/test/gpu_test.mjs        (needs build-wasm/ and `npm ci` in web/test)
 import {readFileSync} from 'node:fs';
 import {join} from 'node:path';
-import {openBrowser, root} from './browser.mjs';
+import {openBrowser, root, viewerFrameAndWasmReference} from './browser.mjs';
 import {compare, fmtPsnr, fromBase64, manifestCamera, readPng} from './gpu_common.mjs';
 
 let failures = 0;
@@ -99,19 +99,11 @@ try {
     const vp = await b.newPage({viewport: {width: 400, height: 300}});
     await vp.goto(b.url(`web/index.html?renderer=gpu&size=24&scene=../${conf}${name}.ecrf`));
     await vp.waitForFunction(() => window.ecrfViewer && (ecrfViewer.idle() || ecrfViewer.state.error), null, {timeout: 240000, polling: 100});
-    if (!(await vp.evaluate(() => typeof createEcrfDecoder === 'function'))) await vp.addScriptTag({url: '../build-wasm/ecrf_decoder.js'});
-    const res = await vp.evaluate(async (scene) => {
-      const st = ecrfViewer.state;
-      const module = await createEcrfDecoder({locateFile: (f) => new URL(`../build-wasm/${f}`, location.href).href});
-      const d = new ecrfWeb.EcrfDecoder(module);
-      d.decode(new Uint8Array(await (await fetch(scene)).arrayBuffer()));
-      const cam = ecrfViewer.camera();
-      const ref = d.render(cam);
-      d.destroy();
-      const img = ecrfViewer.readPixels();
-      return {renderer: st.renderer, error: st.error, ref: Array.from(ref), width: cam.width, height: cam.height,
-              img: img && img.width === cam.width && img.height === cam.height ? Array.from(img.data) : null};
-    }, `../${conf}${name}.ecrf`).catch((e) => ({error: e.message}));
+    const res = await (async () => {
+      const st = await vp.evaluate(() => ({renderer: ecrfViewer.state.renderer, error: ecrfViewer.state.error}));
+      const r = await viewerFrameAndWasmReference(vp, `../${conf}${name}.ecrf`);
+      return {...st, ref: r.reference, img: r.frame, width: r.width, height: r.height};
+    })().catch((e) => ({error: e.message}));
     const c = res.img ? compare(res.img, res.ref, res.width, res.height) : {psnr: -1};
     const verrs = b.consoleErrors(vp);
     check(res.renderer === 'gpu' && !res.error && c.psnr >= 40 && verrs.length === 0,

@@ -6,7 +6,7 @@
 import {existsSync, readFileSync} from 'node:fs';
 import {join} from 'node:path';
 import {pathToFileURL} from 'node:url';
-import {openBrowser, root} from './browser.mjs';
+import {openBrowser, root, viewerFrameAndWasmReference} from './browser.mjs';
 
 const SCENE = '../tests/conformance/scene_builtin.ecrf';
 const PAGE = 'web/index.html';
@@ -75,25 +75,14 @@ async function dropTruncatedScene(page) {
 // PSNR over RGB of the viewer's last full frame (read back through the hook, not a screenshot)
 // against EcrfDecoder.render of the same camera, run in the page by the wasm decoder.
 async function psnrAgainstWasm(page, scene = SCENE) {
-  if (!(await page.evaluate(() => typeof createEcrfDecoder === 'function'))) {
-    await page.addScriptTag({url: '../build-wasm/ecrf_decoder.js'});
+  const {frame, reference, width, height} = await viewerFrameAndWasmReference(page, scene);
+  if (!frame) return {psnr: -1, size: 'no image'};
+  let se = 0;
+  for (let p = 0; p < width * height; ++p) {
+    for (let k = 0; k < 3; ++k) se += (frame[4 * p + k] - reference[4 * p + k]) ** 2;
   }
-  return page.evaluate(async (scene) => {
-    const module = await createEcrfDecoder({locateFile: (f) => new URL(`../build-wasm/${f}`, location.href).href});
-    const d = new ecrfWeb.EcrfDecoder(module);
-    d.decode(new Uint8Array(await (await fetch(scene)).arrayBuffer()));
-    const cam = ecrfViewer.camera();
-    const ref = d.render(cam);
-    d.destroy();
-    const img = ecrfViewer.readPixels();
-    if (!img || img.width !== cam.width || img.height !== cam.height) return {psnr: -1, size: 'no image'};
-    let se = 0;
-    for (let p = 0; p < cam.width * cam.height; ++p) {
-      for (let k = 0; k < 3; ++k) se += (img.data[4 * p + k] - ref[4 * p + k]) ** 2;
-    }
-    const mse = se / (3 * cam.width * cam.height);
-    return {psnr: mse === 0 ? Infinity : 10 * Math.log10(65025 / mse), size: `${cam.width}x${cam.height}`};
-  }, scene);
+  const mse = se / (3 * width * height);
+  return {psnr: mse === 0 ? Infinity : 10 * Math.log10(65025 / mse), size: `${width}x${height}`};
 }
 
 const pixelsKey = (page) => page.evaluate(() => {

@@ -9,6 +9,7 @@
 #include <random>
 #include <vector>
 
+#include "tests/common/small_model.h"
 #include "trainer/model/volume_render.h"
 #include "trainer/rate/quant_aware.h"
 
@@ -17,20 +18,12 @@ namespace tools {
 namespace {
 
 trainer::TensorfModel SmallModel() {
-  trainer::TensorfConfig c;
+  trainer::TensorfConfig c = testing_models::SmallTensorfConfig();
   // Extents that are multiples of the block shapes: no edge padding, so the decoded model decodes
   // to itself.
   c.density_ranks = {4, 4, 4};
   c.app_ranks = {4, 4, 4};
-  c.head.num_products = 12;
-  c.head.feature_dim = 6;
-  c.head.hidden = 16;
-  c.aabb.min = {-1.f, -1.f, -1.f};
-  c.aabb.max = {1.f, 1.f, 1.f};
-  c.near = 0.f;
-  c.far = 10.f;
   c.density_shift = 1.f;  // a dense medium: every tensor shows in the colours
-  c.init_scale = 0.4f;
   // Every sample coloured: no threshold that switches a sample on or off under the noise, so the
   // rendered error is a smooth function of the grids.
   c.weight_threshold = 0.f;
@@ -42,15 +35,7 @@ trainer::TensorfModel SmallModel() {
   return model;
 }
 
-trainer::RateConfig SmallBlocks() {
-  trainer::RateConfig b;
-  b.plane_block[0] = 4;
-  b.plane_block[1] = 8;
-  b.plane_block[2] = 4;
-  b.line_block[1] = 2;
-  b.line_block[2] = 8;
-  return b;
-}
+trainer::RateConfig SmallBlocks() { return testing_models::SmallRateBlocks(); }
 
 // The steps of the float model, kept for its decoded copy (whose peaks differ), as training
 // freezes them.
@@ -87,25 +72,10 @@ struct Rays {
   std::vector<float> origins, dirs, rgb;
 };
 
-// Rays from a sphere of radius 3 through the box; targets: the model's colours.
+// Rays from a sphere of radius 3 into the box; targets: the model's colours.
 Rays MakeRays(const trainer::TensorfModel& model) {
   Rays r;
-  std::mt19937_64 rng(11);
-  std::normal_distribution<float> g;
-  for (int i = 0; i < r.n; ++i) {
-    float p[3] = {g(rng), g(rng), g(rng)}, q[3] = {0.3f * g(rng), 0.3f * g(rng), 0.3f * g(rng)};
-    const float len = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
-    float d[3], dl = 0.f;
-    for (int a = 0; a < 3; ++a) {
-      p[a] *= 3.f / len;
-      d[a] = q[a] - p[a];
-      dl += d[a] * d[a];
-    }
-    for (int a = 0; a < 3; ++a) {
-      r.origins.push_back(p[a]);
-      r.dirs.push_back(d[a] / std::sqrt(dl));
-    }
-  }
+  testing_models::RaysFromSphere(r.n, 11, &r.origins, &r.dirs);
   r.rgb.resize(static_cast<size_t>(r.n) * 3);
   trainer::RenderRays(model, r.n, r.origins.data(), r.dirs.data(), r.rgb.data(), nullptr);
   return r;

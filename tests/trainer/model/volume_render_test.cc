@@ -8,6 +8,7 @@
 #include <random>
 #include <vector>
 
+#include "tests/common/small_model.h"
 #include "trainer/train/adam.h"
 
 namespace ecrf {
@@ -25,27 +26,6 @@ TensorfConfig TinyConfig() {
   c.near = 0.f;
   c.far = 10.f;
   return c;
-}
-
-// Rays from a sphere of radius 3 towards random points inside the box.
-void RandomRays(int n, uint32_t seed, std::vector<float>* o, std::vector<float>* d) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<float> nd;
-  std::uniform_real_distribution<float> u(-0.8f, 0.8f);
-  o->resize(3 * n);
-  d->resize(3 * n);
-  for (int i = 0; i < n; ++i) {
-    float p[3] = {nd(rng), nd(rng), nd(rng)};
-    const float len = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
-    float q[3] = {u(rng), u(rng), u(rng)};
-    float dir[3];
-    for (int a = 0; a < 3; ++a) {
-      (*o)[3 * i + a] = 3.f * p[a] / len;
-      dir[a] = q[a] - (*o)[3 * i + a];
-    }
-    const float dl = std::sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
-    for (int a = 0; a < 3; ++a) (*d)[3 * i + a] = dir[a] / dl;
-  }
 }
 
 TEST(VolumeRenderTest, CompositeBackwardMatchesFiniteDifferences) {
@@ -153,7 +133,7 @@ TEST(VolumeRenderTest, EmptyFieldRendersWhite) {
   model.Initialize({8, 8, 8}, 1);
   std::fill(model.density().params().begin(), model.density().params().end(), 0.f);
   std::vector<float> o, d;
-  RandomRays(64, 2, &o, &d);
+  testing_models::RaysFromSphere(64, 2, &o, &d);
   std::vector<float> rgb(3 * 64), depth(64);
   RenderRays(model, 64, o.data(), d.data(), rgb.data(), depth.data());
   for (float v : rgb) EXPECT_GT(v, 0.99f);  // sigma = softplus(-10) is not exactly 0
@@ -170,7 +150,7 @@ TEST(VolumeRenderTest, RenderMatchesTrainStepForward) {
   TensorfModel model(c);
   model.Initialize({8, 8, 8}, 3);
   std::vector<float> o, d;
-  RandomRays(50, 5, &o, &d);
+  testing_models::RaysFromSphere(50, 5, &o, &d);
   std::vector<float> rgb(150);
   RenderRays(model, 50, o.data(), d.data(), rgb.data(), nullptr);
   // rgb as target; a TrainStep without jitter is not available, so check the loss is small
@@ -195,7 +175,7 @@ FdSetup MakeFdSetup() {
   c.weight_threshold = 0.f;  // no colour-sample switching under perturbation
   FdSetup s{TensorfModel(c), {}, {}, {}, 8};
   s.model.Initialize({6, 6, 6}, 12);
-  RandomRays(s.n, 3, &s.o, &s.d);
+  testing_models::RaysFromSphere(s.n, 3, &s.o, &s.d);
   std::mt19937 rng(4);
   std::uniform_real_distribution<float> u(0.2f, 0.8f);
   s.target.resize(3 * s.n);
@@ -272,7 +252,7 @@ TEST(VolumeRenderTest, TrainStepGradientsMatchFiniteDifferences) {
 
 TEST(VolumeRenderTest, TrainStepSameGradientsWithOneAndTwoThreads) {
   FdSetup s = MakeFdSetup();
-  RandomRays(300, 8, &s.o, &s.d);
+  testing_models::RaysFromSphere(300, 8, &s.o, &s.d);
   s.target.assign(900, 0.5f);
   s.n = 300;
   TensorfModel a = s.model, b = s.model;
@@ -308,7 +288,7 @@ TEST(VolumeRenderTest, HeadChunkingAndMaskKeepResults) {
       for (int x = 0; x < 5; ++x) occ[(z * 10 + y) * 10 + x] = 1;
   for (TensorfModel* m : {&a, &b}) m->SetAlphaMask(AlphaMask(m->aabb(), {10, 10, 10}, occ));
   std::vector<float> o, d;
-  RandomRays(150, 12, &o, &d);
+  testing_models::RaysFromSphere(150, 12, &o, &d);
   std::vector<float> target(450, 0.4f);
   a.ZeroGrads();
   b.ZeroGrads();
@@ -347,7 +327,7 @@ TEST(VolumeRenderTest, StatsCountTracedSamples) {
   TensorfModel model(c);
   model.Initialize({10, 10, 10}, 6);
   std::vector<float> o, d;
-  RandomRays(40, 9, &o, &d);
+  testing_models::RaysFromSphere(40, 9, &o, &d);
   std::vector<float> target(120, 0.3f);
   TensorfModel copy = model;
   const TrainStepStats st = TrainStep(copy, 40, o.data(), d.data(), target.data(), 123);
@@ -395,7 +375,7 @@ TEST(VolumeRenderTest, EarlyStopChangesGradientsNegligibly) {
     }
   }
   std::vector<float> o, d;
-  RandomRays(400, 10, &o, &d);
+  testing_models::RaysFromSphere(400, 10, &o, &d);
   std::vector<float> target(1200);
   for (size_t i = 0; i < target.size(); ++i) target[i] = 0.2f + 0.6f * ((i * 7) % 11) / 10.f;
   exact.ZeroGrads();
@@ -422,7 +402,7 @@ TEST(VolumeRenderTest, AdamStepsReduceLoss) {
   model.Initialize({12, 12, 12}, 21);
   const int n = 256;
   std::vector<float> o, d;
-  RandomRays(n, 11, &o, &d);
+  testing_models::RaysFromSphere(n, 11, &o, &d);
   std::vector<float> target(3 * n);
   for (int r = 0; r < n; ++r) {  // colour depends on the direction: a smooth "scene"
     target[3 * r + 0] = 0.5f + 0.4f * d[3 * r + 0];

@@ -15,6 +15,7 @@
 #include "format/coefficients/int_idct.h"
 #include "format/container.h"
 #include "format/mlp_coder.h"
+#include "tests/common/small_model.h"
 #include "trainer/model/volume_render.h"
 #include "trainer/train/rate_state.h"
 
@@ -23,32 +24,12 @@ namespace trainer {
 namespace {
 
 TensorfModel SmallModel(uint64_t seed) {
-  TensorfConfig c;
-  c.density_ranks = {3, 4, 2};
-  c.app_ranks = {5, 3, 4};
-  c.head.num_products = 12;
-  c.head.feature_dim = 6;
-  c.head.hidden = 16;
-  c.aabb.min = {-1.f, -1.f, -1.f};
-  c.aabb.max = {1.f, 1.f, 1.f};
-  c.near = 0.f;
-  c.far = 10.f;
-  c.density_shift = -1.f;
-  c.init_scale = 0.4f;
-  TensorfModel model(c);
+  TensorfModel model(testing_models::SmallTensorfConfig());
   model.Initialize({21, 18, 13}, seed);
   return model;
 }
 
-RateConfig SmallBlocks() {
-  RateConfig b;
-  b.plane_block[0] = 4;
-  b.plane_block[1] = 8;
-  b.plane_block[2] = 4;
-  b.line_block[1] = 2;
-  b.line_block[2] = 8;
-  return b;
-}
+RateConfig SmallBlocks() { return testing_models::SmallRateBlocks(); }
 
 // With rounding to nearest and with a dead zone (rounding offset 0.3): training sees the file.
 class QuantAwareOffset : public ::testing::TestWithParam<float> {};
