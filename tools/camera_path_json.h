@@ -15,7 +15,7 @@ namespace ecrf {
 namespace tools {
 
 // The cameras of `file`, in file order, named path_000, path_001, ... Read by the datasets' own
-// transforms reader (trainer::ReadDatasetManifest), so a path accepts and checks exactly what a
+// transforms reader (trainer::ReadTransformsCameras), so a path accepts and checks exactly what a
 // Blender transforms_SPLIT.json does, distortion and per-frame intrinsics included. Throws
 // std::runtime_error naming the file, the frame and the problem.
 std::vector<PathCamera> ReadCameraPath(const std::string& file, int default_width,

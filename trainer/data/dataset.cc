@@ -224,26 +224,33 @@ std::string FilePathOf(const json& frame, size_t index, const JsonContext& conte
   return it->get<std::string>();
 }
 
+// The non-empty `frames` array of a transforms file, every entry an object; its top-level
+// intrinsics go into `shared`.
+const json& TransformFrames(const json& root, JsonContext* context, IntrinsicFields* shared) {
+  if (!root.is_object()) context->Fail("top level must be a JSON object");
+  shared->ReadFrom(root, "", *context);
+  auto frames_it = root.find("frames");
+  if (frames_it == root.end()) context->Fail("missing 'frames'");
+  if (!frames_it->is_array()) context->Fail("'frames' must be an array");
+  const json& frames = *frames_it;
+  if (frames.empty()) context->Fail("'frames' is empty");
+  context->set_frames(&frames);
+  for (size_t i = 0; i < frames.size(); ++i) {
+    if (!frames[i].is_object()) context->FailFrame(i, "must be a JSON object");
+  }
+  return frames;
+}
+
 DatasetManifest ParseTransforms(const fs::path& dir, const std::string& json_path, Layout layout,
                                 const std::string& split) {
   JsonContext context(json_path);
   const json root = ReadJson(json_path);
-  if (!root.is_object()) context.Fail("top level must be a JSON object");
   IntrinsicFields shared;
-  shared.ReadFrom(root, "", context);
-  auto frames_it = root.find("frames");
-  if (frames_it == root.end()) context.Fail("missing 'frames'");
-  if (!frames_it->is_array()) context.Fail("'frames' must be an array");
-  const json& frames = *frames_it;
-  if (frames.empty()) context.Fail("'frames' is empty");
-  context.set_frames(&frames);
+  const json& frames = TransformFrames(root, &context, &shared);
 
   DatasetManifest manifest;
   std::vector<size_t> order(frames.size());
-  for (size_t i = 0; i < order.size(); ++i) {
-    if (!frames[i].is_object()) context.FailFrame(i, "must be a JSON object");
-    order[i] = i;
-  }
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
   if (layout == Layout::kNgp) {
     SetNgpAabb(root, context, &manifest);
     if (auto it = root.find("white_transparent"); it != root.end()) {
@@ -392,6 +399,26 @@ void NearFarFromCameras(const std::vector<Camera>& cameras, const double box[2][
   }
   *near_out = std::max(near, kMinNearFraction * std::sqrt(diagonal_sq));
   *far_out = std::max(far, *near_out * 1.01);
+}
+
+std::vector<Camera> ReadTransformsCameras(const std::string& json_path, int default_width,
+                                          int default_height) {
+  JsonContext context(json_path);
+  const json root = ReadJson(json_path);
+  IntrinsicFields shared;
+  const json& frames = TransformFrames(root, &context, &shared);
+  std::vector<Camera> cameras;
+  for (size_t i = 0; i < frames.size(); ++i) {
+    Camera camera;
+    ReadTransform(frames[i], i, context, &camera);
+    IntrinsicFields fields = shared;
+    fields.ReadFrom(frames[i], "frame " + std::to_string(i) + ": ", context);
+    // No image to take the size from: the caller's size stands in for a missing one.
+    if (!fields.w) fields.w = default_width;
+    if (!fields.h) fields.h = default_height;
+    cameras.push_back(ResolveIntrinsics(fields, "", i, context, camera));
+  }
+  return cameras;
 }
 
 DatasetManifest ReadDatasetManifest(const std::string& dir, const std::string& split,

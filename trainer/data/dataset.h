@@ -55,6 +55,14 @@ struct DatasetManifest {
 DatasetManifest ReadDatasetManifest(const std::string& dir, const std::string& split,
                                     int downscale = 1);
 
+// The cameras of one transforms file (the Blender layout of transforms_SPLIT.json, or a camera
+// path), in file order and without images: `file_path` is not needed, and a size the file does not
+// give (w and h, top level or per frame) is default_width x default_height. The same fields and
+// checks as ReadDatasetManifest; throws std::runtime_error naming the file, the frame and the
+// problem.
+std::vector<Camera> ReadTransformsCameras(const std::string& json_path, int default_width,
+                                          int default_height);
+
 // Decodes the images in parallel (OpenMP), composites them on white and downscales them with
 // DownscaleArea; the cameras are scaled to match. Throws the first failing view's error
 // (by view order, so the message does not depend on thread timing).
