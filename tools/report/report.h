@@ -36,6 +36,13 @@ void AddReferenceColumns(nlohmann::json* report);
 // The decoded-file curve of a report: (file bytes, decoded PSNR) per point.
 std::vector<RdPoint> RateDistortionCurve(const nlohmann::json& report);
 
+// The lambda = 0 float32 reference of the earlier sweep in dir, for a sweep (report["sweep"]) of
+// data without one: same data, preset, seed, test views and downscale; the same iterations, or the
+// preset's own schedule (the `fast` reference stays the yardstick of a longer-trained sweep).
+// Throws saying which setting differs.
+nlohmann::json BorrowReference(const std::string& dir, const nlohmann::json& sweep,
+                               const std::string& data);
+
 // Parses a JSON file (throws naming the file).
 nlohmann::json ReadJsonFile(const std::string& path);
 

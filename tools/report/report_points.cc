@@ -93,8 +93,11 @@ void AddReferenceColumns(nlohmann::json* report) {
     const double bytes = p.at("file_bytes").get<double>();
     const double float32 = (ref.is_null() ? p : ref).at("float32_bytes").get<double>();
     p["ratio"] = float32 / bytes;
+    // Runs trained without --score-float have no float PSNR (null), so no quantization loss.
     p["quantization_loss_db"] =
-        p.at("decoded_psnr").get<double>() - p.at("float_psnr").get<double>();
+        p.at("float_psnr").is_null()
+            ? nlohmann::json()
+            : nlohmann::json(p.at("decoded_psnr").get<double>() - p.at("float_psnr").get<double>());
     if (!ref.is_null()) {
       p["psnr_loss_db"] = p.at("decoded_psnr").get<double>() - ref.at("float_psnr").get<double>();
     } else {

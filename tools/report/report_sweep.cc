@@ -26,6 +26,7 @@
 #include "tools/train_run.h"
 #include "trainer/train/checkpoint.h"
 #include "trainer/train/train_config.h"
+#include "trainer/train/train_options.h"
 
 namespace ecrf {
 namespace tools {
@@ -179,6 +180,8 @@ void CheckReusable(const nlohmann::json& m, const trainer::TrainOptions& o,
 }
 
 // The lambda = 0 float model of an earlier sweep, usable when this sweep trains it the same way.
+}  // namespace
+
 nlohmann::json BorrowReference(const std::string& dir, const nlohmann::json& sweep,
                                const std::string& data) {
   const nlohmann::json other = ReadReport(dir);
@@ -189,8 +192,17 @@ nlohmann::json BorrowReference(const std::string& dir, const nlohmann::json& swe
     throw std::runtime_error(dir + "/report.json: reference of data " + other.value("data", "?") +
                              ", this sweep is of " + data);
   }
+  // The yardstick of every ratio is the preset's lambda = 0 model at the preset's own schedule, so
+  // a sweep trained longer (e.g. --iters 4500) still measures against the 3000-iteration `fast`
+  // reference; any other iteration count has to match the sweep's.
+  const nlohmann::json other_iters =
+      other.contains("sweep") ? other["sweep"].value("iterations", nlohmann::json()) : nullptr;
+  const bool preset_schedule =
+      other_iters.is_number_integer() &&
+      other_iters.get<int>() == trainer::PresetOptions(sweep.at("preset")).reference_iters;
   for (const char* key :
        {"preset", "iterations", "seed", "test_view_stride", "max_test_views", "downscale"}) {
+    if (std::string(key) == "iterations" && preset_schedule) continue;
     if (!other.contains("sweep") || other["sweep"].value(key, nlohmann::json()) != sweep.at(key)) {
       throw std::runtime_error(
           dir + "/report.json: its sweep has " + key + " " +
@@ -199,9 +211,11 @@ nlohmann::json BorrowReference(const std::string& dir, const nlohmann::json& swe
     }
   }
   nlohmann::json ref = other["reference"];
-  ref["label"] = "lambda=0 float32 model (from " + dir + ")";
+  ref["label"] = "lambda=0 float32 model, " + other_iters.dump() + " iterations (from " + dir + ")";
   return ref;
 }
+
+namespace {
 
 std::string Minutes(double seconds) {
   char text[32];
@@ -384,12 +398,12 @@ int RunReportSweep(int argc, char** argv) {
   std::printf("%-24s %10s %8s %10s %10s %9s %10s\n", "point", "bytes", "ratio", "decoded", "float",
               "loss", "train");
   for (const nlohmann::json& p : report["points"]) {
-    const double loss = p["psnr_loss_db"].is_null() ? NAN : p["psnr_loss_db"].get<double>();
+    auto number = [](const nlohmann::json& x) { return x.is_null() ? NAN : x.get<double>(); };
+    const double loss = number(p["psnr_loss_db"]);
     std::printf("%-24s %10lld %7.1fx %7.2f dB %7.2f dB %+6.2f dB %10s\n",
                 p["label"].get<std::string>().c_str(), p["file_bytes"].get<long long>(),
-                p["ratio"].get<double>(), p["decoded_psnr"].get<double>(),
-                p["float_psnr"].get<double>(), loss,
-                Minutes(p["train_seconds"].get<double>()).c_str());
+                p["ratio"].get<double>(), p["decoded_psnr"].get<double>(), number(p["float_psnr"]),
+                loss, Minutes(p["train_seconds"].get<double>()).c_str());
   }
   std::printf("report: %s/index.html (report.json, CSV files and plots beside it)\n", out.c_str());
   return 0;

@@ -221,6 +221,66 @@ TEST(ReportCli, HelpExitsZeroAndBadUsageTwo) {
   EXPECT_EQ(Invoke(RunRender, {"render", "--help"}), 0);
 }
 
+TEST(ReportReference, BorrowedFromTheSameScheduleOrThePresetsOwn) {
+  char tmpl[] = "/tmp/ecrf_report_ref_XXXXXX";
+  ASSERT_NE(mkdtemp(tmpl), nullptr);
+  const std::string dir = tmpl;
+  const nlohmann::json sweep_3000 = {{"preset", "fast"},    {"iterations", 3000},
+                                     {"seed", 7},           {"test_view_stride", 10},
+                                     {"max_test_views", 0}, {"downscale", 1}};
+  nlohmann::json earlier = {{"data", "/data/chair"},
+                            {"sweep", sweep_3000},
+                            {"reference", {{"float32_bytes", 100}, {"float_psnr", 35.0}}},
+                            {"points", nlohmann::json::array()}};
+  WriteTextFile(dir + "/report.json", earlier.dump());
+  auto borrow = [&](const std::string& key, const nlohmann::json& value) {
+    nlohmann::json sweep = sweep_3000;
+    sweep[key] = value;
+    return BorrowReference(dir, sweep, "/data/chair");
+  };
+  // A longer schedule measures against the preset's 3000-iteration reference, and says so.
+  const nlohmann::json ref = borrow("iterations", 4500);
+  EXPECT_EQ(ref["float32_bytes"], 100);
+  EXPECT_NE(ref["label"].get<std::string>().find("3000 iterations"), std::string::npos);
+  EXPECT_EQ(borrow("iterations", 3000)["float_psnr"], 35.0);
+  auto refused = [&](const std::string& key, const nlohmann::json& value, const std::string& why) {
+    try {
+      borrow(key, value);
+      ADD_FAILURE() << key << " " << value.dump() << " was borrowed";
+    } catch (const std::exception& e) {
+      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+    }
+  };
+  refused("seed", 8, "its sweep has seed 7, this one 8");
+  refused("test_view_stride", 20, "test_view_stride 10, this one 20");
+  refused("preset", "paper", "preset \"fast\", this one \"paper\"");
+  EXPECT_THROW(BorrowReference(dir, sweep_3000, "/data/mic"), std::runtime_error);
+  // A reference that is neither the preset's schedule nor the sweep's does not apply.
+  earlier["sweep"]["iterations"] = 2000;
+  WriteTextFile(dir + "/report.json", earlier.dump());
+  refused("iterations", 4500, "its sweep has iterations 2000, this one 4500");
+  EXPECT_EQ(borrow("iterations", 2000)["float32_bytes"], 100);
+  std::system(("rm -rf '" + dir + "'").c_str());
+}
+
+TEST(ReportReference, APointWithoutAFloatScoreHasNoQuantizationLoss) {
+  // A run trained by `ecrf train` without --score-float, reused by a sweep: its float PSNR is
+  // null; the ratio and the loss against the borrowed reference still exist.
+  nlohmann::json report = {
+      {"borrowed_reference", {{"float32_bytes", 1000.0}, {"float_psnr", 35.0}}},
+      {"points",
+       {{{"lambda_e", 3e-11},
+         {"file_bytes", 10.0},
+         {"decoded_psnr", 35.5},
+         {"float_psnr", nullptr},
+         {"float32_bytes", 2000.0}}}}};
+  AddReferenceColumns(&report);
+  const nlohmann::json& p = report["points"][0];
+  EXPECT_TRUE(p["quantization_loss_db"].is_null());
+  EXPECT_DOUBLE_EQ(p["ratio"].get<double>(), 100.0);
+  EXPECT_DOUBLE_EQ(p["psnr_loss_db"].get<double>(), 0.5);
+}
+
 TEST(ReportCli, UnwritableOutputFailsBeforeTraining) {
   // A path below a regular file can never be created: the sweep must say so at once.
   char tmpl[] = "/tmp/ecrf_report_file_XXXXXX";
