@@ -1,5 +1,6 @@
 #include "decoder/mlp.h"
 #include "decoder/fast_sincos.h"
+#include "decoder/mlp_gemm.h"
 
 #include <cmath>
 #include <cstring>
@@ -14,106 +15,13 @@ static_assert(kPad % 8 == 0 && kOutPad % 8 == 0, "Gemm4 writes columns in runs o
 
 int RoundUp(int v, int m) { return (v + m - 1) / m * m; }
 
-// y_r[j] = bias[j] + sum_k x_r[k] * wt[k * ldw + j] for 4 rows r, j < ncols (multiple of 8),
-// optional ReLU. The k loop is sequential for every element, identical for all rows.
-// GCC/Clang generic vectors (lowered to SSE/AVX/NEON/wasm-simd128, or scalar code, by the
-// compiler): plain loops over small accumulator arrays get scalarised by GCC's SLP pass.
-#if defined(__GNUC__)
-typedef float V4 __attribute__((vector_size(16)));
-#if defined(__AVX512F__)
-typedef float VWide __attribute__((vector_size(64)));
-#elif defined(__AVX__)
-typedef float VWide __attribute__((vector_size(32)));
-#else
-typedef V4 VWide;  // wider generic vectors are lowered through the stack on SSE / NEON / wasm
-#endif
-
-// Columns [j0, j0 + 2 * lanes of V) of 4 rows. Named accumulators (not arrays) so they stay in
-// registers. Every element sums over k in the same order whatever V is, and a compiler that
-// contracts a * b + c into an FMA does so at every width: the width never changes a result.
-template <typename V>
-inline void Block4(const float* x0, const float* x1, const float* x2, const float* x3, int K,
-                   const float* wt, int ldw, const float* bias, int j0, bool relu, float* y0,
-                   float* y1, float* y2, float* y3) {
-  constexpr int kLanes = sizeof(V) / sizeof(float);
-  V a0, b0, a1, b1, a2, b2, a3, b3;
-  std::memcpy(&a0, bias + j0, sizeof(V));
-  std::memcpy(&b0, bias + j0 + kLanes, sizeof(V));
-  a1 = a2 = a3 = a0;
-  b1 = b2 = b3 = b0;
-  const float* w = wt + j0;
-  for (int k = 0; k < K; ++k, w += ldw) {
-    V wa, wb;
-    std::memcpy(&wa, w, sizeof(V));
-    std::memcpy(&wb, w + kLanes, sizeof(V));
-    const float s0 = x0[k], s1 = x1[k], s2 = x2[k], s3 = x3[k];
-    a0 += s0 * wa;
-    b0 += s0 * wb;
-    a1 += s1 * wa;
-    b1 += s1 * wb;
-    a2 += s2 * wa;
-    b2 += s2 * wb;
-    a3 += s3 * wa;
-    b3 += s3 * wb;
-  }
-  if (relu) {
-    const V z = {};  // zeros of any width (a0 - a0 would be NaN where a0 is infinite)
-    a0 = a0 > z ? a0 : z;
-    b0 = b0 > z ? b0 : z;
-    a1 = a1 > z ? a1 : z;
-    b1 = b1 > z ? b1 : z;
-    a2 = a2 > z ? a2 : z;
-    b2 = b2 > z ? b2 : z;
-    a3 = a3 > z ? a3 : z;
-    b3 = b3 > z ? b3 : z;
-  }
-  std::memcpy(y0 + j0, &a0, sizeof(V));
-  std::memcpy(y0 + j0 + kLanes, &b0, sizeof(V));
-  std::memcpy(y1 + j0, &a1, sizeof(V));
-  std::memcpy(y1 + j0 + kLanes, &b1, sizeof(V));
-  std::memcpy(y2 + j0, &a2, sizeof(V));
-  std::memcpy(y2 + j0 + kLanes, &b2, sizeof(V));
-  std::memcpy(y3 + j0, &a3, sizeof(V));
-  std::memcpy(y3 + j0 + kLanes, &b3, sizeof(V));
-}
-
-void Gemm4(const float* x0, const float* x1, const float* x2, const float* x3, int K,
-           const float* wt, int ldw, const float* bias, int ncols, bool relu, float* y0, float* y1,
-           float* y2, float* y3) {
-  constexpr int kWide = 2 * static_cast<int>(sizeof(VWide) / sizeof(float));
-  int j0 = 0;
-  for (; j0 + kWide <= ncols; j0 += kWide)
-    Block4<VWide>(x0, x1, x2, x3, K, wt, ldw, bias, j0, relu, y0, y1, y2, y3);
-  for (; j0 < ncols; j0 += 8)
-    Block4<V4>(x0, x1, x2, x3, K, wt, ldw, bias, j0, relu, y0, y1, y2, y3);
-}
-#else
-void Gemm4(const float* x0, const float* x1, const float* x2, const float* x3, int K,
-           const float* wt, int ldw, const float* bias, int ncols, bool relu, float* y0, float* y1,
-           float* y2, float* y3) {
-  float* y[4] = {y0, y1, y2, y3};
-  const float* x[4] = {x0, x1, x2, x3};
-  for (int r = 0; r < 4; ++r) {
-    for (int j = 0; j < ncols; ++j) y[r][j] = bias[j];
-    for (int k = 0; k < K; ++k) {
-      const float s = x[r][k];
-      const float* w = wt + static_cast<size_t>(k) * ldw;
-      for (int j = 0; j < ncols; ++j) y[r][j] += s * w[j];
-    }
-    if (relu) {
-      for (int j = 0; j < ncols; ++j) y[r][j] = y[r][j] > 0.f ? y[r][j] : 0.f;
-    }
-  }
-}
-#endif
-
 // rows (multiple of 4) x K times wt, rows contiguous with strides ldx / ldy.
-void GemmRows(int rows, const float* x, int ldx, int K, const float* wt, int ldw, const float* bias,
-              bool relu, float* y, int ldy) {
+void GemmRows(Gemm4Fn gemm4, int rows, const float* x, int ldx, int K, const float* wt, int ldw,
+              const float* bias, bool relu, float* y, int ldy) {
   for (int r = 0; r < rows; r += 4) {
     const float* xr = x + static_cast<size_t>(r) * ldx;
     float* yr = y + static_cast<size_t>(r) * ldy;
-    Gemm4(xr, xr + ldx, xr + 2 * ldx, xr + 3 * ldx, K, wt, ldw, bias, ldw, relu, yr, yr + ldy,
+    gemm4(xr, xr + ldx, xr + 2 * ldx, xr + 3 * ldx, K, wt, ldw, bias, ldw, relu, yr, yr + ldy,
           yr + 2 * ldy, yr + 3 * ldy);
   }
 }
@@ -187,6 +95,8 @@ AppearanceMlp& AppearanceMlp::operator=(AppearanceMlp&& o) noexcept {
   o_w3_ = o.o_w3_;
   o_b3_ = o.o_b3_;
   o_zero_ = o.o_zero_;
+  kernel_ = o.kernel_;
+  gemm4_ = o.gemm4_;
   o.weights_ = nullptr;
   o.weights_count_ = 0;
   return *this;
@@ -214,6 +124,8 @@ Status AppearanceMlp::Init(const MlpConfig& config) {
   ECRF_CHECK_OR_RETURN(config.hidden >= 1 && config.hidden <= kMaxMlpHidden, kErrLimit,
                        "mlp: hidden width %d out of range [1, %d]", config.hidden, kMaxMlpHidden);
   config_ = config;
+  kernel_ = BestGemmKernel();
+  gemm4_ = Gemm4For(kernel_);
   in_dim_ = config.input_dim();
   in_stride_ = RoundUp(in_dim_, 8);
   fd_pad_ = RoundUp(config.feature_dim, kPad);
@@ -242,6 +154,15 @@ Status AppearanceMlp::Init(const MlpConfig& config) {
   ECRF_CHECK_OR_RETURN(weights_ != nullptr, kErrOutOfMemory, "mlp: out of memory (%zu floats)",
                        off);
   weights_count_ = off;
+  return Status::Ok();
+}
+
+Status AppearanceMlp::UseGemmKernel(GemmKernel kernel) {
+  ECRF_CHECK_OR_RETURN(GemmKernelAvailable(kernel), kErrInvalidArgument,
+                       "mlp: the %s kernel is not available on this CPU or in this build",
+                       GemmKernelName(kernel));
+  kernel_ = kernel;
+  gemm4_ = Gemm4For(kernel);
   return Status::Ok();
 }
 
@@ -340,8 +261,8 @@ void AppearanceMlp::Infer(int rows, const float* products, size_t products_strid
         x[q] = r + q < n ? products + static_cast<size_t>(r0 + r + q) * products_stride : zero_row;
       }
       float* y = feat + static_cast<size_t>(r) * fd_pad_;
-      Gemm4(x[0], x[1], x[2], x[3], P, weights_ + o_basis_, fd_pad_, wz, fd_pad_, false, y,
-            y + fd_pad_, y + 2 * fd_pad_, y + 3 * fd_pad_);
+      gemm4_(x[0], x[1], x[2], x[3], P, weights_ + o_basis_, fd_pad_, wz, fd_pad_, false, y,
+             y + fd_pad_, y + 2 * fd_pad_, y + 3 * fd_pad_);
     }
     // PE arguments for the whole chunk, one vectorised sin/cos pass.
     for (int r = 0; r < n4; ++r) {
@@ -376,10 +297,12 @@ void AppearanceMlp::Infer(int rows, const float* products, size_t products_strid
       std::memcpy(x, s + nf, nv * sizeof(float));
       std::memcpy(x + nv, c + nf, nv * sizeof(float));
     }
-    GemmRows(n4, in, in_stride_, in_dim_, weights_ + o_w1_, hid_pad_, weights_ + o_b1_, true, h1,
+    GemmRows(gemm4_, n4, in, in_stride_, in_dim_, weights_ + o_w1_, hid_pad_, weights_ + o_b1_,
+             true, h1, hid_pad_);
+    GemmRows(gemm4_, n4, h1, hid_pad_, H, weights_ + o_w2_, hid_pad_, weights_ + o_b2_, true, h2,
              hid_pad_);
-    GemmRows(n4, h1, hid_pad_, H, weights_ + o_w2_, hid_pad_, weights_ + o_b2_, true, h2, hid_pad_);
-    GemmRows(n4, h2, hid_pad_, H, weights_ + o_w3_, kOutPad, weights_ + o_b3_, false, out, kOutPad);
+    GemmRows(gemm4_, n4, h2, hid_pad_, H, weights_ + o_w3_, kOutPad, weights_ + o_b3_, false, out,
+             kOutPad);
     for (int r = 0; r < n; ++r) {
       for (int c = 0; c < 3; ++c) {
         rgb[static_cast<size_t>(r0 + r) * 3 + c] =

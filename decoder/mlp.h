@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <cstdlib>
 
+#include "decoder/mlp_gemm.h"
 #include "format/status.h"
 
 namespace ecrf {
@@ -49,8 +50,12 @@ class AppearanceMlp {
   AppearanceMlp(AppearanceMlp&& o) noexcept;
   AppearanceMlp& operator=(AppearanceMlp&& o) noexcept;
 
-  // Validates the widths and allocates zero weights.
+  // Validates the widths and allocates zero weights; picks the widest GEMM kernel the CPU runs.
   Status Init(const MlpConfig& config);
+  // Another kernel (all give bit-identical results, decoder/mlp_gemm.h): for tests and benchmarks.
+  // kErrInvalidArgument when this build or CPU lacks it.
+  Status UseGemmKernel(GemmKernel kernel);
+  GemmKernel gemm_kernel() const { return kernel_; }
   bool initialized() const { return weights_ != nullptr; }
   const MlpConfig& config() const { return config_; }
 
@@ -78,6 +83,8 @@ class AppearanceMlp {
   int fd_pad_ = 0, hid_pad_ = 0, in_dim_ = 0, in_stride_ = 0;
   // One allocation: basis_t [P x fd_pad], w1_t [in x hid_pad], b1 [hid_pad], w2_t [H x hid_pad],
   // b2 [hid_pad], w3_t [H x 8], b3 [8], zero bias [fd_pad].
+  GemmKernel kernel_ = GemmKernel::kPortable;
+  Gemm4Fn gemm4_ = nullptr;
   float* weights_ = nullptr;
   size_t weights_count_ = 0;
   size_t o_basis_ = 0, o_w1_ = 0, o_b1_ = 0, o_w2_ = 0, o_b2_ = 0, o_w3_ = 0, o_b3_ = 0,

@@ -4,8 +4,10 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "tests/common/naive_renderer.h"
@@ -113,6 +115,50 @@ TEST(MlpTest, ZeroProducts) {
   cfg.num_products = 0;
   cfg.hidden = 16;
   CheckAgainstNaive(cfg, 9, 4);
+}
+
+// The AVX2 and AVX-512 kernels compute more columns side by side with the same per-element
+// arithmetic: the same bits as the portable kernel, for widths that fill none, some or all of
+// their wide blocks (hidden 1, 20, 40, 128, 200; feature dims 5 and 27).
+TEST(MlpTest, EveryGemmKernelGivesThePortableKernelsBits) {
+  int checked = 0;
+  for (const GemmKernel kernel : {GemmKernel::kAvx2, GemmKernel::kAvx512}) {
+    if (!GemmKernelAvailable(kernel)) {
+      AppearanceMlp mlp;
+      ASSERT_TRUE(mlp.Init(MlpConfig()).ok());
+      EXPECT_EQ(mlp.UseGemmKernel(kernel).code(), kErrInvalidArgument);
+      continue;
+    }
+    for (const int hidden : {1, 20, 40, 128, 200}) {
+      for (const int feature_dim : {5, 27}) {
+        SCOPED_TRACE(std::string(GemmKernelName(kernel)) + " hidden " + std::to_string(hidden) +
+                     " features " + std::to_string(feature_dim));
+        MlpConfig cfg;
+        cfg.num_products = 48;
+        cfg.feature_dim = feature_dim;
+        cfg.hidden = hidden;
+        AppearanceMlp portable, wide;
+        ASSERT_TRUE(portable.Init(cfg).ok());
+        ASSERT_TRUE(wide.Init(cfg).ok());
+        ASSERT_TRUE(portable.UseGemmKernel(GemmKernel::kPortable).ok());
+        ASSERT_TRUE(wide.UseGemmKernel(kernel).ok());
+        EXPECT_EQ(wide.gemm_kernel(), kernel);
+        const std::vector<float> params = RandomParams(portable, 11 + hidden, 0.5f);
+        ASSERT_TRUE(portable.SetParams(params.data(), params.size()).ok());
+        ASSERT_TRUE(wide.SetParams(params.data(), params.size()).ok());
+        std::vector<float> prod, vd;
+        const int rows = 70;
+        RandomInputs(rows, cfg.num_products, 5, &prod, &vd);
+        std::vector<float> a(rows * 3), b(rows * 3, -1.f), scratch(portable.ScratchFloats());
+        portable.Infer(rows, prod.data(), cfg.num_products, vd.data(), a.data(), scratch.data());
+        wide.Infer(rows, prod.data(), cfg.num_products, vd.data(), b.data(), scratch.data());
+        EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0);
+        ++checked;
+      }
+    }
+  }
+  std::printf("  %d configurations checked; widest kernel here: %s\n", checked,
+              GemmKernelName(BestGemmKernel()));
 }
 
 TEST(MlpTest, RejectsBadConfigAndParams) {

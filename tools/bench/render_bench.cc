@@ -185,6 +185,9 @@ Status BenchmarkRender(const SceneField& scene, int width, int height, int threa
       sec > 0 ? static_cast<double>(total.color_samples) / sec * 1e-6 : 0.0;
   result->samples_per_view = total.samples / static_cast<uint64_t>(views);
   result->color_samples_per_view = total.color_samples / static_cast<uint64_t>(views);
+  uint64_t hash = 14695981039346656037ull;
+  for (size_t i = 0; i < bytes; ++i) hash = (hash ^ image.data()[i]) * 1099511628211ull;
+  result->image_hash = hash;
   return Status::Ok();
 }
 
@@ -192,6 +195,7 @@ int RunRenderBench(int argc, char** argv) {
   int res = 128, width = 400, height = 400, views = 2;
   bool int16 = false, no_skip = false;
   std::string threads = "1,0", json_path;
+  std::vector<std::string> kernels = {"best"};
   auto app = MakeCommand(
       "bench render",
       "the renderer's speed on a synthetic res^3 blob scene (ranks 16/48, hidden 128, alpha "
@@ -215,8 +219,39 @@ int RunRenderBench(int argc, char** argv) {
   app->add_flag("--int16", int16, "int16 grids (as a decoded file holds them) instead of float32");
   app->add_flag("--no-skip", no_skip, "march every sample (no empty-space skipping)");
   AddThreadListFlag(app.get(), &threads);
+  app->add_option("--kernels", kernels,
+                  "MLP matrix kernels to time, one after the other: best (the one the decoder "
+                  "picks), all (every one this CPU runs: they give identical pixels), or a list "
+                  "of portable, avx2, avx512")
+      ->type_name("LIST")
+      ->delimiter(',')
+      ->capture_default_str();
   app->add_option("--json", json_path, "also write the figures as JSON")->type_name("FILE");
   if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
+  // The kernels to time; with one (the default) the JSON keys are those of earlier versions.
+  std::vector<GemmKernel> kernel_list;
+  for (const std::string& name : kernels) {
+    bool known = false;
+    for (const GemmKernel k : {GemmKernel::kPortable, GemmKernel::kAvx2, GemmKernel::kAvx512}) {
+      const bool wanted = name == GemmKernelName(k) || (name == "all" && GemmKernelAvailable(k)) ||
+                          (name == "best" && k == BestGemmKernel());
+      known |= wanted || name == "all" || name == "best";
+      if (!wanted) continue;
+      if (!GemmKernelAvailable(k)) {
+        std::fprintf(stderr, "bench render: the %s kernel does not run on this CPU or build\n",
+                     GemmKernelName(k));
+        return 2;
+      }
+      kernel_list.push_back(k);
+    }
+    if (!known) {
+      std::fprintf(stderr,
+                   "bench render: --kernels: unknown kernel '%s' (best, all, portable, avx2, "
+                   "avx512)\n",
+                   name.c_str());
+      return 2;
+    }
+  }
 
   SceneField scene;
   const auto t0 = std::chrono::steady_clock::now();
@@ -234,20 +269,36 @@ int RunRenderBench(int argc, char** argv) {
   BenchReport report;
   RenderOptions options;
   options.skip_empty_space = !no_skip;
-  for (int t : ThreadCounts(threads)) {
-    RenderBenchResult r;
-    if (const Status st = BenchmarkRender(scene, width, height, t, views, options, &r); !st.ok()) {
-      std::fprintf(stderr, "bench render: %s\n", st.message());
-      return 1;
+  uint64_t first_hash = 0;
+  bool identical = true;
+  for (size_t ki = 0; ki < kernel_list.size(); ++ki) {
+    const GemmKernel kernel = kernel_list[ki];
+    if (!scene.mlp.UseGemmKernel(kernel).ok()) return 1;  // checked available above
+    std::printf("MLP kernel: %s\n", GemmKernelName(kernel));
+    const std::string prefix =
+        kernel_list.size() > 1 ? std::string(GemmKernelName(kernel)) + "." : std::string();
+    for (int t : ThreadCounts(threads)) {
+      RenderBenchResult r;
+      if (const Status st = BenchmarkRender(scene, width, height, t, views, options, &r);
+          !st.ok()) {
+        std::fprintf(stderr, "bench render: %s\n", st.message());
+        return 1;
+      }
+      if (ki == 0 && first_hash == 0) first_hash = r.image_hash;
+      identical &= r.image_hash == first_hash;
+      const std::string key = prefix + "threads_" + std::to_string(t) + ".";
+      report.Add(key + "ms_per_view", r.ms_per_view, "ms");
+      report.Add(key + "msamples_per_s", r.msamples_per_s, "M samples/s");
+      report.Add(key + "mcolor_samples_per_s", r.mcolor_samples_per_s, "M MLP samples/s");
+      report.Add(key + "samples_per_view", static_cast<double>(r.samples_per_view), "samples");
+      report.Add(key + "color_samples_per_view", static_cast<double>(r.color_samples_per_view),
+                 "MLP samples");
     }
-    const std::string key = "threads_" + std::to_string(t) + ".";
-    report.Add(key + "ms_per_view", r.ms_per_view, "ms");
-    report.Add(key + "msamples_per_s", r.msamples_per_s, "M samples/s");
-    report.Add(key + "mcolor_samples_per_s", r.mcolor_samples_per_s, "M MLP samples/s");
-    report.Add(key + "samples_per_view", static_cast<double>(r.samples_per_view), "samples");
-    report.Add(key + "color_samples_per_view", static_cast<double>(r.color_samples_per_view),
-               "MLP samples");
   }
+  // Kernels and thread counts never change a pixel (decoder/mlp_gemm.h, SPEC.md 7.8).
+  std::printf("pixels of every kernel and thread count: %s\n",
+              identical ? "identical" : "DIFFERENT");
+  if (!identical) return 1;
   if (!json_path.empty() && !report.WriteJson(json_path)) {
     std::fprintf(stderr, "bench render: cannot write %s\n", json_path.c_str());
     return 1;

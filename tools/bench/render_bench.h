@@ -30,6 +30,7 @@ struct RenderBenchResult {
   double mcolor_samples_per_s = 0.0;  // MLP samples
   uint64_t samples_per_view = 0;
   uint64_t color_samples_per_view = 0;
+  uint64_t image_hash = 0;  // FNV-1a of the last view's RGBA bytes: equal hashes, equal pixels
 };
 
 // Renders `views` orbit views of width x height (after one warm-up view) and times them.

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "decoder/mlp_gemm.h"
 #include "tests/common/invoke.h"
 #include "tools/commands.h"
 
@@ -52,6 +53,32 @@ TEST(RenderBenchTest, CommandWritesItsFiguresAsJson) {
   }
   // The renderer's output does not depend on the thread count, nor its work.
   EXPECT_EQ(j.at("threads_1.samples_per_view"), j.at("threads_2.samples_per_view"));
+}
+
+// --kernels all: one figure set per MLP kernel this CPU runs, all with the portable kernel's
+// pixels (the command fails when a kernel's image differs); an unknown or unavailable kernel is a
+// usage error.
+TEST(RenderBenchTest, EveryMlpKernelIsTimedAndRendersThePortablePixels) {
+  const std::string json = ::testing::TempDir() + "/bench_render_kernels.json";
+  std::remove(json.c_str());
+  EXPECT_EQ(testing_cli::Invoke(RunEcrf, {"ecrf", "bench", "render", "--res", "16", "--width", "24",
+                                          "--height", "16", "--views", "1", "--threads", "1",
+                                          "--kernels", "all", "--json", json}),
+            0);
+  std::ifstream in(json);
+  ASSERT_TRUE(in) << json;
+  const nlohmann::json j = nlohmann::json::parse(in);
+  int kernels = 0;
+  for (const dec::GemmKernel k :
+       {dec::GemmKernel::kPortable, dec::GemmKernel::kAvx2, dec::GemmKernel::kAvx512}) {
+    const std::string key = std::string(dec::GemmKernelName(k)) + ".threads_1.samples_per_view";
+    EXPECT_EQ(j.contains(key), dec::GemmKernelAvailable(k)) << key;
+    kernels += j.contains(key);
+  }
+  EXPECT_EQ(j.size(), 5u * kernels);
+  EXPECT_EQ(testing_cli::Invoke(
+                RunEcrf, {"ecrf", "bench", "render", "--res", "16", "--kernels", "portable,sse9"}),
+            2);
 }
 
 }  // namespace
