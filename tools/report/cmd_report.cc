@@ -6,6 +6,7 @@
 
 #include "tools/cli.h"
 #include "tools/commands.h"
+#include "tools/report/component_drop.h"
 #include "tools/report/quant_sensitivity.h"
 #include "tools/report/report.h"
 #include "tools/subcommands.h"
@@ -88,6 +89,8 @@ int RunReport(int argc, char** argv) {
            "FILE.png]"},
           {"sensitivity", RunReportSensitivity,
            "where quantization costs PSNR, tensor by tensor: ecrf report sensitivity RUN"},
+          {"components", RunReportComponents,
+           "which components are worth their bits, a drop test each: ecrf report components RUN"},
           {"plot", RunReportPlot,
            "redraw the plots and index.html from REPORT/report.json: ecrf report plot REPORT"},
       },

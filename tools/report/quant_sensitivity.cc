@@ -19,8 +19,6 @@
 
 namespace ecrf {
 namespace tools {
-namespace {
-
 double RenderMse(const trainer::TensorfModel& model, int n, const float* origins, const float* dirs,
                  const float* rgb) {
   std::vector<float> out(static_cast<size_t>(n) * 3);
@@ -33,15 +31,9 @@ double RenderMse(const trainer::TensorfModel& model, int n, const float* origins
   return sum / static_cast<double>(out.size());
 }
 
-}  // namespace
-
-SensitivityReport MeasureQuantSensitivity(const trainer::TensorfModel& trained,
-                                          const std::vector<float>& steps,
-                                          const trainer::RateConfig& blocks, int mlp_max_level,
-                                          int n, const float* origins, const float* dirs,
-                                          const float* rgb, uint64_t seed, double noise_scale) {
-  if (steps.size() != 12) throw std::invalid_argument("sensitivity: 12 steps expected");
-  // The decoded model: what the file renders.
+trainer::TensorfModel DecodedModel(const trainer::TensorfModel& trained,
+                                   const std::vector<float>& steps,
+                                   const trainer::RateConfig& blocks, int mlp_max_level) {
   trainer::TensorfModel model = trained;
   trainer::VmGrid* grids[2] = {&model.density(), &model.appearance()};
   for (int g = 0; g < 2; ++g) {
@@ -54,6 +46,18 @@ SensitivityReport MeasureQuantSensitivity(const trainer::TensorfModel& trained,
     trainer::ReconstructQuantizedHead(model, mlp_max_level, &head);
     model.head().params() = std::move(head);
   }
+  return model;
+}
+
+SensitivityReport MeasureQuantSensitivity(const trainer::TensorfModel& trained,
+                                          const std::vector<float>& steps,
+                                          const trainer::RateConfig& blocks, int mlp_max_level,
+                                          int n, const float* origins, const float* dirs,
+                                          const float* rgb, uint64_t seed, double noise_scale) {
+  if (steps.size() != 12) throw std::invalid_argument("sensitivity: 12 steps expected");
+  // The decoded model: what the file renders.
+  trainer::TensorfModel model = DecodedModel(trained, steps, blocks, mlp_max_level);
+  trainer::VmGrid* grids[2] = {&model.density(), &model.appearance()};
   SensitivityReport report;
   report.rays = n;
   report.mse = RenderMse(model, n, origins, dirs, rgb);

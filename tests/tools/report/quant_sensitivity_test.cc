@@ -50,21 +50,11 @@ const std::vector<float>& Steps() {
 
 constexpr int kMlpMaxLevel = 7;
 
-// The model as its own file decodes it: quantizing it again changes nothing, so its renders are
-// the targets of a model at its optimum, where every perturbation costs (the curvature that the
-// measurement reads is positive, as at the end of a training run).
-trainer::TensorfModel DecodedModel(trainer::TensorfModel model) {
-  const std::vector<float>& steps = Steps();
-  trainer::VmGrid* grids[2] = {&model.density(), &model.appearance()};
-  for (int g = 0; g < 2; ++g) {
-    std::vector<float> q;
-    trainer::ReconstructQuantizedGrid(*grids[g], steps.data() + 6 * g, SmallBlocks(), &q);
-    grids[g]->params() = std::move(q);
-  }
-  std::vector<float> head;
-  trainer::ReconstructQuantizedHead(model, kMlpMaxLevel, &head);
-  model.head().params() = std::move(head);
-  return model;
+// The model as its own file decodes it (tools::DecodedModel): quantizing it again changes
+// nothing, so its renders are the targets of a model at its optimum, where every perturbation
+// costs (the curvature that the measurement reads is positive, as at the end of a training run).
+trainer::TensorfModel Decoded(const trainer::TensorfModel& model) {
+  return DecodedModel(model, Steps(), SmallBlocks(), kMlpMaxLevel);
 }
 
 struct Rays {
@@ -83,14 +73,14 @@ Rays MakeRays(const trainer::TensorfModel& model) {
 
 SensitivityReport Measure(const trainer::TensorfModel& model, double noise_scale = 1.0,
                           uint64_t seed = 3) {
-  static const Rays rays = MakeRays(DecodedModel(SmallModel()));
+  static const Rays rays = MakeRays(Decoded(SmallModel()));
   return MeasureQuantSensitivity(model, Steps(), SmallBlocks(), kMlpMaxLevel, rays.n,
                                  rays.origins.data(), rays.dirs.data(), rays.rgb.data(), seed,
                                  noise_scale);
 }
 
 TEST(QuantSensitivity, EveryCodedTensorCostsAndAnUncodedOneNothing) {
-  const SensitivityReport r = Measure(DecodedModel(SmallModel()));
+  const SensitivityReport r = Measure(Decoded(SmallModel()));
   ASSERT_EQ(r.tensors.size(), 12u);
   EXPECT_EQ(r.mse, 0.0);  // the targets are its own renders
   for (const TensorSensitivity& s : r.tensors) {
@@ -115,7 +105,7 @@ TEST(QuantSensitivity, EveryCodedTensorCostsAndAnUncodedOneNothing) {
 // The antithetic pair cancels the first-order term: half the noise costs a quarter (for noise
 // small enough that the second-order term dominates).
 TEST(QuantSensitivity, TheCostIsQuadraticInTheNoise) {
-  const trainer::TensorfModel model = DecodedModel(SmallModel());
+  const trainer::TensorfModel model = Decoded(SmallModel());
   const SensitivityReport full = Measure(model, 0.04), half = Measure(model, 0.02);
   int checked = 0;
   for (size_t t = 0; t < full.tensors.size(); ++t) {
@@ -129,7 +119,7 @@ TEST(QuantSensitivity, TheCostIsQuadraticInTheNoise) {
 }
 
 TEST(QuantSensitivity, BalancedStepsKeepTheRateAndEqualiseTheSlopes) {
-  const SensitivityReport r = Measure(DecodedModel(SmallModel()));
+  const SensitivityReport r = Measure(Decoded(SmallModel()));
   double rate_change = 0.0, lo = 1e300, hi = 0.0;
   for (const TensorSensitivity& s : r.tensors) {
     if (s.nonzero == 0) continue;
