@@ -92,10 +92,29 @@ double Pchip::Integral(double a, double b) const {
   return sum;
 }
 
-BdResult Bjontegaard(const std::vector<RdPoint>& anchor, const std::vector<RdPoint>& test) {
+std::vector<RdPoint> ParetoFront(const std::vector<RdPoint>& curve,
+                                 std::vector<RdPoint>* dominated) {
+  std::vector<RdPoint> front;
+  for (const RdPoint& p : curve) {
+    bool beaten = false;
+    for (const RdPoint& q : curve) {
+      beaten |= (q.rate <= p.rate && q.psnr > p.psnr) || (q.rate < p.rate && q.psnr >= p.psnr);
+    }
+    (beaten ? dominated : &front)->push_back(p);
+  }
+  return front;
+}
+
+BdResult Bjontegaard(const std::vector<RdPoint>& anchor_points,
+                     const std::vector<RdPoint>& test_points) {
   BdResult r;
+  // A point another point of its own curve beats (no larger and better, or smaller and no
+  // worse) is not on the curve: a codec reaches the better one at that size. Left in, it folds
+  // the curve back on itself and the interpolant over PSNR zigzags.
+  const std::vector<RdPoint> anchor = ParetoFront(anchor_points, &r.dominated[0]);
+  const std::vector<RdPoint> test = ParetoFront(test_points, &r.dominated[1]);
   if (anchor.size() < 2 || test.size() < 2) {
-    r.error = "each curve needs at least two points";
+    r.error = "each curve needs at least two points that no other point of it beats";
     return r;
   }
   // BD-rate integrates log10(rate) over PSNR; BD-PSNR integrates PSNR over log10(rate).

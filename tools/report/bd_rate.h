@@ -23,10 +23,17 @@ struct BdResult {
   double bd_psnr = 0.0;  // dB: mean PSNR change of test against anchor at equal rate
   double psnr_range[2] = {0.0, 0.0};  // the overlap BD-rate integrates over
   double rate_range[2] = {0.0, 0.0};  // the overlap BD-PSNR integrates over
+  std::vector<RdPoint> dominated[2];  // points of the anchor / test left out (ParetoFront)
 };
 
-// Needs >= 2 points per curve with distinct positive rates and distinct PSNRs, and overlapping
-// PSNR and rate ranges. Points may come in any order.
+// The points of `curve` that no other point of it beats: none has a rate no larger and a higher
+// PSNR, or a smaller rate and a PSNR no lower. The others go to *dominated (in input order).
+std::vector<RdPoint> ParetoFront(const std::vector<RdPoint>& curve,
+                                 std::vector<RdPoint>* dominated);
+
+// Over the Pareto fronts of both curves (dominated points are left out and listed in the
+// result). Needs >= 2 such points per curve with distinct positive rates and distinct PSNRs, and
+// overlapping PSNR and rate ranges. Points may come in any order.
 BdResult Bjontegaard(const std::vector<RdPoint>& anchor, const std::vector<RdPoint>& test);
 
 // Monotone piecewise cubic Hermite interpolant through (x[i], y[i]), x strictly increasing.

@@ -52,6 +52,15 @@ int RunReportCompare(int argc, char** argv) {
       r.psnr_range[1]);
   std::printf("  BD-PSNR %+.3f dB  (at the same size, over %.0f-%.0f bytes)\n", r.bd_psnr,
               r.rate_range[0], r.rate_range[1]);
+  nlohmann::json left_out[2];
+  for (int c = 0; c < 2; ++c) {
+    left_out[c] = nlohmann::json::array();
+    for (const RdPoint& p : r.dominated[c]) {
+      std::printf("  left out of %s: %.0f bytes at %.2f dB (a point of its own curve is better)\n",
+                  c == 0 ? "A" : "B", p.rate, p.psnr);
+      left_out[c].push_back({{"file_bytes", p.rate}, {"decoded_psnr", p.psnr}});
+    }
+  }
   if (!json_path.empty()) {
     const nlohmann::json j = {{"anchor", paths[0]},
                               {"test", paths[1]},
@@ -59,6 +68,8 @@ int RunReportCompare(int argc, char** argv) {
                               {"bd_psnr_db", r.bd_psnr},
                               {"psnr_range_db", {r.psnr_range[0], r.psnr_range[1]}},
                               {"rate_range_bytes", {r.rate_range[0], r.rate_range[1]}},
+                              {"anchor_points_left_out", left_out[0]},
+                              {"test_points_left_out", left_out[1]},
                               {"interpolation", "pchip"},
                               {"distortion", "decoded-file test PSNR"},
                               {"rate", "file bytes"}};

@@ -6,7 +6,7 @@
       name from report.json) and writes rd.png, ratio.png, chunks.png, curve.png and speed.png
       beside them: each plot whose CSV exists and has rows.
   plot_report.py --compare OUT.png COMPARE_CSV
-      Draws the rate-distortion curves of COMPARE_CSV (series,file_bytes,psnr) into OUT.png.
+      Draws the rate-distortion curves of COMPARE_CSV (series,file_bytes,psnr,left_out) into OUT.png.
 
 Prints one line per PNG written; each is written to a temporary file in its directory and renamed
 into place. Empty CSV cells mean "not available". Exit status: 0 done (a plot without data is
@@ -308,13 +308,21 @@ def plot_curve(scene, rows):
 
 
 def plot_compare(rows):
-    curves = {}
+    # The line joins each curve's Pareto front (what BD-rate integrates); points their own curve
+    # beats (left_out = 1) are drawn hollow in the curve's colour, off the line.
+    curves, left_out = {}, {}
     for r in rows:
         if positive(r["file_bytes"]) and r["psnr"] is not None:
-            curves.setdefault(r["series"], []).append((r["file_bytes"], r["psnr"]))
+            target = left_out if r["left_out"] else curves
+            target.setdefault(r["series"], []).append((r["file_bytes"], r["psnr"]))
     if not curves:
         return None
     fig, ax = plot_lines("rate–distortion comparison", BYTES_AXIS, curves)
+    for line, series in zip(ax.get_lines(), curves):
+        if series in left_out:
+            ax.plot(*zip(*sorted(left_out[series])), linestyle="none", marker=line.get_marker(),
+                    markersize=6, markerfacecolor="none", color=line.get_color(),
+                    label=f"{series}: left out (a point of its own curve is better)")
     log_x(ax, bytes_text)
     place_legend(ax)
     return fig
@@ -379,7 +387,7 @@ COLUMNS = {
     "chunks.csv": ["label", "chunk", "bytes#"],
     "curve.csv": ["label", "minutes#", "test_psnr#"],
     "speed.csv": ["knob", "setting", "is_default#", "seconds_per_view#", "psnr#"],
-    "compare": ["series", "file_bytes#", "psnr#"],
+    "compare": ["series", "file_bytes#", "psnr#", "left_out#"],
 }
 PLOTS = [("rd.png", plot_rd, ["rd.csv", "anchors.csv"]), ("ratio.png", plot_ratio, ["rd.csv", "anchors.csv"]),
          ("chunks.png", plot_chunks, ["chunks.csv"]), ("curve.png", plot_curve, ["curve.csv"]),

@@ -53,10 +53,11 @@ nlohmann::json ReadReport(const std::string& dir);
 // atomically. Returns false when the plots could not be drawn (and says why on stderr).
 bool WriteReport(const std::string& dir, const nlohmann::json& report);
 
-// compare.csv: series,file_bytes,psnr for each named curve.
+// compare.csv: series,file_bytes,psnr,left_out for each named curve (left_out 1: a point its own
+// curve beats, outside the Pareto front that BD-rate integrates).
 std::string CompareCsv(const std::vector<std::pair<std::string, std::vector<RdPoint>>>& curves);
 
-// Draws compare.csv (series,file_bytes,psnr) into png; false when it could not.
+// Draws compare.csv into png; false when it could not.
 bool DrawComparePlot(const std::string& png, const std::string& csv);
 
 // Writes `text` to path through a temporary file and a rename.

@@ -328,11 +328,15 @@ bool DrawPlots(const std::string& dir) { return RunPlotScript(Quote(dir), dir); 
 
 std::string CompareCsv(const std::vector<std::pair<std::string, std::vector<RdPoint>>>& curves) {
   std::ostringstream o;
-  o << "series,file_bytes,psnr\n";
+  o << "series,file_bytes,psnr,left_out\n";
   for (const auto& [name, points] : curves) {
+    std::vector<RdPoint> dominated;
+    ParetoFront(points, &dominated);
     for (const RdPoint& p : points) {
+      bool left_out = false;
+      for (const RdPoint& d : dominated) left_out |= d.rate == p.rate && d.psnr == p.psnr;
       o << Csv(name) << ',' << Num(nlohmann::json(p.rate), "%.0f") << ','
-        << Num(nlohmann::json(p.psnr), "%.6f") << '\n';
+        << Num(nlohmann::json(p.psnr), "%.6f") << ',' << (left_out ? 1 : 0) << '\n';
     }
   }
   return o.str();

@@ -65,6 +65,29 @@ TEST(BdRate, PointOrderDoesNotMatter) {
   EXPECT_DOUBLE_EQ(a.bd_psnr, b.bd_psnr);
 }
 
+// A point its own curve beats (here a lambda = 0 run larger and worse than a rate point, as in
+// the chair baseline) is left out of both integrals and listed: it would fold the curve back.
+TEST(BdRate, PointsTheirOwnCurveBeatsAreLeftOut) {
+  std::vector<RdPoint> with_dominated = kAnchor;
+  with_dominated.push_back({1000e3, 36.0});  // larger than 800e3 at 36.5 dB, and worse
+  with_dominated.push_back({400e3, 34.0});   // the size of 400e3 at 35.2 dB, and worse
+  const BdResult clean = Bjontegaard(kAnchor, Scaled(kAnchor, 0.8));
+  const BdResult r = Bjontegaard(with_dominated, Scaled(kAnchor, 0.8));
+  ASSERT_TRUE(r.ok) << r.error;
+  EXPECT_NEAR(r.bd_rate, clean.bd_rate, 1e-12);
+  EXPECT_NEAR(r.bd_psnr, clean.bd_psnr, 1e-12);
+  ASSERT_EQ(r.dominated[0].size(), 2u);
+  EXPECT_EQ(r.dominated[0][0].rate, 1000e3);
+  EXPECT_EQ(r.dominated[0][1].psnr, 34.0);
+  EXPECT_TRUE(r.dominated[1].empty());
+  // Without the front the same data gives another figure: the check has teeth.
+  std::vector<RdPoint> front_only;
+  std::vector<RdPoint> left;
+  front_only = ParetoFront(with_dominated, &left);
+  EXPECT_EQ(front_only.size(), kAnchor.size());
+  EXPECT_EQ(left.size(), 2u);
+}
+
 TEST(BdRate, RefusesWhatCannotBeCompared) {
   EXPECT_FALSE(Bjontegaard({kAnchor[0]}, kAnchor).ok);
   EXPECT_FALSE(Bjontegaard(kAnchor, {{1e5, 30.0}, {2e5, 30.0}}).ok);  // same PSNR twice
