@@ -32,6 +32,24 @@ inline trainer::TensorfConfig SmallTensorfConfig() {
   return c;
 }
 
+// A model every grid value of which shows in the colours, for tests that perturb the grids and
+// read the rendered error: ranks 4,4,4 for both grids (extents that are multiples of
+// SmallRateBlocks, so no edge padding), a dense medium (density shift +1), every sample coloured
+// (weight threshold 0: no sample switches on or off under a perturbation), grids initialised on a
+// 16^3 grid (seed 5), and a head 6x steeper than a fresh one, so that colours depend on the
+// features as a trained head's do.
+inline trainer::TensorfModel DenseSmallModel() {
+  trainer::TensorfConfig c = SmallTensorfConfig();
+  c.density_ranks = {4, 4, 4};
+  c.app_ranks = {4, 4, 4};
+  c.density_shift = 1.f;
+  c.weight_threshold = 0.f;
+  trainer::TensorfModel model(c);
+  model.Initialize({16, 16, 16}, 5);
+  for (float& w : model.head().params()) w *= 6.f;
+  return model;
+}
+
 // Plane blocks 4 x 8 x 4 (channel x H x W), line blocks 1 x 2 x 8.
 inline trainer::RateConfig SmallRateBlocks() {
   trainer::RateConfig b;

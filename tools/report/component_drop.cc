@@ -130,23 +130,10 @@ int RunReportComponents(int argc, char** argv) {
       ->type_name("FILE.ecrf");
   if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
 
-  const std::string ckpt = IsDirectory(run) ? run + "/checkpoint.ckpt" : run;
-  const trainer::CheckpointRunInfo info = trainer::ReadCheckpointRunInfo(ckpt);
-  if (!info.has_config)
-    throw std::runtime_error(ckpt + ": no stored configuration (an older ecrf wrote it)");
-  trainer::RateState rate;
-  const trainer::TensorfModel model = trainer::LoadModelFromCheckpoint(ckpt, &rate);
-  trainer::EncodeOptions o = trainer::RunEncodeOptions(info.config, rate);
-  if (!rate.active || o.steps.size() != 12)
-    o.steps = trainer::ChooseQuantSteps(model, o.blocks, info.config.coef_bits);
-  if (lambda_e < 0.0) lambda_e = info.lambda_e;
-  const trainer::Dataset data = trainer::LoadTrainingViews(info.config, "train");
-  trainer::RaySet set(data.views);
-  std::vector<float> origins(size_t(rays) * 3), dirs(size_t(rays) * 3), rgb(size_t(rays) * 3);
-  std::mt19937_64 rng(seed);
-  set.NextBatch(rays, rng, origins.data(), dirs.data(), rgb.data());
-  const ComponentReport r =
-      MeasureComponentCosts(model, o, lambda_e, rays, origins.data(), dirs.data(), rgb.data());
+  const TrainedRun t = LoadTrainedRun(run, rays, seed);
+  if (lambda_e < 0.0) lambda_e = t.info.lambda_e;
+  const ComponentReport r = MeasureComponentCosts(t.model, t.options, lambda_e, rays,
+                                                  t.origins.data(), t.dirs.data(), t.rgb.data());
 
   std::printf("%s: %zu bytes; decoded model on %d training rays: MSE %.4g (%.2f dB); lambda_e %g\n",
               run.c_str(), r.bytes, rays, r.mse, -10.0 * std::log10(r.mse), lambda_e);

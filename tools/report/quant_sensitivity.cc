@@ -49,6 +49,24 @@ trainer::TensorfModel DecodedModel(const trainer::TensorfModel& trained,
   return model;
 }
 
+TrainedRun LoadTrainedRun(const std::string& run, int rays, uint64_t seed) {
+  const std::string ckpt = IsDirectory(run) ? run + "/checkpoint.ckpt" : run;
+  trainer::CheckpointRunInfo info = trainer::ReadCheckpointRunInfo(ckpt);
+  if (!info.has_config)
+    throw std::runtime_error(ckpt + ": no stored configuration (an older ecrf wrote it)");
+  trainer::RateState rate;
+  TrainedRun t{info, trainer::LoadModelFromCheckpoint(ckpt, &rate), {}, rays, {}, {}, {}};
+  t.options = trainer::RunEncodeOptions(info.config, rate);
+  if (!rate.active || t.options.steps.size() != 12)
+    t.options.steps = trainer::ChooseQuantSteps(t.model, t.options.blocks, info.config.coef_bits);
+  const trainer::Dataset data = trainer::LoadTrainingViews(info.config, "train");
+  trainer::RaySet set(data.views);
+  for (std::vector<float>* v : {&t.origins, &t.dirs, &t.rgb}) v->resize(size_t(rays) * 3);
+  std::mt19937_64 rng(seed);
+  set.NextBatch(rays, rng, t.origins.data(), t.dirs.data(), t.rgb.data());
+  return t;
+}
+
 SensitivityReport MeasureQuantSensitivity(const trainer::TensorfModel& trained,
                                           const std::vector<float>& steps,
                                           const trainer::RateConfig& blocks, int mlp_max_level,
@@ -145,23 +163,11 @@ int RunReportSensitivity(int argc, char** argv) {
   app->add_option("--json", json_path, "also write the table as JSON")->type_name("FILE");
   if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
 
-  const std::string ckpt = IsDirectory(run) ? run + "/checkpoint.ckpt" : run;
-  const trainer::CheckpointRunInfo info = trainer::ReadCheckpointRunInfo(ckpt);
-  if (!info.has_config)
-    throw std::runtime_error(ckpt + ": no stored configuration (an older ecrf wrote it)");
-  trainer::RateState rate;
-  const trainer::TensorfModel model = trainer::LoadModelFromCheckpoint(ckpt, &rate);
-  trainer::EncodeOptions o = trainer::RunEncodeOptions(info.config, rate);
-  if (!rate.active || o.steps.size() != 12)
-    o.steps = trainer::ChooseQuantSteps(model, o.blocks, info.config.coef_bits);
-  const trainer::Dataset data = trainer::LoadTrainingViews(info.config, "train");
-  trainer::RaySet set(data.views);
-  std::vector<float> origins(size_t(rays) * 3), dirs(size_t(rays) * 3), rgb(size_t(rays) * 3);
-  std::mt19937_64 rng(seed);
-  set.NextBatch(rays, rng, origins.data(), dirs.data(), rgb.data());
+  const TrainedRun t = LoadTrainedRun(run, rays, seed);
+  const trainer::EncodeOptions& o = t.options;
   const SensitivityReport r =
-      MeasureQuantSensitivity(model, o.steps, o.blocks, o.mlp_max_level, rays, origins.data(),
-                              dirs.data(), rgb.data(), seed);
+      MeasureQuantSensitivity(t.model, o.steps, o.blocks, o.mlp_max_level, rays, t.origins.data(),
+                              t.dirs.data(), t.rgb.data(), seed);
 
   std::printf("%s: decoded model on %d training rays: MSE %.4g (%.2f dB)\n", run.c_str(), rays,
               r.mse, -10.0 * std::log10(r.mse));

@@ -23,7 +23,9 @@
 #include <vector>
 
 #include "encoder/coded_tensors.h"
+#include "encoder/scene_encoder.h"
 #include "trainer/model/tensorf_model.h"
+#include "trainer/train/trainer.h"
 
 namespace ecrf {
 namespace tools {
@@ -37,6 +39,19 @@ double RenderMse(const trainer::TensorfModel& model, int n, const float* origins
 trainer::TensorfModel DecodedModel(const trainer::TensorfModel& trained,
                                    const std::vector<float>& steps,
                                    const trainer::RateConfig& blocks, int mlp_max_level);
+
+// A trained run as the report commands probe it: its model, the options that encode it (the
+// run's own steps, blocks and head levels) and a batch of its training rays.
+struct TrainedRun {
+  trainer::CheckpointRunInfo info;
+  trainer::TensorfModel model;
+  trainer::EncodeOptions options;
+  int rays = 0;
+  std::vector<float> origins, dirs, rgb;  // rays x 3 each
+};
+// run: a run directory or its checkpoint.ckpt; the rays are drawn from the training views with
+// `seed`. Throws when the checkpoint has no stored configuration.
+TrainedRun LoadTrainedRun(const std::string& run, int rays, uint64_t seed);
 
 struct TensorSensitivity {
   std::string name;

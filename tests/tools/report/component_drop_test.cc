@@ -17,16 +17,7 @@ namespace ecrf {
 namespace tools {
 namespace {
 
-trainer::TensorfModel SmallModel() {
-  trainer::TensorfConfig c = testing_models::SmallTensorfConfig();
-  c.density_ranks = {4, 4, 4};
-  c.app_ranks = {4, 4, 4};
-  c.density_shift = 1.f;  // a dense medium: every component shows in the colours
-  trainer::TensorfModel model(c);
-  model.Initialize({16, 16, 16}, 5);
-  for (float& w : model.head().params()) w *= 6.f;
-  return model;
-}
+trainer::TensorfModel SmallModel() { return testing_models::DenseSmallModel(); }
 
 trainer::EncodeOptions Options() {
   trainer::EncodeOptions o;

@@ -17,23 +17,7 @@ namespace ecrf {
 namespace tools {
 namespace {
 
-trainer::TensorfModel SmallModel() {
-  trainer::TensorfConfig c = testing_models::SmallTensorfConfig();
-  // Extents that are multiples of the block shapes: no edge padding, so the decoded model decodes
-  // to itself.
-  c.density_ranks = {4, 4, 4};
-  c.app_ranks = {4, 4, 4};
-  c.density_shift = 1.f;  // a dense medium: every tensor shows in the colours
-  // Every sample coloured: no threshold that switches a sample on or off under the noise, so the
-  // rendered error is a smooth function of the grids.
-  c.weight_threshold = 0.f;
-  trainer::TensorfModel model(c);
-  model.Initialize({16, 16, 16}, 5);
-  // A fresh head maps every feature to about the same grey; a steeper one makes the colours
-  // depend on the grids, as a trained head does.
-  for (float& w : model.head().params()) w *= 6.f;
-  return model;
-}
+trainer::TensorfModel SmallModel() { return testing_models::DenseSmallModel(); }
 
 trainer::RateConfig SmallBlocks() { return testing_models::SmallRateBlocks(); }
 
