@@ -17,8 +17,9 @@ scenes=("$@")
 [ ${#scenes[@]} -gt 0 ] || scenes=(chair mic)
 for scene in "${scenes[@]}"; do
   out="docs/reports/baseline_2026_11/$scene"
+  # --iters 3000: the baseline's schedule (the low and medium rate points train 4500 since #31).
   "$ecrf" report sweep --data "$data_root/$scene" --rates none,low,medium,high --lambdas 1e-10,6e-11 \
-    --eval-every 0 --anchors docs/reports/anchors_paper.json -o "$out"
+    --iters 3000 --eval-every 0 --anchors docs/reports/anchors_paper.json -o "$out"
   # Keep what describes each run (settings and scores), not the checkpoints and files.
   find "$out/runs" -type f ! -name config.json ! -name metrics.json -delete
 done

@@ -360,6 +360,7 @@ trainer::TrainOptions FinishTrainFlags(const CLI::App& app, TrainFlags* f) {
   settings_given.ranks = rate || given("--ranks");
   settings_given.schedule =
       rate || given("--final-grid") || given("--upsample-at") || given("--rate-start");
+  settings_given.iters = rate || given("--iters");
   trainer::ApplyTargetSizeDefaults(&o, settings_given);
   // Stopping on purpose keeps the work: a checkpoint is written at the stop.
   if (o.stop_after > 0 && o.checkpoint_every == 0) o.checkpoint_every = o.stop_after;

@@ -96,8 +96,10 @@ TEST(TrainFlags, FinalGridSetsWhereUpsamplingEnds) {
 }
 
 TEST(TrainFlags, UpsampleAtAndMaskAtMoveTheScheduleAndTheRatePhaseFollows) {
+  // At the preset's own 3000 iterations the milestones fall where they are stated (the default
+  // medium point trains 4500, and they scale with it).
   const trainer::TrainOptions o =
-      Parse({"--upsample-at", "200,400,600,800,1000", "--rate-start", "0.1"});
+      Parse({"--upsample-at", "200,400,600,800,1000", "--rate-start", "0.1", "--iters", "3000"});
   EXPECT_EQ(o.upsample_iters, (std::vector<int>{200, 400, 600, 800, 1000}));
   // The rate phase still waits for the last upsampling and the last mask update (fast: 900).
   EXPECT_EQ(trainer::RateStartIteration(o), 1001);
@@ -106,8 +108,8 @@ TEST(TrainFlags, UpsampleAtAndMaskAtMoveTheScheduleAndTheRatePhaseFollows) {
     EXPECT_THROW(Parse({"--upsample-at", bad}), std::invalid_argument) << bad;
     EXPECT_THROW(Parse({"--mask-at", bad}), std::invalid_argument) << bad;
   }
-  const trainer::TrainOptions early = Parse(
-      {"--upsample-at", "100,200,300,400,500", "--mask-at", "200,600", "--rate-start", "0.1"});
+  const trainer::TrainOptions early = Parse({"--upsample-at", "100,200,300,400,500", "--mask-at",
+                                             "200,600", "--rate-start", "0.1", "--iters", "3000"});
   EXPECT_EQ(early.alpha_mask_iters, (std::vector<int>{200, 600}));
   EXPECT_EQ(trainer::RateStartIteration(early), 601);
 }

@@ -165,15 +165,15 @@ struct TargetSizeFlagsGiven {
   bool mlp_levels = false;  // --mlp-levels or --rate
   bool ranks = false;       // --ranks or --rate
   bool schedule = false;    // --final-grid, --upsample-at, --rate-start or --rate
+  bool iters = false;       // --iters or --rate
 };
 
 // --target-size: the step scale of the nearest named rate point, by the target's share of
 // NominalFloat32GridBytes; below 3% (chair-400 `fast`: 750 KB) also the low and medium points'
-// grid schedule and the point's MLP levels, and below 1.6% (400 KB) at most 32 appearance
-// components (ApplyRatePoint). On
-// chair-400 `fast` (docs/reports/chair_v2) steps x4 win below that share, x3 up to about 3%, and
-// x2 above: never x1, so that encode-time rate control (encoder/encode_rate_control.h) can refine
-// the steps when training ends below the target.
+// grid schedule and iterations and the point's MLP levels, and below 1.6% (400 KB) at most 32
+// appearance components (ApplyRatePoint). On chair-400 `fast` (docs/reports/chair_v2) steps x4 win
+// below that share, x3 up to about 3%, and x2 above: never x1, so that encode-time rate control
+// (encoder/encode_rate_control.h) can refine the steps when training ends below the target.
 void ApplyTargetSizeDefaults(TrainOptions* options, const TargetSizeFlagsGiven& given);
 
 // What a run's metrics record as its data: the procedural scene's name or the data directory.

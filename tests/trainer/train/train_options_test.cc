@@ -92,7 +92,10 @@ TEST(RatePoints, NamedPointsSetLambdaStepsAndMlpLevels) {
   // A finer final grid, reached earlier: the rate phase starts after the upsampling at 1000.
   EXPECT_EQ(o.voxels_final, 220L * 220 * 220);
   EXPECT_EQ(o.upsample_iters, (std::vector<int>{200, 400, 600, 800, 1000}));
-  EXPECT_EQ(RateStartIteration(o), 1001);
+  EXPECT_EQ(RateStartIteration(o), 1501);  // 1000 of the 3000-iteration schedule, at 4500
+  // 1.5x the preset's iterations; the milestones scale with them.
+  EXPECT_EQ(o.iters, 4500);
+  EXPECT_EQ(o.reference_iters, 3000);
   TrainOptions tiny = PresetOptions("tiny");  // already below 32 appearance components
   ApplyRatePoint("low", &tiny);
   EXPECT_EQ(tiny.appearance_rank, 24);
@@ -101,6 +104,7 @@ TEST(RatePoints, NamedPointsSetLambdaStepsAndMlpLevels) {
   EXPECT_EQ(tiny.voxels_final, PresetOptions("tiny").voxels_final);
   EXPECT_EQ(tiny.upsample_iters, PresetOptions("tiny").upsample_iters);
   EXPECT_EQ(RateStartIteration(tiny), RateStartIteration(PresetOptions("tiny")));
+  EXPECT_EQ(tiny.iters, PresetOptions("tiny").iters);
   TrainOptions medium = PresetOptions("fast");
   ApplyRatePoint("medium", &medium);
   EXPECT_EQ(medium.lambda_e, 3e-11f);
@@ -108,12 +112,14 @@ TEST(RatePoints, NamedPointsSetLambdaStepsAndMlpLevels) {
   EXPECT_EQ(medium.mlp_levels, 31);
   EXPECT_EQ(medium.appearance_rank, 48);
   EXPECT_EQ(medium.voxels_final, 220L * 220 * 220);  // the low point's grid schedule
-  EXPECT_EQ(RateStartIteration(medium), 1001);
+  EXPECT_EQ(medium.iters, 4500);
+  EXPECT_EQ(RateStartIteration(medium), 1501);
   TrainOptions high = PresetOptions("fast");
   ApplyRatePoint("high", &high);
   EXPECT_EQ(high.quant_step_scale, 1.0f);
   EXPECT_EQ(high.voxels_final, 180L * 180 * 180);  // the preset's schedule
   EXPECT_EQ(RateStartIteration(high), RateStartIteration(PresetOptions("fast")));
+  EXPECT_EQ(high.iters, 3000);
   EXPECT_THROW(ApplyRatePoint("extreme", &o), std::invalid_argument);
 }
 
@@ -127,10 +133,11 @@ TEST(RatePoints, TargetSizeTakesTheStepsOfTheNearestRatePoint) {
     int levels;
     int appearance_rank;
     long voxels_final;
-  } cases[] = {{300000, 4.f, 15, 32, 220L * 220 * 220},
-               {600000, 3.f, 31, 48, 220L * 220 * 220},
-               {1000000, 2.f, 127, 48, 180L * 180 * 180},
-               {5000000, 2.f, 127, 48, 180L * 180 * 180}};
+    int iters;
+  } cases[] = {{300000, 4.f, 15, 32, 220L * 220 * 220, 4500},
+               {600000, 3.f, 31, 48, 220L * 220 * 220, 4500},
+               {1000000, 2.f, 127, 48, 180L * 180 * 180, 3000},
+               {5000000, 2.f, 127, 48, 180L * 180 * 180, 3000}};
   for (const Case& c : cases) {
     TrainOptions t = o;
     t.target_bytes = c.target;
@@ -140,6 +147,7 @@ TEST(RatePoints, TargetSizeTakesTheStepsOfTheNearestRatePoint) {
     EXPECT_EQ(t.appearance_rank, c.appearance_rank) << c.target;
     EXPECT_EQ(t.density_rank, 16) << c.target;
     EXPECT_EQ(t.voxels_final, c.voxels_final) << c.target;
+    EXPECT_EQ(t.iters, c.iters) << c.target;
   }
   // What the user gave stays; without a target nothing changes.
   TrainOptions given = o;
@@ -148,8 +156,10 @@ TEST(RatePoints, TargetSizeTakesTheStepsOfTheNearestRatePoint) {
   given.mlp_levels = 63;
   given.appearance_rank = 40;
   TargetSizeFlagsGiven all;
-  all.step_scale = all.mlp_levels = all.ranks = all.schedule = true;
+  given.iters = 2000;
+  all.step_scale = all.mlp_levels = all.ranks = all.schedule = all.iters = true;
   ApplyTargetSizeDefaults(&given, all);
+  EXPECT_EQ(given.iters, 2000);
   EXPECT_EQ(given.quant_step_scale, 2.5f);
   EXPECT_EQ(given.mlp_levels, 63);
   EXPECT_EQ(given.appearance_rank, 40);
