@@ -69,7 +69,9 @@ fi
 
 # 64-bit and 32-bit ARM, the small devices the decoder is for: Debian's cross compilers, the
 # checker linked statically and run under qemu-user (no target sysroot needed at run time).
+# Each checker runs single-threaded under qemu for about a minute: both run side by side.
 if [ "${ECRF_MATRIX_ARM:-1}" != 0 ]; then
+  arm_runs=()
   for target in aarch64-linux-gnu:qemu-aarch64 arm-linux-gnueabihf:qemu-arm; do
     IFS=: read -r triple qemu <<<"$target"
     if command -v "$triple-g++" >/dev/null && command -v "$qemu" >/dev/null; then
@@ -77,12 +79,14 @@ if [ "${ECRF_MATRIX_ARM:-1}" != 0 ]; then
       echo "== $name (under $qemu)"
       LINK_EXTRA=(-static -pthread)
       build "$name" "$triple-g++" checker -O2
-      "$qemu" "$OUT/$name/checker" tests/conformance >"$OUT/$name/out.txt" || status=1
+      "$qemu" "$OUT/$name/checker" tests/conformance >"$OUT/$name/out.txt" &
+      arm_runs+=($!)
       configs+=("$name:$triple-g++:-O2")
     else
       echo "($triple-g++ or $qemu not installed: $triple skipped)"
     fi
   done
+  for p in "${arm_runs[@]}"; do wait "$p" || status=1; done
 fi
 
 for c in "${configs[@]}"; do

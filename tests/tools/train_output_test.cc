@@ -101,8 +101,8 @@ TEST_F(TrainOutputTest, ExistingRunIsRefusedUnlessResumedOrOverwritten) {
 TEST_F(TrainOutputTest, EvalDownscaleIsRecordedWithSamplesPerRay) {
   const std::string out = root_ + "/run";
   Invoke(RunTrain,
-         {"train", "--scene", "builtin", "--iters", "300", "--batch", "1024", "--lambda-e", "0",
-          "--eval-downscale", "2", "--max-test-views", "2", "-o", out});
+         {"train", "--scene", "builtin", "--iters", "160", "--batch", "512", "--final-grid", "48",
+          "--lambda-e", "0", "--eval-downscale", "2", "--max-test-views", "2", "-o", out});
   std::FILE* f = std::fopen((out + "/metrics.json").c_str(), "rb");
   ASSERT_NE(f, nullptr);
   std::string text;

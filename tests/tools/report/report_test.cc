@@ -136,10 +136,10 @@ void SpeedRowsObeyWhatTheSpecPromises() {
 void SweepResumesFromFinishedRunsAndRefusesIncompatibleOnes() {
   const nlohmann::json before = ReadJson(dir_ + "/report.json");
   // Same sweep again: nothing is trained (the runs' metrics are reused), the points are the same.
-  ASSERT_EQ(
-      Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "--lambdas", "0,1e-8@2",
-                         "--iters", "150", "--max-test-views", "4", "--seed", "7", "-o", dir_}),
-      0);
+  ASSERT_EQ(Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "--lambdas", "0,1e-8@2",
+                               "--iters", "150", "--batch", "512", "--final-grid", "48",
+                               "--max-test-views", "4", "--seed", "7", "-o", dir_}),
+            0);
   const nlohmann::json after = ReadJson(dir_ + "/report.json");
   EXPECT_EQ(after["points"], before["points"]);
   // A point's own step scale names its run and labels it.
@@ -151,8 +151,9 @@ void SweepResumesFromFinishedRunsAndRefusesIncompatibleOnes() {
   EXPECT_TRUE(after.contains("speed"));
   // Other iterations: the finished runs no longer match, and the sweep says so.
   try {
-    Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "--lambdas", "0", "--iters", "151",
-                       "--max-test-views", "4", "--seed", "7", "-o", dir_});
+    Invoke(RunReport,
+           {"report", "sweep", "--scene", "builtin", "--lambdas", "0", "--iters", "151", "--batch",
+            "512", "--final-grid", "48", "--max-test-views", "4", "--seed", "7", "-o", dir_});
     ADD_FAILURE() << "an incompatible finished run was reused";
   } catch (const std::exception& e) {
     // The run's config.json against the sweep's settings, named as config.json names them.
@@ -175,9 +176,11 @@ TEST(Report, BuiltinSweepMatchesEvalResumesAndCompares) {
   root_ = tmpl;
   dir_ = root_ + "/nested/report";  // parents do not exist yet
   // Plots are drawn when matplotlib is installed; the checks below read the tables either way.
-  ASSERT_EQ(Invoke(RunReport,
-                   {"report", "sweep", "--scene", "builtin", "--lambdas", "0,1e-8@2", "--iters",
-                    "150", "--max-test-views", "4", "--seed", "7", "--threads", "2", "-o", dir_}),
+  ASSERT_EQ(Invoke(RunReport, {"report",           "sweep",    "--scene",      "builtin",
+                               "--lambdas",        "0,1e-8@2", "--iters",      "150",
+                               "--batch",          "512",      "--final-grid", "48",
+                               "--max-test-views", "4",        "--seed",       "7",
+                               "--threads",        "2",        "-o",           dir_}),
             0);
   ASSERT_EQ(Invoke(RunReport, {"report", "render", dir_, "--test-stride", "1"}), 0);
   {

@@ -144,13 +144,10 @@ TEST(TrainBuiltin, TargetSizeLands) {
   o.iters = 600;  // rate phase from 321 (after the last upsample at 320)
   const Dataset train = LoadTrainingViews(o, "train");
   const Dataset test = LoadTrainingViews(o, "test");
-  TensorfModel plain(ConfigFor(o, train));
-  RateState plain_rate;
-  Train(o, train, test, &plain, &plain_rate);
-  const size_t plain_bytes = EncodeScene(plain, RunEncodeOptions(o, plain_rate)).size();
-
+  // About a third of what this run writes without a target (249,568 bytes with g++ 12 on
+  // x86-64): a fixed number rather than a second training, which doubled the test's time.
   TrainOptions t = o;
-  t.target_bytes = plain_bytes / 3;
+  t.target_bytes = 83000;
   t.rate_control_every = 25;
   t.qat_start = 0.7f;
   TensorfModel model(ConfigFor(t, train));
@@ -161,10 +158,10 @@ TEST(TrainBuiltin, TargetSizeLands) {
   const double trained_psnr = DecodedPsnr(trained, test);
   const double fit_psnr = DecodedPsnr(fit.bytes, test);
   std::printf(
-      "  plain file %zu bytes; target %zu: trained to %zu bytes (lambda_e %g, %.2f dB decoded), "
+      "  target %zu: trained to %zu bytes (lambda_e %g, %.2f dB decoded), "
       "encoded "
       "%zu bytes (steps x%.3f, %.2f dB decoded); float model %.2f dB\n",
-      plain_bytes, t.target_bytes, trained.size(), r.final_lambda_e, trained_psnr, fit.bytes.size(),
+      t.target_bytes, trained.size(), r.final_lambda_e, trained_psnr, fit.bytes.size(),
       fit.step_scale, fit_psnr, r.test.psnr);
   EXPECT_LE(fit.bytes.size(), t.target_bytes);
   EXPECT_GE(double(fit.bytes.size()), 0.95 * double(t.target_bytes));
