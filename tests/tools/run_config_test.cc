@@ -77,13 +77,6 @@ TEST_F(RunConfigTest, EncodeRunRebuildsTheFileTrainWroteForEveryRatePoint) {
   EXPECT_GT(Bytes(low + "/f16.ecrf").size(), Bytes(low + "/scene.ecrf").size());
 }
 
-TEST_F(RunConfigTest, EncodeRunKeepsTheTargetSize) {
-  const std::string run = Train("target", {"--target-size", "50KB"});
-  ASSERT_EQ(Invoke(RunEncode, {"encode", run, "-o", run + "/again.ecrf"}), 0);
-  EXPECT_EQ(Bytes(run + "/again.ecrf"), Bytes(run + "/scene.ecrf"));
-  EXPECT_LE(Bytes(run + "/scene.ecrf").size(), 50000u);
-}
-
 TEST_F(RunConfigTest, LambdaEAtTheDefaultValueWritesTheDefaultRunsBytes) {
   const std::string plain = Train("default", {});
   trainer::TrainOptions medium = trainer::PresetOptions("tiny");
@@ -97,22 +90,38 @@ TEST_F(RunConfigTest, LambdaEAtTheDefaultValueWritesTheDefaultRunsBytes) {
 TEST_F(RunConfigTest, ASweepPointWritesTheBytesOfTheTrainRunOfItsSettings) {
   std::vector<std::string> sweep = {"report", "sweep"};
   sweep.insert(sweep.end(), kSmallRun.begin(), kSmallRun.end());
-  sweep.insert(sweep.end(), {"--rates", "high", "--lambdas", "1e-10", "-o", root_ + "/report"});
+  sweep.insert(sweep.end(), {"--rates", "high", "--targets", "50KB", "--lambdas", "1e-10", "-o",
+                             root_ + "/report"});
   ASSERT_EQ(Invoke(RunReportSweep, std::vector<std::string>(sweep.begin() + 1, sweep.end())), 0);
   const std::string high = Train("high", {"--rate", "high"});
+  const std::string target = Train("target", {"--target-size", "50KB"});
   const std::string lambda = Train("lambda", {"--lambda-e", "1e-10"});
   EXPECT_EQ(Bytes(root_ + "/report/runs/rate_high/scene.ecrf"), Bytes(high + "/scene.ecrf"));
+  EXPECT_EQ(Bytes(root_ + "/report/runs/target_50KB/scene.ecrf"), Bytes(target + "/scene.ecrf"));
   EXPECT_EQ(Bytes(root_ + "/report/runs/lambda_1e-10_steps3/scene.ecrf"),
             Bytes(lambda + "/scene.ecrf"));
+  // `ecrf encode RUN` keeps the run's target size: the same bytes, within the size.
+  ASSERT_EQ(Invoke(RunEncode, {"encode", target, "-o", target + "/again.ecrf"}), 0);
+  EXPECT_EQ(Bytes(target + "/again.ecrf"), Bytes(target + "/scene.ecrf"));
+  EXPECT_LE(Bytes(target + "/scene.ecrf").size(), 50000u);
   // report.json records each point's configuration and rate point.
   const nlohmann::json report = ReadReport(root_ + "/report");
-  ASSERT_EQ(report["points"].size(), 2u);
+  ASSERT_EQ(report["points"].size(), 3u);
   for (const nlohmann::json& p : report["points"]) {
     ASSERT_TRUE(p.contains("config"));
     const trainer::TrainOptions c = trainer::TrainConfigFromJson(p["config"].dump(), "report.json");
-    EXPECT_EQ(p["rate_point"], c.rate_point == "medium" ? "medium base" : c.rate_point);
-    EXPECT_FLOAT_EQ(float(p["lambda_e"].get<double>()), c.lambda_e);
+    const std::string expected = c.target_bytes > 0         ? "target 50KB"
+                                 : c.rate_point == "medium" ? "medium base"
+                                                            : c.rate_point;
+    EXPECT_EQ(p["rate_point"], expected);
+    if (c.target_bytes == 0) EXPECT_FLOAT_EQ(float(p["lambda_e"].get<double>()), c.lambda_e);
   }
+  // A size that cannot name a run directory is refused before anything trains.
+  std::vector<std::string> bad(sweep.begin() + 1, sweep.end());
+  for (std::string& a : bad) {
+    if (a == "50KB") a = "50 KB";
+  }
+  EXPECT_THROW(Invoke(RunReportSweep, bad), std::invalid_argument);
 }
 
 TEST_F(RunConfigTest, ResumeRefusesChangedSettingsUnlessAccepted) {

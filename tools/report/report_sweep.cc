@@ -4,6 +4,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <climits>
 #include <cmath>
@@ -40,16 +41,19 @@ std::string SceneName(const trainer::TrainOptions& o) {
   return slash == std::string::npos ? d : d.substr(slash + 1);
 }
 
-// One run of the sweep: a named rate point (--rate R) or a lambda_e on the sweep's base (--lambda-e
-// X, with --quant-step-scale S for "X@S"), resolved like the same `ecrf train` command line.
+// One run of the sweep: a named rate point (--rate R), a file size (--target-size SIZE) or a
+// lambda_e on the sweep's base (--lambda-e X, with --quant-step-scale S for "X@S"), resolved like
+// the same `ecrf train` command line.
 struct SweepPoint {
-  std::string rate;  // "" for a lambda point
+  std::string rate;    // "" for a lambda or size point
+  std::string target;  // "" for a lambda or rate point
   double lambda = 0.0;
   float step_scale = 0.0f;  // 0: the base's
 };
 
 std::vector<std::string> PointArgs(const SweepPoint& p) {
   if (!p.rate.empty()) return {"--rate", p.rate};
+  if (!p.target.empty()) return {"--target-size", p.target};
   char text[32];
   std::snprintf(text, sizeof(text), "%.9g", p.lambda);
   std::vector<std::string> args = {"--lambda-e", text};
@@ -61,7 +65,26 @@ std::vector<std::string> PointArgs(const SweepPoint& p) {
 }
 
 std::string PointName(const SweepPoint& p, const trainer::TrainOptions& resolved) {
+  if (!p.target.empty()) return "target_" + p.target;
   return p.rate.empty() ? LambdaText(p.lambda, resolved.quant_step_scale) : "rate_" + p.rate;
+}
+
+// "316KB,127KB": file sizes, one --target-size run each. The text names the run directory, so it
+// is kept to letters, digits and '.'; `ecrf train` parses and checks the size itself.
+std::vector<SweepPoint> ParseTargets(const std::string& text) {
+  std::vector<SweepPoint> out;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    const bool plain = !item.empty() && std::all_of(item.begin(), item.end(), [](char c) {
+      return std::isalnum(static_cast<unsigned char>(c)) || c == '.';
+    });
+    if (!plain) throw std::invalid_argument("--targets: '" + item + "' is not a size like 316KB");
+    SweepPoint p;
+    p.target = item;
+    out.push_back(p);
+  }
+  return out;
 }
 
 // "low,medium,high": named rate points.
@@ -229,7 +252,8 @@ std::vector<std::string> TrainArgs(const std::vector<std::string>& args) {
   for (size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
     bool with_value = false, sweep_flag = a == "--render";
-    for (const char* f : {"--lambdas", "--rates", "--anchors", "--reference", "-o", "--out"}) {
+    for (const char* f :
+         {"--lambdas", "--rates", "--targets", "--anchors", "--reference", "-o", "--out"}) {
       if (a == f) with_value = sweep_flag = true;
       if (a.rfind(std::string(f) + "=", 0) == 0) sweep_flag = true;
     }
@@ -246,21 +270,26 @@ int RunReportSweep(int argc, char** argv) {
       "report sweep",
       "One `ecrf train` run per rate point, each encoded, decoded and scored, then the "
       "rate-distortion report. Each point is the run `ecrf train` makes with the shared flags "
-      "plus --rate R (for --rates) or --lambda-e X (for --lambdas, on the same base as train: "
-      "the medium point unless --rate or --preset say otherwise), so both write the same bytes.\n"
-      "usage: ecrf report sweep (--data DIR | --scene NAME) (--rates R,... | --lambdas L,...) "
-      "-o REPORT_DIR [train options]");
+      "plus --rate R (for --rates), --target-size S (for --targets) or --lambda-e X (for "
+      "--lambdas, on the same base as train: the medium point unless --rate or --preset say "
+      "otherwise), so both write the same bytes.\n"
+      "usage: ecrf report sweep (--data DIR | --scene NAME) (--rates R,... | --targets S,... | "
+      "--lambdas L,...) -o REPORT_DIR [train options]");
   const std::vector<std::string> args(argv + 1, argv + argc);
   TrainFlags flags;
   flags.options = BaseTrainOptions(args);
   AddTrainFlags(app.get(), &flags);
-  std::string out, lambdas_text, rates_text, anchors_path, reference_dir;
+  std::string out, lambdas_text, rates_text, targets_text, anchors_path, reference_dir;
   bool render = false;
   app->add_option("-o,--out", out, "report directory (runs/ holds one run per point)")
       ->type_name("REPORT_DIR");
   app->add_option("--rates", rates_text,
                   "named rate points, one run each (e.g. low,medium,high; none: lambda_e 0)")
       ->type_name("R1,R2,...");
+  app->add_option("--targets", targets_text,
+                  "file sizes, one `ecrf train --target-size` run each (e.g. 316KB,127KB: the "
+                  "settings of the nearest rate point, lambda_e adapted while training)")
+      ->type_name("S1,S2,...");
   app->add_option(
          "--lambdas", lambdas_text,
          "one run per lambda_e on the base; L@S also sets the step scale S (e.g. 0,1e-10,5e-11@2); "
@@ -277,15 +306,17 @@ int RunReportSweep(int argc, char** argv) {
       ->type_name("REPORT_DIR");
   trainer::TrainOptions o;
   if (const int rc = ParseTrainCommandLine(app.get(), &flags, argc, argv, &o); rc >= 0) return rc;
-  if (out.empty() || (lambdas_text.empty() && rates_text.empty()) ||
+  if (out.empty() || (lambdas_text.empty() && rates_text.empty() && targets_text.empty()) ||
       trainer::DataSource(o).empty()) {
     std::fprintf(
         stderr,
-        "ecrf report sweep: error: needs --data DIR or --scene NAME, --rates or --lambdas, and -o; "
+        "ecrf report sweep: error: needs --data DIR or --scene NAME, --rates, --targets or "
+        "--lambdas, and -o; "
         "see 'ecrf report sweep --help'\n");
     return 2;
   }
   std::vector<SweepPoint> points = ParseRates(rates_text);
+  for (const SweepPoint& p : ParseTargets(targets_text)) points.push_back(p);
   for (const SweepPoint& p : ParsePoints(lambdas_text)) points.push_back(p);
   // Each point's options, resolved as `ecrf train` resolves its command line. Every point scores
   // the float model too (the report's quantization-loss column), on every 10th test view unless
@@ -326,7 +357,9 @@ int RunReportSweep(int argc, char** argv) {
   for (size_t k = 0; k < runs.size(); ++k) {
     lambdas.push_back(runs[k].lambda_e);
     step_scales.push_back(runs[k].quant_step_scale);
-    rate_points.push_back(points[k].rate.empty() ? runs[k].rate_point + " base" : points[k].rate);
+    rate_points.push_back(!points[k].target.empty() ? "target " + points[k].target
+                          : points[k].rate.empty()  ? runs[k].rate_point + " base"
+                                                    : points[k].rate);
   }
   report["scene"] = SceneName(o);
   report["data"] = trainer::DataSource(o);
@@ -385,8 +418,8 @@ int RunReportSweep(int argc, char** argv) {
     }
     nlohmann::json point = RatePointFromMetrics(metrics, "runs/" + names[k]);
     point["rate_point"] = rate_points[k];
-    if (!points[k].rate.empty())
-      point["label"] = points[k].rate + " (" + point["label"].get<std::string>() + ")";
+    if (!points[k].rate.empty() || !points[k].target.empty())
+      point["label"] = rate_points[k] + " (" + point["label"].get<std::string>() + ")";
     // The point's whole configuration: what `ecrf train` needs to write the same file.
     point["config"] = nlohmann::json::parse(trainer::TrainConfigToJson(run, -1));
     point["config"]["bookkeeping"].erase("out_dir");
