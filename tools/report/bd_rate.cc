@@ -141,19 +141,45 @@ BdResult Bjontegaard(const std::vector<RdPoint>& anchor_points,
   const double phi = std::min(a_by_psnr.back().first, t_by_psnr.back().first);
   const double rlo = std::max(a_by_rate.front().first, t_by_rate.front().first);
   const double rhi = std::min(a_by_rate.back().first, t_by_rate.back().first);
-  if (!(phi > plo) || !(rhi > rlo)) {
-    r.error = "the curves do not overlap in PSNR and in rate";
+  const bool psnr_overlap = phi > plo, rate_overlap = rhi > rlo;
+  if (!psnr_overlap && !rate_overlap) {
+    r.error = "the curves overlap neither in PSNR nor in rate";
     return r;
   }
   const Pchip ap = MakeCurve(a_by_psnr), tp = MakeCurve(t_by_psnr);
   const Pchip ar = MakeCurve(a_by_rate), tr = MakeCurve(t_by_rate);
-  const double mean_log_diff = (tp.Integral(plo, phi) - ap.Integral(plo, phi)) / (phi - plo);
-  r.bd_rate = (std::pow(10.0, mean_log_diff) - 1.0) * 100.0;
-  r.bd_psnr = (tr.Integral(rlo, rhi) - ar.Integral(rlo, rhi)) / (rhi - rlo);
-  r.psnr_range[0] = plo;
-  r.psnr_range[1] = phi;
-  r.rate_range[0] = std::pow(10.0, rlo);
-  r.rate_range[1] = std::pow(10.0, rhi);
+  if (psnr_overlap) {
+    const double mean_log_diff = (tp.Integral(plo, phi) - ap.Integral(plo, phi)) / (phi - plo);
+    r.bd_rate = (std::pow(10.0, mean_log_diff) - 1.0) * 100.0;
+    r.psnr_range[0] = plo;
+    r.psnr_range[1] = phi;
+  } else {
+    // The test curve above the anchor's PSNRs: its smallest file reaches all of them (at most
+    // that rate). Below them: it needs more than its largest file (at least that rate).
+    const bool above = t_by_psnr.front().first >= a_by_psnr.back().first;
+    const double lo = a_by_psnr.front().first, hi = a_by_psnr.back().first;
+    const double test_log_rate = above ? t_by_psnr.front().second : t_by_psnr.back().second;
+    const double mean_log_diff = test_log_rate - ap.Integral(lo, hi) / (hi - lo);
+    r.bd_rate = (std::pow(10.0, mean_log_diff) - 1.0) * 100.0;
+    r.bd_rate_bound = above ? +1 : -1;
+    r.psnr_range[0] = lo;
+    r.psnr_range[1] = hi;
+  }
+  if (rate_overlap) {
+    r.bd_psnr = (tr.Integral(rlo, rhi) - ar.Integral(rlo, rhi)) / (rhi - rlo);
+    r.rate_range[0] = std::pow(10.0, rlo);
+    r.rate_range[1] = std::pow(10.0, rhi);
+  } else {
+    // The test curve at smaller files than the anchor's: at any of the anchor's sizes it does
+    // at least as well as its largest file. At larger files: no better than its smallest.
+    const bool smaller = t_by_rate.back().first <= a_by_rate.front().first;
+    const double lo = a_by_rate.front().first, hi = a_by_rate.back().first;
+    const double test_psnr = smaller ? t_by_rate.back().second : t_by_rate.front().second;
+    r.bd_psnr = test_psnr - ar.Integral(lo, hi) / (hi - lo);
+    r.bd_psnr_bound = smaller ? -1 : +1;
+    r.rate_range[0] = std::pow(10.0, lo);
+    r.rate_range[1] = std::pow(10.0, hi);
+  }
   r.ok = true;
   return r;
 }

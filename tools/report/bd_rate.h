@@ -23,6 +23,11 @@ struct BdResult {
   double bd_psnr = 0.0;  // dB: mean PSNR change of test against anchor at equal rate
   double psnr_range[2] = {0.0, 0.0};  // the overlap BD-rate integrates over
   double rate_range[2] = {0.0, 0.0};  // the overlap BD-PSNR integrates over
+  // 0: the value. Where one curve lies wholly beyond the other's PSNRs (or rates), the value is
+  // a bound instead: +1 the true figure is at most bd_rate (bd_psnr), -1 at least; the range is
+  // then the anchor's own. See Bjontegaard.
+  int bd_rate_bound = 0;
+  int bd_psnr_bound = 0;
   std::vector<RdPoint> dominated[2];  // points of the anchor / test left out (ParetoFront)
 };
 
@@ -33,7 +38,12 @@ std::vector<RdPoint> ParetoFront(const std::vector<RdPoint>& curve,
 
 // Over the Pareto fronts of both curves (dominated points are left out and listed in the
 // result). Needs >= 2 such points per curve with distinct positive rates and distinct PSNRs, and
-// overlapping PSNR and rate ranges. Points may come in any order.
+// overlapping PSNR or rate ranges. Points may come in any order. Where the PSNR ranges do not
+// overlap (the test curve is better, or worse, at every size both reach), BD-rate is bounded over
+// the anchor's PSNR range with the test curve held at its nearest end point: a file that reaches
+// a PSNR also reaches every lower one, so the test's smallest file bounds its rate from above
+// (its largest from below when it never reaches the anchor's PSNRs). BD-PSNR likewise when the
+// rates do not overlap.
 BdResult Bjontegaard(const std::vector<RdPoint>& anchor, const std::vector<RdPoint>& test);
 
 // Monotone piecewise cubic Hermite interpolant through (x[i], y[i]), x strictly increasing.

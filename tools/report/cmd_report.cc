@@ -46,12 +46,30 @@ int RunReportCompare(int argc, char** argv) {
     throw std::runtime_error("cannot compare " + paths[0] + " and " + paths[1] + ": " + r.error);
   std::printf("B = %s against A = %s (decoded-file PSNR vs file bytes, PCHIP):\n", paths[1].c_str(),
               paths[0].c_str());
-  std::printf(
-      "  BD-rate %+.2f%%  (B needs %.2f%% %s bytes than A for the same PSNR, over %.2f-%.2f dB)\n",
-      r.bd_rate, std::fabs(r.bd_rate), r.bd_rate <= 0 ? "fewer" : "more", r.psnr_range[0],
-      r.psnr_range[1]);
-  std::printf("  BD-PSNR %+.3f dB  (at the same size, over %.0f-%.0f bytes)\n", r.bd_psnr,
-              r.rate_range[0], r.rate_range[1]);
+  auto bound = [](int b) { return b > 0 ? "at most " : b < 0 ? "at least " : ""; };
+  if (r.bd_rate_bound == 0) {
+    std::printf(
+        "  BD-rate %+.2f%%  (B needs %.2f%% %s bytes than A for the same PSNR, over %.2f-%.2f "
+        "dB)\n",
+        r.bd_rate, std::fabs(r.bd_rate), r.bd_rate <= 0 ? "fewer" : "more", r.psnr_range[0],
+        r.psnr_range[1]);
+  } else {
+    std::printf(
+        "  BD-rate %s%+.2f%%  (the PSNRs do not overlap: B is %s A's %.2f-%.2f dB at every size; "
+        "the bound holds B at its %s file)\n",
+        bound(r.bd_rate_bound), r.bd_rate, r.bd_rate_bound > 0 ? "above" : "below", r.psnr_range[0],
+        r.psnr_range[1], r.bd_rate_bound > 0 ? "smallest" : "largest");
+  }
+  if (r.bd_psnr_bound == 0) {
+    std::printf("  BD-PSNR %+.3f dB  (at the same size, over %.0f-%.0f bytes)\n", r.bd_psnr,
+                r.rate_range[0], r.rate_range[1]);
+  } else {
+    std::printf(
+        "  BD-PSNR %s%+.3f dB  (the sizes do not overlap: B's files are all %s A's %.0f-%.0f "
+        "bytes; the bound holds B at its %s file)\n",
+        bound(r.bd_psnr_bound), r.bd_psnr, r.bd_psnr_bound < 0 ? "below" : "above", r.rate_range[0],
+        r.rate_range[1], r.bd_psnr_bound < 0 ? "largest" : "smallest");
+  }
   nlohmann::json left_out[2];
   for (int c = 0; c < 2; ++c) {
     left_out[c] = nlohmann::json::array();
@@ -62,10 +80,13 @@ int RunReportCompare(int argc, char** argv) {
     }
   }
   if (!json_path.empty()) {
+    auto bound_name = [](int b) { return b > 0 ? "upper bound" : b < 0 ? "lower bound" : "value"; };
     const nlohmann::json j = {{"anchor", paths[0]},
                               {"test", paths[1]},
                               {"bd_rate_percent", r.bd_rate},
                               {"bd_psnr_db", r.bd_psnr},
+                              {"bd_rate_is", bound_name(r.bd_rate_bound)},
+                              {"bd_psnr_is", bound_name(r.bd_psnr_bound)},
                               {"psnr_range_db", {r.psnr_range[0], r.psnr_range[1]}},
                               {"rate_range_bytes", {r.rate_range[0], r.rate_range[1]}},
                               {"anchor_points_left_out", left_out[0]},

@@ -146,14 +146,18 @@ def drawn_boxes(ax):
     return boxes
 
 
-def place_legend(ax, **kwargs):
+def place_legend(ax, below=False, **kwargs):
     """The legend in a corner of the axes where it hides no point or line, else right of the axes
-    (constrained layout makes room). loc='best' would ignore the labels placed afterwards."""
+    (or below them, for legends whose long labels would squeeze the axes; constrained layout makes
+    room). loc='best' would ignore the labels placed afterwards."""
     boxes = drawn_boxes(ax)
     for loc in ("upper left", "lower right", "upper right", "lower left", "center right", "center left"):
         if not any(overlap(extent(ax.legend(loc=loc, **kwargs)), b) for b in boxes):
             return
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1), borderaxespad=0, **kwargs)
+    if below:
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), borderaxespad=0, **kwargs)
+    else:
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1), borderaxespad=0, **kwargs)
 
 
 def place_labels(ax, labels, fontsize=8):
@@ -322,9 +326,9 @@ def plot_compare(rows):
         if series in left_out:
             ax.plot(*zip(*sorted(left_out[series])), linestyle="none", marker=line.get_marker(),
                     markersize=6, markerfacecolor="none", color=line.get_color(),
-                    label=f"{series}: left out (a point of its own curve is better)")
+                    label=f"{series.split(':')[0]}: left out (a point of its own curve is better)")
     log_x(ax, bytes_text)
-    place_legend(ax)
+    place_legend(ax, below=True)
     return fig
 
 

@@ -88,10 +88,41 @@ TEST(BdRate, PointsTheirOwnCurveBeatsAreLeftOut) {
   EXPECT_EQ(left.size(), 2u);
 }
 
+// A curve wholly above the anchor's PSNRs has no BD-rate, only a bound: its smallest file reaches
+// every PSNR of the anchor. With PSNR = 10 log10(rate) - 20 the anchor's mean log10 rate over its
+// PSNR range is log10(sqrt(1e5 * 9e5)) = log10(3e5) exactly.
+TEST(BdRate, CurvesThatDoNotOverlapInPsnrGiveABound) {
+  std::vector<RdPoint> line;
+  for (double rate : {1e5, 3e5, 4e5, 9e5}) line.push_back({rate, 10.0 * std::log10(rate) - 20.0});
+  const BdResult above = Bjontegaard(line, {{2e5, 40.0}, {5e5, 41.0}});
+  ASSERT_TRUE(above.ok) << above.error;
+  EXPECT_EQ(above.bd_rate_bound, +1);
+  EXPECT_NEAR(above.bd_rate, (2e5 / 3e5 - 1.0) * 100.0, 1e-9);
+  EXPECT_NEAR(above.psnr_range[0], 30.0, 1e-12);
+  EXPECT_NEAR(above.psnr_range[1], 10.0 * std::log10(9e5) - 20.0, 1e-12);
+  EXPECT_EQ(above.bd_psnr_bound, 0);  // the rates overlap: BD-PSNR is a value
+  EXPECT_GT(above.bd_psnr, 0.0);
+  // Below the anchor's PSNRs: more than its largest file, so at least that.
+  const BdResult below = Bjontegaard(line, {{2e5, 20.0}, {5e5, 25.0}});
+  ASSERT_TRUE(below.ok) << below.error;
+  EXPECT_EQ(below.bd_rate_bound, -1);
+  EXPECT_NEAR(below.bd_rate, (5e5 / 3e5 - 1.0) * 100.0, 1e-9);
+  // Files all smaller than the anchor's with overlapping PSNRs: BD-PSNR at least what its largest
+  // file gives against the anchor's mean PSNR over its log rates ((30 + 39.54) / 2).
+  const BdResult smaller = Bjontegaard(line, {{2e4, 31.0}, {5e4, 35.0}});
+  ASSERT_TRUE(smaller.ok) << smaller.error;
+  EXPECT_EQ(smaller.bd_rate_bound, 0);
+  EXPECT_LT(smaller.bd_rate, -50.0);
+  EXPECT_EQ(smaller.bd_psnr_bound, -1);
+  EXPECT_NEAR(smaller.bd_psnr, 35.0 - (30.0 + 10.0 * std::log10(9e5) - 20.0) / 2.0, 1e-9);
+  EXPECT_NEAR(smaller.rate_range[0], 1e5, 1e-6);
+  EXPECT_NEAR(smaller.rate_range[1], 9e5, 1e-6);
+}
+
 TEST(BdRate, RefusesWhatCannotBeCompared) {
   EXPECT_FALSE(Bjontegaard({kAnchor[0]}, kAnchor).ok);
   EXPECT_FALSE(Bjontegaard(kAnchor, {{1e5, 30.0}, {2e5, 30.0}}).ok);  // same PSNR twice
-  EXPECT_FALSE(Bjontegaard(kAnchor, {{1e9, 50.0}, {2e9, 51.0}}).ok);  // no overlap
+  EXPECT_FALSE(Bjontegaard(kAnchor, {{1e9, 50.0}, {2e9, 51.0}}).ok);  // overlaps in neither
   EXPECT_FALSE(Bjontegaard(kAnchor, {{0.0, 31.0}, {2e5, 33.0}}).ok);  // rate 0
   const BdResult r = Bjontegaard(kAnchor, {{1e5, NAN}, {2e5, 33.0}});
   EXPECT_FALSE(r.ok);
