@@ -6,17 +6,22 @@
 # About 45-60 minutes per point on 2 cores. Finished runs under REPORT/runs are reused (their
 # committed config.json and metrics.json suffice), so each session can add points.
 #
-#   bash scripts/frontier-reports.sh [chair mic]   # RATES=medium,low, DATA_ROOT=../shared/data/nerf_synthetic_400, ECRF=build/tools/ecrf
+# TARGETS adds file sizes (`report sweep --targets`); chair's committed sweep has TARGETS=316KB, the
+# largest file of at least 80x against the 25,438,668-byte reference.
+#
+#   bash scripts/frontier-reports.sh [chair mic]   # RATES=medium,low, TARGETS=, DATA_ROOT=../shared/data/nerf_synthetic_400, ECRF=build/tools/ecrf
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ecrf="${ECRF:-build/tools/ecrf}"
 data_root="${DATA_ROOT:-../shared/data/nerf_synthetic_400}"
 rates="${RATES:-medium,low}"
+targets=()
+[ -z "${TARGETS:-}" ] || targets=(--targets "$TARGETS")
 scenes=("$@")
 [ ${#scenes[@]} -gt 0 ] || scenes=(chair mic)
 for scene in "${scenes[@]}"; do
   out="docs/reports/frontier/$scene"
-  "$ecrf" report sweep --data "$data_root/$scene" --rates "$rates" --iters 4500 --test-stride 10 \
+  "$ecrf" report sweep --data "$data_root/$scene" --rates "$rates" "${targets[@]}" --iters 4500 --test-stride 10 \
     --reference "docs/reports/baseline_2026_11/$scene" -o "$out"
   # BD-rate needs two points on each curve: with RATES=medium alone there is nothing to compare.
   if ! "$ecrf" report compare "docs/reports/baseline_2026_11/$scene" "$out" \

@@ -115,7 +115,11 @@ TEST_F(RunConfigTest, ASweepPointWritesTheBytesOfTheTrainRunOfItsSettings) {
                                                             : c.rate_point;
     EXPECT_EQ(p["rate_point"], expected);
     if (c.target_bytes == 0) EXPECT_FLOAT_EQ(float(p["lambda_e"].get<double>()), c.lambda_e);
+    // A size point's lambda_e is the one it adapted to (it starts from 0, "choose one").
+    if (c.target_bytes > 0) EXPECT_GT(p["lambda_e"].get<double>(), 0.0);
   }
+  // No point of this sweep is a lambda = 0 float model, so there is no reference to divide by.
+  EXPECT_TRUE(report["reference"].is_null()) << report["reference"].dump();
   // A size that cannot name a run directory is refused before anything trains.
   std::vector<std::string> bad(sweep.begin() + 1, sweep.end());
   for (std::string& a : bad) {

@@ -23,7 +23,10 @@ std::string LambdaText(double lambda, double step_scale) {
 }
 
 nlohmann::json RatePointFromMetrics(const nlohmann::json& m, const std::string& run_dir) {
-  const double lambda = m.at("lambda_e").get<double>();
+  // A --target-size run starts from lambda_e 0 ("choose one") and adapts it: its point is the
+  // lambda_e it ended with, never a lambda = 0 reference.
+  const bool sized = m.value("target_bytes", 0.0) > 0.0;
+  const double lambda = m.at(sized ? "final_lambda_e" : "lambda_e").get<double>();
   const double step_scale = m.value("quant_step_scale", 1.0);
   nlohmann::json p;
   char label[64];
@@ -35,6 +38,7 @@ nlohmann::json RatePointFromMetrics(const nlohmann::json& m, const std::string& 
   p["label"] = label;
   p["lambda_e"] = lambda;
   p["quant_step_scale"] = step_scale;
+  if (sized) p["target_bytes"] = m.at("target_bytes");
   p["run_dir"] = run_dir;
   p["iterations"] = m.at("iterations");
   p["train_seconds"] = m.at("train_seconds");
