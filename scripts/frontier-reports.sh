@@ -6,8 +6,8 @@
 # About 45-60 minutes per point on 2 cores. Finished runs under REPORT/runs are reused (their
 # committed config.json and metrics.json suffice), so each session can add points.
 #
-# TARGETS adds file sizes (`report sweep --targets`); chair's committed sweep has TARGETS=316KB, the
-# largest file of at least 80x against the 25,438,668-byte reference.
+# TARGETS adds file sizes (`report sweep --targets`); chair's committed sweep has TARGETS=316KB,127KB,
+# the largest files of at least 80x and 200x against the 25,438,668-byte reference.
 #
 #   bash scripts/frontier-reports.sh [chair mic]   # RATES=medium,low, TARGETS=, DATA_ROOT=../shared/data/nerf_synthetic_400, ECRF=build/tools/ecrf
 set -euo pipefail
