@@ -69,13 +69,20 @@ std::string PointName(const SweepPoint& p, const trainer::TrainOptions& resolved
   return p.rate.empty() ? LambdaText(p.lambda, resolved.quant_step_scale) : "rate_" + p.rate;
 }
 
+// The items of a comma-separated list, as --rates, --targets and --lambdas give them.
+std::vector<std::string> CommaItems(const std::string& text) {
+  std::vector<std::string> items;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) items.push_back(item);
+  return items;
+}
+
 // "316KB,127KB": file sizes, one --target-size run each. The text names the run directory, so it
 // is kept to letters, digits and '.'; `ecrf train` parses and checks the size itself.
 std::vector<SweepPoint> ParseTargets(const std::string& text) {
   std::vector<SweepPoint> out;
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
+  for (const std::string& item : CommaItems(text)) {
     const bool plain = !item.empty() && std::all_of(item.begin(), item.end(), [](char c) {
       return std::isalnum(static_cast<unsigned char>(c)) || c == '.';
     });
@@ -90,9 +97,7 @@ std::vector<SweepPoint> ParseTargets(const std::string& text) {
 // "low,medium,high": named rate points.
 std::vector<SweepPoint> ParseRates(const std::string& text) {
   std::vector<SweepPoint> out;
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
+  for (const std::string& item : CommaItems(text)) {
     trainer::TrainOptions check;
     trainer::ApplyRatePoint(item, &check);  // throws for unknown names
     SweepPoint p;
@@ -105,9 +110,7 @@ std::vector<SweepPoint> ParseRates(const std::string& text) {
 // "0,2e-11@3,1e-10": lambda_e values, each with an optional step scale after '@'.
 std::vector<SweepPoint> ParsePoints(const std::string& text) {
   std::vector<SweepPoint> out;
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
+  for (const std::string& item : CommaItems(text)) {
     SweepPoint p;
     const size_t at = item.find('@');
     p.lambda = ParseFloat("--lambdas", item.substr(0, at).c_str());
