@@ -16,6 +16,8 @@ class BenchReport {
  public:
   // Prints "name: value unit" and records it for JSON.
   void Add(const std::string& name, double value, const std::string& unit);
+  // Records it for JSON only (a benchmark that prints its own table).
+  void Record(const std::string& name, double value) { figures_.emplace_back(name, value); }
   // Writes {"name": value, ...} to path (nlohmann-json, atomically). Returns false on error,
   // after printing it.
   bool WriteJson(const std::string& path) const;
