@@ -137,7 +137,7 @@ const char* const kPhaseKeys[kNumPhases] = {"zero", "qat_refresh", "qat_apply", 
 }  // namespace
 
 int RunTrainStepBench(int argc, char** argv) {
-  int res = 128, rays = 4096, reps = 5, mask = 0, rate_phase = 1;
+  int res = 128, rays = 4096, reps = 5, mask = 0, rate_phase = 1, scatter_width = 0;
   float early = 0.f, blob_peak = 14.f;
   std::string threads = "1,2", json_path;
   auto app = MakeCommand(
@@ -170,6 +170,12 @@ int RunTrainStepBench(int argc, char** argv) {
       ->type_name("0|1")
       ->check(CLI::Range(0, 1))
       ->capture_default_str();
+  app->add_option("--scatter-width", scatter_width,
+                  "components per gradient-scatter task (0: the trainer's choice for the thread "
+                  "count; every width gives the same bits)")
+      ->type_name("N")
+      ->check(CLI::Range(0, 1024))
+      ->capture_default_str();
   app->add_option("--early-stop", early, "early_stop_transmittance of the ray marching")
       ->type_name("T")
       ->check(CLI::Range(0.0f, 1.0f))
@@ -191,6 +197,7 @@ int RunTrainStepBench(int argc, char** argv) {
 
   TensorfConfig config;
   config.early_stop_transmittance = early;
+  config.scatter_width = scatter_width;
   TensorfModel model(config);
   model.Initialize({res, res, res}, 1);
   AddBlob(model, blob_peak);  // feature up to blob_peak: sigma up to softplus(peak - 10)

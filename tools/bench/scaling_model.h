@@ -16,10 +16,10 @@ namespace tools {
 double FitSerialFraction(const std::vector<int>& threads, const std::vector<double>& seconds);
 
 struct PhaseModel {
-  double t1 = 0.0;               // seconds on one thread
-  double serial = 0.0;           // fitted serial fraction
-  double bytes = 0.0;            // bytes streamed per step (0: not a streaming phase)
-  std::vector<int> max_tasks;    // per predicted count: the phase's independent tasks (0: many)
+  double t1 = 0.0;             // seconds on one thread
+  double serial = 0.0;         // fitted serial fraction
+  double bytes = 0.0;          // bytes streamed per step (0: not a streaming phase)
+  std::vector<int> max_tasks;  // per predicted count: the phase's independent tasks (0: many)
 };
 
 struct Prediction {

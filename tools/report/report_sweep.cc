@@ -1,8 +1,11 @@
 // `ecrf report sweep`: one training run per lambda_e, each encoded, decoded and scored, then the
 // rate–distortion report. Finished runs in REPORT/runs/ are reused, so an interrupted sweep
-// resumes where it stopped, and the report is rewritten after every point.
+// resumes where it stopped, and the report is rewritten after every point. With --plan the points
+// become a plan of independent tasks for Slurm or GNU parallel (sweep_plan.h), and --collect
+// reports what those tasks finished without training anything.
 #include <omp.h>
 
+#include <unistd.h>
 #include <algorithm>
 #include <cctype>
 #include <chrono>
@@ -23,6 +26,7 @@
 #include "tools/cli_args.h"
 #include "tools/report/report.h"
 #include "tools/report/report_speed.h"
+#include "tools/report/sweep_plan.h"
 #include "tools/train_flags.h"
 #include "tools/train_run.h"
 #include "trainer/train/checkpoint.h"
@@ -254,9 +258,9 @@ std::vector<std::string> TrainArgs(const std::vector<std::string>& args) {
   std::vector<std::string> out;
   for (size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
-    bool with_value = false, sweep_flag = a == "--render";
-    for (const char* f :
-         {"--lambdas", "--rates", "--targets", "--anchors", "--reference", "-o", "--out"}) {
+    bool with_value = false, sweep_flag = a == "--render" || a == "--plan" || a == "--collect";
+    for (const char* f : {"--lambdas", "--rates", "--targets", "--anchors", "--reference", "-o",
+                          "--out", "--task-cpus"}) {
       if (a == f) with_value = sweep_flag = true;
       if (a.rfind(std::string(f) + "=", 0) == 0) sweep_flag = true;
     }
@@ -264,6 +268,35 @@ std::vector<std::string> TrainArgs(const std::vector<std::string>& args) {
     if (!sweep_flag) out.push_back(a);
   }
   return out;
+}
+
+// The arguments without --threads (a planned task takes its thread count from where it runs).
+std::vector<std::string> WithoutThreads(const std::vector<std::string>& args) {
+  std::vector<std::string> out;
+  for (size_t i = 0; i < args.size(); ++i) {
+    if (args[i] == "--threads") {
+      ++i;
+    } else if (args[i].rfind("--threads=", 0) != 0) {
+      out.push_back(args[i]);
+    }
+  }
+  return out;
+}
+
+// `path` from the root (relative paths are relative to the current directory; "" is it).
+std::string AbsolutePath(const std::string& path) {
+  if (!path.empty() && path[0] == '/') return path;
+  char cwd[PATH_MAX];
+  if (!getcwd(cwd, sizeof(cwd))) throw std::runtime_error("cannot read the current directory");
+  return path.empty() ? std::string(cwd) : std::string(cwd) + "/" + path;
+}
+
+std::string ProgramPath() {
+  char path[PATH_MAX];
+  const ssize_t n = readlink("/proc/self/exe", path, sizeof(path) - 1);
+  if (n <= 0) return "ecrf";
+  path[n] = '\0';
+  return path;
 }
 
 }  // namespace
@@ -283,9 +316,23 @@ int RunReportSweep(int argc, char** argv) {
   flags.options = BaseTrainOptions(args);
   AddTrainFlags(app.get(), &flags);
   std::string out, lambdas_text, rates_text, targets_text, anchors_path, reference_dir;
-  bool render = false;
+  bool render = false, plan = false, collect = false;
+  int task_cpus = 4;
   app->add_option("-o,--out", out, "report directory (runs/ holds one run per point)")
       ->type_name("REPORT_DIR");
+  app->add_flag("--plan", plan,
+                "train nothing: write REPORT_DIR/plan/, one task per unfinished point for a Slurm "
+                "job array (sweep.sbatch), GNU parallel or one after another (run_local.sh), and "
+                "collect.sh, which reports them (docs/cluster.md)");
+  app->add_flag("--collect", collect,
+                "train nothing: report the finished points; name each unfinished one with its "
+                "plan log and exit 1")
+      ->excludes("--plan");
+  app->add_option("--task-cpus", task_cpus,
+                  "with --plan: CPUs per Slurm array task (the task trains on that many threads)")
+      ->type_name("N")
+      ->check(CLI::Range(1, 4096))
+      ->capture_default_str();
   app->add_option("--rates", rates_text,
                   "named rate points, one run each (e.g. low,medium,high; none: lambda_e 0)")
       ->type_name("R1,R2,...");
@@ -391,8 +438,49 @@ int RunReportSweep(int argc, char** argv) {
   }
   report["points"] = nlohmann::json::array();
 
+  const std::string plan_dir = AbsolutePath(out) + "/plan";
+  if (plan) {
+    SweepPlan p;
+    p.plan_dir = plan_dir;
+    p.ecrf = ProgramPath();
+    p.work_dir = AbsolutePath("");
+    p.job_name = "ecrf-sweep-" + SceneName(o);
+    p.task_cpus = task_cpus;
+    size_t finished = 0;
+    for (size_t k = 0; k < runs.size(); ++k) {
+      const std::string run_dir = out + "/runs/" + names[k];
+      if (FileExists(run_dir + "/metrics.json")) {
+        CheckReusable(ReadJsonFile(run_dir + "/metrics.json"), runs[k], run_dir + "/metrics.json");
+        ++finished;
+      }
+      std::vector<std::string> point_args = WithoutThreads(train_args);
+      for (const std::string& a : PointArgs(points[k])) point_args.push_back(a);
+      p.tasks.push_back({names[k], run_dir, point_args});
+    }
+    // The sweep's own command line, --plan replaced by --collect.
+    p.collect_args = {"report", "sweep"};
+    for (size_t i = 0; i < args.size(); ++i) {
+      if (args[i] == "--task-cpus") {
+        ++i;
+      } else if (args[i] != "--plan" && args[i].rfind("--task-cpus=", 0) != 0) {
+        p.collect_args.push_back(args[i]);
+      }
+    }
+    p.collect_args.push_back("--collect");
+    WriteSweepPlan(p);
+    std::printf(
+        "plan: %zu tasks (%zu finished already) in %s\n"
+        "  Slurm:      sbatch %s/sweep.sbatch   (a job array, %d CPUs per task)\n"
+        "  this host:  bash %s/run_local.sh [JOBS]   (GNU parallel for JOBS > 1)\n"
+        "  then:       bash %s/collect.sh   (the report; names any task that did not finish)\n",
+        p.tasks.size(), finished, plan_dir.c_str(), plan_dir.c_str(), task_cpus, plan_dir.c_str(),
+        plan_dir.c_str());
+    return 0;
+  }
+
   double trained_seconds = 0.0;
   int trained = 0;
+  std::vector<std::string> unfinished;
   for (size_t k = 0; k < runs.size(); ++k) {
     trainer::TrainOptions run = runs[k];
     const std::string run_dir = out + "/runs/" + names[k];
@@ -403,6 +491,15 @@ int RunReportSweep(int argc, char** argv) {
       CheckReusable(metrics, run, metrics_path);
       std::fprintf(stderr, "report: point %zu/%zu (%s): reusing the finished run in %s\n", k + 1,
                    runs.size(), names[k].c_str(), run_dir.c_str());
+    } else if (collect) {
+      const std::string log = TaskLogPath(plan_dir, k);
+      const std::string tail = LastLines(log, 6);
+      std::fprintf(
+          stderr, "report: point %zu/%zu (%s): not finished: no %s; task %zu's log %s%s\n%s", k + 1,
+          runs.size(), names[k].c_str(), metrics_path.c_str(), k, log.c_str(),
+          tail.empty() ? " does not exist (the task has not run)" : " ends:", tail.c_str());
+      unfinished.push_back(names[k] + " (task " + std::to_string(k) + ", log " + log + ")");
+      continue;
     } else {
       size_t left = 0;
       for (size_t j = k; j < runs.size(); ++j)
@@ -429,6 +526,16 @@ int RunReportSweep(int argc, char** argv) {
     report["points"].push_back(point);
     AddReferenceColumns(&report);
     WriteReport(out, report);
+  }
+  if (!unfinished.empty()) {
+    std::fprintf(stderr, "report: %zu of %zu points did not finish:\n", unfinished.size(),
+                 runs.size());
+    for (const std::string& u : unfinished) std::fprintf(stderr, "  %s\n", u.c_str());
+    std::fprintf(stderr,
+                 "resubmit the plan (finished points are skipped) and collect again; the report "
+                 "in %s holds the finished points\n",
+                 out.c_str());
+    return 1;
   }
   if (render) RunSpeedSweep(out, SpeedSweepOptions(), &report);
   std::printf("%-24s %10s %8s %10s %10s %9s %10s\n", "point", "bytes", "ratio", "decoded", "float",

@@ -341,7 +341,7 @@ namespace {
 // the appearance tasks, which see the coloured ones). The slicing changes no sum
 // (ModeGradScatter), so it may follow the thread count.
 int ScatterSliceWidth(const VmGrid& density, const VmGrid& appearance, int threads,
-                      int* num_tasks) {
+                      int forced_width, int* num_tasks) {
   auto count = [&](int w) {
     int tasks = 0;
     for (const VmGrid* g : {&density, &appearance})
@@ -352,7 +352,9 @@ int ScatterSliceWidth(const VmGrid& density, const VmGrid& appearance, int threa
     return tasks;
   };
   int width = 0;
-  if (threads > 2) {
+  if (forced_width > 0) {
+    width = forced_width;
+  } else if (threads > 2) {
     for (int w : {16, 8, 4}) {
       width = w;
       if (count(w) >= 2 * threads) break;
@@ -362,9 +364,10 @@ int ScatterSliceWidth(const VmGrid& density, const VmGrid& appearance, int threa
   return width;
 }
 
-void PlanScatter(const VmGrid& density, const VmGrid& appearance, int threads, Workspace* ws) {
+void PlanScatter(const VmGrid& density, const VmGrid& appearance, int threads, int forced_width,
+                 Workspace* ws) {
   int num_tasks = 0;
-  const int width = ScatterSliceWidth(density, appearance, threads, &num_tasks);
+  const int width = ScatterSliceWidth(density, appearance, threads, forced_width, &num_tasks);
   ws->scatter_tasks.clear();
   for (const VmGrid* g : {&density, &appearance}) {
     for (int m = 0; m < 3; ++m) {
@@ -381,7 +384,8 @@ void PlanScatter(const VmGrid& density, const VmGrid& appearance, int threads, W
 
 int ScatterTaskCount(const TensorfModel& model, int threads) {
   int num_tasks = 0;
-  ScatterSliceWidth(model.density(), model.appearance(), threads, &num_tasks);
+  ScatterSliceWidth(model.density(), model.appearance(), threads, model.config().scatter_width,
+                    &num_tasks);
   return num_tasks;
 }
 
@@ -394,7 +398,7 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
   Workspace& ws = *static_cast<Workspace*>(model.train_workspace.get());
   const int threads = omp_get_max_threads();
   ws.Prepare(n_rays, threads);
-  PlanScatter(model.density(), model.appearance(), threads, &ws);
+  PlanScatter(model.density(), model.appearance(), threads, model.config().scatter_width, &ws);
   const MarchParams p = MakeMarchParams(model);
   const TensorfConfig& cfg = model.config();
   const bool white =

@@ -21,9 +21,9 @@ TEST(ScalingModel, FitRecoversTheSerialFractionOfAmdahlTimes) {
 }
 
 TEST(ScalingModel, FitClampsAndRefusesWhatItCannotFit) {
-  EXPECT_EQ(FitSerialFraction({1, 2}, {1.0, 0.4}), 0.0);  // superlinear: no negative fraction
-  EXPECT_EQ(FitSerialFraction({1, 2}, {1.0, 1.3}), 1.0);  // slower with more threads
-  EXPECT_EQ(FitSerialFraction({1}, {1.0}), -1.0);         // nothing above one thread
+  EXPECT_EQ(FitSerialFraction({1, 2}, {1.0, 0.4}), 0.0);   // superlinear: no negative fraction
+  EXPECT_EQ(FitSerialFraction({1, 2}, {1.0, 1.3}), 1.0);   // slower with more threads
+  EXPECT_EQ(FitSerialFraction({1}, {1.0}), -1.0);          // nothing above one thread
   EXPECT_EQ(FitSerialFraction({2, 4}, {1.0, 0.5}), -1.0);  // no one-thread time
 }
 
