@@ -137,7 +137,7 @@ const char* const kPhaseKeys[kNumPhases] = {"zero", "qat_refresh", "qat_apply", 
 }  // namespace
 
 int RunTrainStepBench(int argc, char** argv) {
-  int res = 128, rays = 4096, reps = 5, mask = 0, rate_phase = 1, scatter_width = 0;
+  int res = 128, rays = 4096, reps = 5, mask = 0, rate_phase = 1;
   float early = 0.f, blob_peak = 14.f;
   std::string threads = "1,2", json_path;
   auto app = MakeCommand(
@@ -170,12 +170,6 @@ int RunTrainStepBench(int argc, char** argv) {
       ->type_name("0|1")
       ->check(CLI::Range(0, 1))
       ->capture_default_str();
-  app->add_option("--scatter-width", scatter_width,
-                  "components per gradient-scatter task (0: the trainer's choice for the thread "
-                  "count; every width gives the same bits)")
-      ->type_name("N")
-      ->check(CLI::Range(0, 1024))
-      ->capture_default_str();
   app->add_option("--early-stop", early, "early_stop_transmittance of the ray marching")
       ->type_name("T")
       ->check(CLI::Range(0.0f, 1.0f))
@@ -197,7 +191,6 @@ int RunTrainStepBench(int argc, char** argv) {
 
   TensorfConfig config;
   config.early_stop_transmittance = early;
-  config.scatter_width = scatter_width;
   TensorfModel model(config);
   model.Initialize({res, res, res}, 1);
   AddBlob(model, blob_peak);  // feature up to blob_peak: sigma up to softplus(peak - 10)
@@ -306,8 +299,7 @@ int RunTrainStepBench(int argc, char** argv) {
         "appearance samples %ld | scatter tasks %d | triad bandwidth %.1f GB/s | peak RSS %.0f "
         "MB\n",
         nthreads, step_medians.back(), times[0], cpu / (nthreads * wall), last.density_samples,
-        last.appearance_samples, trainer::ScatterTaskCount(model, nthreads),
-        bandwidths.back() / 1e9, PeakRssMb());
+        last.appearance_samples, trainer::kScatterTasks, bandwidths.back() / 1e9, PeakRssMb());
     report.Record("threads_" + std::to_string(nthreads) + "_step_median", step_medians.back());
     for (int k = 0; k < kNumPhases; ++k)
       report.Record("threads_" + std::to_string(nthreads) + "_" + kPhaseKeys[k], med[k]);
@@ -361,7 +353,7 @@ int RunTrainStepBench(int argc, char** argv) {
     std::printf(" %7.3f %6.0f", pm.serial, pm.bytes / 1e6);
     for (int j = 0; j < 4; ++j) {
       const int n = predicted[j];
-      const int tasks = k == kScatter ? trainer::ScatterTaskCount(model, n) : 0;
+      const int tasks = k == kScatter ? trainer::kScatterTasks : 0;
       const Prediction p = PredictPhase(pm, n, tasks, bandwidth);
       total_pred[j] += p.seconds;
       std::printf(" %7.4f %-8s", p.seconds, p.bound.c_str());

@@ -100,25 +100,34 @@ void WriteSweepPlan(const SweepPlan& plan) {
     const std::string script = TaskScriptPath(dir, k), log = TaskLogPath(dir, k);
     WriteScript(script,
                 "#!/bin/sh\n"
-                "# ecrf sweep task " + std::to_string(k) + " of " + std::to_string(n) +
-                    ": point " + t.name +
+                "# ecrf sweep task " +
+                    std::to_string(k) + " of " + std::to_string(n) + ": point " + t.name +
                     ". Written by `ecrf report sweep --plan`; run by sweep.sbatch (Slurm array "
-                    "task " + std::to_string(k) +
+                    "task " +
+                    std::to_string(k) +
                     "), run_local.sh or by hand.\n"
                     "# A finished point is left as it is; an unfinished one is trained from the "
                     "start.\n"
                     "# Threads: the Slurm task's CPUs, else $ECRF_THREADS, else all cores (the "
                     "model is the same bits for any count).\n"
                     "set -e\n"
-                    "cd " + work + "\n"
-                    "if [ -f " + ShellQuote(t.run_dir + "/metrics.json") + " ]; then\n"
-                    "  echo \"task " + std::to_string(k) + " (" + t.name +
-                    "): finished already in " + t.run_dir + "\"\n"
+                    "cd " +
+                    work +
+                    "\n"
+                    "if [ -f " +
+                    ShellQuote(t.run_dir + "/metrics.json") +
+                    " ]; then\n"
+                    "  echo \"task " +
+                    std::to_string(k) + " (" + t.name + "): finished already in " + t.run_dir +
+                    "\"\n"
                     "  exit 0\n"
                     "fi\n"
-                    "ecrf=${ECRF:-" + ecrf + "}\n"
+                    "ecrf=${ECRF:-" +
+                    ecrf +
+                    "}\n"
                     "threads=${SLURM_CPUS_PER_TASK:-${ECRF_THREADS:-0}}\n"
-                    "exec \"$ecrf\" " + Join(args) + " --threads \"$threads\"\n");
+                    "exec \"$ecrf\" " +
+                    Join(args) + " --threads \"$threads\"\n");
     task_lines += "bash " + ShellQuote(script) + " > " + ShellQuote(log) + " 2>&1\n";
     nlohmann::ordered_json j;
     j["index"] = k;
@@ -143,44 +152,71 @@ void WriteSweepPlan(const SweepPlan& plan) {
   const std::string last = std::to_string(n == 0 ? 0 : n - 1);
   WriteScript(dir + "/sweep.sbatch",
               "#!/bin/bash\n"
-              "#SBATCH --job-name=" + plan.job_name + "\n"
-              "#SBATCH --array=0-" + last + "\n"
-              "#SBATCH --cpus-per-task=" + std::to_string(plan.task_cpus) + "\n"
-              "#SBATCH --mem=" + plan.task_mem + "\n"
-              "#SBATCH --output=" + dir + "/logs/task_%a.log\n"
-              "# One sweep point per array task (task_K.sh). Options given to sbatch override "
-              "these lines:\n"
-              "#   sbatch --partition=P --time=12:00:00 " + dir + "/sweep.sbatch\n"
-              "# Afterwards: bash " + dir + "/collect.sh, or chained:\n"
-              "#   jid=$(sbatch --parsable " + dir + "/sweep.sbatch)\n"
-              "#   sbatch --dependency=afterany:$jid --wrap 'bash " + dir + "/collect.sh'\n"
-              "# Finished points are skipped, so resubmitting reruns only the tasks that "
-              "failed.\n"
-              "exec bash " + dir + "/task_${SLURM_ARRAY_TASK_ID}.sh\n");
-  WriteScript(dir + "/run_local.sh",
-              "#!/bin/bash\n"
-              "# Runs this plan on this machine: the tasks one after another, or JOBS at a "
-              "time with GNU\n"
-              "# parallel (bash run_local.sh [JOBS]; each task then trains on cores/JOBS "
-              "threads), then\n"
-              "# collects the report. Logs: " + dir + "/logs/task_K.log.\n"
-              "set -u\n"
-              "jobs=${1:-1}\n"
-              "if [ \"$jobs\" -gt 1 ]; then\n"
-              "  if ! command -v parallel >/dev/null 2>&1; then\n"
-              "    echo \"run_local.sh: GNU parallel is not installed (apt-get install parallel);"
-              " without JOBS the tasks run one after another\" >&2\n"
-              "    exit 2\n"
-              "  fi\n"
-              "  export ECRF_THREADS=${ECRF_THREADS:-$(( $(nproc) / jobs > 0 ? $(nproc) / jobs : "
-              "1 ))}\n"
-              "  parallel --will-cite -j \"$jobs\" < " + ShellQuote(dir + "/tasks.txt") + "\n"
-              "else\n"
-              "  while IFS= read -r task; do\n"
-              "    bash -c \"$task\" || echo \"run_local.sh: failed: $task\" >&2\n"
-              "  done < " + ShellQuote(dir + "/tasks.txt") + "\n"
-              "fi\n"
-              "exec bash " + ShellQuote(dir + "/collect.sh") + "\n");
+              "#SBATCH --job-name=" +
+                  plan.job_name +
+                  "\n"
+                  "#SBATCH --array=0-" +
+                  last +
+                  "\n"
+                  "#SBATCH --cpus-per-task=" +
+                  std::to_string(plan.task_cpus) +
+                  "\n"
+                  "#SBATCH --mem=" +
+                  plan.task_mem +
+                  "\n"
+                  "#SBATCH --output=" +
+                  dir +
+                  "/logs/task_%a.log\n"
+                  "# One sweep point per array task (task_K.sh). Options given to sbatch override "
+                  "these lines:\n"
+                  "#   sbatch --partition=P --time=12:00:00 " +
+                  dir +
+                  "/sweep.sbatch\n"
+                  "# Afterwards: bash " +
+                  dir +
+                  "/collect.sh, or chained:\n"
+                  "#   jid=$(sbatch --parsable " +
+                  dir +
+                  "/sweep.sbatch)\n"
+                  "#   sbatch --dependency=afterany:$jid --wrap 'bash " +
+                  dir +
+                  "/collect.sh'\n"
+                  "# Finished points are skipped, so resubmitting reruns only the tasks that "
+                  "failed.\n"
+                  "exec bash " +
+                  dir + "/task_${SLURM_ARRAY_TASK_ID}.sh\n");
+  WriteScript(
+      dir + "/run_local.sh",
+      "#!/bin/bash\n"
+      "# Runs this plan on this machine: the tasks one after another, or JOBS at a "
+      "time with GNU\n"
+      "# parallel (bash run_local.sh [JOBS]; each task then trains on cores/JOBS "
+      "threads), then\n"
+      "# collects the report. Logs: " +
+          dir +
+          "/logs/task_K.log.\n"
+          "set -u\n"
+          "jobs=${1:-1}\n"
+          "if [ \"$jobs\" -gt 1 ]; then\n"
+          "  if ! command -v parallel >/dev/null 2>&1; then\n"
+          "    echo \"run_local.sh: GNU parallel is not installed (apt-get install parallel);"
+          " without JOBS the tasks run one after another\" >&2\n"
+          "    exit 2\n"
+          "  fi\n"
+          "  export ECRF_THREADS=${ECRF_THREADS:-$(( $(nproc) / jobs > 0 ? $(nproc) / jobs : "
+          "1 ))}\n"
+          "  parallel --will-cite -j \"$jobs\" < " +
+          ShellQuote(dir + "/tasks.txt") +
+          "\n"
+          "else\n"
+          "  while IFS= read -r task; do\n"
+          "    bash -c \"$task\" || echo \"run_local.sh: failed: $task\" >&2\n"
+          "  done < " +
+          ShellQuote(dir + "/tasks.txt") +
+          "\n"
+          "fi\n"
+          "exec bash " +
+          ShellQuote(dir + "/collect.sh") + "\n");
   nlohmann::ordered_json j;
   j["ecrf"] = plan.ecrf;
   j["work_dir"] = plan.work_dir;

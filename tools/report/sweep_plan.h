@@ -20,11 +20,11 @@ struct PlannedTask {
 };
 
 struct SweepPlan {
-  std::string plan_dir;   // REPORT/plan
-  std::string ecrf;       // absolute path of the ecrf program the tasks run
-  std::string work_dir;   // absolute directory the sweep's relative paths are relative to
-  std::string job_name;   // Slurm job name
-  int task_cpus = 4;      // --cpus-per-task of each array task (and its training threads)
+  std::string plan_dir;  // REPORT/plan
+  std::string ecrf;      // absolute path of the ecrf program the tasks run
+  std::string work_dir;  // absolute directory the sweep's relative paths are relative to
+  std::string job_name;  // Slurm job name
+  int task_cpus = 4;     // --cpus-per-task of each array task (and its training threads)
   std::string task_mem = "8G";
   std::vector<PlannedTask> tasks;
   std::vector<std::string> collect_args;  // `ecrf` arguments that collect the report

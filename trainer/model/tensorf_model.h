@@ -48,9 +48,6 @@ struct TensorfConfig {
   // TrainStep runs the head on chunks of rays with at most this many colour samples (bounds the
   // head's activation memory; the loss is separable over rays, so results do not depend on it).
   int head_chunk_rows = 32768;
-  // Components per task of TrainStep's gradient scatter (0: chosen by the thread count). Speed
-  // only: every width gives the same bits (ModeGradScatter). For benchmarks.
-  int scatter_width = 0;
   Aabb aabb;  // initial scene box (unbounded: the contracted cube [-2, 2]^3)
   // kUnbounded: world points are normalised by `roi` and contracted (decoder/contraction.h,
   // SPEC.md 7.2.1); the grids span the contracted cube, which never shrinks.

@@ -179,30 +179,23 @@ void VmGrid::Prefetch(const GridPoint& gp, bool for_write) const {
   for (int m = 0; m < 3; ++m) PrefetchMode(gp, m, for_write);
 }
 
-void VmGrid::PrefetchMode(const GridPoint& gp, int m, bool for_write, int first, int count) const {
+void VmGrid::PrefetchMode(const GridPoint& gp, int m, bool for_write) const {
   const float* base = for_write ? grads_.data() : params_.data();
   const int u = kMatMode[m][0], v = kMatMode[m][1], w = kVecMode[m];
   const int R = ranks_[m];
   const int W = res_[u];
-  if (count <= 0) count = R - first;
   const float* c00 = base + plane_off_[m] + (static_cast<size_t>(gp.i0[v]) * W + gp.i0[u]) * R;
   const float* c01 = c00 + static_cast<size_t>(W) * R;
   const float* l0 = base + line_off_[m] + static_cast<size_t>(gp.i0[w]) * R;
-  // Vertices x0 and x0 + 1 (and i0, i0 + 1) lie R floats apart: one range, or two for a slice.
-  const int ranges = count == R ? 1 : 2;
-  const int length = count == R ? 2 * R : count;
-  for (int h = 0; h < ranges; ++h) {
-    const int start = first + h * R;
-    for (int k = start; k < start + length; k += 16) {
-      if (for_write) {
-        __builtin_prefetch(c00 + k, 1);
-        __builtin_prefetch(c01 + k, 1);
-        __builtin_prefetch(l0 + k, 1);
-      } else {
-        __builtin_prefetch(c00 + k);
-        __builtin_prefetch(c01 + k);
-        __builtin_prefetch(l0 + k);
-      }
+  for (int k = 0; k < 2 * R; k += 16) {
+    if (for_write) {
+      __builtin_prefetch(c00 + k, 1);
+      __builtin_prefetch(c01 + k, 1);
+      __builtin_prefetch(l0 + k, 1);
+    } else {
+      __builtin_prefetch(c00 + k);
+      __builtin_prefetch(c01 + k);
+      __builtin_prefetch(l0 + k);
     }
   }
 }
@@ -302,17 +295,15 @@ double VmGrid::L1(float weight) {
 // ---------------------------------------------------------------------------------------------
 // ModeGradScatter
 
-void ModeGradScatter::Bind(VmGrid* grid, int mode, int first, int count) {
+void ModeGradScatter::Bind(VmGrid* grid, int mode) {
   grid_ = grid;
   mode_ = mode;
   rank_ = grid->ranks()[mode];
-  first_ = std::min(std::max(0, first), rank_);
-  width_ = count > 0 ? std::min(count, rank_ - first_) : rank_ - first_;
   for (int s = 0; s < 16; ++s) plane_key_[s] = -1;
   for (int s = 0; s < 4; ++s) line_key_[s] = -1;
-  plane_acc_.assign(static_cast<size_t>(16) * width_, 0.f);
-  line_acc_.assign(static_cast<size_t>(4) * width_, 0.f);
-  tmp_.assign(static_cast<size_t>(2) * width_, 0.f);
+  plane_acc_.assign(static_cast<size_t>(16) * rank_, 0.f);
+  line_acc_.assign(static_cast<size_t>(4) * rank_, 0.f);
+  tmp_.assign(static_cast<size_t>(2) * rank_, 0.f);
 }
 
 namespace {
@@ -326,14 +317,14 @@ inline void AddAndClear(float* __restrict dst, float* __restrict acc, int n) {
 }  // namespace
 
 void ModeGradScatter::FlushPlaneSlot(int s) {
-  AddAndClear(grid_->plane_grad(mode_) + static_cast<size_t>(plane_key_[s]) * rank_ + first_,
-              plane_acc_.data() + static_cast<size_t>(s) * width_, width_);
+  AddAndClear(grid_->plane_grad(mode_) + static_cast<size_t>(plane_key_[s]) * rank_,
+              plane_acc_.data() + static_cast<size_t>(s) * rank_, rank_);
   plane_key_[s] = -1;
 }
 
 void ModeGradScatter::FlushLineSlot(int s) {
-  AddAndClear(grid_->line_grad(mode_) + static_cast<size_t>(line_key_[s]) * rank_ + first_,
-              line_acc_.data() + static_cast<size_t>(s) * width_, width_);
+  AddAndClear(grid_->line_grad(mode_) + static_cast<size_t>(line_key_[s]) * rank_,
+              line_acc_.data() + static_cast<size_t>(s) * rank_, rank_);
   line_key_[s] = -1;
 }
 
@@ -344,32 +335,30 @@ void ModeGradScatter::Flush() {
     if (line_key_[s] >= 0) FlushLineSlot(s);
 }
 
-template <bool kDensity, int kW>
+template <bool kDensity, int kR>
 void ModeGradScatter::Add(const GridPoint& gp, float g_density, const float* g_mode) {
   const int m = mode_;
   const int u = kMatMode[m][0], v = kMatMode[m][1], w = kVecMode[m];
-  const int R = rank_;
-  const int S = kW > 0 ? kW : width_;
+  const int R = kR > 0 ? kR : rank_;
   const int W = grid_->res()[u];
   const int x0 = gp.i0[u], y0 = gp.i0[v], i0 = gp.i0[w];
   const float fu = gp.f[u], fv = gp.f[v], fw = gp.f[w];
-  const float* c00 = grid_->plane(m) + (static_cast<size_t>(y0) * W + x0) * R + first_;
+  const float* c00 = grid_->plane(m) + (static_cast<size_t>(y0) * W + x0) * R;
   const float* c10 = c00 + R;
   const float* c01 = c00 + static_cast<size_t>(W) * R;
   const float* c11 = c01 + R;
-  const float* l0 = grid_->line(m) + static_cast<size_t>(i0) * R + first_;
+  const float* l0 = grid_->line(m) + static_cast<size_t>(i0) * R;
   const float* l1 = l0 + R;
-  const float* g_slice = kDensity ? nullptr : g_mode + first_;
   const float cw[4] = {(1.f - fu) * (1.f - fv), fu * (1.f - fv), (1.f - fu) * fv, fu * fv};
   const float lw[2] = {1.f - fw, fw};
   // dp[r] = dL/d(plane value r) = g_r * l[r];  dl[r] = dL/d(line value r) = g_r * p[r].
   float* __restrict dp = tmp_.data();
-  float* __restrict dl = tmp_.data() + S;
+  float* __restrict dl = tmp_.data() + R;
 #pragma omp simd
-  for (int r = 0; r < S; ++r) {
+  for (int r = 0; r < R; ++r) {
     const float p = cw[0] * c00[r] + cw[1] * c10[r] + cw[2] * c01[r] + cw[3] * c11[r];
     const float l = lw[0] * l0[r] + lw[1] * l1[r];
-    const float g = kDensity ? g_density : g_slice[r];
+    const float g = kDensity ? g_density : g_mode[r];
     dp[r] = g * l;
     dl[r] = g * p;
   }
@@ -383,9 +372,9 @@ void ModeGradScatter::Add(const GridPoint& gp, float g_density, const float* g_m
       if (plane_key_[s] >= 0) FlushPlaneSlot(s);
       plane_key_[s] = key;
     }
-    float* __restrict acc = plane_acc_.data() + static_cast<size_t>(s) * S;
+    float* __restrict acc = plane_acc_.data() + static_cast<size_t>(s) * R;
 #pragma omp simd
-    for (int r = 0; r < S; ++r) acc[r] += wc * dp[r];
+    for (int r = 0; r < R; ++r) acc[r] += wc * dp[r];
   }
   for (int c = 0; c < 2; ++c) {
     const float wc = lw[c];
@@ -396,21 +385,15 @@ void ModeGradScatter::Add(const GridPoint& gp, float g_density, const float* g_m
       if (line_key_[s] >= 0) FlushLineSlot(s);
       line_key_[s] = i;
     }
-    float* __restrict acc = line_acc_.data() + static_cast<size_t>(s) * S;
+    float* __restrict acc = line_acc_.data() + static_cast<size_t>(s) * R;
 #pragma omp simd
-    for (int r = 0; r < S; ++r) acc[r] += wc * dl[r];
+    for (int r = 0; r < R; ++r) acc[r] += wc * dl[r];
   }
 }
 
 template <bool kDensity>
 void ModeGradScatter::Dispatch(const GridPoint& gp, float g_density, const float* g_mode) {
-  switch (width_) {
-    case 4:
-      Add<kDensity, 4>(gp, g_density, g_mode);
-      break;
-    case 8:
-      Add<kDensity, 8>(gp, g_density, g_mode);
-      break;
+  switch (rank_) {
     case 16:
       Add<kDensity, 16>(gp, g_density, g_mode);
       break;

@@ -76,10 +76,9 @@ class VmGrid {
   void Products(const GridPoint& gp, float* out) const;
 
   // Software prefetch of everything Density/Products(gp) reads; with for_write, of the same
-  // offsets in grads() (what ModeGradScatter will update). PrefetchMode: mode m only, components
-  // [first, first + count) of it (count <= 0: to the end).
+  // offsets in grads() (what ModeGradScatter will update). PrefetchMode: mode m only.
   void Prefetch(const GridPoint& gp, bool for_write = false) const;
-  void PrefetchMode(const GridPoint& gp, int m, bool for_write, int first = 0, int count = 0) const;
+  void PrefetchMode(const GridPoint& gp, int m, bool for_write) const;
 
   // F.interpolate(bilinear / linear, align_corners=True) of every plane and line to new_res.
   void UpsampleTo(const std::array<int, 3>& new_res);
@@ -101,30 +100,26 @@ class VmGrid {
   std::vector<float> grads_;
 };
 
-// Scatters sample gradients into components [first, first + count) of one mode (plane m and line
-// m) of a VmGrid's grads(). The scatter runs as one task per (grid, mode, component slice): a task
-// owns its slice of the plane and line, so it needs no atomics, and every gradient element is
-// summed in sample order whatever the slicing and however tasks are spread over threads (the
-// training step is bit-identical for any thread count). Slices exist so that many threads have
-// work: 6 (grid, mode) tasks cannot use more than 6 cores. Consecutive samples of a ray mostly
-// touch the same vertices, so per-vertex slice vectors are accumulated in a small direct-mapped
-// cache (plane slot (x&3)|((y&3)<<2), line slot i&3) and added to the grid on eviction and at
-// Flush(). Call Flush() before reading grads. Cache-line aligned: tasks on different threads keep
-// their slot keys in adjacent instances, which would otherwise share cache lines.
+// Scatters sample gradients into one mode (plane m and line m) of a VmGrid's grads(). The scatter
+// runs as one task per (grid, mode): a task owns its plane and line, so it needs no atomics and
+// its sums do not depend on how tasks are spread over threads (the training step is
+// deterministic for any thread count). Consecutive samples of a ray mostly touch the same
+// vertices, so per-vertex rank vectors are accumulated in a small direct-mapped cache (plane slot
+// (x&3)|((y&3)<<2), line slot i&3) and added to the grid on eviction and at Flush(). Call Flush()
+// before reading grads. Cache-line aligned: tasks on different threads keep their slot keys in
+// adjacent instances, which would otherwise share cache lines.
 class alignas(64) ModeGradScatter {
  public:
   ModeGradScatter() = default;
-  // count <= 0: every component from first on.
-  void Bind(VmGrid* grid, int mode, int first = 0, int count = 0);
-  // This slice's share of the gradient g of Density(gp).
+  void Bind(VmGrid* grid, int mode);
+  // This mode's share of the gradient g of Density(gp).
   void AddDensity(const GridPoint& gp, float g);
-  // Gradient of this mode's products: g[r] = dL/d(Products(gp)[rank_offset(mode) + r]) for the
-  // whole mode (the slice picks its own components).
+  // Gradient of this mode's products: g[r] = dL/d(Products(gp)[rank_offset(mode) + r]).
   void AddProducts(const GridPoint& gp, const float* g);
   void Flush();
 
  private:
-  template <bool kDensity, int kW>
+  template <bool kDensity, int kR>
   void Add(const GridPoint& gp, float g_density, const float* g_mode);
   template <bool kDensity>
   void Dispatch(const GridPoint& gp, float g_density, const float* g_mode);
@@ -133,14 +128,12 @@ class alignas(64) ModeGradScatter {
 
   VmGrid* grid_ = nullptr;
   int mode_ = 0;
-  int rank_ = 0;   // the mode's components: the stride of a vertex in the plane and line
-  int first_ = 0;  // the slice
-  int width_ = 0;
+  int rank_ = 0;
   int plane_key_[16];
   int line_key_[4];
-  std::vector<float> plane_acc_;  // 16 x width
-  std::vector<float> line_acc_;   // 4 x width
-  std::vector<float> tmp_;        // 2 x width
+  std::vector<float> plane_acc_;  // 16 x rank
+  std::vector<float> line_acc_;   // 4 x rank
+  std::vector<float> tmp_;        // 2 x rank
 };
 
 }  // namespace trainer

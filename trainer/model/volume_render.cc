@@ -75,13 +75,7 @@ struct Workspace {
   std::vector<ThreadSamples> per_thread;
   std::vector<RayRec> rays;
   std::vector<float> products, viewdirs, rgb, dl_drgb, dl_dproducts;
-  // The scatter's tasks: (grid, mode, component slice), density first (it has the most samples).
-  struct ScatterTask {
-    bool density;
-    int mode, first, count;
-  };
-  std::vector<ScatterTask> scatter_tasks;
-  std::vector<ModeGradScatter> scatter;  // one per task
+  ModeGradScatter scatter[6];  // per (grid, mode) task: density modes 0-2, appearance modes 0-2
 
   void Prepare(int n_rays, int threads) {
     if (static_cast<int>(per_thread.size()) < threads) per_thread.resize(threads);
@@ -333,62 +327,6 @@ std::vector<RaySampleInfo> TraceRay(const TensorfModel& model, const float o[3],
   return out;
 }
 
-namespace {
-
-// The scatter's slice width for `threads`: whole modes (0, 6 tasks) up to 2 threads, as before
-// slicing existed, else slices of 16, 8 or 4 components, the widest that gives every thread two
-// tasks (the dynamic schedule then evens out the density tasks, which see every sample, against
-// the appearance tasks, which see the coloured ones). The slicing changes no sum
-// (ModeGradScatter), so it may follow the thread count.
-int ScatterSliceWidth(const VmGrid& density, const VmGrid& appearance, int threads,
-                      int forced_width, int* num_tasks) {
-  auto count = [&](int w) {
-    int tasks = 0;
-    for (const VmGrid* g : {&density, &appearance})
-      for (int m = 0; m < 3; ++m) {
-        const int rank = std::max(1, g->ranks()[m]);
-        tasks += w > 0 ? (rank + w - 1) / w : 1;
-      }
-    return tasks;
-  };
-  int width = 0;
-  if (forced_width > 0) {
-    width = forced_width;
-  } else if (threads > 2) {
-    for (int w : {16, 8, 4}) {
-      width = w;
-      if (count(w) >= 2 * threads) break;
-    }
-  }
-  *num_tasks = count(width);
-  return width;
-}
-
-void PlanScatter(const VmGrid& density, const VmGrid& appearance, int threads, int forced_width,
-                 Workspace* ws) {
-  int num_tasks = 0;
-  const int width = ScatterSliceWidth(density, appearance, threads, forced_width, &num_tasks);
-  ws->scatter_tasks.clear();
-  for (const VmGrid* g : {&density, &appearance}) {
-    for (int m = 0; m < 3; ++m) {
-      const int rank = g->ranks()[m];
-      const int w = width > 0 ? width : std::max(1, rank);
-      for (int first = 0; first < std::max(1, rank); first += w)
-        ws->scatter_tasks.push_back({g == &density, m, first, std::min(w, rank - first)});
-    }
-  }
-  if (ws->scatter.size() < ws->scatter_tasks.size()) ws->scatter.resize(ws->scatter_tasks.size());
-}
-
-}  // namespace
-
-int ScatterTaskCount(const TensorfModel& model, int threads) {
-  int num_tasks = 0;
-  ScatterSliceWidth(model.density(), model.appearance(), threads, model.config().scatter_width,
-                    &num_tasks);
-  return num_tasks;
-}
-
 TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, const float* dirs,
                          const float* target_rgb, uint64_t rng_seed) {
   TrainStepStats stats;
@@ -398,7 +336,6 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
   Workspace& ws = *static_cast<Workspace*>(model.train_workspace.get());
   const int threads = omp_get_max_threads();
   ws.Prepare(n_rays, threads);
-  PlanScatter(model.density(), model.appearance(), threads, model.config().scatter_width, &ws);
   const MarchParams p = MakeMarchParams(model);
   const TensorfConfig& cfg = model.config();
   const bool white =
@@ -505,18 +442,15 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
     if (rows > 0) head.Backward(static_cast<int>(rows), ws.dl_drgb.data(), ws.dl_dproducts.data());
     stats.t_head += lap();
 
-    // Scatter grid gradients: one task per (grid, mode, component slice), each the only writer
-    // of its slice of a plane and a line (no atomics; the sums are the same for every thread
-    // count and slicing).
-    const int num_tasks = static_cast<int>(ws.scatter_tasks.size());
+    // Scatter grid gradients: one task per (grid, mode), each the only writer of its plane and
+    // line (no atomics; the sums are the same for every thread count).
 #pragma omp parallel for schedule(dynamic, 1) if (nr >= kMinParallelRays)
-    for (int task = 0; task < num_tasks; ++task) {
-      const Workspace::ScatterTask& st = ws.scatter_tasks[task];
-      const bool is_density = st.density;
-      const int m = st.mode;
+    for (int task = 0; task < 6; ++task) {
+      const bool is_density = task < 3;
+      const int m = task % 3;
       VmGrid& grid = is_density ? density : appearance;
       ModeGradScatter& sc = ws.scatter[task];
-      sc.Bind(&grid, m, st.first, st.count);
+      sc.Bind(&grid, m);
       const int mode_offset = appearance.rank_offset(m);
       for (int r = r0; r < r1; ++r) {
         const RayRec& rr = ws.rays[r];
@@ -525,16 +459,16 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
         const float* dprod =
             ws.dl_dproducts.data() + static_cast<size_t>(rr.app_start - base) * P + mode_offset;
         for (int k = 0; k < std::min(rr.count, kPrefetchDistance); ++k) {
-          grid.PrefetchMode(s[k].gp, m, false, st.first, st.count);
-          grid.PrefetchMode(s[k].gp, m, true, st.first, st.count);
+          grid.PrefetchMode(s[k].gp, m, false);
+          grid.PrefetchMode(s[k].gp, m, true);
         }
         for (int k = 0; k < rr.count; ++k) {
           // Prefetch only when the sample ahead enters a new cell (otherwise it is cached).
           const int ahead = k + kPrefetchDistance;
           if (ahead < rr.count && !SameCell(s[ahead].gp, s[ahead - 1].gp) &&
               (is_density || s[ahead].app >= 0 || s[ahead - 1].app >= 0)) {
-            grid.PrefetchMode(s[ahead].gp, m, false, st.first, st.count);
-            grid.PrefetchMode(s[ahead].gp, m, true, st.first, st.count);
+            grid.PrefetchMode(s[ahead].gp, m, false);
+            grid.PrefetchMode(s[ahead].gp, m, true);
           }
           if (is_density) {
             if (s[k].feat != 0.f) sc.AddDensity(s[k].gp, s[k].feat);

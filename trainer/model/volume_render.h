@@ -24,8 +24,8 @@
 // colour samples; per chunk the appearance products of all colour samples are gathered into
 // one contiguous rows x P matrix, the head runs forward, the compositing forward/backward runs
 // per ray (O(n) suffix sum), the head runs backward, and the grid gradients are scattered
-// (ModeGradScatter: one task per grid, mode and component slice, each the only writer of its
-// slice of a plane and a line, so no atomics and the same sums for every thread count).
+// (ModeGradScatter: one task per grid and mode, each the only writer of its plane and line, so
+// no atomics and the same sums for every thread count).
 #ifndef ECRF_TRAINER_MODEL_VOLUME_RENDER_H_
 #define ECRF_TRAINER_MODEL_VOLUME_RENDER_H_
 
@@ -57,9 +57,10 @@ struct TrainStepStats {
 TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, const float* dirs,
                          const float* target_rgb, uint64_t rng_seed);
 
-// The independent tasks TrainStep's gradient scatter runs as on `threads` threads (grid, mode and
-// component slice): the most threads that phase can use.
-int ScatterTaskCount(const TensorfModel& model, int threads);
+// The tasks of TrainStep's gradient scatter: one per (grid, mode), the most threads that phase can
+// use (measured with `ecrf bench train`: on 16 cores slicing the modes into more tasks did not
+// shorten it, docs/cluster.md).
+constexpr int kScatterTasks = 6;
 
 // Inference (no jitter, no gradients), chunked to bound memory. rgb_out: n_rays x 3 in [0,1];
 // depth_or_null: n_rays, the expected ray parameter sum_i w_i t_i (not normalized by acc).

@@ -65,9 +65,9 @@ TEST(SweepPlan, WritesOneScriptPerTaskTheArrayAndTheCollector) {
             std::string::npos);
   EXPECT_NE(sbatch.find("exec bash " + p.plan_dir + "/task_${SLURM_ARRAY_TASK_ID}.sh"),
             std::string::npos);
-  EXPECT_NE(ReadText(p.plan_dir + "/collect.sh")
-                .find("report sweep --data ../chair -o report --collect"),
-            std::string::npos);
+  EXPECT_NE(
+      ReadText(p.plan_dir + "/collect.sh").find("report sweep --data ../chair -o report --collect"),
+      std::string::npos);
   EXPECT_EQ(ReadText(p.plan_dir + "/tasks.txt"),
             "bash " + p.plan_dir + "/task_0.sh > " + TaskLogPath(p.plan_dir, 0) + " 2>&1\n" +
                 "bash " + p.plan_dir + "/task_1.sh > " + TaskLogPath(p.plan_dir, 1) + " 2>&1\n");

@@ -251,8 +251,7 @@ TEST(VolumeRenderTest, TrainStepGradientsMatchFiniteDifferences) {
 }
 
 TEST(VolumeRenderTest, TrainStepSameGradientsForAnyThreadCount) {
-  // Ranks of the trainer's size, 20 appearance components so that slices of 16, 8 and 4 leave a
-  // shorter last slice; 3 threads slice the scatter by 16, 8 by 8, 24 by 4 (PlanScatter).
+  // Ranks of the trainer's size; more threads than the scatter's six tasks, and more than cores.
   TensorfConfig c = TinyConfig();
   c.density_ranks = {16, 16, 16};
   c.app_ranks = {20, 20, 20};
@@ -277,8 +276,8 @@ TEST(VolumeRenderTest, TrainStepSameGradientsForAnyThreadCount) {
     const TrainStepStats sb = TrainStep(b, 300, o.data(), d.data(), target.data(), 5);
     EXPECT_NEAR(sa.loss, sb.loss, 1e-9) << threads << " threads";
     EXPECT_EQ(sa.density_samples, sb.density_samples);
-    // Each gradient element is scattered by one task in ray order whatever the slicing, and the
-    // head sums its weight gradients in fixed runs of chunks: the same bits for any thread count.
+    // Each (grid, mode) is scattered by one task in ray order and the head sums its weight
+    // gradients in fixed runs of chunks: the same bits for any thread count.
     EXPECT_EQ(a.density().grads(), b.density().grads()) << threads << " threads";
     EXPECT_EQ(a.appearance().grads(), b.appearance().grads()) << threads << " threads";
     EXPECT_EQ(a.head().grads(), b.head().grads()) << threads << " threads";

@@ -106,10 +106,10 @@ TEST(TrainBuiltin, ReachesHeldOutPsnrAndCheckpointsRestore) {
   EXPECT_LT(bytes.size() * 8, float_bytes);
 }
 
-// Training reproduces to the bit across thread counts: the grid scatter has one writer per
-// element (whole modes on 1-2 threads, component slices beyond), and the head and the entropy
-// model sum their gradients in fixed runs. The short run crosses an upsample, both alpha-mask
-// updates (shrink, ray filtering), the rate objective and quantization-aware steps.
+// Training reproduces to the bit across thread counts: the grid scatter has one writer per plane
+// and line, and the head and the entropy model sum their gradients in fixed runs. The short run
+// crosses an upsample, both alpha-mask updates (shrink, ray filtering), the rate objective and
+// quantization-aware steps.
 TEST(TrainBuiltin, SameModelForAnyThreadCount) {
   TrainOptions o = SmallRun();
   o.iters = 120;  // milestones scale: upsamples at 16, 32, 48, 64; masks at 24, 56
@@ -130,7 +130,7 @@ TEST(TrainBuiltin, SameModelForAnyThreadCount) {
   };
   TensorfModel one = run(1);
   const std::vector<NamedArray> a = one.NamedParameters();
-  for (int threads : {2, 5}) {  // 5: the scatter runs in component slices
+  for (int threads : {2, 5}) {  // 5: more threads than cores here
     TensorfModel other = run(threads);
     const std::vector<NamedArray> b = other.NamedParameters();
     ASSERT_EQ(a.size(), b.size());
