@@ -321,9 +321,10 @@ int RunReportSweep(int argc, char** argv) {
   app->add_option("-o,--out", out, "report directory (runs/ holds one run per point)")
       ->type_name("REPORT_DIR");
   app->add_flag("--plan", plan,
-                "train nothing: write REPORT_DIR/plan/, one task per unfinished point for a Slurm "
-                "job array (sweep.sbatch), GNU parallel or one after another (run_local.sh), and "
-                "collect.sh, which reports them (docs/cluster.md)");
+                "train nothing: write REPORT_DIR/plan/, one task per point (a finished point's "
+                "task exits at once) for a Slurm job array (sweep.sbatch), GNU parallel or one "
+                "after another (run_local.sh), and collect.sh, which reports them "
+                "(docs/cluster.md)");
   app->add_flag("--collect", collect,
                 "train nothing: report the finished points; name each unfinished one with its "
                 "plan log and exit 1")
