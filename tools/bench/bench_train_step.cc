@@ -299,7 +299,8 @@ int RunTrainStepBench(int argc, char** argv) {
         "appearance samples %ld | scatter tasks %d | triad bandwidth %.1f GB/s | peak RSS %.0f "
         "MB\n",
         nthreads, step_medians.back(), times[0], cpu / (nthreads * wall), last.density_samples,
-        last.appearance_samples, trainer::kScatterTasks, bandwidths.back() / 1e9, PeakRssMb());
+        last.appearance_samples, trainer::ScatterTaskCount(model), bandwidths.back() / 1e9,
+        PeakRssMb());
     report.Record("threads_" + std::to_string(nthreads) + "_step_median", step_medians.back());
     for (int k = 0; k < kNumPhases; ++k)
       report.Record("threads_" + std::to_string(nthreads) + "_" + kPhaseKeys[k], med[k]);
@@ -353,7 +354,7 @@ int RunTrainStepBench(int argc, char** argv) {
     std::printf(" %7.3f %6.0f", pm.serial, pm.bytes / 1e6);
     for (int j = 0; j < 4; ++j) {
       const int n = predicted[j];
-      const int tasks = k == kScatter ? trainer::kScatterTasks : 0;
+      const int tasks = k == kScatter ? trainer::ScatterTaskCount(model) : 0;
       const Prediction p = PredictPhase(pm, n, tasks, bandwidth);
       total_pred[j] += p.seconds;
       std::printf(" %7.4f %-8s", p.seconds, p.bound.c_str());

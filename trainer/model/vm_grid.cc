@@ -296,9 +296,20 @@ double VmGrid::L1(float weight) {
 // ModeGradScatter
 
 void ModeGradScatter::Bind(VmGrid* grid, int mode) {
+  BindTile(grid, mode, 0, grid->res()[kMatMode[mode][0]], 0, grid->res()[kMatMode[mode][1]],
+           grid->line_grad(mode));
+}
+
+void ModeGradScatter::BindTile(VmGrid* grid, int mode, int x0, int x1, int y0, int y1,
+                               float* line_out) {
   grid_ = grid;
   mode_ = mode;
   rank_ = grid->ranks()[mode];
+  x0_ = x0;
+  x1_ = x1;
+  y0_ = y0;
+  y1_ = y1;
+  line_out_ = line_out;
   for (int s = 0; s < 16; ++s) plane_key_[s] = -1;
   for (int s = 0; s < 4; ++s) line_key_[s] = -1;
   plane_acc_.assign(static_cast<size_t>(16) * rank_, 0.f);
@@ -323,7 +334,7 @@ void ModeGradScatter::FlushPlaneSlot(int s) {
 }
 
 void ModeGradScatter::FlushLineSlot(int s) {
-  AddAndClear(grid_->line_grad(mode_) + static_cast<size_t>(line_key_[s]) * rank_,
+  AddAndClear(line_out_ + static_cast<size_t>(line_key_[s]) * rank_,
               line_acc_.data() + static_cast<size_t>(s) * rank_, rank_);
   line_key_[s] = -1;
 }
@@ -366,6 +377,7 @@ void ModeGradScatter::Add(const GridPoint& gp, float g_density, const float* g_m
     const float wc = cw[c];
     if (wc == 0.f) continue;
     const int x = x0 + (c & 1), y = y0 + (c >> 1);
+    if (x < x0_ || x >= x1_ || y < y0_ || y >= y1_) continue;  // another tile's vertex
     const int s = (x & 3) | ((y & 3) << 2);
     const int key = y * W + x;
     if (plane_key_[s] != key) {
@@ -376,6 +388,8 @@ void ModeGradScatter::Add(const GridPoint& gp, float g_density, const float* g_m
 #pragma omp simd
     for (int r = 0; r < R; ++r) acc[r] += wc * dp[r];
   }
+  // The line part once per sample: in the tile of the sample's lower corner.
+  if (x0 < x0_ || x0 >= x1_ || y0 < y0_ || y0 >= y1_) return;
   for (int c = 0; c < 2; ++c) {
     const float wc = lw[c];
     if (wc == 0.f) continue;

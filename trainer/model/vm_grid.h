@@ -100,18 +100,24 @@ class VmGrid {
   std::vector<float> grads_;
 };
 
-// Scatters sample gradients into one mode (plane m and line m) of a VmGrid's grads(). The scatter
-// runs as one task per (grid, mode): a task owns its plane and line, so it needs no atomics and
-// its sums do not depend on how tasks are spread over threads (the training step is
-// deterministic for any thread count). Consecutive samples of a ray mostly touch the same
-// vertices, so per-vertex rank vectors are accumulated in a small direct-mapped cache (plane slot
-// (x&3)|((y&3)<<2), line slot i&3) and added to the grid on eviction and at Flush(). Call Flush()
-// before reading grads. Cache-line aligned: tasks on different threads keep their slot keys in
-// adjacent instances, which would otherwise share cache lines.
+// Scatters sample gradients into one mode (plane m and line m) of a VmGrid's grads(), or into one
+// tile of it. Bound to a whole mode, a task owns its plane and line; bound to a tile (BindTile),
+// it owns the plane vertices of the tile and adds the line gradients of the samples whose lower
+// corner lies in the tile into a line buffer of its own, which the caller sums into the grid in a
+// fixed order. Either way no atomics are needed and every sum is the same whatever the thread
+// count (the training step is deterministic for any thread count). Consecutive samples of a ray
+// mostly touch the same vertices, so per-vertex rank vectors are accumulated in a small
+// direct-mapped cache (plane slot (x&3)|((y&3)<<2), line slot i&3) and added on eviction and at
+// Flush(). Call Flush() before reading grads. Cache-line aligned: tasks on different threads keep
+// their slot keys in adjacent instances, which would otherwise share cache lines.
 class alignas(64) ModeGradScatter {
  public:
   ModeGradScatter() = default;
   void Bind(VmGrid* grid, int mode);
+  // Plane vertices x in [x0, x1), y in [y0, y1) only (x, y: the plane's axes u, v of kMatMode);
+  // the line gradients of samples whose lower corner is in the tile go to line_out (line length x
+  // rank floats, added to).
+  void BindTile(VmGrid* grid, int mode, int x0, int x1, int y0, int y1, float* line_out);
   // This mode's share of the gradient g of Density(gp).
   void AddDensity(const GridPoint& gp, float g);
   // Gradient of this mode's products: g[r] = dL/d(Products(gp)[rank_offset(mode) + r]).
@@ -129,6 +135,8 @@ class alignas(64) ModeGradScatter {
   VmGrid* grid_ = nullptr;
   int mode_ = 0;
   int rank_ = 0;
+  int x0_ = 0, x1_ = 0, y0_ = 0, y1_ = 0;  // the tile
+  float* line_out_ = nullptr;
   int plane_key_[16];
   int line_key_[4];
   std::vector<float> plane_acc_;  // 16 x rank

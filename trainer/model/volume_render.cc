@@ -44,6 +44,7 @@ struct Candidate {
 };
 
 constexpr int kPrefetchDistance = 4;  // samples ahead
+constexpr int kScatterTile = 32;      // plane vertices per side of a scatter tile
 
 inline bool SameCell(const GridPoint& a, const GridPoint& b) {
   return a.i0[0] == b.i0[0] && a.i0[1] == b.i0[1] && a.i0[2] == b.i0[2];
@@ -75,7 +76,25 @@ struct Workspace {
   std::vector<ThreadSamples> per_thread;
   std::vector<RayRec> rays;
   std::vector<float> products, viewdirs, rgb, dl_drgb, dl_dproducts;
-  ModeGradScatter scatter[6];  // per (grid, mode) task: density modes 0-2, appearance modes 0-2
+  // The gradient scatter (ScatterChunk): per (grid, mode), density modes 0-2 then appearance
+  // modes 0-2, the chunk's samples bucketed by plane tile in ray order, and each tile's line sums.
+  struct ScatterEntry {
+    const GridPoint* gp;
+    float g;             // density: dL/d(feature)
+    const float* dprod;  // appearance: the sample's products gradient, at this mode's offset
+  };
+  struct ModeTiles {
+    int tiles_x = 0, tiles_y = 0, line_floats = 0;
+    std::vector<std::vector<ScatterEntry>> lists;  // per tile
+    std::vector<float> line_sums;                  // per tile: line length x rank
+  };
+  ModeTiles tiles[6];
+  struct TileTask {
+    int mode_task, tile;
+    size_t entries;
+  };
+  std::vector<TileTask> tile_tasks;
+  std::vector<ModeGradScatter> scatter;  // one per tile task
 
   void Prepare(int n_rays, int threads) {
     if (static_cast<int>(per_thread.size()) < threads) per_thread.resize(threads);
@@ -327,6 +346,129 @@ std::vector<RaySampleInfo> TraceRay(const TensorfModel& model, const float o[3],
   return out;
 }
 
+namespace {
+
+// Scatters the gradients of rays [r0, r1) into the grids. Each (grid, mode) plane is cut into
+// fixed kScatterTile^2-vertex tiles; the samples are bucketed by the tiles their corners touch
+// (one task per grid and mode, in ray order), then one task per tile adds them in that order
+// (ModeGradScatter::BindTile), the tile's plane vertices and, for the samples whose lower corner
+// it holds, a line of its own; the lines are then summed into the grid tile by tile. The tiling
+// depends on the grid's size only, so every sum is the same for any thread count; it gives the
+// scatter as many tasks as tiles (96 at 128^3) instead of one per (grid, mode), whose longest walk
+// over every density sample was the phase's critical path beyond 4 threads.
+void ScatterChunk(VmGrid& density, VmGrid& appearance, Workspace& ws, int r0, int r1, int64_t base,
+                  int P) {
+  const bool parallel = r1 - r0 >= kMinParallelRays;
+  // 1. Bucketing, one task per (grid, mode).
+#pragma omp parallel for schedule(dynamic, 1) if (parallel)
+  for (int task = 0; task < 6; ++task) {
+    const bool is_density = task < 3;
+    const int m = task % 3;
+    VmGrid& grid = is_density ? density : appearance;
+    const int u = kMatMode[m][0], v = kMatMode[m][1], w = kVecMode[m];
+    Workspace::ModeTiles& mt = ws.tiles[task];
+    mt.tiles_x = (grid.res()[u] + kScatterTile - 1) / kScatterTile;
+    mt.tiles_y = (grid.res()[v] + kScatterTile - 1) / kScatterTile;
+    mt.line_floats = grid.res()[w] * grid.ranks()[m];
+    const size_t n_tiles = static_cast<size_t>(mt.tiles_x) * mt.tiles_y;
+    if (mt.lists.size() < n_tiles) mt.lists.resize(n_tiles);
+    for (size_t t = 0; t < n_tiles; ++t) mt.lists[t].clear();
+    const int mode_offset = appearance.rank_offset(m);
+    for (int r = r0; r < r1; ++r) {
+      const RayRec& rr = ws.rays[r];
+      if (!is_density && rr.app_count == 0) continue;
+      const SampleRec* s = ws.SamplesOf(rr);
+      const float* dprod =
+          ws.dl_dproducts.data() + static_cast<size_t>(rr.app_start - base) * P + mode_offset;
+      for (int k = 0; k < rr.count; ++k) {
+        Workspace::ScatterEntry e{&s[k].gp, 0.f, nullptr};
+        if (is_density) {
+          if (s[k].feat == 0.f) continue;
+          e.g = s[k].feat;
+        } else {
+          if (s[k].app < 0) continue;
+          e.dprod = dprod + static_cast<size_t>(s[k].app) * P;
+        }
+        const int x = s[k].gp.i0[u], y = s[k].gp.i0[v];
+        const int tx0 = x / kScatterTile, ty0 = y / kScatterTile;
+        const int tx1 = std::min((x + 1) / kScatterTile, mt.tiles_x - 1);
+        const int ty1 = std::min((y + 1) / kScatterTile, mt.tiles_y - 1);
+        for (int ty = ty0; ty <= ty1; ++ty)
+          for (int tx = tx0; tx <= tx1; ++tx) mt.lists[ty * mt.tiles_x + tx].push_back(e);
+      }
+    }
+    mt.line_sums.assign(n_tiles * static_cast<size_t>(mt.line_floats), 0.f);
+  }
+  // 2. One task per non-empty tile, the largest first (the order changes no sum).
+  ws.tile_tasks.clear();
+  for (int task = 0; task < 6; ++task) {
+    const Workspace::ModeTiles& mt = ws.tiles[task];
+    for (int t = 0; t < mt.tiles_x * mt.tiles_y; ++t)
+      if (!mt.lists[t].empty()) ws.tile_tasks.push_back({task, t, mt.lists[t].size()});
+  }
+  std::sort(
+      ws.tile_tasks.begin(), ws.tile_tasks.end(),
+      [](const Workspace::TileTask& a, const Workspace::TileTask& b) {
+        return a.entries != b.entries
+                   ? a.entries > b.entries
+                   : (a.mode_task != b.mode_task ? a.mode_task < b.mode_task : a.tile < b.tile);
+      });
+  if (ws.scatter.size() < ws.tile_tasks.size()) ws.scatter.resize(ws.tile_tasks.size());
+  const int n_tasks = static_cast<int>(ws.tile_tasks.size());
+#pragma omp parallel for schedule(dynamic, 1) if (parallel)
+  for (int k = 0; k < n_tasks; ++k) {
+    const Workspace::TileTask& tt = ws.tile_tasks[k];
+    const bool is_density = tt.mode_task < 3;
+    const int m = tt.mode_task % 3;
+    VmGrid& grid = is_density ? density : appearance;
+    Workspace::ModeTiles& mt = ws.tiles[tt.mode_task];
+    const int tx = tt.tile % mt.tiles_x, ty = tt.tile / mt.tiles_x;
+    ModeGradScatter& sc = ws.scatter[k];
+    sc.BindTile(&grid, m, tx * kScatterTile, (tx + 1) * kScatterTile, ty * kScatterTile,
+                (ty + 1) * kScatterTile,
+                mt.line_sums.data() + static_cast<size_t>(tt.tile) * mt.line_floats);
+    const std::vector<Workspace::ScatterEntry>& list = mt.lists[tt.tile];
+    const size_t n = list.size();
+    for (size_t i = 0; i < n; ++i) {
+      if (i + kPrefetchDistance < n) {
+        grid.PrefetchMode(*list[i + kPrefetchDistance].gp, m, false);
+        grid.PrefetchMode(*list[i + kPrefetchDistance].gp, m, true);
+      }
+      if (is_density) {
+        sc.AddDensity(*list[i].gp, list[i].g);
+      } else {
+        sc.AddProducts(*list[i].gp, list[i].dprod);
+      }
+    }
+    sc.Flush();
+  }
+  // 3. The lines: each (grid, mode)'s tile sums added in tile order.
+#pragma omp parallel for schedule(dynamic, 1) if (parallel)
+  for (int task = 0; task < 6; ++task) {
+    const int m = task % 3;
+    VmGrid& grid = task < 3 ? density : appearance;
+    const Workspace::ModeTiles& mt = ws.tiles[task];
+    float* line = grid.line_grad(m);
+    const int n_tiles = mt.tiles_x * mt.tiles_y;
+    for (int t = 0; t < n_tiles; ++t) {
+      if (mt.lists[t].empty()) continue;
+      const float* sums = mt.line_sums.data() + static_cast<size_t>(t) * mt.line_floats;
+      for (int j = 0; j < mt.line_floats; ++j) line[j] += sums[j];
+    }
+  }
+}
+
+}  // namespace
+
+int ScatterTaskCount(const TensorfModel& model) {
+  int tasks = 0;
+  for (const VmGrid* g : {&model.density(), &model.appearance()})
+    for (int m = 0; m < 3; ++m)
+      tasks += ((g->res()[kMatMode[m][0]] + kScatterTile - 1) / kScatterTile) *
+               ((g->res()[kMatMode[m][1]] + kScatterTile - 1) / kScatterTile);
+  return tasks;
+}
+
 TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, const float* dirs,
                          const float* target_rgb, uint64_t rng_seed) {
   TrainStepStats stats;
@@ -442,43 +584,7 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
     if (rows > 0) head.Backward(static_cast<int>(rows), ws.dl_drgb.data(), ws.dl_dproducts.data());
     stats.t_head += lap();
 
-    // Scatter grid gradients: one task per (grid, mode), each the only writer of its plane and
-    // line (no atomics; the sums are the same for every thread count).
-#pragma omp parallel for schedule(dynamic, 1) if (nr >= kMinParallelRays)
-    for (int task = 0; task < 6; ++task) {
-      const bool is_density = task < 3;
-      const int m = task % 3;
-      VmGrid& grid = is_density ? density : appearance;
-      ModeGradScatter& sc = ws.scatter[task];
-      sc.Bind(&grid, m);
-      const int mode_offset = appearance.rank_offset(m);
-      for (int r = r0; r < r1; ++r) {
-        const RayRec& rr = ws.rays[r];
-        if (!is_density && rr.app_count == 0) continue;
-        const SampleRec* s = ws.SamplesOf(rr);
-        const float* dprod =
-            ws.dl_dproducts.data() + static_cast<size_t>(rr.app_start - base) * P + mode_offset;
-        for (int k = 0; k < std::min(rr.count, kPrefetchDistance); ++k) {
-          grid.PrefetchMode(s[k].gp, m, false);
-          grid.PrefetchMode(s[k].gp, m, true);
-        }
-        for (int k = 0; k < rr.count; ++k) {
-          // Prefetch only when the sample ahead enters a new cell (otherwise it is cached).
-          const int ahead = k + kPrefetchDistance;
-          if (ahead < rr.count && !SameCell(s[ahead].gp, s[ahead - 1].gp) &&
-              (is_density || s[ahead].app >= 0 || s[ahead - 1].app >= 0)) {
-            grid.PrefetchMode(s[ahead].gp, m, false);
-            grid.PrefetchMode(s[ahead].gp, m, true);
-          }
-          if (is_density) {
-            if (s[k].feat != 0.f) sc.AddDensity(s[k].gp, s[k].feat);
-          } else if (s[k].app >= 0) {
-            sc.AddProducts(s[k].gp, dprod + static_cast<size_t>(s[k].app) * P);
-          }
-        }
-      }
-      sc.Flush();
-    }
+    ScatterChunk(density, appearance, ws, r0, r1, base, P);
     stats.t_scatter += lap();
     r0 = r1;
   }

@@ -24,8 +24,9 @@
 // colour samples; per chunk the appearance products of all colour samples are gathered into
 // one contiguous rows x P matrix, the head runs forward, the compositing forward/backward runs
 // per ray (O(n) suffix sum), the head runs backward, and the grid gradients are scattered
-// (ModeGradScatter: one task per grid and mode, each the only writer of its plane and line, so
-// no atomics and the same sums for every thread count).
+// (samples bucketed by plane tile, one task per tile, each the only writer of its vertices and of
+// a line of its own, the lines then summed in tile order: no atomics, and the same sums for every
+// thread count).
 #ifndef ECRF_TRAINER_MODEL_VOLUME_RENDER_H_
 #define ECRF_TRAINER_MODEL_VOLUME_RENDER_H_
 
@@ -57,10 +58,9 @@ struct TrainStepStats {
 TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, const float* dirs,
                          const float* target_rgb, uint64_t rng_seed);
 
-// The tasks of TrainStep's gradient scatter: one per (grid, mode), the most threads that phase can
-// use (measured with `ecrf bench train`: on 16 cores slicing the modes into more tasks did not
-// shorten it, docs/cluster.md).
-constexpr int kScatterTasks = 6;
+// The most tasks TrainStep's gradient scatter runs as: one per 32x32-vertex tile of every plane of
+// both grids (empty tiles are skipped).
+int ScatterTaskCount(const TensorfModel& model);
 
 // Inference (no jitter, no gradients), chunked to bound memory. rgb_out: n_rays x 3 in [0,1];
 // depth_or_null: n_rays, the expected ray parameter sum_i w_i t_i (not normalized by acc).
