@@ -321,27 +321,12 @@ int RunTrainStepBench(int argc, char** argv) {
   for (int n : predicted) std::printf(" %16s", ("pred " + std::to_string(n)).c_str());
   std::printf("\n");
   double total_pred[4] = {};
-  for (int k = 0; k <= kNumPhases; ++k) {
-    const bool total = k == kNumPhases;
+  for (int k = 0; k < kNumPhases; ++k) {
     std::vector<double> col;
-    for (size_t i = 0; i < thread_counts.size(); ++i) {
-      double v = 0.0;
-      if (total) {
-        v = step_medians[i];
-      } else {
-        v = medians[i][k];
-      }
-      col.push_back(v);
-    }
-    if (!total && col[0] == 0.0 && col.back() == 0.0) continue;  // a phase this run skips
-    std::printf("%-12s", total ? "step" : kPhaseNames[k]);
+    for (const auto& med : medians) col.push_back(med[k]);
+    if (col[0] == 0.0 && col.back() == 0.0) continue;  // a phase this run skips
+    std::printf("%-12s", kPhaseNames[k]);
     for (double v : col) std::printf(" %8.4f", v);
-    if (total) {
-      std::printf(" %7s %6s", "", "");
-      for (int j = 0; j < 4; ++j) std::printf(" %16.4f", total_pred[j]);
-      std::printf("\n");
-      break;
-    }
     PhaseModel pm;
     pm.serial = FitSerialFraction(thread_counts, col);
     pm.bytes = phase_bytes[k];
@@ -352,16 +337,20 @@ int RunTrainStepBench(int argc, char** argv) {
       continue;
     }
     std::printf(" %7.3f %6.0f", pm.serial, pm.bytes / 1e6);
+    const int tasks = k == kScatter ? trainer::ScatterTaskCount(model) : 0;
     for (int j = 0; j < 4; ++j) {
-      const int n = predicted[j];
-      const int tasks = k == kScatter ? trainer::ScatterTaskCount(model) : 0;
-      const Prediction p = PredictPhase(pm, n, tasks, bandwidth);
+      const Prediction p = PredictPhase(pm, predicted[j], tasks, bandwidth);
       total_pred[j] += p.seconds;
       std::printf(" %7.4f %-8s", p.seconds, p.bound.c_str());
-      report.Record(std::string("predicted_") + std::to_string(n) + "_" + kPhaseKeys[k], p.seconds);
+      report.Record("predicted_" + std::to_string(predicted[j]) + "_" + kPhaseKeys[k], p.seconds);
     }
     std::printf("\n");
   }
+  std::printf("%-12s", "step");
+  for (double v : step_medians) std::printf(" %8.4f", v);
+  std::printf(" %7s %6s", "", "");
+  for (int j = 0; j < 4; ++j) std::printf(" %16.4f", total_pred[j]);
+  std::printf("\n");
   for (int j = 0; j < 4; ++j)
     report.Record("predicted_" + std::to_string(predicted[j]) + "_step", total_pred[j]);
   if (!json_path.empty() && !report.WriteJson(json_path)) {

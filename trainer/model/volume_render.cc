@@ -46,6 +46,9 @@ struct Candidate {
 constexpr int kPrefetchDistance = 4;  // samples ahead
 constexpr int kScatterTile = 32;      // plane vertices per side of a scatter tile
 
+// Scatter tiles along a plane axis of `res` vertices.
+inline int TilesAlong(int res) { return (res + kScatterTile - 1) / kScatterTile; }
+
 inline bool SameCell(const GridPoint& a, const GridPoint& b) {
   return a.i0[0] == b.i0[0] && a.i0[1] == b.i0[1] && a.i0[2] == b.i0[2];
 }
@@ -367,8 +370,8 @@ void ScatterChunk(VmGrid& density, VmGrid& appearance, Workspace& ws, int r0, in
     VmGrid& grid = is_density ? density : appearance;
     const int u = kMatMode[m][0], v = kMatMode[m][1], w = kVecMode[m];
     Workspace::ModeTiles& mt = ws.tiles[task];
-    mt.tiles_x = (grid.res()[u] + kScatterTile - 1) / kScatterTile;
-    mt.tiles_y = (grid.res()[v] + kScatterTile - 1) / kScatterTile;
+    mt.tiles_x = TilesAlong(grid.res()[u]);
+    mt.tiles_y = TilesAlong(grid.res()[v]);
     mt.line_floats = grid.res()[w] * grid.ranks()[m];
     const size_t n_tiles = static_cast<size_t>(mt.tiles_x) * mt.tiles_y;
     if (mt.lists.size() < n_tiles) mt.lists.resize(n_tiles);
@@ -464,8 +467,7 @@ int ScatterTaskCount(const TensorfModel& model) {
   int tasks = 0;
   for (const VmGrid* g : {&model.density(), &model.appearance()})
     for (int m = 0; m < 3; ++m)
-      tasks += ((g->res()[kMatMode[m][0]] + kScatterTile - 1) / kScatterTile) *
-               ((g->res()[kMatMode[m][1]] + kScatterTile - 1) / kScatterTile);
+      tasks += TilesAlong(g->res()[kMatMode[m][0]]) * TilesAlong(g->res()[kMatMode[m][1]]);
   return tasks;
 }
 
