@@ -151,6 +151,13 @@ void AddTrainFlags(CLI::App* app, TrainFlags* f) {
       ->type_name("I,J,...")
       ->capture_default_str()
       ->group(schedule);
+  app->add_option("--mask-downscale", o.mask_downscale,
+                  "alpha-mask grid points N grid cells apart (a smaller OCCU chunk, more samples "
+                  "evaluated)")
+      ->type_name("N")
+      ->check(CLI::Range(1, 16))
+      ->capture_default_str()
+      ->group(schedule);
   app->add_option("--mask-at", f->mask_at, "iterations of the alpha-mask updates and box shrink")
       ->type_name("I,J,...")
       ->capture_default_str()

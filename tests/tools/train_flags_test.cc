@@ -179,6 +179,8 @@ TEST(TrainFlags, ConfigJsonRoundTripsEverySetting) {
                                          "123KB",
                                          "--density-step-factor",
                                          "0.4",
+                                         "--mask-downscale",
+                                         "3",
                                          "--test-stride",
                                          "3",
                                          "-o",
@@ -191,6 +193,7 @@ TEST(TrainFlags, ConfigJsonRoundTripsEverySetting) {
   EXPECT_NE(text.find("\"lambda_e\": 1.5e-10"), std::string::npos) << text;
   EXPECT_EQ(back.test_view_stride, 3);
   EXPECT_EQ(back.density_step_factor, 0.4f);
+  EXPECT_EQ(back.mask_downscale, 3);
   EXPECT_EQ(back.out_dir, "run/x");
   EXPECT_THROW(trainer::TrainConfigFromJson("{\"config_version\": 99, \"settings\": {}}", "x"),
                std::runtime_error);

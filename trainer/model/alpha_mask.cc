@@ -1,7 +1,9 @@
 #include "trainer/model/alpha_mask.h"
 #include "decoder/occupancy_rule.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
 #include <utility>
 
@@ -85,6 +87,51 @@ bool AlphaMask::Occupied(const float xyz[3]) const {
   if (!interior) return OccupiedSlow(idx);
   return cell_any_[(static_cast<size_t>(i0[2]) * (res_[1] - 1) + i0[1]) * (res_[0] - 1) + i0[0]] !=
          0;
+}
+
+std::array<int, 3> AlphaMaskRes(const std::array<int, 3>& grid_res, int downscale) {
+  if (downscale < 1) throw std::invalid_argument("alpha-mask downscale must be >= 1");
+  std::array<int, 3> res;
+  for (int a = 0; a < 3; ++a) {
+    const int cells = std::max(1, grid_res[a] - 1);
+    res[a] = std::max(2, (cells + downscale - 1) / downscale + 1);
+  }
+  return res;
+}
+
+AlphaMask CoarsenAlphaMask(const AlphaMask& fine, int downscale) {
+  const std::array<int, 3> res = AlphaMaskRes(fine.res(), downscale);
+  // Per axis and fine index i: the coarse indices of the corners of the closed coarse cells
+  // holding fine point i. Its coarse position u = i * (M - 1) / (R - 1) in exact integers: a point
+  // on a coarse point needs only that point (it is a corner of every cell holding it).
+  std::array<std::vector<std::array<int, 2>>, 3> range;
+  for (int a = 0; a < 3; ++a) {
+    const int64_t R = fine.res()[a], M = res[a];
+    range[a].resize(size_t(R));
+    for (int64_t i = 0; i < R; ++i) {
+      const int64_t num = i * (M - 1), lo = num / (R - 1);
+      const int64_t hi = (num % (R - 1) == 0) ? lo : lo + 1;
+      range[a][size_t(i)] = {int(lo), int(std::min(hi, M - 1))};
+    }
+  }
+  const int FX = fine.res()[0], FY = fine.res()[1], FZ = fine.res()[2];
+  const size_t X = size_t(res[0]), Y = size_t(res[1]);
+  std::vector<uint8_t> occ(X * Y * size_t(res[2]), 0);
+  const uint8_t* in = fine.occupancy().data();
+  for (int z = 0; z < FZ; ++z)
+    for (int y = 0; y < FY; ++y) {
+      const uint8_t* row = in + (size_t(z) * FY + y) * FX;
+      for (int x = 0; x < FX; ++x) {
+        if (!row[x]) continue;
+        const auto& rx = range[0][size_t(x)];
+        const auto& ry = range[1][size_t(y)];
+        const auto& rz = range[2][size_t(z)];
+        for (int cz = rz[0]; cz <= rz[1]; ++cz)
+          for (int cy = ry[0]; cy <= ry[1]; ++cy)
+            for (int cx = rx[0]; cx <= rx[1]; ++cx) occ[(size_t(cz) * Y + cy) * X + cx] = 1;
+      }
+    }
+  return AlphaMask(fine.aabb(), res, std::move(occ));
 }
 
 }  // namespace trainer

@@ -43,6 +43,17 @@ class AlphaMask {
   size_t count_ = 0;
 };
 
+// The resolution of a mask over the same box as a grid of grid_res points whose mask points are
+// at most `downscale` grid cells apart: ceil((res - 1) / downscale) + 1 points per axis (>= 2).
+std::array<int, 3> AlphaMaskRes(const std::array<int, 3>& grid_res, int downscale);
+
+// The same mask on the coarser grid of AlphaMaskRes(fine.res(), downscale), conservatively: every
+// point `fine` keeps, the result keeps too. Each occupied fine point marks the corners of the
+// coarse cells that contain it, so the coarse cell of any kept point has an occupied corner (its
+// fine corners lie in that cell or on a face it shares). Fewer points to code (SPEC 6.3), a
+// thicker shell of evaluated samples.
+AlphaMask CoarsenAlphaMask(const AlphaMask& fine, int downscale);
+
 }  // namespace trainer
 }  // namespace ecrf
 

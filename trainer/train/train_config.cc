@@ -30,6 +30,7 @@ void VisitSettings(TrainOptions& o, F&& f) {
   f("voxels_final", o.voxels_final);
   f("upsample_iters", o.upsample_iters);
   f("alpha_mask_iters", o.alpha_mask_iters);
+  f("mask_downscale", o.mask_downscale);
   f("lr_grid", o.lr_grid);
   f("lr_network", o.lr_network);
   f("lr_decay_ratio", o.lr_decay_ratio);

@@ -43,6 +43,10 @@ struct TrainOptions {
   long voxels_final = 300L * 300 * 300;
   std::vector<int> upsample_iters = {2000, 3000, 4000, 5500, 7000};
   std::vector<int> alpha_mask_iters = {2000, 4000};
+  // The alpha mask's grid points are this many grid cells apart (1: TensoRF's mask at the grid's
+  // resolution). The mask is coded into the file (OCCU), so a coarser mask costs fewer bytes and
+  // a thicker shell of evaluated samples; training and the file use the same mask.
+  int mask_downscale = 1;
   float lr_grid = 0.02f;
   float lr_network = 1e-3f;
   float lr_decay_ratio = 0.1f;  // learning rates fall to this fraction over the run

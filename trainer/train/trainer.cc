@@ -406,8 +406,10 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
     // TensoRF order: alpha mask (and shrink / ray filtering) first, then upsampling.
     for (size_t k = 0; k < mask_at.size(); ++k) {
       if (it != mask_at[k]) continue;
-      const std::array<int, 3> mask_res = model->res();
-      const Aabb new_box = model->UpdateAlphaMask(mask_res);
+      const Aabb new_box = model->UpdateAlphaMask(model->res());
+      if (o.mask_downscale > 1) {
+        model->SetAlphaMask(CoarsenAlphaMask(*model->alpha_mask(), o.mask_downscale));
+      }
       if (k == 0) {
         if (!model->unbounded()) model->Shrink(new_box);  // the contracted cube is all of space
         l1_weight = o.l1_weight_rest;
