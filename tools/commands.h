@@ -17,6 +17,7 @@ int RunInfo(int argc, char** argv);
 int RunRender(int argc, char** argv);
 int RunEval(int argc, char** argv);
 int RunReport(int argc, char** argv);
+int RunPrepare(int argc, char** argv);
 
 }  // namespace tools
 }  // namespace ecrf

@@ -56,6 +56,8 @@ const SubcommandTable& EcrfTable() {
           {"version", RunVersion, "print the library and bitstream versions"},
           {"selfcheck", RunSelfCheck,
            "round-trip the entropy coder and check the integer IDCT against float64"},
+          {"prepare", RunPrepare,
+           "posed images from photos or a video (COLMAP): prepare PHOTOS|VIDEO -o DATA"},
           {"train", RunTrain,
            "train a TensoRF VM model: train --data DIR|--scene builtin|capture|forward -o RUN"},
           {"encode", RunEncode, "encode a trained run: encode RUN_DIR -o SCENE.ecrf"},

@@ -142,5 +142,25 @@ std::string ShellCommandLine(const std::vector<std::string>& argv) {
   return line;
 }
 
+// ffmpeg reads "-x.mp4" as an option and "a:b.mp4" as protocol "a": a relative path gets "./".
+std::string FfmpegFileName(const std::string& path) {
+  if (path.empty() || path[0] == '/' || path.rfind("./", 0) == 0) return path;
+  if (path[0] == '-' || path.find(':') != std::string::npos) return "./" + path;
+  return path;
+}
+
+// The last `lines` lines of text, for error messages (ffmpeg puts the cause at the end).
+std::string TailLines(const std::string& text, int lines) {
+  const size_t end = text.find_last_not_of("\n\r \t");
+  if (end == std::string::npos) return "";
+  size_t start = end + 1;
+  for (int n = 0; n < lines && start > 0; ++n) {
+    const size_t newline = text.rfind('\n', start - 1);
+    start = newline == std::string::npos ? 0 : newline;
+  }
+  if (text[start] == '\n') ++start;
+  return text.substr(start, end + 1 - start);
+}
+
 }  // namespace tools
 }  // namespace ecrf

@@ -33,6 +33,13 @@ ProgramResult RunProgram(const std::vector<std::string>& argv);
 // anything but letters, digits and -_./%+:=,@.
 std::string ShellCommandLine(const std::vector<std::string>& argv);
 
+// A file name ffmpeg takes as a file: it reads "-x.mp4" as an option and "a:b.mp4" as protocol
+// "a", so a relative path that starts with '-' or holds ':' gets "./".
+std::string FfmpegFileName(const std::string& path);
+
+// The last `lines` lines of text, for error messages (programs put the cause at the end).
+std::string TailLines(const std::string& text, int lines);
+
 }  // namespace tools
 }  // namespace ecrf
 

@@ -36,31 +36,11 @@ std::string TemporaryVideoName(const std::string& output) {
   return output + ".tmp." + std::to_string(::getpid());
 }
 
-// ffmpeg reads "-x.mp4" as an option and "a:b.mp4" as protocol "a": a relative path gets "./".
-std::string FfmpegFileName(const std::string& path) {
-  if (path.empty() || path[0] == '/' || path.rfind("./", 0) == 0) return path;
-  if (path[0] == '-' || path.find(':') != std::string::npos) return "./" + path;
-  return path;
-}
-
 // The frames as ffmpeg's image-sequence pattern; a '%' of the directory is a literal "%%".
 std::string SequencePattern(const VideoJob& job) {
   std::string dir;
   for (char c : job.frames_dir) dir += c == '%' ? std::string("%%") : std::string(1, c);
   return FfmpegFileName(dir + "/" + job.frame_pattern + ".png");
-}
-
-// The last `lines` lines of text, for error messages (ffmpeg puts the cause at the end).
-std::string LastLines(const std::string& text, int lines) {
-  const size_t end = text.find_last_not_of("\n\r \t");
-  if (end == std::string::npos) return "";
-  size_t start = end + 1;
-  for (int n = 0; n < lines && start > 0; ++n) {
-    const size_t newline = text.rfind('\n', start - 1);
-    start = newline == std::string::npos ? 0 : newline;
-  }
-  if (text[start] == '\n') ++start;
-  return text.substr(start, end + 1 - start);
 }
 
 }  // namespace
@@ -141,7 +121,7 @@ void EncodeVideo(const std::string& ffmpeg, const VideoJob& job) {
   }
   if (!result.Succeeded()) {
     std::remove(temporary.c_str());
-    const std::string tail = LastLines(result.error_tail, 10);
+    const std::string tail = TailLines(result.error_tail, 10);
     throw std::runtime_error("--video " + job.output + ": " + ffmpeg + " failed (" +
                              result.Status() + ") encoding " + std::to_string(job.count) +
                              " frames from " + job.frames_dir +
