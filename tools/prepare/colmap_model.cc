@@ -24,9 +24,7 @@ std::vector<std::string> Lines(const std::string& text) {
   return lines;
 }
 
-bool IsBlank(const std::string& line) {
-  return line.find_first_not_of(" \t") == std::string::npos;
-}
+bool IsBlank(const std::string& line) { return line.find_first_not_of(" \t") == std::string::npos; }
 
 [[noreturn]] void Fail(const std::string& where, size_t line, const std::string& what) {
   throw std::runtime_error(where + ":" + std::to_string(line + 1) + ": " + what);
@@ -140,8 +138,8 @@ std::map<int, ColmapCamera> ParseColmapCameras(const std::string& text, const st
     if (c.width < 1 || c.height < 1) Fail(where, i, "the image size must be positive");
     double p[8];
     for (int k = 0; k < count; ++k) p[k] = Number(w[size_t(4 + k)], where, i, "parameter");
-    const bool one_focal = c.model == "SIMPLE_PINHOLE" || c.model == "SIMPLE_RADIAL" ||
-                           c.model == "RADIAL";
+    const bool one_focal =
+        c.model == "SIMPLE_PINHOLE" || c.model == "SIMPLE_RADIAL" || c.model == "RADIAL";
     c.fx = p[0];
     c.fy = one_focal ? p[0] : p[1];
     c.cx = one_focal ? p[1] : p[2];
@@ -228,16 +226,20 @@ void ColmapPoseFromC2w(const double c2w[3][4], double qvec[4], double tvec[3]) {
   double w, x, y, z;
   if (trace > 0) {
     const double s = 2 * std::sqrt(trace + 1);
-    w = s / 4, x = (R[2][1] - R[1][2]) / s, y = (R[0][2] - R[2][0]) / s, z = (R[1][0] - R[0][1]) / s;
+    w = s / 4, x = (R[2][1] - R[1][2]) / s, y = (R[0][2] - R[2][0]) / s,
+    z = (R[1][0] - R[0][1]) / s;
   } else if (R[0][0] > R[1][1] && R[0][0] > R[2][2]) {
     const double s = 2 * std::sqrt(1 + R[0][0] - R[1][1] - R[2][2]);
-    w = (R[2][1] - R[1][2]) / s, x = s / 4, y = (R[0][1] + R[1][0]) / s, z = (R[0][2] + R[2][0]) / s;
+    w = (R[2][1] - R[1][2]) / s, x = s / 4, y = (R[0][1] + R[1][0]) / s,
+    z = (R[0][2] + R[2][0]) / s;
   } else if (R[1][1] > R[2][2]) {
     const double s = 2 * std::sqrt(1 + R[1][1] - R[0][0] - R[2][2]);
-    w = (R[0][2] - R[2][0]) / s, x = (R[0][1] + R[1][0]) / s, y = s / 4, z = (R[1][2] + R[2][1]) / s;
+    w = (R[0][2] - R[2][0]) / s, x = (R[0][1] + R[1][0]) / s, y = s / 4,
+    z = (R[1][2] + R[2][1]) / s;
   } else {
     const double s = 2 * std::sqrt(1 + R[2][2] - R[0][0] - R[1][1]);
-    w = (R[1][0] - R[0][1]) / s, x = (R[0][2] + R[2][0]) / s, y = (R[1][2] + R[2][1]) / s, z = s / 4;
+    w = (R[1][0] - R[0][1]) / s, x = (R[0][2] + R[2][0]) / s, y = (R[1][2] + R[2][1]) / s,
+    z = s / 4;
   }
   const double sign = w < 0 ? -1 : 1;  // COLMAP's convention: w >= 0
   qvec[0] = sign * w, qvec[1] = sign * x, qvec[2] = sign * y, qvec[3] = sign * z;
@@ -258,7 +260,8 @@ double NormalizeColmapPoses(std::vector<ColmapImage>* images, double mean_distan
     Cross(up, zaxis, axis);
     const double s = std::sqrt(Dot(axis, axis)), c = Dot(up, zaxis);
     if (s > 1e-12) {
-      const double K[3][3] = {{0, -axis[2], axis[1]}, {axis[2], 0, -axis[0]}, {-axis[1], axis[0], 0}};
+      const double K[3][3] = {
+          {0, -axis[2], axis[1]}, {axis[2], 0, -axis[0]}, {-axis[1], axis[0], 0}};
       double K2[3][3];
       for (int r = 0; r < 3; ++r)
         for (int col = 0; col < 3; ++col) {
@@ -277,8 +280,8 @@ double NormalizeColmapPoses(std::vector<ColmapImage>* images, double mean_distan
     double m[3][4];
     for (int r = 0; r < 3; ++r)
       for (int col = 0; col < 4; ++col)
-        m[r][col] = rot[r][0] * im.c2w[0][col] + rot[r][1] * im.c2w[1][col] +
-                    rot[r][2] * im.c2w[2][col];
+        m[r][col] =
+            rot[r][0] * im.c2w[0][col] + rot[r][1] * im.c2w[1][col] + rot[r][2] * im.c2w[2][col];
     std::copy(&m[0][0], &m[0][0] + 12, &im.c2w[0][0]);
   }
   // 2. The point nearest every optical axis (least squares: sum (I - d d^T)(p - o) = 0); the
@@ -316,7 +319,8 @@ std::string TransformsJson(const ColmapModel& model, const std::vector<ColmapIma
                            int aabb_scale, const std::string& image_dir) {
   using Json = nlohmann::ordered_json;
   auto intrinsics = [&](const ColmapCamera& c, Json* out) {
-    (*out)["camera_model"] = c.k1 == 0 && c.k2 == 0 && c.p1 == 0 && c.p2 == 0 ? "PINHOLE" : "OPENCV";
+    (*out)["camera_model"] =
+        c.k1 == 0 && c.k2 == 0 && c.p1 == 0 && c.p2 == 0 ? "PINHOLE" : "OPENCV";
     (*out)["fl_x"] = c.fx;
     (*out)["fl_y"] = c.fy;
     (*out)["cx"] = c.cx;

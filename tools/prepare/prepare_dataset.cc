@@ -89,8 +89,8 @@ void Run(const std::vector<std::string>& argv, const std::string& step) {
   std::fprintf(stderr, "prepare: %s\n", step.c_str());
   const ProgramResult result = RunProgram(argv);
   if (!result.Succeeded()) {
-    throw std::runtime_error(step + " failed (" + result.Status() + "): " +
-                             ShellCommandLine(argv) + "\n" + TailLines(result.error_tail, 12));
+    throw std::runtime_error(step + " failed (" + result.Status() + "): " + ShellCommandLine(argv) +
+                             "\n" + TailLines(result.error_tail, 12));
   }
 }
 
@@ -122,13 +122,14 @@ int ExtractFrames(const std::string& ffmpeg, const PrepareOptions& o, const fs::
     // The longer side becomes max_size (never enlarged), the other keeps the aspect, even.
     filter += ",scale='if(gte(iw,ih),min(" + s + ",iw),-2)':'if(gte(iw,ih),-2,min(" + s + ",ih))'";
   }
-  Run({ffmpeg, "-nostdin", "-v", "error", "-i", FfmpegFileName(o.input), "-vf", filter,
-       "-frames:v", std::to_string(o.max_frames), "-q:v", "2",
+  Run({ffmpeg, "-nostdin", "-v", "error", "-i", FfmpegFileName(o.input), "-vf", filter, "-frames:v",
+       std::to_string(o.max_frames), "-q:v", "2",
        FfmpegFileName((images / "frame_%05d.jpg").string())},
       "extracting frames from " + o.input + " (ffmpeg)");
   int n = 0;
   std::error_code ec;
-  for (const fs::directory_entry& e : fs::directory_iterator(images, ec)) n += IsImageName(e.path());
+  for (const fs::directory_entry& e : fs::directory_iterator(images, ec))
+    n += IsImageName(e.path());
   return n;
 }
 
@@ -143,10 +144,11 @@ PrepareResult PrepareDataset(const PrepareOptions& o) {
                                 "SIMPLE_PINHOLE (the distortion the trainer models)");
   }
   if (o.matcher != "auto" && o.matcher != "exhaustive" && o.matcher != "sequential") {
-    throw std::invalid_argument("--matcher " + o.matcher + ": expected auto, exhaustive or sequential");
+    throw std::invalid_argument("--matcher " + o.matcher +
+                                ": expected auto, exhaustive or sequential");
   }
-  if (!(o.fps > 0) || o.max_frames < 3 || o.max_features < 0 || o.max_size < 0 || o.aabb_scale < 1 ||
-      !(o.min_registered >= 0 && o.min_registered <= 1)) {
+  if (!(o.fps > 0) || o.max_frames < 3 || o.max_features < 0 || o.max_size < 0 ||
+      o.aabb_scale < 1 || !(o.min_registered >= 0 && o.min_registered <= 1)) {
     throw std::invalid_argument(
         "need --fps > 0, --max-frames >= 3, --max-size >= 0, --aabb-scale >= 1 and "
         "--min-registered in [0, 1]");
@@ -176,11 +178,20 @@ PrepareResult PrepareDataset(const PrepareOptions& o) {
   const fs::path db = tmp.path() / "colmap" / "database.db";
   const fs::path sparse = tmp.path() / "colmap" / "sparse";
   fs::create_directories(sparse, ec);
-  std::vector<std::string> extract = {
-      colmap, "feature_extractor", "--database_path", db.string(), "--image_path",
-      images.string(), "--ImageReader.single_camera", "1", "--ImageReader.camera_model",
-      o.camera_model, "--SiftExtraction.use_gpu", "0", "--SiftExtraction.num_threads",
-      std::to_string(threads)};
+  std::vector<std::string> extract = {colmap,
+                                      "feature_extractor",
+                                      "--database_path",
+                                      db.string(),
+                                      "--image_path",
+                                      images.string(),
+                                      "--ImageReader.single_camera",
+                                      "1",
+                                      "--ImageReader.camera_model",
+                                      o.camera_model,
+                                      "--SiftExtraction.use_gpu",
+                                      "0",
+                                      "--SiftExtraction.num_threads",
+                                      std::to_string(threads)};
   if (o.max_features > 0) {
     extract.insert(extract.end(),
                    {"--SiftExtraction.max_num_features", std::to_string(o.max_features)});
@@ -188,8 +199,8 @@ PrepareResult PrepareDataset(const PrepareOptions& o) {
   Run(extract, "COLMAP feature extraction of " + std::to_string(result.frames) + " frames");
   const std::string matcher =
       o.matcher == "auto" ? (video ? "sequential" : "exhaustive") : o.matcher;
-  Run({colmap, matcher + "_matcher", "--database_path", db.string(), "--SiftMatching.use_gpu",
-       "0", "--SiftMatching.num_threads", std::to_string(threads)},
+  Run({colmap, matcher + "_matcher", "--database_path", db.string(), "--SiftMatching.use_gpu", "0",
+       "--SiftMatching.num_threads", std::to_string(threads)},
       "COLMAP " + matcher + " matching");
   Run({colmap, "mapper", "--database_path", db.string(), "--image_path", images.string(),
        "--output_path", sparse.string(), "--Mapper.num_threads", std::to_string(threads)},

@@ -17,9 +17,9 @@ namespace ecrf {
 namespace tools {
 
 struct PrepareOptions {
-  std::string input;    // a folder of PNG / JPEG photos, or a video file
-  std::string out_dir;  // must not exist (or be an empty folder)
-  double fps = 2.0;     // video: frames extracted per second
+  std::string input;     // a folder of PNG / JPEG photos, or a video file
+  std::string out_dir;   // must not exist (or be an empty folder)
+  double fps = 2.0;      // video: frames extracted per second
   int max_frames = 300;  // video: at most this many frames
   int max_size = 0;      // video: longest side of the frames in pixels (0: the video's)
   // exhaustive (every pair), sequential (neighbours in name order: video) or auto (sequential
@@ -29,7 +29,7 @@ struct PrepareOptions {
   // PINHOLE or SIMPLE_PINHOLE (the distortion models the trainer's loader reads).
   std::string camera_model = "OPENCV";
   int max_features = 0;  // SIFT features per frame (0: COLMAP's default, 8192); fewer match faster
-  int aabb_scale = 16;          // Instant-NGP's scene cube (the trainer fits its box inside)
+  int aabb_scale = 16;   // Instant-NGP's scene cube (the trainer fits its box inside)
   double min_registered = 0.5;  // fail when COLMAP poses a smaller share of the frames
   int threads = 0;              // 0: all cores
   std::string colmap = "colmap";

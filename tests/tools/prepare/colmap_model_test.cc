@@ -35,8 +35,9 @@ std::string ImagesText(const std::vector<trainer::Camera>& cameras) {
   for (size_t i = 0; i < cameras.size(); ++i) {
     double q[4], t[3];
     ColmapPoseFromC2w(cameras[i].c2w, q, t);
-    std::snprintf(line, sizeof(line), "%zu %.17g %.17g %.17g %.17g %.17g %.17g %.17g 1 frame %03zu.png\n",
-                  i + 1, q[0], q[1], q[2], q[3], t[0], t[1], t[2], i);
+    std::snprintf(line, sizeof(line),
+                  "%zu %.17g %.17g %.17g %.17g %.17g %.17g %.17g 1 frame %03zu.png\n", i + 1, q[0],
+                  q[1], q[2], q[3], t[0], t[1], t[2], i);
     text += line;
     text += i % 2 ? "\n" : "12.5 7.25 -1 3.0 4.0 17\n";  // the 2-D points line, empty or not
   }
@@ -100,10 +101,12 @@ TEST(ColmapModel, BadLinesNameTheFileLineAndProblem) {
   auto cameras = [](const std::string& text) {
     return ErrorOf([&] { ParseColmapCameras(text, "cameras.txt"); });
   };
-  EXPECT_NE(cameras("# c\n\n1 OPENCV_FISHEYE 64 48 1 1 1 1 0 0 0 0\n").find("cameras.txt:3: camera model OPENCV_FISHEYE is not supported"),
+  EXPECT_NE(cameras("# c\n\n1 OPENCV_FISHEYE 64 48 1 1 1 1 0 0 0 0\n")
+                .find("cameras.txt:3: camera model OPENCV_FISHEYE is not supported"),
             std::string::npos);
-  EXPECT_NE(cameras("1 PINHOLE 64 48 50 50 32\n").find("PINHOLE needs 4 parameters, the line has 3"),
-            std::string::npos);
+  EXPECT_NE(
+      cameras("1 PINHOLE 64 48 50 50 32\n").find("PINHOLE needs 4 parameters, the line has 3"),
+      std::string::npos);
   EXPECT_NE(cameras("1 PINHOLE 64 48 50 nan 32 24\n").find("is not a finite number"),
             std::string::npos);
   EXPECT_NE(cameras("1 PINHOLE 64 48 -5 5 32 24\n").find("focal length must be positive"),
@@ -115,10 +118,10 @@ TEST(ColmapModel, BadLinesNameTheFileLineAndProblem) {
   };
   EXPECT_NE(images("1 1 0 0 0 0 0 0 1\n").find("images.txt:1: expected IMAGE_ID"),
             std::string::npos);
-  EXPECT_NE(images("1 2 0 0 0 0 0 0 1 a.png\n\n").find("not a unit quaternion"),
-            std::string::npos);
+  EXPECT_NE(images("1 2 0 0 0 0 0 0 1 a.png\n\n").find("not a unit quaternion"), std::string::npos);
   // An image of a camera cameras.txt does not list.
-  const fs::path dir = fs::temp_directory_path() / ("colmap_model_test_" + std::to_string(::getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("colmap_model_test_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   std::ofstream(dir / "cameras.txt") << "1 PINHOLE 64 48 50 50 32 24\n";
   std::ofstream(dir / "images.txt") << "1 1 0 0 0 0 0 0 2 a.png\n\n";
@@ -140,7 +143,8 @@ TEST(ColmapModel, NormalisedPosesLookAtTheOriginWithZUp) {
     const double a = 2 * M_PI * double(i) / double(images.size());
     const double radius = 2.5 + 0.3 * std::sin(3 * a);
     double o[3], back[3], right[3], cam_up[3];
-    for (int k = 0; k < 3; ++k) o[k] = centre[k] + radius * (std::cos(a) * e1[k] + std::sin(a) * e2[k]) + 0.4 * up[k];
+    for (int k = 0; k < 3; ++k)
+      o[k] = centre[k] + radius * (std::cos(a) * e1[k] + std::sin(a) * e2[k]) + 0.4 * up[k];
     double norm = 0;
     for (int k = 0; k < 3; ++k) norm += (o[k] - centre[k]) * (o[k] - centre[k]);
     for (int k = 0; k < 3; ++k) back[k] = (o[k] - centre[k]) / std::sqrt(norm);  // +z_gl
@@ -185,15 +189,18 @@ TEST(ColmapModel, NormalisedPosesLookAtTheOriginWithZUp) {
 
 // transforms.json as the trainer's loader reads it: intrinsics, distortion and poses.
 TEST(ColmapModel, TransformsJsonLoadsWithTheSameCameras) {
-  const fs::path dir = fs::temp_directory_path() / ("colmap_json_test_" + std::to_string(::getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("colmap_json_test_" + std::to_string(::getpid()));
   fs::create_directories(dir / "images");
   ColmapModel model;
-  model.cameras = ParseColmapCameras("1 OPENCV 32 24 30 31 16.5 11.5 -0.12 0.03 0.001 -0.002\n", "c");
+  model.cameras =
+      ParseColmapCameras("1 OPENCV 32 24 30 31 16.5 11.5 -0.12 0.03 0.001 -0.002\n", "c");
   const trainer::Dataset capture = trainer::MakeCaptureScene("train", 32, 24, 10, 3);
   std::vector<trainer::Camera> cameras;
   for (const trainer::View& v : capture.views) cameras.push_back(v.camera);
   model.images = ParseColmapImages(ImagesText(cameras), "i");
-  for (const ColmapImage& im : model.images) trainer::SavePng((dir / "images" / im.name).string(), capture.views[0].rgb);
+  for (const ColmapImage& im : model.images)
+    trainer::SavePng((dir / "images" / im.name).string(), capture.views[0].rgb);
   std::ofstream(dir / "transforms.json") << TransformsJson(model, model.images, 16, "images");
   size_t loaded = 0;
   for (const char* split : {"train", "test"}) {

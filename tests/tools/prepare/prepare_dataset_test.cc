@@ -79,11 +79,47 @@ TEST_F(PrepareDatasetTest, TooFewPhotosLeaveNothingBehind) {
   for (const auto& e : fs::directory_iterator(dir_)) EXPECT_EQ(e.path().filename(), "photos");
 }
 
+// A video goes through ffmpeg at --fps: 3 s at 8 frames per second give 6 frames at 2 per
+// second, the longer side scaled to --max-size. COLMAP here is `true`, which makes no
+// reconstruction: the error counts the frames and names them, and nothing is left behind.
+TEST_F(PrepareDatasetTest, AVideoBecomesFramesAtTheAskedRate) {
+  const std::string ffmpeg = FindExecutable("ffmpeg");
+  if (ffmpeg.empty()) GTEST_SKIP() << "ffmpeg not installed (apt-get install ffmpeg)";
+  const trainer::Dataset capture =
+      trainer::MakeCaptureScene("train", 96, 72, 28, 7);  // 24 views: 28 less every 8th
+  ASSERT_EQ(capture.views.size(), 24u);
+  for (int i = 0; i < 24; ++i) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "f_%03d.png", i);
+    trainer::SavePng((dir_ / "photos" / name).string(), capture.views[size_t(i)].rgb);
+  }
+  const std::string video = (dir_ / "walk.mp4").string();
+  const ProgramResult made =
+      RunProgram({ffmpeg, "-nostdin", "-v", "error", "-framerate", "8", "-i",
+                  (dir_ / "photos" / "f_%03d.png").string(), "-pix_fmt", "yuv420p", video});
+  ASSERT_TRUE(made.Succeeded()) << made.error_tail;
+  PrepareOptions o;
+  o.input = video;
+  o.out_dir = (dir_ / "data").string();
+  o.max_size = 64;
+  o.colmap = "true";
+  const std::string error = ErrorOf(o);
+  EXPECT_NE(error.find("COLMAP posed 0 of 6 frames (0 reconstructions"), std::string::npos)
+      << error;
+  EXPECT_NE(error.find("frame_00001.jpg, frame_00002.jpg"), std::string::npos) << error;
+  for (const auto& e : fs::directory_iterator(dir_)) {
+    EXPECT_TRUE(e.path().filename() == "photos" || e.path().filename() == "walk.mp4") << e.path();
+  }
+  o.fps = 4;
+  EXPECT_NE(ErrorOf(o).find("posed 0 of 12 frames"), std::string::npos);
+}
+
 // The procedural capture (a still life in a textured room, a hand-held loop, a distorting lens)
 // rendered to photos: COLMAP poses every one, and the poses match the true ones up to the
 // similarity structure from motion cannot know.
 TEST_F(PrepareDatasetTest, PosesEveryPhotoOfARenderedCapture) {
-  if (FindExecutable("colmap").empty()) GTEST_SKIP() << "colmap not installed (apt-get install colmap)";
+  if (FindExecutable("colmap").empty())
+    GTEST_SKIP() << "colmap not installed (apt-get install colmap)";
   constexpr int kWidth = 320, kHeight = 240, kFrames = 48;
   std::vector<trainer::Camera> truth(kFrames);
   for (const char* split : {"train", "test"}) {
@@ -109,7 +145,8 @@ TEST_F(PrepareDatasetTest, PosesEveryPhotoOfARenderedCapture) {
 
   std::vector<trainer::ViewSource> views;
   for (const char* split : {"train", "test"}) {
-    const trainer::DatasetManifest m = trainer::ReadDatasetManifest((dir_ / "data").string(), split, 1);
+    const trainer::DatasetManifest m =
+        trainer::ReadDatasetManifest((dir_ / "data").string(), split, 1);
     views.insert(views.end(), m.views.begin(), m.views.end());
   }
   ASSERT_EQ(int(views.size()), kFrames);
@@ -129,11 +166,13 @@ TEST_F(PrepareDatasetTest, PosesEveryPhotoOfARenderedCapture) {
   const Eigen::Matrix3Xd aligned =
       (sim.topLeftCorner<3, 3>() * found).colwise() + sim.topRightCorner<3, 1>();
   const double rms = std::sqrt((aligned - known).colwise().squaredNorm().mean());
-  const double spread = std::sqrt((known.colwise() - known.rowwise().mean()).colwise().squaredNorm().mean());
-  std::printf("poses: centres %.2f %% rms of the capture's spread; fx %.4f of the true, k1 %.4f "
-              "(true %.4f), cx %.2f (true %.2f)\n",
-              100 * rms / spread, views[0].camera.fx / truth[0].fx, views[0].camera.k1, truth[0].k1,
-              views[0].camera.cx, truth[0].cx);
+  const double spread =
+      std::sqrt((known.colwise() - known.rowwise().mean()).colwise().squaredNorm().mean());
+  std::printf(
+      "poses: centres %.2f %% rms of the capture's spread; fx %.4f of the true, k1 %.4f "
+      "(true %.4f), cx %.2f (true %.2f)\n",
+      100 * rms / spread, views[0].camera.fx / truth[0].fx, views[0].camera.k1, truth[0].k1,
+      views[0].camera.cx, truth[0].cx);
   // Measured 1.5-2.4 % over runs (COLMAP's RANSAC is not repeatable); a wrong convention or
   // normalisation is off by the whole capture.
   EXPECT_LT(rms / spread, 0.05) << "camera centres off by " << rms << " m (rms) in a " << spread
