@@ -94,16 +94,22 @@ void Run(const std::vector<std::string>& argv, const std::string& step) {
   }
 }
 
-// The photos of a folder, copied in name order (hard links where the file system allows).
-int CopyPhotos(const fs::path& input, const fs::path& images) {
-  std::vector<fs::path> photos;
+// The PNG and JPEG files of a folder, in name order.
+std::vector<fs::path> ImagesIn(const fs::path& dir) {
+  std::vector<fs::path> images;
   std::error_code ec;
-  for (const fs::directory_entry& e : fs::directory_iterator(input, ec)) {
-    if (e.is_regular_file(ec) && IsImageName(e.path())) photos.push_back(e.path());
+  for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
+    if (e.is_regular_file(ec) && IsImageName(e.path())) images.push_back(e.path());
   }
-  if (ec) throw std::runtime_error(input.string() + ": cannot list (" + ec.message() + ")");
-  std::sort(photos.begin(), photos.end());
-  for (const fs::path& p : photos) {
+  if (ec) throw std::runtime_error(dir.string() + ": cannot list (" + ec.message() + ")");
+  std::sort(images.begin(), images.end());
+  return images;
+}
+
+// The photos of a folder, copied (hard links where the file system allows).
+void CopyPhotos(const fs::path& input, const fs::path& images) {
+  std::error_code ec;
+  for (const fs::path& p : ImagesIn(input)) {
     const fs::path to = images / p.filename();
     fs::create_hard_link(p, to, ec);
     if (ec) {
@@ -112,10 +118,9 @@ int CopyPhotos(const fs::path& input, const fs::path& images) {
       if (ec) throw std::runtime_error(p.string() + ": cannot copy (" + ec.message() + ")");
     }
   }
-  return int(photos.size());
 }
 
-int ExtractFrames(const std::string& ffmpeg, const PrepareOptions& o, const fs::path& images) {
+void ExtractFrames(const std::string& ffmpeg, const PrepareOptions& o, const fs::path& images) {
   std::string filter = "fps=" + std::to_string(o.fps);
   if (o.max_size > 0) {
     const std::string s = std::to_string(o.max_size);
@@ -126,11 +131,6 @@ int ExtractFrames(const std::string& ffmpeg, const PrepareOptions& o, const fs::
        std::to_string(o.max_frames), "-q:v", "2",
        FfmpegFileName((images / "frame_%05d.jpg").string())},
       "extracting frames from " + o.input + " (ffmpeg)");
-  int n = 0;
-  std::error_code ec;
-  for (const fs::directory_entry& e : fs::directory_iterator(images, ec))
-    n += IsImageName(e.path());
-  return n;
 }
 
 }  // namespace
@@ -167,7 +167,14 @@ PrepareResult PrepareDataset(const PrepareOptions& o) {
                    (out.filename().string() + ".partial." + std::to_string(::getpid())));
   const fs::path images = tmp.path() / "images";
   PrepareResult result;
-  result.frames = video ? ExtractFrames(ffmpeg, o, images) : CopyPhotos(input, images);
+  if (video) {
+    ExtractFrames(ffmpeg, o, images);
+  } else {
+    CopyPhotos(input, images);
+  }
+  std::vector<std::string> all;  // the frames COLMAP gets, by name
+  for (const fs::path& p : ImagesIn(images)) all.push_back(p.filename().string());
+  result.frames = int(all.size());
   if (result.frames < 3) {
     throw std::runtime_error(o.input + ": " + std::to_string(result.frames) +
                              (video ? " frames extracted" : " PNG or JPEG images") +
@@ -223,10 +230,6 @@ PrepareResult PrepareDataset(const PrepareOptions& o) {
   std::vector<std::string> posed;
   for (const ColmapImage& im : best.images) posed.push_back(im.name);
   std::sort(posed.begin(), posed.end());
-  std::vector<std::string> all;
-  for (const fs::directory_entry& e : fs::directory_iterator(images, ec))
-    if (IsImageName(e.path())) all.push_back(e.path().filename().string());
-  std::sort(all.begin(), all.end());
   std::set_difference(all.begin(), all.end(), posed.begin(), posed.end(),
                       std::back_inserter(result.unregistered));
   if (result.registered < 3 || result.registered < o.min_registered * result.frames) {
