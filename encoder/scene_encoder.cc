@@ -9,6 +9,7 @@
 #include "decoder/scene_decoder.h"
 #include "encoder/coded_tensors.h"
 #include "encoder/coef_quantizer.h"
+#include "encoder/coef_rdoq.h"
 #include "encoder/grid_dct.h"
 #include "format/byte_io.h"
 #include "format/coefficients/coef_coder.h"
@@ -174,17 +175,23 @@ std::vector<uint8_t> EncodeCoefficients(const SceneTensors& s, int g, int t, flo
   const int volume = layout.block_volume();
   std::vector<int32_t> levels(coeffs.size(), 0);
   const int index = g * 6 + t;
+  for (size_t i = 0; i < coeffs.size(); ++i) {
+    const double level = QuantizeLevel(double(coeffs[i]), step, o.rounding_offset);
+    if (std::fabs(level) > max_abs) ++report->clipped_coefficients;
+  }
+  RdoqOptions rdoq;
+  rdoq.lambda = o.rdoq_lambda;
+  rdoq.rounding_offset = o.rounding_offset;
+  rdoq.max_abs = max_abs;
+  // RDOQ decides with the costs of the richest context set the asked version allows.
+  rdoq.set = o.max_version_minor >= kNeighbourContextsMinVersionMinor ? CoefContextSet::kNeighbour
+             : o.max_version_minor >= kWideContextsMinVersionMinor    ? CoefContextSet::kWide
+                                                                      : CoefContextSet::kNarrow;
+  RdoqLevels(coeffs.data(), layout, step, rdoq, levels.data());
   for (int b = 0; b < layout.num_blocks(); ++b) {
-    bool zero = true;
-    int32_t* q = &levels[size_t(b) * volume];
-    for (int i = 0; i < volume; ++i) {
-      const double level =
-          QuantizeLevel(double(coeffs[size_t(b) * volume + i]), step, o.rounding_offset);
-      if (std::fabs(level) > max_abs) ++report->clipped_coefficients;
-      q[i] = int32_t(std::max<double>(-max_abs, std::min<double>(max_abs, level)));
-      zero &= q[i] == 0;
-    }
-    report->tensor_zero_blocks[index] += zero;
+    const int32_t* q = &levels[size_t(b) * volume];
+    report->tensor_zero_blocks[index] +=
+        std::all_of(q, q + volume, [](int32_t v) { return v == 0; });
   }
   // Every context set the asked version allows codes the same levels; the chunk keeps the
   // shortest code, so no tensor ever grows over its size in an older version.
@@ -365,6 +372,10 @@ std::vector<uint8_t> EncodeScene(const TensorfModel& model, const EncodeOptions&
   if (!(o.rounding_offset > 0.f && o.rounding_offset <= 0.5f)) {
     throw std::invalid_argument("rounding offset " + std::to_string(o.rounding_offset) +
                                 " outside (0, 0.5]");
+  }
+  if (!(o.rdoq_lambda >= 0.f && o.rdoq_lambda <= kMaxRdoqLambda)) {
+    throw std::invalid_argument("RDOQ lambda " + std::to_string(o.rdoq_lambda) + " outside [0, " +
+                                std::to_string(kMaxRdoqLambda) + "]");
   }
   if (!o.steps.empty() && o.steps.size() != 12) {
     throw std::invalid_argument("EncodeScene: expected 12 quantization steps, got " +

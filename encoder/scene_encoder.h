@@ -40,6 +40,9 @@ struct EncodeOptions {
   // Rounding offset of the coefficient quantizer (encoder/coef_quantizer.h): 0.5 rounds to
   // nearest, smaller values widen the dead zone.
   float rounding_offset = 0.5f;
+  // > 0: rate-distortion optimised quantization (encoder/coef_rdoq.h) with this lambda, in
+  // squared steps per bit; 0: the rounding alone.
+  float rdoq_lambda = 0.f;
   std::string metadata_json;  // the ancillary meta chunk (empty: none)
   // The newest stream version 1.x to write. From 4 on, each COEF chunk takes the shorter of its
   // narrow and wide (1.4) codes; below 4 all are narrow, so 1.3 decoders read the stream (2-3.5%

@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "encoder/coef_rdoq.h"
 #include "tools/cli.h"
 #include "tools/cli_args.h"
 #include "tools/commands.h"
@@ -30,7 +31,7 @@ int RunEncode(int argc, char** argv) {
   std::string input, output, target_size, dct_block, line_block, max_version;
   trainer::EncodeOptions defaults;
   int coef_bits = defaults.coef_bits, mlp_levels = 0;
-  float rounding_offset = defaults.rounding_offset;
+  float rounding_offset = defaults.rounding_offset, rdoq_lambda = defaults.rdoq_lambda;
   bool mlp_f32 = false, no_drop = false, no_occupancy = false;
   app->add_option("run", input, "run directory (or its checkpoint.ckpt)")
       ->required()
@@ -58,6 +59,11 @@ int RunEncode(int argc, char** argv) {
                   "run trained "
                   "through")
       ->type_name("X");
+  app->add_option("--rdoq", rdoq_lambda,
+                  "rate-distortion optimised quantization with lambda L (squared steps per bit; 0 "
+                  "= off); default: the one the run trained through")
+      ->type_name("L")
+      ->check(CLI::Range(0.f, trainer::kMaxRdoqLambda));
   app->add_option("--max-version", max_version,
                   "write a stream decoders of 1.N read (default 1." +
                       std::to_string(kVersionMinor) +
@@ -95,6 +101,7 @@ int RunEncode(int argc, char** argv) {
     trainer::TrainOptions config = info.config;
     if (given("--mlp-levels")) config.mlp_levels = mlp_levels;
     if (given("--rounding-offset")) config.rounding_offset = rounding_offset;
+    if (given("--rdoq")) config.rdoq_lambda = rdoq_lambda;
     if (given("--coef-bits")) config.coef_bits = coef_bits;
     if (given("--target-size")) config.target_bytes = target_flag;
     for (const std::string& c : trainer::ChangedSettings(info.config, config)) {
@@ -115,9 +122,11 @@ int RunEncode(int argc, char** argv) {
     if (rate.active) {
       o.steps = rate.steps;
       o.rounding_offset = rate.rounding_offset;
+      o.rdoq_lambda = rate.rdoq_lambda;
     }
     o.mlp_max_level = mlp_levels;
     if (given("--rounding-offset")) o.rounding_offset = rounding_offset;
+    if (given("--rdoq")) o.rdoq_lambda = rdoq_lambda;
     target_bytes = target_flag;
     nlohmann::json meta;
     meta["encoder"] = "ecrf";

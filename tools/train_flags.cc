@@ -1,4 +1,5 @@
 #include "tools/train_flags.h"
+#include "encoder/coef_rdoq.h"
 
 #include <algorithm>
 #include <cmath>
@@ -243,6 +244,12 @@ void AddTrainFlags(CLI::App* app, TrainFlags* f) {
       ->type_name("X")
       ->capture_default_str()
       ->group(rate);
+  app->add_option("--rdoq", o.rdoq_lambda,
+                  "rate-distortion optimised quantization with lambda L (squared steps per bit; "
+                  "0 = off), in training and encoding")
+      ->type_name("L")
+      ->capture_default_str()
+      ->group(rate);
   app->add_option("--dct-block", f->dct_block, "plane block shape, powers of two <= 32")
       ->type_name("CxHxW")
       ->capture_default_str()
@@ -354,6 +361,10 @@ trainer::TrainOptions FinishTrainFlags(const CLI::App& app, TrainFlags* f) {
     throw std::invalid_argument("--rate-start must be in [0, 1)");
   if (!(o.rounding_offset > 0.f && o.rounding_offset <= 0.5f)) {
     throw std::invalid_argument("--rounding-offset must be in (0, 0.5]");
+  }
+  if (!(o.rdoq_lambda >= 0.f && o.rdoq_lambda <= trainer::kMaxRdoqLambda)) {
+    throw std::invalid_argument("--rdoq must be in [0, " +
+                                std::to_string(int(trainer::kMaxRdoqLambda)) + "]");
   }
   if (!(o.rate_fraction > 0.f && o.rate_fraction <= 1.f))
     throw std::invalid_argument("--rate-fraction must be in (0, 1]");

@@ -217,6 +217,7 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
   m["qat_start"] = o.qat_start;
   m["qat_refresh"] = o.qat_refresh;
   m["rounding_offset"] = o.rounding_offset;
+  m["rdoq_lambda"] = o.rdoq_lambda;
   m["mlp_levels"] = o.mlp_levels;
   m["plane_block"] = o.plane_block;
   m["line_block"] = o.line_block;

@@ -138,7 +138,7 @@ const char* const kPhaseKeys[kNumPhases] = {"zero", "qat_refresh", "qat_apply", 
 
 int RunTrainStepBench(int argc, char** argv) {
   int res = 128, rays = 4096, reps = 5, mask = 0, rate_phase = 1;
-  float early = 0.f, blob_peak = 14.f;
+  float early = 0.f, blob_peak = 14.f, rdoq = 0.f;
   std::string threads = "1,2", json_path;
   auto app = MakeCommand(
       "bench train",
@@ -169,6 +169,12 @@ int RunTrainStepBench(int argc, char** argv) {
                   "quantization-aware training); 0: plain TensoRF's")
       ->type_name("0|1")
       ->check(CLI::Range(0, 1))
+      ->capture_default_str();
+  app->add_option("--rdoq", rdoq,
+                  "the rate phase's quantizer: RDOQ with this lambda (0: rounding), as ecrf train "
+                  "--rdoq")
+      ->type_name("L")
+      ->check(CLI::Range(0.0f, 10.0f))
       ->capture_default_str();
   app->add_option("--early-stop", early, "early_stop_transmittance of the ray marching")
       ->type_name("T")
@@ -202,15 +208,17 @@ int RunTrainStepBench(int argc, char** argv) {
   MakeRays(rays, 7, &o, &d, &rgb);
   std::printf(
       "train-step bench: res %d^3 (after shrink %dx%dx%d), %d rays, %d samples/ray, mask %d, "
-      "early stop %g, blob peak %g, %s\n",
+      "early stop %g, blob peak %g, %s, rdoq %g\n",
       res, model.res()[0], model.res()[1], model.res()[2], rays, model.n_samples(), mask, early,
-      blob_peak, rate_phase ? "rate phase (lambda_e 3e-11, quantization-aware)" : "plain TensoRF");
+      blob_peak, rate_phase ? "rate phase (lambda_e 3e-11, quantization-aware)" : "plain TensoRF",
+      rdoq);
   // The trainer's optimizers (trainer.cc): grids at lr 0.02, head at 1e-3.
   trainer::Adam adam_density(model.density().params().size(), trainer::AdamConfig{});
   trainer::Adam adam_app(model.appearance().params().size(), trainer::AdamConfig{});
   trainer::Adam adam_head(model.head().params().size(), trainer::AdamConfig{});
   trainer::TrainOptions options;
   options.lambda_e = 3e-11f;  // the medium rate point's
+  options.rdoq_lambda = rdoq;
   trainer::RateState rate;
   trainer::QuantAwareModel qat;
   if (rate_phase) rate.Activate(model, options);
@@ -251,7 +259,8 @@ int RunTrainStepBench(int argc, char** argv) {
       model.ZeroGrads();
       t[kZero] = lap();
       if (rate_phase) {
-        qat.Refresh(model, rate.steps, rate.config, options.mlp_levels, options.rounding_offset);
+        qat.Refresh(model, rate.steps, rate.config, options.mlp_levels, options.rounding_offset,
+                    options.rdoq_lambda);
         t[kQatRefresh] = lap();
         qat.Apply(&model);
         t[kQatApply] = lap();

@@ -8,6 +8,7 @@
 #include <string>
 #include <utility>
 
+#include "encoder/coef_rdoq.h"
 #include "trainer/train/checkpoint.h"
 #include "trainer/train/rate_state.h"
 #include "trainer/train/train_config.h"
@@ -27,6 +28,7 @@ void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int itera
   j["iters"] = o.iters;
   j["lambda_e"] = o.lambda_e;                // the live value under rate control
   j["rounding_offset"] = o.rounding_offset;  // the quantizer the run trained through
+  j["rdoq_lambda"] = o.rdoq_lambda;
   j["res"] = model.res();
   j["aabb_min"] = model.aabb().min;
   j["aabb_max"] = model.aabb().max;
@@ -186,6 +188,12 @@ int LoadModelCheckpointOrThrow(const std::string& path, TensorfModel* model, Rat
     if (!(rate->rounding_offset > 0.f && rate->rounding_offset <= 0.5f)) {
       throw std::runtime_error(path + ": checkpoint holds a rounding offset of " +
                                std::to_string(rate->rounding_offset) + " (expected (0, 0.5])");
+    }
+    rate->rdoq_lambda = j.value("rdoq_lambda", 0.0f);
+    if (!(rate->rdoq_lambda >= 0.f && rate->rdoq_lambda <= kMaxRdoqLambda)) {
+      throw std::runtime_error(path + ": checkpoint holds an RDOQ lambda of " +
+                               std::to_string(rate->rdoq_lambda) + " (expected [0, " +
+                               std::to_string(kMaxRdoqLambda) + "])");
     }
   }
   const int iteration = j.at("iteration").get<int>();

@@ -26,7 +26,8 @@ struct RateState {
   float checkpoint_lambda_e = 0.f;
   // The coefficient quantizer's rounding offset a checkpointed run trained through.
   float rounding_offset = 0.5f;
-  double last_bits = 0.0;  // latest unbiased estimate (bits)
+  float rdoq_lambda = 0.f;  // ... and its RDOQ lambda (0: none)
+  double last_bits = 0.0;   // latest unbiased estimate (bits)
   double last_regularizer = 0.0;
 
   // Applies the options' block shapes; does not activate.

@@ -53,6 +53,7 @@ void VisitSettings(TrainOptions& o, F&& f) {
   f("density_step_factor", o.density_step_factor);
   f("qat_start", o.qat_start);
   f("rounding_offset", o.rounding_offset);
+  f("rdoq_lambda", o.rdoq_lambda);
   f("qat_refresh", o.qat_refresh);
   f("mlp_levels", o.mlp_levels);
   f("target_bytes", o.target_bytes);

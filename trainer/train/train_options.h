@@ -91,6 +91,8 @@ struct TrainOptions {
   // The coefficient quantizer's rounding offset (encoder/coef_quantizer.h), in the encoder and in
   // quantization-aware training alike: 0.5 rounds to nearest.
   float rounding_offset = 0.5f;
+  // > 0: the quantizer is RDOQ with this lambda (encoder/coef_rdoq.h), in training and encoding.
+  float rdoq_lambda = 0.f;
   int qat_refresh = 1;
   // How `ecrf train` codes the basis and MLP: > 0 integer levels (at most this many per row,
   // MLPW precision 2); 0 binary16. 127 cost no measurable PSNR on chair (docs/results.md) and

@@ -237,6 +237,7 @@ EncodeOptions RunEncodeOptions(const TrainOptions& o, const RateState& rate) {
   eo.coef_bits = o.coef_bits;
   eo.mlp_max_level = o.mlp_levels;
   eo.rounding_offset = o.rounding_offset;
+  eo.rdoq_lambda = o.rdoq_lambda;
   return eo;
 }
 
@@ -373,7 +374,8 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
           std::fprintf(stderr, "%squantization-aware training from iteration %d\n",
                        isatty(2) ? "\n" : "", it);
         }
-        qat.Refresh(*model, rate.steps, rate.config, o.mlp_levels, o.rounding_offset);
+        qat.Refresh(*model, rate.steps, rate.config, o.mlp_levels, o.rounding_offset,
+                    o.rdoq_lambda);
       }
       qat.Apply(model);
     }

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include "decoder/scene_decoder.h"
@@ -31,11 +32,12 @@ TensorfModel SmallModel(uint64_t seed) {
 
 RateConfig SmallBlocks() { return testing_models::SmallRateBlocks(); }
 
-// With rounding to nearest and with a dead zone (rounding offset 0.3): training sees the file.
-class QuantAwareOffset : public ::testing::TestWithParam<float> {};
+// With rounding to nearest, with a dead zone (rounding offset 0.3) and with RDOQ
+// (encoder/coef_rdoq.h): training sees the file.
+class QuantAwareOffset : public ::testing::TestWithParam<std::pair<float, float>> {};
 
 TEST_P(QuantAwareOffset, ReconstructionIsWhatTheDecoderDecodes) {
-  const float offset = GetParam();
+  const float offset = GetParam().first, rdoq = GetParam().second;
   const TensorfModel model = SmallModel(3);
   const RateConfig blocks = SmallBlocks();
   // Coarser than the 8-bit peak step, as --quant-step-scale 3 trains.
@@ -45,6 +47,7 @@ TEST_P(QuantAwareOffset, ReconstructionIsWhatTheDecoderDecodes) {
   o.blocks = blocks;
   o.steps = steps;
   o.rounding_offset = offset;
+  o.rdoq_lambda = rdoq;
   o.drop_zero_components = false;
   const std::vector<uint8_t> bytes = EncodeScene(model, o);
   dec::SceneField field;
@@ -57,7 +60,7 @@ TEST_P(QuantAwareOffset, ReconstructionIsWhatTheDecoderDecodes) {
   double worst_units = 0.0, worst_steps = 0.0;
   for (int g = 0; g < 2; ++g) {
     std::vector<float> q;
-    ReconstructQuantizedGrid(*grids[g], steps.data() + 6 * g, blocks, &q, offset);
+    ReconstructQuantizedGrid(*grids[g], steps.data() + 6 * g, blocks, &q, offset, rdoq);
     ASSERT_EQ(q.size(), grids[g]->params().size());
     for (int t = 0; t < 6; ++t) {
       const float* mine = q.data() + (RateTensorData(*grids[g], t) - grids[g]->params().data());
@@ -79,7 +82,30 @@ TEST_P(QuantAwareOffset, ReconstructionIsWhatTheDecoderDecodes) {
   EXPECT_GT(worst_steps, 0.1);
 }
 
-INSTANTIATE_TEST_SUITE_P(Offsets, QuantAwareOffset, ::testing::Values(0.5f, 0.3f));
+INSTANTIATE_TEST_SUITE_P(Offsets, QuantAwareOffset,
+                         ::testing::Values(std::make_pair(0.5f, 0.f), std::make_pair(0.3f, 0.f),
+                                           std::make_pair(0.5f, 0.3f)));
+
+// RDOQ in the encoder: a smaller file than rounding, larger lambdas smaller still, and the
+// lambda is checked.
+TEST(CoefRdoq, EncodedSceneShrinksWithLambda) {
+  const TensorfModel model = SmallModel(4);
+  EncodeOptions o;
+  o.blocks = SmallBlocks();
+  o.steps = ChooseQuantSteps(model, o.blocks, 8);
+  for (float& s : o.steps) s *= 3.f;
+  size_t previous = EncodeScene(model, o).size();
+  for (float lambda : {0.1f, 0.5f, 2.f}) {
+    o.rdoq_lambda = lambda;
+    const size_t bytes = EncodeScene(model, o).size();
+    EXPECT_LT(bytes, previous) << lambda;
+    previous = bytes;
+  }
+  for (float bad : {-0.1f, 11.f}) {
+    o.rdoq_lambda = bad;
+    EXPECT_THROW(EncodeScene(model, o), std::invalid_argument) << bad;
+  }
+}
 
 // The dead zone: levels move toward zero by 0.5 - offset, so the file shrinks.
 TEST(CoefQuantizer, OffsetWidensTheDeadZone) {
