@@ -1,0 +1,620 @@
+// ecrf_gl_replay: replays GL traces of the web viewer's WebGL2 renderer (recorded by
+// web/test/gl_record.mjs from web/gpu_renderer.js + web/gpu_shaders.js, unchanged) on a headless
+// EGL + OpenGL ES 3 context, times the frame and writes the image: the viewer's frame times on a
+// GPU without a browser. Links only libEGL and libGLESv2 (and libzstd statically where found, for
+// zstd-compressed traces).
+//
+//   ecrf_gl_replay [--frames N] [--max-seconds S] [--out-dir DIR] [--device I] [--no-robust]
+//                  [--egl auto|device|surfaceless|default] FRAME.glt...
+//   ecrf_gl_replay --check FILE.glt...     parse and validate only (no GL)
+//
+// A frame trace NAME_WxH.frame.glt names its setup trace (NAME.setup.glt, same folder). Each
+// frame trace is replayed on a fresh context: the setup (renderer + setScene: textures, UBOs,
+// shader compile), the warm-up render (creates the render target), the frame between the two
+// marks once more untimed, then N times with glFinish before and after each (the viewer renders
+// with finish: a 1-pixel readPixels ends the frame), then the final readPixels, written as
+// DIR/NAME_WxH.ppm (RGB, top row first). One JSON line per trace on stdout. A trace is parsed and
+// checked completely (sizes, ids, enums that size data) before any GL call: a truncated or corrupt
+// file fails with a message, exit status 1.
+//
+// The trace format and its checks: gl_trace.h; the EGL display and context (--egl, --device,
+// --no-robust): gl_replay_context.h. WebGL's framebuffer null (the canvas) is an RGBA8 FBO of the
+// canvas's size.
+#include "gl_replay_context.h"  // first: its EGL_NO_X11 must precede every EGL header
+
+#include <GLES3/gl3.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "gl_trace.h"
+
+namespace ecrf {
+namespace gl_replay {
+namespace {
+
+// The trace checks (gl_trace.cc) spell out the GL enums they accept, to need no GL headers.
+static_assert(gl_enum::kUnsignedByte == GL_UNSIGNED_BYTE && gl_enum::kFloat == GL_FLOAT &&
+                  gl_enum::kRed == GL_RED && gl_enum::kRgba == GL_RGBA &&
+                  gl_enum::kRedInteger == GL_RED_INTEGER &&
+                  gl_enum::kRgbaInteger == GL_RGBA_INTEGER &&
+                  gl_enum::kUnpackAlignment == GL_UNPACK_ALIGNMENT &&
+                  gl_enum::kTexture2D == GL_TEXTURE_2D && gl_enum::kTexture3D == GL_TEXTURE_3D &&
+                  gl_enum::kTexture2DArray == GL_TEXTURE_2D_ARRAY &&
+                  gl_enum::kArrayBuffer == GL_ARRAY_BUFFER &&
+                  gl_enum::kUniformBuffer == GL_UNIFORM_BUFFER &&
+                  gl_enum::kFragmentShader == GL_FRAGMENT_SHADER &&
+                  gl_enum::kVertexShader == GL_VERTEX_SHADER,
+              "gl_trace.h's gl_enum differs from GLES3/gl3.h");
+
+class Player {
+ public:
+  Player(uint32_t canvas_w, uint32_t canvas_h) : names_(kNumKinds) {
+    // The canvas's drawing buffer (framebuffer null in WebGL): an FBO of its size.
+    glGenRenderbuffers(1, &canvas_rb_);
+    glBindRenderbuffer(GL_RENDERBUFFER, canvas_rb_);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, canvas_w, canvas_h);
+    glGenFramebuffers(1, &canvas_fbo_);
+    glBindFramebuffer(GL_FRAMEBUFFER, canvas_fbo_);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, canvas_rb_);
+    glBindFramebuffer(GL_FRAMEBUFFER, canvas_fbo_);
+  }
+
+  // checks: glGetError after each call, compile / link / framebuffer status (untimed passes).
+  bool Run(const Trace& t, size_t from, size_t to, bool checks, std::string* err) {
+    for (size_t i = from; i < to; ++i) {
+      if (!Exec(t.calls[i], checks, err)) {
+        *err =
+            Fmt("%s: call %zu (%s): %s", t.path.c_str(), i, kOps[t.calls[i].op].name, err->c_str());
+        return false;
+      }
+      if (checks) {
+        GLenum e = glGetError();
+        if (e != GL_NO_ERROR) {
+          *err = Fmt("%s: call %zu (%s): GL error 0x%x", t.path.c_str(), i,
+                     kOps[t.calls[i].op].name, e);
+          return false;
+        }
+      }
+    }
+    return true;
+  }
+
+  const std::vector<uint8_t>& pixels() const { return pixels_; }
+  uint32_t pixels_w() const { return pixels_w_; }
+  uint32_t pixels_h() const { return pixels_h_; }
+
+ private:
+  GLuint Name(uint32_t kind, uint32_t id) const { return id == 0 ? 0 : names_[kind][id]; }
+
+  GLint Location(uint32_t prog, const std::string& name) {
+    auto key = std::make_pair(prog, name);
+    auto it = locations_.find(key);
+    if (it != locations_.end()) return it->second;
+    GLint loc = glGetUniformLocation(Name(kProgram, prog), name.c_str());
+    locations_[key] = loc;
+    return loc;
+  }
+
+  bool Exec(const Call& c, bool checks, std::string* err) {
+    const uint32_t* u = c.u;
+    switch (c.op) {
+      case kEnd:
+      case kMark:
+        return true;
+      case kCreate: {
+        GLuint n = 0;
+        switch (u[0]) {
+          case kTexture:
+            glGenTextures(1, &n);
+            break;
+          case kBuffer:
+            glGenBuffers(1, &n);
+            break;
+          case kFramebuffer:
+            glGenFramebuffers(1, &n);
+            break;
+          case kVertexArray:
+            glGenVertexArrays(1, &n);
+            break;
+          case kProgram:
+            n = glCreateProgram();
+            break;
+          case kShader:
+            n = glCreateShader(u[2]);
+            break;
+          default:
+            break;
+        }
+        if (n == 0) return Fail(err, Fmt("could not create a %s", kKindName[u[0]]));
+        auto& v = names_[u[0]];
+        if (v.size() <= u[1]) v.resize(u[1] + 1);
+        v[u[1]] = n;
+        if (u[0] == kProgram) {
+          for (auto it = locations_.begin(); it != locations_.end();) {
+            it = it->first.first == u[1] ? locations_.erase(it) : std::next(it);
+          }
+        }
+        return true;
+      }
+      case kDelete: {
+        GLuint n = Name(u[0], u[1]);
+        switch (u[0]) {
+          case kTexture:
+            glDeleteTextures(1, &n);
+            break;
+          case kBuffer:
+            glDeleteBuffers(1, &n);
+            break;
+          case kFramebuffer:
+            glDeleteFramebuffers(1, &n);
+            break;
+          case kVertexArray:
+            glDeleteVertexArrays(1, &n);
+            break;
+          case kProgram:
+            glDeleteProgram(n);
+            break;
+          case kShader:
+            glDeleteShader(n);
+            break;
+          default:
+            break;
+        }
+        names_[u[0]][u[1]] = 0;
+        return true;
+      }
+      case kShaderSource: {
+        const GLchar* src = c.str.c_str();
+        GLint len = static_cast<GLint>(c.str.size());
+        glShaderSource(Name(kShader, u[0]), 1, &src, &len);
+        return true;
+      }
+      case kCompileShader: {
+        GLuint sh = Name(kShader, u[0]);
+        glCompileShader(sh);
+        if (!checks) return true;
+        GLint ok = 0;
+        glGetShaderiv(sh, GL_COMPILE_STATUS, &ok);
+        if (!ok) return Fail(err, "shader compilation failed: " + ShaderLog(sh, false));
+        return true;
+      }
+      case kAttachShader:
+        glAttachShader(Name(kProgram, u[0]), Name(kShader, u[1]));
+        return true;
+      case kLinkProgram: {
+        GLuint p = Name(kProgram, u[0]);
+        glLinkProgram(p);
+        if (!checks) return true;
+        GLint ok = 0;
+        glGetProgramiv(p, GL_LINK_STATUS, &ok);
+        if (!ok) return Fail(err, "program link failed: " + ShaderLog(p, true));
+        return true;
+      }
+      case kUseProgram:
+        glUseProgram(Name(kProgram, u[0]));
+        return true;
+      case kUniformBlockBinding: {
+        GLuint p = Name(kProgram, u[0]);
+        GLuint idx = glGetUniformBlockIndex(p, c.str.c_str());
+        if (idx != GL_INVALID_INDEX) glUniformBlockBinding(p, idx, u[1]);
+        return true;
+      }
+      case kUniform: {
+        GLint loc = Location(u[0], c.str);
+        if (loc < 0) return true;  // inactive: WebGL's location is null, the call a no-op
+        scratch_.assign(c.data, c.data + c.size);
+        GLsizei n = static_cast<GLsizei>(u[3]);
+        if (u[1] == 0) {
+          const GLfloat* v = reinterpret_cast<const GLfloat*>(scratch_.data());
+          switch (u[2]) {
+            case 1:
+              glUniform1fv(loc, n, v);
+              break;
+            case 2:
+              glUniform2fv(loc, n, v);
+              break;
+            case 3:
+              glUniform3fv(loc, n, v);
+              break;
+            default:
+              glUniform4fv(loc, n, v);
+              break;
+          }
+        } else {
+          const GLint* v = reinterpret_cast<const GLint*>(scratch_.data());
+          switch (u[2]) {
+            case 1:
+              glUniform1iv(loc, n, v);
+              break;
+            case 2:
+              glUniform2iv(loc, n, v);
+              break;
+            case 3:
+              glUniform3iv(loc, n, v);
+              break;
+            default:
+              glUniform4iv(loc, n, v);
+              break;
+          }
+        }
+        return true;
+      }
+      case kActiveTexture:
+        glActiveTexture(u[0]);
+        return true;
+      case kBindTexture:
+        glBindTexture(u[0], Name(kTexture, u[1]));
+        return true;
+      case kTexParameteri:
+        glTexParameteri(u[0], u[1], static_cast<GLint>(u[2]));
+        return true;
+      case kPixelStorei:
+        glPixelStorei(u[0], static_cast<GLint>(u[1]));
+        return true;
+      case kTexImage: {
+        const void* data = nullptr;
+        if (c.has_data) {
+          scratch_.assign(c.data, c.data + c.size);
+          data = scratch_.data();
+        }
+        if (u[0] == GL_TEXTURE_2D) {
+          glTexImage2D(u[0], u[1], u[2], u[3], u[4], u[6], u[7], u[8], data);
+        } else {
+          glTexImage3D(u[0], u[1], u[2], u[3], u[4], u[5], u[6], u[7], u[8], data);
+        }
+        return true;
+      }
+      case kTexStorage2D:
+        glTexStorage2D(u[0], u[1], u[2], u[3], u[4]);
+        return true;
+      case kBindBuffer:
+        glBindBuffer(u[0], Name(kBuffer, u[1]));
+        return true;
+      case kBufferData:
+        scratch_.assign(c.data, c.data + c.size);
+        glBufferData(u[0], static_cast<GLsizeiptr>(c.size), scratch_.data(), u[1]);
+        return true;
+      case kBindBufferBase:
+        glBindBufferBase(u[0], u[1], Name(kBuffer, u[2]));
+        return true;
+      case kBindFramebuffer:
+        glBindFramebuffer(u[0], u[1] == 0 ? canvas_fbo_ : Name(kFramebuffer, u[1]));
+        return true;
+      case kFramebufferTexture2D:
+        glFramebufferTexture2D(u[0], u[1], u[2], Name(kTexture, u[3]), u[4]);
+        return true;
+      case kBindVertexArray:
+        glBindVertexArray(Name(kVertexArray, u[0]));
+        return true;
+      case kViewport:
+        glViewport(u[0], u[1], u[2], u[3]);
+        return true;
+      case kScissor:
+        glScissor(u[0], u[1], u[2], u[3]);
+        return true;
+      case kEnable:
+        glEnable(u[0]);
+        return true;
+      case kDisable:
+        glDisable(u[0]);
+        return true;
+      case kDrawArrays:
+        if (checks) {
+          GLenum s = glCheckFramebufferStatus(GL_FRAMEBUFFER);
+          if (s != GL_FRAMEBUFFER_COMPLETE)
+            return Fail(err, Fmt("framebuffer incomplete (0x%x)", s));
+        }
+        glDrawArrays(u[0], u[1], u[2]);
+        return true;
+      case kReadPixels:
+        pixels_.resize(size_t(u[2]) * u[3] * 4);
+        glReadPixels(u[0], u[1], u[2], u[3], GL_RGBA, GL_UNSIGNED_BYTE, pixels_.data());
+        pixels_w_ = u[2];
+        pixels_h_ = u[3];
+        return true;
+      default:
+        return Fail(err, "unknown op");
+    }
+  }
+
+  static std::string ShaderLog(GLuint obj, bool program) {
+    GLint n = 0;
+    if (program)
+      glGetProgramiv(obj, GL_INFO_LOG_LENGTH, &n);
+    else
+      glGetShaderiv(obj, GL_INFO_LOG_LENGTH, &n);
+    std::string log(std::max(n, 1), '\0');
+    GLsizei got = 0;
+    if (program)
+      glGetProgramInfoLog(obj, n, &got, &log[0]);
+    else
+      glGetShaderInfoLog(obj, n, &got, &log[0]);
+    log.resize(std::max(got, 0));
+    if (log.size() > 4000) log = log.substr(0, 4000) + "...";
+    return log;
+  }
+
+  std::vector<std::vector<GLuint>> names_;
+  std::map<std::pair<uint32_t, std::string>, GLint> locations_;
+  std::vector<uint8_t> scratch_, pixels_;
+  uint32_t pixels_w_ = 0, pixels_h_ = 0;
+  GLuint canvas_rb_ = 0, canvas_fbo_ = 0;
+};
+
+std::string JsonStr(const std::string& s) {
+  std::string o = "\"";
+  for (unsigned char ch : s) {
+    if (ch == '"' || ch == '\\')
+      o += '\\', o += static_cast<char>(ch);
+    else if (ch < 0x20 || ch >= 0x7f)
+      o += Fmt("\\u%04x", ch);
+    else
+      o += static_cast<char>(ch);
+  }
+  return o + "\"";
+}
+
+const char* GlStr(GLenum e) {
+  const GLubyte* s = glGetString(e);
+  return s ? reinterpret_cast<const char*>(s) : "";
+}
+
+std::string Dirname(const std::string& p) {
+  size_t k = p.rfind('/');
+  return k == std::string::npos ? "." : p.substr(0, k);
+}
+
+std::string Stem(const std::string& p) {
+  size_t k = p.rfind('/');
+  std::string b = k == std::string::npos ? p : p.substr(k + 1);
+  for (const char* ext : {".frame.glt", ".glt"}) {
+    size_t n = strlen(ext);
+    if (b.size() > n && b.compare(b.size() - n, n, ext) == 0) return b.substr(0, b.size() - n);
+  }
+  return b;
+}
+
+bool WritePpm(const std::string& path, const std::vector<uint8_t>& rgba, uint32_t w, uint32_t h,
+              std::string* err) {
+  FILE* f = fopen(path.c_str(), "wb");
+  if (!f) return Fail(err, Fmt("cannot write %s: %s", path.c_str(), strerror(errno)));
+  fprintf(f, "P6\n%u %u\n255\n", w, h);
+  std::vector<uint8_t> row(size_t(w) * 3);
+  for (uint32_t y = 0; y < h; ++y) {
+    for (uint32_t x = 0; x < w; ++x) memcpy(&row[3 * x], &rgba[(size_t(y) * w + x) * 4], 3);
+    fwrite(row.data(), 1, row.size(), f);
+  }
+  bool ok = fclose(f) == 0;
+  if (!ok) *err = Fmt("error writing %s", path.c_str());
+  return ok;
+}
+
+struct Options {
+  int frames = 10;
+  double max_seconds = 20;
+  std::string out_dir;
+  std::string egl = "auto";
+  int device = 0;
+  bool check_only = false;
+  bool robust = true;
+};
+
+double Ms(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+// One frame trace: a JSON line on stdout. Returns false after printing the error.
+bool ReplayOne(const Options& o, HeadlessDisplay* egl, const std::string& path) {
+  std::string err;
+  auto fail = [&](const std::string& e) {
+    fprintf(stderr, "ecrf_gl_replay: %s\n", e.c_str());
+    printf("{\"trace\": %s, \"ok\": false, \"error\": %s}\n", JsonStr(path).c_str(),
+           JsonStr(e).c_str());
+    fflush(stdout);
+    return false;
+  };
+  Trace frame, setup;
+  if (!ParseTrace(path, &frame, &err)) return fail(err);
+  if (frame.kind != kKindFrame)
+    return fail(path + ": not a frame trace (a setup trace is replayed through its frame traces)");
+  std::string setup_path = Dirname(path) + "/" + frame.setup_file;
+  if (!ParseTrace(setup_path, &setup, &err)) return fail(err);
+  if (setup.kind != kKindSetup || setup.setup_id != frame.setup_id) {
+    return fail(Fmt("%s is not the setup %s was recorded with (id %s, expected %s)",
+                    setup_path.c_str(), path.c_str(), setup.setup_id.c_str(),
+                    frame.setup_id.c_str()));
+  }
+  size_t begin = 0, end = 0;
+  if (!Validate(setup, frame, &begin, &end, &err)) return fail(err);
+  if (o.check_only) {
+    printf(
+        "{\"trace\": %s, \"setup\": %s, \"width\": %u, \"height\": %u, \"calls\": %zu, "
+        "\"setup_calls\": %zu, \"ok\": true}\n",
+        JsonStr(path).c_str(), JsonStr(setup_path).c_str(), frame.width, frame.height,
+        frame.calls.size(), setup.calls.size());
+    return true;
+  }
+  HeadlessContext ctx;
+  if (!CreateContext(*egl, o.robust, &ctx, &err)) {
+    DestroyContext(*egl, &ctx);
+    return fail(err);
+  }
+  bool ok = false;
+  do {
+    std::string version = GlStr(GL_VERSION);
+    if (version.compare(0, 12, "OpenGL ES 3.") != 0) {
+      err = "the context is not OpenGL ES 3.x: " + version;
+      break;
+    }
+    // The GPU must allow what the mock told the renderer it allows.
+    std::string short_limits;
+    for (const auto& l : setup.limits) {
+      GLint v[2] = {0, 0};
+      glGetIntegerv(l.first, v);
+      if (glGetError() != GL_NO_ERROR) continue;
+      GLint have = l.first == GL_MAX_VIEWPORT_DIMS ? std::min(v[0], v[1]) : v[0];
+      if (have < l.second)
+        short_limits += Fmt("%s0x%x: GPU %d < trace %d", short_limits.empty() ? "" : ", ", l.first,
+                            have, l.second);
+    }
+    Player player(frame.canvas_w, frame.canvas_h);
+    glFinish();
+    auto t0 = std::chrono::steady_clock::now();
+    if (!player.Run(setup, 0, setup.calls.size(), true, &err)) break;
+    glFinish();
+    auto t1 = std::chrono::steady_clock::now();
+    // The warm-up render (creates the render target, first draw: lazy compiles), then the
+    // frame once more untimed.
+    if (!player.Run(frame, 0, begin, true, &err)) break;
+    glFinish();
+    auto t2 = std::chrono::steady_clock::now();
+    if (!player.Run(frame, begin, end, true, &err)) break;
+    glFinish();
+    std::vector<double> ms;
+    auto start = std::chrono::steady_clock::now();
+    for (int k = 0; k < o.frames; ++k) {
+      glFinish();
+      auto a = std::chrono::steady_clock::now();
+      player.Run(frame, begin, end, false, &err);
+      glFinish();
+      auto b = std::chrono::steady_clock::now();
+      ms.push_back(Ms(a, b));
+      if (Ms(start, b) > 1000 * o.max_seconds && k >= 2) break;
+    }
+    GLenum e = glGetError();
+    if (e != GL_NO_ERROR) {
+      err = Fmt("GL error 0x%x during the timed frames", e);
+      break;
+    }
+    if (!player.Run(frame, end, frame.calls.size(), true, &err)) break;
+    std::string image = "null";
+    if (!o.out_dir.empty()) {
+      if (player.pixels_w() != frame.width || player.pixels_h() != frame.height) {
+        err = Fmt("the trace's last readPixels is %ux%u, not the image's %ux%u", player.pixels_w(),
+                  player.pixels_h(), frame.width, frame.height);
+        break;
+      }
+      std::string out = o.out_dir + "/" + Stem(path) + ".ppm";
+      if (!WritePpm(out, player.pixels(), frame.width, frame.height, &err)) break;
+      image = JsonStr(out);
+    }
+    std::vector<double> sorted = ms;
+    std::sort(sorted.begin(), sorted.end());
+    double median = sorted.empty()
+                        ? 0
+                        : (sorted.size() % 2
+                               ? sorted[sorted.size() / 2]
+                               : 0.5 * (sorted[sorted.size() / 2 - 1] + sorted[sorted.size() / 2]));
+    double mean = 0;
+    for (double v : ms) mean += v / ms.size();
+    std::string line;
+    auto add = [&line](const char* key, const std::string& value) {
+      line += (line.empty() ? "{" : ", ") + JsonStr(key) + ": " + value;
+    };
+    auto num = [](double v) { return Fmt("%.4f", v); };
+    add("trace", JsonStr(path));
+    add("width", Fmt("%u", frame.width));
+    add("height", Fmt("%u", frame.height));
+    add("egl", JsonStr(egl->platform));
+    add("robust", ctx.robust ? "true" : "false");
+    add("gl_vendor", JsonStr(GlStr(GL_VENDOR)));
+    add("gl_renderer", JsonStr(GlStr(GL_RENDERER)));
+    add("gl_version", JsonStr(version));
+    add("setup_ms", num(Ms(t0, t1)));
+    add("first_frame_ms", num(Ms(t1, t2)));
+    add("ms_min", num(sorted.empty() ? 0 : sorted.front()));
+    add("ms_median", num(median));
+    add("ms_mean", num(mean));
+    add("ms_max", num(sorted.empty() ? 0 : sorted.back()));
+    add("frames", Fmt("%zu", ms.size()));
+    add("image", image);
+    add("limits_short", short_limits.empty() ? "null" : JsonStr(short_limits));
+    add("ok", "true");
+    printf("%s}\n", line.c_str());
+    fflush(stdout);
+    ok = true;
+  } while (false);
+  DestroyContext(*egl, &ctx);
+  return ok || fail(err);
+}
+
+int Usage() {
+  fprintf(
+      stderr,
+      "usage: ecrf_gl_replay [--frames N (10)] [--max-seconds S (20)] [--out-dir DIR]\n"
+      "                      [--egl auto|device|surfaceless|default] [--device I] [--no-robust]\n"
+      "                      FRAME.glt...\n"
+      "       ecrf_gl_replay --check FRAME.glt...   (parse and validate only, no GL)\n");
+  return 2;
+}
+
+int Main(int argc, char** argv) {
+  Options o;
+  std::vector<std::string> traces;
+  for (int i = 1; i < argc; ++i) {
+    std::string a = argv[i];
+    auto value = [&](const char* name) -> const char* {
+      if (i + 1 >= argc) {
+        fprintf(stderr, "ecrf_gl_replay: %s needs a value\n", name);
+        exit(2);
+      }
+      return argv[++i];
+    };
+    if (a == "--frames") {
+      o.frames = atoi(value("--frames"));
+      if (o.frames < 0 || o.frames > 100000) return Usage();
+    } else if (a == "--max-seconds") {
+      o.max_seconds = atof(value("--max-seconds"));
+    } else if (a == "--out-dir") {
+      o.out_dir = value("--out-dir");
+    } else if (a == "--egl") {
+      o.egl = value("--egl");
+      if (o.egl != "auto" && o.egl != "device" && o.egl != "surfaceless" && o.egl != "default")
+        return Usage();
+    } else if (a == "--device") {
+      o.device = atoi(value("--device"));
+      if (o.device < 0 || o.device > 15) return Usage();
+    } else if (a == "--no-robust") {
+      o.robust = false;
+    } else if (a == "--check") {
+      o.check_only = true;
+    } else if (a == "-h" || a == "--help") {
+      Usage();
+      return 0;
+    } else if (!a.empty() && a[0] == '-') {
+      fprintf(stderr, "ecrf_gl_replay: unknown flag %s\n", a.c_str());
+      return Usage();
+    } else {
+      traces.push_back(a);
+    }
+  }
+  if (traces.empty()) return Usage();
+  HeadlessDisplay egl;
+  if (!o.check_only && !OpenDisplay(&egl, o.egl, o.device)) {
+    fprintf(stderr, "ecrf_gl_replay: no EGL display with OpenGL ES 3 (--egl %s): %s\n",
+            o.egl.c_str(), egl.log.c_str());
+    printf("{\"ok\": false, \"error\": %s}\n", JsonStr("no EGL display: " + egl.log).c_str());
+    return 1;
+  }
+  if (!egl.log.empty()) fprintf(stderr, "ecrf_gl_replay: EGL: %s\n", egl.log.c_str());
+  int failed = 0;
+  for (const auto& t : traces) failed += ReplayOne(o, &egl, t) ? 0 : 1;
+  CloseDisplay(&egl);
+  return failed ? 1 : 0;
+}
+
+}  // namespace
+}  // namespace gl_replay
+}  // namespace ecrf
+
+int main(int argc, char** argv) { return ecrf::gl_replay::Main(argc, argv); }
