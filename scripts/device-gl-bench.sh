@@ -55,7 +55,7 @@ main() {
     zstd=()
     if echo '#include <zstd.h>' | c++ -E -x c++ - >/dev/null 2>&1; then zstd=(-DECRF_GL_REPLAY_ZSTD -lzstd); fi
     lib=$(dirname "$(ldconfig -p | grep -m1 'libEGL\.so\.1 ' | sed 's/.*=> //')")
-    c++ -O2 -std=c++17 -I"$DEV/include" tools/bench/gl_replay.cc tools/bench/gl_replay_context.cc \
+    c++ -O2 -std=c++17 -I. -I"$DEV/include" tools/bench/gl_replay.cc tools/bench/gl_replay_context.cc \
       tools/bench/gl_trace.cc -o "$tmp/ecrf_gl_replay" "$lib/libEGL.so.1" "$lib/libGLESv2.so.2" \
       "${zstd[@]}" && REPLAY="$tmp/ecrf_gl_replay"
   fi

@@ -20,7 +20,7 @@
 // The trace format and its checks: gl_trace.h; the EGL display and context (--egl, --device,
 // --no-robust): gl_replay_context.h. WebGL's framebuffer null (the canvas) is an RGBA8 FBO of the
 // canvas's size.
-#include "gl_replay_context.h"  // first: its EGL_NO_X11 must precede every EGL header
+#include "tools/bench/gl_replay_context.h"  // first: its EGL_NO_X11 must precede every EGL header
 
 #include <GLES3/gl3.h>
 
@@ -36,7 +36,7 @@
 #include <utility>
 #include <vector>
 
-#include "gl_trace.h"
+#include "tools/bench/gl_trace.h"
 
 namespace ecrf {
 namespace gl_replay {
