@@ -256,16 +256,18 @@ class BlockRd {
 
 }  // namespace
 
-void RdoqLevels(const float* coeffs, const GridBlockLayout& layout, double step,
-                const RdoqOptions& options, int32_t* levels) {
+size_t RdoqLevels(const float* coeffs, const GridBlockLayout& layout, double step,
+                  const RdoqOptions& options, int32_t* levels) {
   const int volume = layout.block_volume();
   const size_t n = layout.num_coeffs();
+  size_t clipped = 0;
   for (size_t i = 0; i < n; ++i) {
     const double level = QuantizeLevel(double(coeffs[i]), step, options.rounding_offset);
+    clipped += std::fabs(level) > options.max_abs;
     levels[i] =
         int32_t(std::max<double>(-options.max_abs, std::min<double>(options.max_abs, level)));
   }
-  if (!(options.lambda > 0.0)) return;
+  if (!(options.lambda > 0.0)) return clipped;
 
   CoefContexts contexts;
   const Status st = contexts.Init(BlockShape{layout.block[0], layout.block[1], layout.block[2]},
@@ -295,6 +297,7 @@ void RdoqLevels(const float* coeffs, const GridBlockLayout& layout, double step,
     }
     EncodeCoefBlock(adapt, contexts, q);
   }
+  return clipped;
 }
 
 }  // namespace trainer

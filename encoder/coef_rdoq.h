@@ -19,6 +19,7 @@
 #ifndef ECRF_ENCODER_COEF_RDOQ_H_
 #define ECRF_ENCODER_COEF_RDOQ_H_
 
+#include <cstddef>
 #include <cstdint>
 
 #include "encoder/grid_dct.h"
@@ -38,10 +39,10 @@ struct RdoqOptions {
 };
 
 // levels[layout.num_coeffs()] for the coefficients of one tensor (block order, as ForwardBlocks
-// writes them) quantized with `step`. Deterministic: a pure function of its inputs. Throws
-// std::invalid_argument on an invalid layout.
-void RdoqLevels(const float* coeffs, const GridBlockLayout& layout, double step,
-                const RdoqOptions& options, int32_t* levels);
+// writes them) quantized with `step`. Deterministic: a pure function of its inputs. Returns how
+// many levels were clipped to max_abs. Throws std::invalid_argument on an invalid layout.
+size_t RdoqLevels(const float* coeffs, const GridBlockLayout& layout, double step,
+                  const RdoqOptions& options, int32_t* levels);
 
 }  // namespace trainer
 }  // namespace ecrf

@@ -175,19 +175,16 @@ std::vector<uint8_t> EncodeCoefficients(const SceneTensors& s, int g, int t, flo
   const int volume = layout.block_volume();
   std::vector<int32_t> levels(coeffs.size(), 0);
   const int index = g * 6 + t;
-  for (size_t i = 0; i < coeffs.size(); ++i) {
-    const double level = QuantizeLevel(double(coeffs[i]), step, o.rounding_offset);
-    if (std::fabs(level) > max_abs) ++report->clipped_coefficients;
-  }
   RdoqOptions rdoq;
+  rdoq.set = CoefContextSet::kNarrow;
   rdoq.lambda = o.rdoq_lambda;
   rdoq.rounding_offset = o.rounding_offset;
   rdoq.max_abs = max_abs;
   // RDOQ decides with the costs of the richest context set the asked version allows.
-  rdoq.set = o.max_version_minor >= kNeighbourContextsMinVersionMinor ? CoefContextSet::kNeighbour
-             : o.max_version_minor >= kWideContextsMinVersionMinor    ? CoefContextSet::kWide
-                                                                      : CoefContextSet::kNarrow;
-  RdoqLevels(coeffs.data(), layout, step, rdoq, levels.data());
+  for (CoefContextSet set : {CoefContextSet::kWide, CoefContextSet::kNeighbour}) {
+    if (o.max_version_minor >= CoefContextSetMinVersionMinor(set)) rdoq.set = set;
+  }
+  report->clipped_coefficients += RdoqLevels(coeffs.data(), layout, step, rdoq, levels.data());
   for (int b = 0; b < layout.num_blocks(); ++b) {
     const int32_t* q = &levels[size_t(b) * volume];
     report->tensor_zero_blocks[index] +=

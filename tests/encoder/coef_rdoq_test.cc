@@ -85,6 +85,9 @@ TEST(CoefRdoq, LambdaZeroIsTheRoundingQuantizer) {
     ASSERT_EQ(levels[i], int32_t(std::max(-127.0, std::min(127.0, plain)))) << i;
   }
   EXPECT_GT(clipped, 0);
+  std::vector<int32_t> again(levels.size());
+  EXPECT_EQ(RdoqLevels(t.coeffs.data(), t.layout, step, RdoqOptions(), again.data()),
+            size_t(clipped));
 }
 
 TEST(CoefRdoq, LevelsOnlyShrinkTowardZero) {
