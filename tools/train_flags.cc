@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <stdexcept>
 
 #include "tools/cli_args.h"
@@ -45,6 +46,28 @@ std::vector<int> ParseIterationList(const char* flag, const std::string& text) {
       throw std::invalid_argument(std::string(flag) + ": '" + text +
                                   "' is not increasing positive iterations");
     }
+    begin = end + 1;
+  }
+  return at;
+}
+
+// "F,G,..." of shares (of the rate phase), each in (0, 1) and increasing; "" is the empty list.
+std::vector<float> ParseShareList(const char* flag, const std::string& text) {
+  std::vector<float> at;
+  if (text.empty()) return at;
+  for (size_t begin = 0; begin <= text.size();) {
+    size_t end = text.find(',', begin);
+    if (end == std::string::npos) end = text.size();
+    const std::string item = text.substr(begin, end - begin);
+    char* stop = nullptr;
+    const double v = std::strtod(item.c_str(), &stop);
+    if (item.empty() || *stop != '\0' || !(v > 0.0 && v < 1.0) ||
+        (!at.empty() && !(float(v) > at.back()))) {
+      throw std::invalid_argument(
+          std::string(flag) + ": '" + text +
+          "' is not a list of increasing shares of the rate phase in (0, 1)");
+    }
+    at.push_back(float(v));
     begin = end + 1;
   }
   return at;
@@ -250,6 +273,16 @@ void AddTrainFlags(CLI::App* app, TrainFlags* f) {
       ->type_name("L")
       ->capture_default_str()
       ->group(rate);
+  app->add_option("--prune-at", f->prune_at,
+                  "shares of the rate phase after which the components that cost more (lambda_e x "
+                  "bits) than they give (MSE) are removed, e.g. 0.2,0.4 (empty: never)")
+      ->type_name("F,...")
+      ->group(rate);
+  app->add_option("--prune-share", o.prune_share,
+                  "the most of one mode's components a pruning test removes, in (0, 1]")
+      ->type_name("S")
+      ->capture_default_str()
+      ->group(rate);
   app->add_option("--dct-block", f->dct_block, "plane block shape, powers of two <= 32")
       ->type_name("CxHxW")
       ->capture_default_str()
@@ -345,6 +378,9 @@ trainer::TrainOptions FinishTrainFlags(const CLI::App& app, TrainFlags* f) {
   if (given("--upsample-at"))
     o.upsample_iters = ParseIterationList("--upsample-at", f->upsample_at);
   if (given("--mask-at")) o.alpha_mask_iters = ParseIterationList("--mask-at", f->mask_at);
+  if (given("--prune-at")) o.prune_at = ParseShareList("--prune-at", f->prune_at);
+  if (!(o.prune_share > 0.f && o.prune_share <= 1.f))
+    throw std::invalid_argument("--prune-share must be in (0, 1]");
   if (given("--dct-block")) ParseShape("--dct-block", f->dct_block, 3, o.plane_block);
   if (given("--line-block")) {
     int shape[2];

@@ -28,7 +28,8 @@ trainer::TrainOptions BaseTrainOptions(const std::vector<std::string>& args);
 // Values of the flags that need converting before they become options.
 struct TrainFlags {
   trainer::TrainOptions options;  // the base, then what the flags set
-  std::string preset, rate, scene, target_size, ranks, dct_block, line_block, upsample_at, mask_at;
+  std::string preset, rate, scene, target_size, ranks, dct_block, line_block, upsample_at, mask_at,
+      prune_at;
   int final_grid = 0;
   int threads = 0;
 };

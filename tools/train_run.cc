@@ -196,6 +196,11 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
       o.score_float ? nlohmann::json(r.test.seconds_per_view) : nlohmann::json();
   m["rate_point"] = o.rate_point;
   m["grid_res"] = model.res();
+  // The components the model ended with, per mode (--prune-at removes what does not pay).
+  m["density_ranks"] = model.density().ranks();
+  m["appearance_ranks"] = model.appearance().ranks();
+  m["mlp_hidden"] = model.head().config().hidden;
+  m["prune_at"] = o.prune_at;
   m["aabb_min"] = model.aabb().min;
   m["aabb_max"] = model.aabb().max;
   m["scene_model"] = SceneModelName(fit.model);

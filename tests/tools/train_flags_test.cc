@@ -162,6 +162,23 @@ TEST(TrainFlags, LambdaEAloneAdjustsTheDefaultPointAndZeroIsPlainTensorf) {
   EXPECT_TRUE(trainer::ChangedSettings(target, Parse({"--target-size", "600KB"})).empty());
 }
 
+TEST(TrainFlags, PruneAtIsAListOfIncreasingSharesThatRoundTrips) {
+  EXPECT_TRUE(Parse({"--scene", "builtin"}).prune_at.empty());
+  const trainer::TrainOptions o =
+      Parse({"--scene", "builtin", "--prune-at", "0.4,0.65", "--prune-share", "0.5"});
+  EXPECT_EQ(o.prune_at, (std::vector<float>{0.4f, 0.65f}));
+  EXPECT_EQ(o.prune_share, 0.5f);
+  const trainer::TrainOptions back =
+      trainer::TrainConfigFromJson(trainer::TrainConfigToJson(o), "test");
+  EXPECT_EQ(back.prune_at, o.prune_at);
+  EXPECT_EQ(back.prune_share, 0.5f);
+  for (const char* bad : {"0.6,0.4", "1", "0", "0.5,", "x", "-0.2"}) {
+    EXPECT_THROW(Parse({"--prune-at", bad}), std::invalid_argument) << bad;
+  }
+  EXPECT_THROW(Parse({"--prune-share", "0"}), std::invalid_argument);
+  EXPECT_THROW(Parse({"--prune-share", "1.5"}), std::invalid_argument);
+}
+
 TEST(TrainFlags, ConfigJsonRoundTripsEverySetting) {
   const trainer::TrainOptions o = Parse({"--scene",
                                          "capture",

@@ -13,6 +13,7 @@
 #include "tools/report/report.h"
 #include "trainer/data/file_io.h"
 #include "trainer/data/ray_set.h"
+#include "trainer/model/volume_render.h"
 #include "trainer/train/rate_state.h"
 #include "trainer/train/trainer.h"
 
@@ -58,7 +59,7 @@ ComponentReport MeasureComponentCosts(const trainer::TensorfModel& trained,
   report.lambda_e = lambda_e;
   report.bytes = trainer::EncodeScene(trained, o).size();
   trainer::TensorfModel decoded = DecodedModel(trained, o.steps, o.blocks, o.mlp_max_level);
-  report.mse = RenderMse(decoded, n, origins, dirs, rgb);
+  report.mse = trainer::RenderMse(decoded, n, origins, dirs, rgb);
   trainer::TensorfModel model = trained;
   std::vector<float> plane_kept, line_kept;
   for (int g = 0; g < 2; ++g) {
@@ -82,7 +83,7 @@ ComponentReport MeasureComponentCosts(const trainer::TensorfModel& trained,
         trainer::VmGrid& dg = GridOf(&decoded, g);
         SaveAndZero(dg.plane(m), plane_cells, rank, r, &plane_kept);
         SaveAndZero(dg.line(m), line_cells, rank, r, &line_kept);
-        c.dmse = RenderMse(decoded, n, origins, dirs, rgb) - report.mse;
+        c.dmse = trainer::RenderMse(decoded, n, origins, dirs, rgb) - report.mse;
         Restore(dg.plane(m), plane_cells, rank, r, plane_kept);
         Restore(dg.line(m), line_cells, rank, r, line_kept);
         c.drop = c.saved_bytes > 0 && c.dmse < lambda_e * 8.0 * double(c.saved_bytes);
@@ -99,8 +100,8 @@ ComponentReport MeasureComponentCosts(const trainer::TensorfModel& trained,
   }
   report.file_after = trainer::EncodeScene(reduced, o);
   report.bytes_after = report.file_after.size();
-  report.mse_after =
-      RenderMse(DecodedModel(reduced, o.steps, o.blocks, o.mlp_max_level), n, origins, dirs, rgb);
+  report.mse_after = trainer::RenderMse(DecodedModel(reduced, o.steps, o.blocks, o.mlp_max_level),
+                                        n, origins, dirs, rgb);
   return report;
 }
 

@@ -19,18 +19,6 @@
 
 namespace ecrf {
 namespace tools {
-double RenderMse(const trainer::TensorfModel& model, int n, const float* origins, const float* dirs,
-                 const float* rgb) {
-  std::vector<float> out(static_cast<size_t>(n) * 3);
-  trainer::RenderRays(model, n, origins, dirs, out.data(), nullptr);
-  double sum = 0.0;
-  for (size_t i = 0; i < out.size(); ++i) {
-    const double e = double(out[i]) - rgb[i];
-    sum += e * e;
-  }
-  return sum / static_cast<double>(out.size());
-}
-
 trainer::TensorfModel DecodedModel(const trainer::TensorfModel& trained,
                                    const std::vector<float>& steps,
                                    const trainer::RateConfig& blocks, int mlp_max_level) {
@@ -78,7 +66,7 @@ SensitivityReport MeasureQuantSensitivity(const trainer::TensorfModel& trained,
   trainer::VmGrid* grids[2] = {&model.density(), &model.appearance()};
   SensitivityReport report;
   report.rays = n;
-  report.mse = RenderMse(model, n, origins, dirs, rgb);
+  report.mse = trainer::RenderMse(model, n, origins, dirs, rgb);
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<float> unit(-0.5f, 0.5f);
   for (int t = 0; t < 12; ++t) {
@@ -106,7 +94,7 @@ SensitivityReport MeasureQuantSensitivity(const trainer::TensorfModel& trained,
       for (const float sign : {1.f, -1.f}) {
         for (size_t i = 0; i < coeffs.size(); ++i) moved[i] = coeffs[i] + sign * noise[i];
         trainer::InverseBlocks(moved.data(), layout, data);
-        added += RenderMse(model, n, origins, dirs, rgb) - report.mse;
+        added += trainer::RenderMse(model, n, origins, dirs, rgb) - report.mse;
       }
       std::copy(kept.begin(), kept.end(), data);
       s.dmse = added / 2.0;

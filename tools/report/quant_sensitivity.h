@@ -30,10 +30,6 @@
 namespace ecrf {
 namespace tools {
 
-// Mean squared error per channel of model's renders of n rays against rgb.
-double RenderMse(const trainer::TensorfModel& model, int n, const float* origins, const float* dirs,
-                 const float* rgb);
-
 // The model a file of these steps, blocks and head levels decodes to (mlp_max_level 0: the head
 // as is): every tensor reconstructed from its quantized block-DCT coefficients.
 trainer::TensorfModel DecodedModel(const trainer::TensorfModel& trained,

@@ -24,6 +24,14 @@ RaySet::RaySet(const std::vector<View>& views) : views_(views) {
   for (size_t i = 0; i < active_.size(); ++i) active_[i] = uint32_t(i);
 }
 
+void RaySet::Sample(int n, std::mt19937_64& rng, float* origins, float* dirs, float* rgb) const {
+  if (active_.empty()) throw std::runtime_error("RaySet::Sample: no rays are kept");
+  std::uniform_int_distribution<size_t> pick(0, active_.size() - 1);
+  for (int i = 0; i < n; ++i) {
+    Ray(active_[pick(rng)], origins + 3 * size_t(i), dirs + 3 * size_t(i), rgb + 3 * size_t(i));
+  }
+}
+
 void RaySet::Ray(uint32_t index, float origin[3], float dir[3], float rgb[3]) const {
   const size_t v =
       size_t(std::upper_bound(view_offset_.begin(), view_offset_.end(), uint64_t(index)) -

@@ -35,6 +35,10 @@ class RaySet {
   // permutation, reshuffled when exhausted). Outputs are n x 3 each.
   void NextBatch(int n, std::mt19937_64& rng, float* origins, float* dirs, float* rgb);
 
+  // n kept rays drawn uniformly with replacement, without moving NextBatch's position (a probe of
+  // the training rays that leaves the training sequence as it was).
+  void Sample(int n, std::mt19937_64& rng, float* origins, float* dirs, float* rgb) const;
+
   void Ray(uint32_t index, float origin[3], float dir[3], float rgb[3]) const;
 
   // For --resume: the sampler position is part of the training state.

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <random>
 #include <stdexcept>
+#include <utility>
 
 #include "trainer/model/positional_encoding.h"
 #include "trainer/model/small_gemm.h"
@@ -178,6 +179,82 @@ AppearanceHead::AppearanceHead(const AppearanceHeadConfig& config) : config_(con
   }
   params_.assign(b3_offset() + kRgb, 0.0f);
   grads_.assign(params_.size(), 0.0f);
+}
+
+std::vector<size_t> AppearanceHead::KeptIndices(const std::vector<uint8_t>& keep) const {
+  if (keep.size() != static_cast<size_t>(config_.num_products)) {
+    throw std::invalid_argument("AppearanceHead::KeptIndices: one flag per product expected");
+  }
+  std::vector<size_t> idx;
+  for (int f = 0; f < config_.feature_dim; ++f) {
+    for (int p = 0; p < config_.num_products; ++p) {
+      if (keep[p])
+        idx.push_back(basis_offset() + static_cast<size_t>(f) * config_.num_products + p);
+    }
+  }
+  for (size_t i = w1_offset(); i < params_.size(); ++i) idx.push_back(i);
+  return idx;
+}
+
+void AppearanceHead::KeepProducts(const std::vector<uint8_t>& keep) {
+  const std::vector<size_t> idx = KeptIndices(keep);
+  int kept = 0;
+  for (uint8_t k : keep) kept += k ? 1 : 0;
+  if (kept < 1) throw std::invalid_argument("AppearanceHead::KeepProducts: no input would remain");
+  std::vector<float> params(idx.size());
+  for (size_t i = 0; i < idx.size(); ++i) params[i] = params_[idx[i]];
+  config_.num_products = kept;
+  params_ = std::move(params);
+  grads_.assign(params_.size(), 0.0f);
+  last_n_ = -1;  // the kept activations no longer match the shape
+}
+
+std::vector<size_t> AppearanceHead::KeptHiddenIndices(const std::vector<uint8_t>& keep1,
+                                                      const std::vector<uint8_t>& keep2) const {
+  const int h = config_.hidden, in = mlp_input_dim();
+  if (keep1.size() != size_t(h) || keep2.size() != size_t(h) ||
+      std::count(keep1.begin(), keep1.end(), 0) != std::count(keep2.begin(), keep2.end(), 0) ||
+      std::count(keep1.begin(), keep1.end(), 0) == h) {
+    throw std::invalid_argument(
+        "AppearanceHead::KeptHiddenIndices: one flag per unit of each layer, as many kept in "
+        "both, at least one");
+  }
+  std::vector<size_t> idx;
+  for (size_t i = 0; i < w1_offset(); ++i) idx.push_back(i);  // the basis
+  for (int i = 0; i < h; ++i) {
+    if (!keep1[i]) continue;
+    for (int c = 0; c < in; ++c) idx.push_back(w1_offset() + size_t(i) * in + c);
+  }
+  for (int i = 0; i < h; ++i) {
+    if (keep1[i]) idx.push_back(b1_offset() + i);
+  }
+  for (int j = 0; j < h; ++j) {
+    if (!keep2[j]) continue;
+    for (int i = 0; i < h; ++i) {
+      if (keep1[i]) idx.push_back(w2_offset() + size_t(j) * h + i);
+    }
+  }
+  for (int j = 0; j < h; ++j) {
+    if (keep2[j]) idx.push_back(b2_offset() + j);
+  }
+  for (int c = 0; c < kRgb; ++c) {
+    for (int j = 0; j < h; ++j) {
+      if (keep2[j]) idx.push_back(w3_offset() + size_t(c) * h + j);
+    }
+  }
+  for (int c = 0; c < kRgb; ++c) idx.push_back(b3_offset() + c);
+  return idx;
+}
+
+void AppearanceHead::KeepHidden(const std::vector<uint8_t>& keep1,
+                                const std::vector<uint8_t>& keep2) {
+  const std::vector<size_t> idx = KeptHiddenIndices(keep1, keep2);
+  std::vector<float> params(idx.size());
+  for (size_t i = 0; i < idx.size(); ++i) params[i] = params_[idx[i]];
+  config_.hidden -= static_cast<int>(std::count(keep1.begin(), keep1.end(), 0));
+  params_ = std::move(params);
+  grads_.assign(params_.size(), 0.0f);
+  last_n_ = -1;
 }
 
 int AppearanceHead::mlp_input_dim() const { return DimsOf(config_).in; }

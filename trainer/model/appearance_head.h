@@ -64,6 +64,19 @@ class AppearanceHead {
 
   // --- Additions (not in the original interface) ---
   size_t num_params() const { return params_.size(); }
+  // Indices into params() of the values a head keeping only the inputs (products) with
+  // keep[p] != 0 holds, in its own order (keep has num_products entries): every MLP parameter and
+  // the kept columns of the basis. Select the same positions of an optimizer's moments.
+  std::vector<size_t> KeptIndices(const std::vector<uint8_t>& keep) const;
+  // Removes the basis columns of the inputs with keep[p] == 0 (the appearance components a
+  // pruned grid no longer has); num_products shrinks. Grads are re-allocated (zero).
+  void KeepProducts(const std::vector<uint8_t>& keep);
+  // The same for hidden units: keep1[i] for unit i of the first hidden layer (its row of W1 and
+  // b1, its column of W2), keep2[j] for unit j of the second (its row of W2 and b2, its column
+  // of W3). The stream has one width for both layers (SPEC.md 6.2), so both keep as many.
+  std::vector<size_t> KeptHiddenIndices(const std::vector<uint8_t>& keep1,
+                                        const std::vector<uint8_t>& keep2) const;
+  void KeepHidden(const std::vector<uint8_t>& keep1, const std::vector<uint8_t>& keep2);
   // Off by default: Forward copies `products` for Backward's dL/dbasis. When on, Forward only
   // keeps the pointer, and the caller must keep that buffer alive and unchanged until Backward
   // (saves n * P floats of memory and their copy). Takes effect at the next Forward.

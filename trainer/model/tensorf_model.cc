@@ -310,6 +310,33 @@ std::vector<uint8_t> TensorfModel::FilterRays(int64_t n, const float* origins, c
   return keep;
 }
 
+void TensorfModel::KeepComponents(int grid, const std::array<std::vector<uint8_t>, 3>& keep) {
+  if (grid != 0 && grid != 1) throw std::invalid_argument("KeepComponents: grid 0 or 1");
+  VmGrid& g = grid == 0 ? density_ : appearance_;
+  if (grid == 1) {
+    std::vector<uint8_t> products;
+    for (int m = 0; m < 3; ++m) products.insert(products.end(), keep[m].begin(), keep[m].end());
+    if (products.size() != static_cast<size_t>(head_.config().num_products)) {
+      throw std::invalid_argument("KeepComponents: the head's inputs do not match the grid");
+    }
+    g.KeepComponents(keep);  // checks every mode keeps a component before the head changes
+    head_.KeepProducts(products);
+    config_.app_ranks = g.ranks();
+    config_.head.num_products = head_.config().num_products;
+  } else {
+    g.KeepComponents(keep);
+    config_.density_ranks = g.ranks();
+  }
+  train_workspace.reset();  // its buffers were sized for the old ranks
+}
+
+void TensorfModel::KeepHidden(const std::vector<uint8_t>& keep1,
+                              const std::vector<uint8_t>& keep2) {
+  head_.KeepHidden(keep1, keep2);
+  config_.head.hidden = head_.config().hidden;
+  train_workspace.reset();
+}
+
 void TensorfModel::ZeroGrads() {
   density_.ZeroGrads();
   appearance_.ZeroGrads();

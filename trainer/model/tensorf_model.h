@@ -126,6 +126,13 @@ class TensorfModel {
   std::vector<uint8_t> FilterRays(int64_t n, const float* origins, const float* dirs,
                                   bool bbox_only, int n_samples = 256) const;
 
+  // Removes the components (plane channel and line channel) with keep[m][r] == 0 from grid g
+  // (0 density, 1 appearance; at least one per mode stays); for appearance also their basis
+  // columns. The config's ranks follow. Grads are re-allocated (zero).
+  void KeepComponents(int grid, const std::array<std::vector<uint8_t>, 3>& keep);
+  // Removes hidden units of the head (AppearanceHead::KeepHidden); the config's width follows.
+  void KeepHidden(const std::vector<uint8_t>& keep1, const std::vector<uint8_t>& keep2);
+
   void ZeroGrads();  // density, appearance and head grads
   // Density L1 (TensoRF density_L1): adds weight * subgradient into the density grads and
   // returns the unweighted value.

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace ecrf {
 namespace trainer {
@@ -111,6 +112,39 @@ void VmGrid::Allocate(const std::array<int, 3>& res, const std::array<int, 3>& r
   const size_t total = line_off_[2] + line_size(2);
   params_.assign(total, 0.f);
   grads_.assign(total, 0.f);
+}
+
+std::vector<size_t> VmGrid::KeptIndices(const std::array<std::vector<uint8_t>, 3>& keep) const {
+  for (int m = 0; m < 3; ++m) {
+    if (keep[m].size() != static_cast<size_t>(ranks_[m])) {
+      throw std::invalid_argument("VmGrid::KeptIndices: one flag per component expected");
+    }
+  }
+  std::vector<size_t> idx;
+  auto add = [&](size_t offset, size_t cells, int m) {
+    for (size_t c = 0; c < cells; ++c) {
+      for (int r = 0; r < ranks_[m]; ++r) {
+        if (keep[m][r]) idx.push_back(offset + c * ranks_[m] + r);
+      }
+    }
+  };
+  for (int m = 0; m < 3; ++m) add(plane_off_[m], plane_size(m) / ranks_[m], m);
+  for (int m = 0; m < 3; ++m) add(line_off_[m], line_size(m) / ranks_[m], m);
+  return idx;
+}
+
+void VmGrid::KeepComponents(const std::array<std::vector<uint8_t>, 3>& keep) {
+  std::array<int, 3> ranks{};
+  for (int m = 0; m < 3; ++m) {
+    ranks[m] = 0;
+    for (uint8_t k : keep[m]) ranks[m] += k ? 1 : 0;
+    if (ranks[m] < 1) throw std::invalid_argument("VmGrid::KeepComponents: a mode would be empty");
+  }
+  const std::vector<size_t> idx = KeptIndices(keep);
+  std::vector<float> kept(idx.size());
+  for (size_t i = 0; i < idx.size(); ++i) kept[i] = params_[idx[i]];
+  Allocate(res_, ranks);
+  params_ = std::move(kept);
 }
 
 void VmGrid::InitNormal(float scale, uint64_t seed) {

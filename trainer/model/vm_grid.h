@@ -85,6 +85,14 @@ class VmGrid {
   // Keeps vertices [lo[a], hi[a]) per axis. Grads are re-allocated (zero).
   void Crop(const std::array<int, 3>& lo, const std::array<int, 3>& hi);
 
+  // Indices into params() of the values a grid keeping only the channels with keep[m][r] != 0
+  // holds, in its own flat order (keep[m] has ranks()[m] entries). Select the same positions of
+  // any array laid out like params() (an optimizer's moments) to follow KeepComponents.
+  std::vector<size_t> KeptIndices(const std::array<std::vector<uint8_t>, 3>& keep) const;
+  // Removes the channels with keep[m][r] == 0 from plane m and line m (at least one must stay
+  // per mode). Grads are re-allocated (zero).
+  void KeepComponents(const std::array<std::vector<uint8_t>, 3>& keep);
+
   // TensoRF density_L1: sum over m of mean|plane_m| + mean|line_m|. Adds weight * subgradient
   // (sign(x) / count, sign(0) = 0) into grads() and returns the unweighted value.
   double L1(float weight);

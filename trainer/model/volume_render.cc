@@ -642,5 +642,17 @@ void RenderRays(const TensorfModel& model, int n_rays, const float* origins, con
   }
 }
 
+double RenderMse(const TensorfModel& model, int n, const float* origins, const float* dirs,
+                 const float* rgb) {
+  std::vector<float> out(static_cast<size_t>(n) * 3);
+  RenderRays(model, n, origins, dirs, out.data(), nullptr);
+  double sum = 0.0;
+  for (size_t i = 0; i < out.size(); ++i) {
+    const double e = double(out[i]) - rgb[i];
+    sum += e * e;
+  }
+  return sum / static_cast<double>(out.size());
+}
+
 }  // namespace trainer
 }  // namespace ecrf

@@ -67,6 +67,10 @@ int ScatterTaskCount(const TensorfModel& model);
 void RenderRays(const TensorfModel& model, int n_rays, const float* origins, const float* dirs,
                 float* rgb_out, float* depth_or_null);
 
+// Mean squared error per channel of RenderRays's colours of n rays against rgb (n x 3).
+double RenderMse(const TensorfModel& model, int n, const float* origins, const float* dirs,
+                 const float* rgb);
+
 // One evaluated sample of a ray (inside the aabb and the alpha mask), as TrainStep/RenderRays see
 // it.
 struct RaySampleInfo {

@@ -117,7 +117,8 @@ void QuantAwareModel::Refresh(const TensorfModel& model, const std::vector<float
 
 bool QuantAwareModel::fresh_for(const TensorfModel& model) const {
   return error_[0].size() == model.density().params().size() &&
-         error_[1].size() == model.appearance().params().size() && !error_[0].empty();
+         error_[1].size() == model.appearance().params().size() && !error_[0].empty() &&
+         (error_[2].empty() || error_[2].size() == model.head().params().size());
 }
 
 void QuantAwareModel::Apply(TensorfModel* model) {

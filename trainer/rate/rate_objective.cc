@@ -189,23 +189,33 @@ RateEstimate AddRateGradients(const std::vector<VmGrid*>& grids, const std::vect
   return est;
 }
 
+double EvaluateTensorBits(const VmGrid& grid, int t, float step, int tensor_index,
+                          const RateConfig& config, const FactorizedEntropyModel& model) {
+  if (t < 0 || t >= kTensorsPerGrid || !(step > 0.f) || tensor_index < 0 ||
+      RateModelIndex(tensor_index, kNumFrequencyBands - 1) >= model.num_models()) {
+    throw std::invalid_argument("EvaluateTensorBits: bad tensor, step or model count");
+  }
+  // Bits() without gradients does not modify the model.
+  FactorizedEntropyModel* m = const_cast<FactorizedEntropyModel*>(&model);
+  const GridBlockLayout L = RateTensorLayout(grid, t, config);
+  std::vector<int> ids(L.num_blocks());
+  std::iota(ids.begin(), ids.end(), 0);
+  return ProcessTensor(RateTensorData(grid, t), nullptr, L, ids, step, tensor_index, m,
+                       Mode::kRoundedEval, 1.f, 0.f, 0.f, 0)
+      .bits;
+}
+
 RateReport EvaluateRate(const std::vector<const VmGrid*>& grids, const std::vector<float>& steps,
                         const RateConfig& config, const FactorizedEntropyModel& model) {
   CheckArgs(grids.size(), steps, model);
-  // Bits() without gradients does not modify the model.
-  FactorizedEntropyModel* m = const_cast<FactorizedEntropyModel*>(&model);
   RateReport rep;
   for (size_t g = 0; g < grids.size(); ++g) {
     for (int t = 0; t < kTensorsPerGrid; ++t) {
       const int ti = static_cast<int>(g) * kTensorsPerGrid + t;
-      const GridBlockLayout L = RateTensorLayout(*grids[g], t, config);
-      std::vector<int> ids(L.num_blocks());
-      std::iota(ids.begin(), ids.end(), 0);
-      const TensorResult r = ProcessTensor(RateTensorData(*grids[g], t), nullptr, L, ids, steps[ti],
-                                           ti, m, Mode::kRoundedEval, 1.f, 0.f, 0.f, 0);
-      rep.bits.push_back(r.bits);
-      rep.coeffs.push_back(L.num_coeffs());
-      rep.total_bits += r.bits;
+      const double bits = EvaluateTensorBits(*grids[g], t, steps[ti], ti, config, model);
+      rep.bits.push_back(bits);
+      rep.coeffs.push_back(RateTensorLayout(*grids[g], t, config).num_coeffs());
+      rep.total_bits += bits;
     }
   }
   return rep;

@@ -67,6 +67,10 @@ struct RateReport {
   std::vector<size_t> coeffs;  // coefficients per tensor index (padded blocks)
   double total_bits = 0.0;
 };
+// The RateReport bits of one tensor: tensor t (0..5) of grid, coded with step under the band
+// models of tensor_index.
+double EvaluateTensorBits(const VmGrid& grid, int t, float step, int tensor_index,
+                          const RateConfig& config, const FactorizedEntropyModel& model);
 RateReport EvaluateRate(const std::vector<const VmGrid*>& grids, const std::vector<float>& steps,
                         const RateConfig& config, const FactorizedEntropyModel& model);
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 namespace ecrf {
 namespace trainer {
@@ -13,6 +14,17 @@ void Adam::Reset(size_t size) {
   m_.assign(size, 0.0f);
   v_.assign(size, 0.0f);
   step_ = 0;
+}
+
+void Adam::Keep(const std::vector<size_t>& indices) {
+  std::vector<float> m(indices.size()), v(indices.size());
+  for (size_t i = 0; i < indices.size(); ++i) {
+    if (indices[i] >= m_.size()) throw std::out_of_range("Adam::Keep: index past the moments");
+    m[i] = m_[indices[i]];
+    v[i] = v_[indices[i]];
+  }
+  m_ = std::move(m);
+  v_ = std::move(v);
 }
 
 void Adam::Step(float* params, const float* grads, size_t size, float learning_rate) {

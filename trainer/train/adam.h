@@ -23,6 +23,9 @@ class Adam {
   void Reset(size_t size);
   // params -= lr * mhat / (sqrt(vhat) + eps); parallel over the array (OpenMP).
   void Step(float* params, const float* grads, size_t size, float learning_rate);
+  // Keeps only the moments at these indices, in this order (the parameters were pruned the same
+  // way: VmGrid::KeptIndices, AppearanceHead::KeptIndices); the step count stays.
+  void Keep(const std::vector<size_t>& indices);
   size_t size() const { return m_.size(); }
   long step_count() const { return step_; }
   // For checkpoints.

@@ -126,6 +126,24 @@ int LoadModelCheckpointOrThrow(const std::string& path, TensorfModel* model, Rat
         throw std::runtime_error(path + ": checkpoint bounding box is empty or not finite");
       }
     }
+    // A run that pruned components or hidden units (trainer/train/component_prune.h) stored a
+    // smaller model than its options describe: the checkpoint's shape wins.
+    TensorfConfig c = model->config();
+    c.density_ranks = j.at("density_rank").get<std::array<int, 3>>();
+    c.app_ranks = j.at("appearance_rank").get<std::array<int, 3>>();
+    c.head.hidden = j.value("head", nlohmann::json::object()).value("hidden", c.head.hidden);
+    c.head.num_products = c.app_ranks[0] + c.app_ranks[1] + c.app_ranks[2];
+    if (c.density_ranks != model->config().density_ranks ||
+        c.app_ranks != model->config().app_ranks || c.head.hidden != model->config().head.hidden) {
+      for (int r : {c.density_ranks[0], c.density_ranks[1], c.density_ranks[2], c.app_ranks[0],
+                    c.app_ranks[1], c.app_ranks[2], c.head.hidden}) {
+        if (r < 1 || r > 1024) {
+          throw std::runtime_error(path + ": checkpoint rank or head width " + std::to_string(r) +
+                                   " outside [1, 1024]");
+        }
+      }
+      *model = TensorfModel(c);
+    }
     model->SetGeometry(box, res);
     model->set_n_samples(j.at("n_samples").get<int>());
   } catch (const nlohmann::json::exception& e) {

@@ -55,6 +55,9 @@ void VisitSettings(TrainOptions& o, F&& f) {
   f("rounding_offset", o.rounding_offset);
   f("rdoq_lambda", o.rdoq_lambda);
   f("qat_refresh", o.qat_refresh);
+  f("prune_at", o.prune_at);
+  f("prune_share", o.prune_share);
+  f("prune_rays", o.prune_rays);
   f("mlp_levels", o.mlp_levels);
   f("target_bytes", o.target_bytes);
   f("rate_control_every", o.rate_control_every);

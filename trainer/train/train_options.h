@@ -94,6 +94,13 @@ struct TrainOptions {
   // > 0: the quantizer is RDOQ with this lambda (encoder/coef_rdoq.h), in training and encoding.
   float rdoq_lambda = 0.f;
   int qat_refresh = 1;
+  // Rate-distortion pruning of whole components (trainer/train/component_prune.h) at these shares
+  // of the rate phase (from its start to the end of the run; each in (0, 1), increasing; empty:
+  // never; runs without a rate term never prune): at most
+  // prune_share of each mode's components per test, judged on prune_rays training rays.
+  std::vector<float> prune_at;
+  float prune_share = 0.25f;
+  int prune_rays = 8192;
   // How `ecrf train` codes the basis and MLP: > 0 integer levels (at most this many per row,
   // MLPW precision 2); 0 binary16. 127 cost no measurable PSNR on chair (docs/results.md) and
   // halves MLPW.

@@ -24,6 +24,7 @@
 #include "trainer/scenes/forward_scene.h"
 #include "trainer/train/adam.h"
 #include "trainer/train/checkpoint.h"
+#include "trainer/train/component_prune.h"
 #include "trainer/train/eval_progress.h"
 #include "trainer/train/train_state.h"
 
@@ -241,6 +242,47 @@ EncodeOptions RunEncodeOptions(const TrainOptions& o, const RateState& rate) {
   return eo;
 }
 
+namespace {
+
+// Whether a pruning test follows iteration `done`: the shares of --prune-at count from the start
+// of the rate phase (the bits of a component are only weighed there) to the end of the run.
+bool PruneIteration(const TrainOptions& o, int rate_start, int done) {
+  for (float share : o.prune_at) {
+    const int at = rate_start + static_cast<int>(std::lround(share * (o.iters - rate_start)));
+    if (done == at && done > rate_start && done < o.iters) return true;
+  }
+  return false;
+}
+
+// One pruning test (trainer/train/component_prune.h) on rays drawn without moving the sampler,
+// of the model as training renders it (the quantized grids under QAT).
+void PruneAt(int done, float lambda_e, const TrainOptions& o, const RaySet& rays,
+             QuantAwareModel* qat, TensorfModel* model, Optimizers* opt, const RateState& rate) {
+  const auto start = Clock::now();
+  const int n = std::max(1, o.prune_rays);
+  std::vector<float> origins(size_t(n) * 3), dirs(size_t(n) * 3), rgb(size_t(n) * 3);
+  std::mt19937_64 rng(uint64_t(o.seed) * 0x9E3779B97F4A7C15ull + uint64_t(done));
+  rays.Sample(n, rng, origins.data(), dirs.data(), rgb.data());
+  if (qat) qat->Apply(model);
+  const PruneDecision d = TestComponents(*model, rate, lambda_e, n, origins.data(), dirs.data(),
+                                         rgb.data(), o.prune_share);
+  // Both tests see the same model; a component's removal leaves the hidden units as they are.
+  const HiddenDecision hd = TestHiddenUnits(*model, o.mlp_levels, lambda_e, n, origins.data(),
+                                            dirs.data(), rgb.data(), o.prune_share);
+  if (qat) qat->Restore(model);
+  PruneComponents(d, model, opt);  // QAT notices the new shapes and refreshes
+  PruneHidden(hd, model, opt);
+  const auto& dr = model->density().ranks();
+  const auto& ar = model->appearance().ranks();
+  std::fprintf(stderr,
+               "%spruning at iteration %d (lambda_e %g): %d components and %d hidden unit pairs "
+               "removed; density %d,%d,%d, appearance %d,%d,%d, head %d wide remain (%.1f s)\n",
+               isatty(2) ? "\n" : "", done, lambda_e, d.dropped, hd.dropped, dr[0], dr[1], dr[2],
+               ar[0], ar[1], ar[2], model->head().config().hidden, Seconds(start));
+}
+
+}  // namespace
+
 TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& test,
                   TensorfModel* model, RateState* rate_out) {
   TrainResult result;
@@ -403,6 +445,10 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
       mse_sum = 0.0;
       mse_count = 0;
       interval_start = Clock::now();
+    }
+
+    if (use_rate && rate.active && PruneIteration(o, rate_start, done)) {
+      PruneAt(done, live.lambda_e, o, rays, quant_aware ? &qat : nullptr, model, &opt, rate);
     }
 
     // TensoRF order: alpha mask (and shrink / ray filtering) first, then upsampling.

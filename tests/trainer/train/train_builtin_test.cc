@@ -240,6 +240,9 @@ TEST(TrainBuiltin, ResumedRunEqualsTheUninterruptedOneBitForBit) {
   o.lambda_e = 1e-8f;
   o.checkpoint_every = 60;
   o.eval_every = 60;
+  o.prune_at = {0.3f};  // at 162: the resume from 120 prunes, the one from 180 loads a pruned model
+  o.prune_rays = 256;
+  o.mlp_hidden = 32;
   const Dataset train = LoadTrainingViews(o, "train");
   const Dataset test = LoadTrainingViews(o, "test");
   char tmpl[] = "/tmp/ecrf_resume_XXXXXX";
@@ -251,6 +254,11 @@ TEST(TrainBuiltin, ResumedRunEqualsTheUninterruptedOneBitForBit) {
   ASSERT_EQ(mkdir(whole.out_dir.c_str(), 0755), 0);
   TensorfModel a(ConfigFor(o, train));
   const TrainResult ra = Train(whole, train, test, &a, nullptr);
+  // The test is about state: pruning must have changed the shapes the resumes restore.
+  EXPECT_LT(a.config().app_ranks[0] + a.config().app_ranks[1] + a.config().app_ranks[2] +
+                a.config().density_ranks[0] + a.config().density_ranks[1] +
+                a.config().density_ranks[2] + a.config().head.hidden,
+            3 * (o.density_rank + o.appearance_rank) + o.mlp_hidden);
 
   TrainOptions parts = o;
   parts.out_dir = root + "/parts";
@@ -261,6 +269,9 @@ TEST(TrainBuiltin, ResumedRunEqualsTheUninterruptedOneBitForBit) {
     if (stop == 0) {
       const TrainResult rb = Train(parts, train, test, &b, nullptr);
       EXPECT_EQ(b.res(), a.res());
+      EXPECT_EQ(b.config().density_ranks, a.config().density_ranks);
+      EXPECT_EQ(b.config().app_ranks, a.config().app_ranks);
+      EXPECT_EQ(b.config().head.hidden, a.config().head.hidden);
       EXPECT_TRUE(b.density().params() == a.density().params());
       EXPECT_TRUE(b.appearance().params() == a.appearance().params());
       EXPECT_TRUE(b.head().params() == a.head().params());
