@@ -84,8 +84,10 @@ HiddenDecision TestHiddenUnits(const TensorfModel& model, int mlp_levels, double
   std::vector<int> order1(h), order2(h);
   std::iota(order1.begin(), order1.end(), 0);
   std::iota(order2.begin(), order2.end(), 0);
-  std::stable_sort(order1.begin(), order1.end(), [&](int a, int b) { return d.dmse1[a] < d.dmse1[b]; });
-  std::stable_sort(order2.begin(), order2.end(), [&](int a, int b) { return d.dmse2[a] < d.dmse2[b]; });
+  std::stable_sort(order1.begin(), order1.end(),
+                   [&](int a, int b) { return d.dmse1[a] < d.dmse1[b]; });
+  std::stable_sort(order2.begin(), order2.end(),
+                   [&](int a, int b) { return d.dmse2[a] < d.dmse2[b]; });
   // The bits the first k pairs save, from the coded head without them.
   const double full_bits = HeadBits(model.head(), mlp_levels);
   auto keep_for = [&](int k, std::vector<uint8_t>* k1, std::vector<uint8_t>* k2) {

@@ -8,9 +8,9 @@
 #include <cmath>
 #include <vector>
 
+#include "format/mlp_coder.h"
 #include "tests/common/small_model.h"
 #include "trainer/model/volume_render.h"
-#include "format/mlp_coder.h"
 #include "trainer/rate/quant_aware.h"
 #include "trainer/rate/rate_objective.h"
 
@@ -128,8 +128,8 @@ TEST(TestComponents, RemovesTheComponentTheTargetLacks) {
   const std::vector<float> target = Render(target_model, rays);
   const RateState rate = ActiveRate(model);
   const double lambda_e = 1e-12;  // bits almost free: a component goes when it lowers the MSE
-  const PruneDecision d =
-      TestComponents(model, rate, lambda_e, kRays, rays.o.data(), rays.d.data(), target.data(), 0.5);
+  const PruneDecision d = TestComponents(model, rate, lambda_e, kRays, rays.o.data(), rays.d.data(),
+                                         target.data(), 0.5);
   ASSERT_EQ(d.tests.size(), 24u);
   ASSERT_GT(d.mse, 1e-5);
   int lacked_drops = 0;
@@ -175,6 +175,49 @@ TEST(TestComponents, BitsAreTheRateOfTheModeWithoutTheComponent) {
   EXPECT_NEAR(t.bits, bits(model.density()) - bits(reduced), 1e-6 * bits(model.density()));
 }
 
+TEST(TestComponents, DropsThatPayAloneButNotTogetherAreHalved) {
+  const Rays rays;
+  TensorfModel model = DenseSmallModel();
+  // Appearance mode 0: components 0 and 1 the same weak product with the same basis column, so
+  // that removing both changes the features twice as much as removing one (four times the MSE).
+  VmGrid& app = model.appearance();
+  const int rank = app.ranks()[0];
+  for (size_t i = 0; i < app.plane_size(0) / rank; ++i)
+    app.plane(0)[i * rank + 1] = app.plane(0)[i * rank];
+  for (size_t i = 0; i < app.line_size(0) / rank; ++i) {
+    app.line(0)[i * rank] *= 0.05f;
+    app.line(0)[i * rank + 1] = app.line(0)[i * rank];
+  }
+  AppearanceHead& head = model.head();
+  const int p = head.config().num_products;
+  for (int f = 0; f < head.config().feature_dim; ++f) {
+    float* basis = head.params().data() + head.basis_offset() + size_t(f) * p;
+    basis[1] = basis[0];
+  }
+  const std::vector<float> own = Render(model, rays);
+  const RateState rate = ActiveRate(model);
+  const PruneDecision probe =
+      TestComponents(model, rate, 0.0, kRays, rays.o.data(), rays.d.data(), own.data(), 0.5);
+  const ComponentTest& c0 = probe.tests[12];  // appearance mode 0, component 0
+  const ComponentTest& c1 = probe.tests[13];
+  ASSERT_EQ(c0.grid, 1);
+  ASSERT_EQ(c0.mode, 0);
+  ASSERT_EQ(c1.component, 1);
+  ASSERT_GT(c0.dmse, 0.0);
+  ASSERT_NEAR(c0.dmse, c1.dmse, 1e-3 * c0.dmse);
+  // Each pays alone at this lambda_e; the two together (about 4x the MSE for 2x the bits) do not.
+  const double lambda_e = 1.2 * std::max(c0.dmse / c0.bits, c1.dmse / c1.bits);
+  const PruneDecision d =
+      TestComponents(model, rate, lambda_e, kRays, rays.o.data(), rays.d.data(), own.data(), 0.5);
+  EXPECT_EQ(d.keep[1][0][0] + d.keep[1][0][1], 1);
+  EXPECT_EQ(d.keep[1][0][2] + d.keep[1][0][3], 2);
+  TensorfModel both = model;
+  ZeroLineChannel(&both, 1, 0, 0);
+  ZeroLineChannel(&both, 1, 0, 1);
+  const double joint = RenderMse(both, kRays, rays.o.data(), rays.d.data(), own.data());
+  EXPECT_GT(joint, lambda_e * (c0.bits + c1.bits));
+}
+
 TEST(TestComponents, DropsAtMostTheShareAndNeverAModesLastComponent) {
   const Rays rays;
   const TensorfModel model = DenseSmallModel();
@@ -194,9 +237,9 @@ TEST(TestComponents, DropsAtMostTheShareAndNeverAModesLastComponent) {
       }
     }
   }
-  EXPECT_THROW(TestComponents(model, RateState(), 1.0, kRays, rays.o.data(), rays.d.data(),
-                              own.data(), 0.5),
-               std::invalid_argument);
+  EXPECT_THROW(
+      TestComponents(model, RateState(), 1.0, kRays, rays.o.data(), rays.d.data(), own.data(), 0.5),
+      std::invalid_argument);
 }
 
 // Zeroes the weights and bias of hidden unit u of layer 1 or 2: its output is then 0.
@@ -224,8 +267,8 @@ TEST(KeepHidden, RendersWhatZeroingTheUnitsRendered) {
   EXPECT_EQ(removed.head().config().hidden, 14);
   EXPECT_EQ(removed.config().head.hidden, 14);
   const int in = removed.head().mlp_input_dim();
-  EXPECT_EQ(before - removed.head().params().size(), size_t(2 * (in + 1) + 16 * 16 - 14 * 14 +
-                                                            2 * (1 + 3)));
+  EXPECT_EQ(before - removed.head().params().size(),
+            size_t(2 * (in + 1) + 16 * 16 - 14 * 14 + 2 * (1 + 3)));
   const std::vector<float> a = Render(zeroed, rays), b = Render(removed, rays);
   for (size_t i = 0; i < a.size(); ++i) ASSERT_NEAR(a[i], b[i], 1e-5);
   EXPECT_THROW(removed.KeepHidden(std::vector<uint8_t>(14, 1), std::vector<uint8_t>(14, 0)),
@@ -276,8 +319,8 @@ TEST(TestHiddenUnits, DropsTheShareWhenBitsAreDearAndNothingWhenTheyAreFree) {
   AppearanceHead smaller = model.head();
   smaller.KeepHidden(dear.keep1, dear.keep2);
   const auto head_bits = [](const AppearanceHead& h) {
-    return 8.0 * EncodeQuantizedMlp(HeadMlpLayout(h.config()), h.params().data(), 15, nullptr)
-                     .size();
+    return 8.0 *
+           EncodeQuantizedMlp(HeadMlpLayout(h.config()), h.params().data(), 15, nullptr).size();
   };
   EXPECT_DOUBLE_EQ(dear.bits, head_bits(model.head()) - head_bits(smaller));
   const HiddenDecision free_bits =
