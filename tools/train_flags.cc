@@ -127,7 +127,7 @@ void AddTrainFlags(CLI::App* app, TrainFlags* f) {
       ->type_name("DIR")
       ->group(data);
   app->add_option("--scene", f->scene, "a procedural scene instead of --data (no files needed)")
-      ->check(CLI::IsMember({"builtin", "capture", "forward"}))
+      ->check(CLI::IsMember({"builtin", "capture", "capture-sparse", "forward"}))
       ->group(data);
   app->add_option(
          "--scene-type", o.scene_type,
@@ -180,6 +180,25 @@ void AddTrainFlags(CLI::App* app, TrainFlags* f) {
                   "evaluated)")
       ->type_name("N")
       ->check(CLI::Range(1, 16))
+      ->capture_default_str()
+      ->group(schedule);
+  app->add_option("--distortion-loss", o.distortion_weight,
+                  "weight of mip-NeRF 360's distortion loss, against floaters (0: off)")
+      ->type_name("W")
+      ->check(CLI::Range(0.0, 10.0))
+      ->capture_default_str()
+      ->group(schedule);
+  app->add_option("--tv-density", o.tv_weight_density,
+                  "weight of total variation on the density planes (TensoRF's TV_weight_density; "
+                  "1 on LLFF scenes; 0: off)")
+      ->type_name("W")
+      ->check(CLI::Range(0.0, 1000.0))
+      ->capture_default_str()
+      ->group(schedule);
+  app->add_option("--tv-app", o.tv_weight_app,
+                  "weight of total variation on the appearance planes (TensoRF's TV_weight_app)")
+      ->type_name("W")
+      ->check(CLI::Range(0.0, 1000.0))
       ->capture_default_str()
       ->group(schedule);
   app->add_option("--mask-at", f->mask_at, "iterations of the alpha-mask updates and box shrink")

@@ -198,6 +198,12 @@ TEST(TrainFlags, ConfigJsonRoundTripsEverySetting) {
                                          "0.4",
                                          "--mask-downscale",
                                          "3",
+                                         "--distortion-loss",
+                                         "0.01",
+                                         "--tv-density",
+                                         "1",
+                                         "--tv-app",
+                                         "0.5",
                                          "--test-stride",
                                          "3",
                                          "-o",
@@ -211,6 +217,9 @@ TEST(TrainFlags, ConfigJsonRoundTripsEverySetting) {
   EXPECT_EQ(back.test_view_stride, 3);
   EXPECT_EQ(back.density_step_factor, 0.4f);
   EXPECT_EQ(back.mask_downscale, 3);
+  EXPECT_EQ(back.distortion_weight, 0.01f);
+  EXPECT_EQ(back.tv_weight_density, 1.f);
+  EXPECT_EQ(back.tv_weight_app, 0.5f);
   EXPECT_EQ(back.out_dir, "run/x");
   EXPECT_THROW(trainer::TrainConfigFromJson("{\"config_version\": 99, \"settings\": {}}", "x"),
                std::runtime_error);

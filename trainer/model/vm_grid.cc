@@ -326,6 +326,50 @@ double VmGrid::L1(float weight) {
   return total;
 }
 
+double VmGrid::PlaneTotalVariation(float weight) {
+  constexpr double kPlaneFactor = 1e-2;  // TensoRF's per-plane factor
+  double total = 0.0;
+  for (int m = 0; m < 3; ++m) {
+    const int w = res_[kMatMode[m][0]], h = res_[kMatMode[m][1]], c = ranks_[m];
+    if (w < 2 || h < 2 || c < 1) continue;
+    const int64_t row = static_cast<int64_t>(w) * c;
+    const double count_v = static_cast<double>(h - 1) * row;
+    const double count_u = static_cast<double>(h) * (w - 1) * c;
+    // d(loss)/d(difference) = 2 * difference * these.
+    const float cv = static_cast<float>(weight * kPlaneFactor * 2.0 / count_v * 2.0);
+    const float cu = static_cast<float>(weight * kPlaneFactor * 2.0 / count_u * 2.0);
+    const float* p = plane(m);
+    float* g = plane_grad(m);
+    double sum_v = 0.0, sum_u = 0.0;
+    // Each row writes only its own gradients (the differences to both neighbours are recomputed),
+    // so rows run in parallel with the same sums for any thread count.
+#pragma omp parallel for schedule(static) reduction(+ : sum_v, sum_u) \
+    if (static_cast<int64_t>(h) * row > kParallelMin)
+    for (int y = 0; y < h; ++y) {
+      const float* r = p + y * row;
+      float* gr = g + y * row;
+      for (int64_t k = 0; k < row; ++k) {
+        float grad = 0.f;
+        if (y + 1 < h) {
+          const float d = r[k + row] - r[k];
+          sum_v += static_cast<double>(d) * d;
+          grad -= cv * d;
+        }
+        if (y > 0) grad += cv * (r[k] - r[k - row]);
+        if (k + c < row) {
+          const float d = r[k + c] - r[k];
+          sum_u += static_cast<double>(d) * d;
+          grad -= cu * d;
+        }
+        if (k >= c) grad += cu * (r[k] - r[k - c]);
+        gr[k] += grad;
+      }
+    }
+    total += kPlaneFactor * 2.0 * (sum_v / count_v + sum_u / count_u);
+  }
+  return total;
+}
+
 // ---------------------------------------------------------------------------------------------
 // ModeGradScatter
 

@@ -97,6 +97,13 @@ class VmGrid {
   // (sign(x) / count, sign(0) = 0) into grads() and returns the unweighted value.
   double L1(float weight);
 
+  // TensoRF's TV_loss_density / TV_loss_app: sum over the planes of 1e-2 * TVLoss(plane), with
+  // TVLoss = 2 (sum of squared neighbour differences along v / their count + the same along u)
+  // (the lines are not regularised, as in TensoRF). Adds weight * its gradient into grads() and
+  // returns the unweighted value. It smooths the planes where no view constrains them, which
+  // sparse real captures need (TensoRF weighs it 1.0 on LLFF, 0 on Blender scenes).
+  double PlaneTotalVariation(float weight);
+
  private:
   void ComputeOffsets();
 

@@ -29,6 +29,7 @@ uint64_t SplitMix64(uint64_t x) {
 struct SampleRec {
   GridPoint gp;  // kept so the gather and scatter passes need not locate the sample again
   float t;
+  float s;  // distance along the ray in sampling units (steps of `step`), for the distortion loss
   float dscale;  // dist * distance_scale of this sample's interval
   float feat;    // density feature + shift; after the composite pass: dL/d(feature)
   float alpha;
@@ -39,6 +40,7 @@ struct SampleRec {
 // A sample inside the aabb and the mask, before its density is known.
 struct Candidate {
   float t;
+  float s;  // as SampleRec::s
   float dscale;
   GridPoint gp;
 };
@@ -189,6 +191,7 @@ void UnboundedCandidates(const MarchParams& p, const float* o, const float* d, f
     if (!p.mask || p.mask->Occupied(x)) {
       Candidate c;
       c.t = t;
+      c.s = static_cast<float>(i) + jitter;
       c.dscale = (next - t) * p.distance_scale;
       ToGridPoint(p, x, &c.gp);
       cand.push_back(c);
@@ -222,6 +225,7 @@ void ObjectCandidates(const MarchParams& p, const float* o, const float* d, floa
     if (p.mask && !p.mask->Occupied(x)) continue;
     Candidate c;
     c.t = t;
+    c.s = ri;
     c.dscale = p.dscale;
     ToGridPoint(p, x, &c.gp);
     cand.push_back(c);
@@ -260,6 +264,7 @@ int MarchRay(const MarchParams& p, const float* o, const float* d, float jitter,
     SampleRec rec;
     rec.gp = cand[k].gp;
     rec.t = cand[k].t;
+    rec.s = cand[k].s;
     rec.dscale = cand[k].dscale;
     rec.feat = feat;
     rec.alpha = alpha;
@@ -472,7 +477,7 @@ int ScatterTaskCount(const TensorfModel& model) {
 }
 
 TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, const float* dirs,
-                         const float* target_rgb, uint64_t rng_seed) {
+                         const float* target_rgb, uint64_t rng_seed, float distortion_weight) {
   TrainStepStats stats;
   stats.rays = n_rays;
   if (n_rays <= 0) return stats;
@@ -507,6 +512,12 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
   head.set_borrow_products(true);
   double sse = 0.0;
   long n_density = 0;
+  // The distortion loss (DistortionLoss, inlined into the compositing backward below): positions
+  // m = s / n_samples, intervals 1 / n_samples.
+  const bool distortion_on = distortion_weight > 0.f;
+  const double inv_n = 1.0 / p.n_samples;
+  const double distortion_scale = static_cast<double>(distortion_weight) / n_rays;
+  double distortion_sum = 0.0;
 
   // The rest runs per chunk of consecutive rays holding at most head_chunk_rows appearance
   // samples (the loss is a sum over rays), bounding the head's activation memory.
@@ -529,7 +540,7 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
     stats.t_head += lap();
 
     // Compositing forward, loss, compositing backward (dL/dfeature, dL/drgb).
-#pragma omp parallel for schedule(dynamic, 16) reduction(+ : sse, n_density) \
+#pragma omp parallel for schedule(dynamic, 16) reduction(+ : sse, n_density, distortion_sum) \
     if (nr >= kMinParallelRays)
     for (int r = r0; r < r1; ++r) {
       const RayRec& rr = ws.rays[r];
@@ -538,9 +549,14 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
       n_density += rr.count;
       float c[3] = {0.f, 0.f, 0.f};
       float acc = 0.f;
+      double w_total = 0.0, wm_total = 0.0;
       for (int k = 0; k < rr.count; ++k) {
         const float w = s[k].alpha * s[k].trans;
         acc += w;
+        if (distortion_on) {
+          w_total += w;
+          wm_total += w * (s[k].s * inv_n);
+        }
         if (s[k].app >= 0) {
           const float* rgb = ws.rgb.data() + 3 * (row0 + s[k].app);
           c[0] += w * rgb[0];
@@ -559,10 +575,21 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
       }
       const float bg_dot = white ? g[0] + g[1] + g[2] : 0.f;
       float suffix = 0.f;
+      double w_after = 0.0, wm_after = 0.0, ray_distortion = 0.0;
       for (int k = rr.count - 1; k >= 0; --k) {
         SampleRec& sk = s[k];
         const float w = sk.alpha * sk.trans;
         float e = -bg_dot;
+        if (distortion_on) {
+          const double m = sk.s * inv_n, wk = w;
+          const double w_before = w_total - w_after - wk;
+          const double wm_before = wm_total - wm_after - wk * m;
+          const double spread = (m * w_before - wm_before) + (wm_after - m * w_after);
+          ray_distortion += wk * spread + inv_n / 3.0 * wk * wk;
+          e += static_cast<float>(distortion_scale * (2.0 * spread + 2.0 * inv_n / 3.0 * wk));
+          w_after += wk;
+          wm_after += wk * m;
+        }
         if (sk.app >= 0) {
           const int64_t row = row0 + sk.app;
           const float* rgb = ws.rgb.data() + 3 * row;
@@ -578,6 +605,7 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
         const float dl_dsigma = dl_dalpha * (1.f - sk.alpha) * sk.dscale;
         sk.feat = dl_dsigma * SoftplusGrad(sk.feat);
       }
+      distortion_sum += ray_distortion;
     }
     stats.t_composite += lap();
 
@@ -591,7 +619,8 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
     r0 = r1;
   }
   stats.mse = sse / (3.0 * n_rays);
-  stats.loss = stats.mse;
+  stats.distortion = distortion_sum / n_rays;
+  stats.loss = stats.mse + distortion_weight * stats.distortion;
   stats.density_samples = n_density;
   return stats;
 }

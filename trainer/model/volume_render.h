@@ -39,8 +39,9 @@ namespace ecrf {
 namespace trainer {
 
 struct TrainStepStats {
-  double loss = 0.0;  // == mse (the caller adds its regulariser)
+  double loss = 0.0;  // mse + distortion_weight * distortion (the caller adds its other terms)
   double mse = 0.0;
+  double distortion = 0.0;  // mean DistortionLoss over the rays (0 unless it is weighted in)
   long rays = 0;
   long density_samples = 0;     // samples whose density was evaluated (inside aabb and mask)
   long appearance_samples = 0;  // samples sent through the appearance head (w > threshold)
@@ -55,8 +56,11 @@ struct TrainStepStats {
 // the reference uses unit directions). Accumulates gradients into the density / appearance grads
 // and the head's grads (does not zero them, does not step Adam). Jitter is drawn from rng_seed.
 // Threads with OpenMP; scratch buffers are kept in model.train_workspace across calls.
+// distortion_weight > 0 adds that times the mean over rays of DistortionLoss (positions in units
+// of the ray's sample cap, so a ray's samples span [0, 1] as in mip-NeRF 360's normalized
+// distance; contracted distance for unbounded scenes) to the loss and its gradient.
 TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, const float* dirs,
-                         const float* target_rgb, uint64_t rng_seed);
+                         const float* target_rgb, uint64_t rng_seed, float distortion_weight = 0.f);
 
 // The most tasks TrainStep's gradient scatter runs as: one per 32x32-vertex tile of every plane of
 // both grids (empty tiles are skipped).
@@ -97,6 +101,34 @@ void CompositeBackward(int n, const Real* alpha, const Real* trans, const Real* 
     dl_dalpha[i] = e[i] * trans[i] - suffix / f;
     suffix += e[i] * alpha[i] * trans[i];
   }
+}
+
+// The distortion loss of mip-NeRF 360 (Barron et al. 2022, eq. 15) for one ray, in O(n): samples
+// i with weights w[i] at positions m[i] (non-decreasing), each standing for an interval of length
+// delta around m[i]:
+//   L = sum_i sum_j w_i w_j |m_i - m_j| + (delta / 3) sum_i w_i^2.
+// It is small when the weight sits in one short stretch of the ray (a surface) and large when it
+// is spread along it (floaters, fog), which real captures with few views drift into. Writes
+// dL/dw_i to grad (may be null) and returns L.
+template <typename Real>
+Real DistortionLoss(int n, const Real* w, const Real* m, Real delta, Real* grad) {
+  Real w_total = 0, wm_total = 0;
+  for (int i = 0; i < n; ++i) {
+    w_total += w[i];
+    wm_total += w[i] * m[i];
+  }
+  Real loss = 0, w_before = 0, wm_before = 0;
+  for (int i = 0; i < n; ++i) {
+    const Real w_after = w_total - w_before - w[i];
+    const Real wm_after = wm_total - wm_before - w[i] * m[i];
+    // sum_j w_j |m_i - m_j|, split at i (the positions are sorted).
+    const Real spread = (m[i] * w_before - wm_before) + (wm_after - m[i] * w_after);
+    loss += w[i] * spread + delta / Real(3) * w[i] * w[i];
+    if (grad) grad[i] = Real(2) * spread + Real(2) * delta / Real(3) * w[i];
+    w_before += w[i];
+    wm_before += w[i] * m[i];
+  }
+  return loss;
 }
 
 }  // namespace trainer

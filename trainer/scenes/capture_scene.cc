@@ -20,8 +20,10 @@ using procedural::Vec3;
 
 constexpr double kDegree = kPi / 180.0;
 
-Camera CaptureCamera(Vec3 position, Vec3 target, double roll, double pitch, double yaw, int width,
-                     int height) {
+}  // namespace
+
+Camera CaptureCamera(const procedural::Vec3& position, const procedural::Vec3& target, double roll,
+                     double pitch, double yaw, int width, int height) {
   Camera camera;
   camera.width = width;
   camera.height = height;
@@ -34,6 +36,8 @@ Camera CaptureCamera(Vec3 position, Vec3 target, double roll, double pitch, doub
   procedural::LookAtPose(position, target, roll, pitch, yaw, camera.c2w);
   return camera;
 }
+
+namespace {
 
 // The whole loop, whatever the split, so that train and test frames come from one capture.
 std::vector<Camera> CapturePath(int frames, int width, int height, uint32_t seed) {

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "trainer/data/dataset.h"
+#include "trainer/scenes/procedural_math.h"
 
 namespace ecrf::trainer {
 
@@ -44,6 +45,11 @@ inline constexpr int kCaptureTestEvery = 8;
 // that would be empty.
 Dataset MakeCaptureScene(const std::string& split, int width, int height, int num_frames,
                          uint32_t seed);
+
+// A camera of the capture's phone (62 degree field of view, the principal point offset, the k1/k2
+// lens) at `position` looking at `target`, then turned by roll, pitch and yaw (radians).
+Camera CaptureCamera(const procedural::Vec3& position, const procedural::Vec3& target, double roll,
+                     double pitch, double yaw, int width, int height);
 
 // The colour the images show along a ray (unit `dir`): what a pixel of the scene is.
 void CaptureSceneRadiance(const float origin[3], const float dir[3], float rgb[3]);

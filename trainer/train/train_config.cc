@@ -37,6 +37,9 @@ void VisitSettings(TrainOptions& o, F&& f) {
   f("l1_weight_initial", o.l1_weight_initial);
   f("l1_weight_rest", o.l1_weight_rest);
   f("max_samples_per_ray", o.max_samples_per_ray);
+  f("distortion_weight", o.distortion_weight);
+  f("tv_weight_density", o.tv_weight_density);
+  f("tv_weight_app", o.tv_weight_app);
   f("fine_grid_at_rate_points", o.fine_grid_at_rate_points);
   f("density_rank", o.density_rank);
   f("appearance_rank", o.appearance_rank);

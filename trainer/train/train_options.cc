@@ -44,9 +44,10 @@ TrainOptions PresetOptions(const std::string& name) {
 }
 
 void SelectProceduralScene(const std::string& name, TrainOptions* o) {
-  if (name != "builtin" && name != "capture" && name != "forward") {
-    throw std::invalid_argument("--scene: unknown scene '" + name +
-                                "' (builtin, capture or forward; for files use --data DIR)");
+  if (name != "builtin" && name != "capture" && name != "capture-sparse" && name != "forward") {
+    throw std::invalid_argument(
+        "--scene: unknown scene '" + name +
+        "' (builtin, capture, capture-sparse or forward; for files use --data DIR)");
   }
   o->procedural_scene = name;
 }

@@ -27,9 +27,10 @@ struct TrainOptions {
   // below are what the run uses.
   std::string rate_point = "none";
   // Data.
-  std::string data_dir;          // NeRF Blender or Instant-NGP/nerfstudio layout
-  std::string procedural_scene;  // "builtin" (Blender-like), "capture" or "forward" instead of
-                                 // data_dir; "" = data_dir
+  std::string data_dir;  // NeRF Blender or Instant-NGP/nerfstudio layout
+  // "builtin" (Blender-like), "capture", "capture-sparse" or "forward" instead of data_dir;
+  // "" = data_dir.
+  std::string procedural_scene;
   // "auto" (from the camera layout, trainer/data/scene_fit.h), "object" or "unbounded".
   std::string scene_type = "auto";
   int downscale = 1;
@@ -53,6 +54,15 @@ struct TrainOptions {
   float l1_weight_initial = 8e-5f;
   float l1_weight_rest = 4e-5f;       // after the first alpha-mask update
   int max_samples_per_ray = 1000000;  // cap on TensoRF's n_samples (1e6 = no cap)
+  // Weight of mip-NeRF 360's distortion loss (trainer/model/volume_render.h DistortionLoss): it
+  // pulls each ray's weight into one short stretch, against floaters and fog between the views of
+  // sparse captures. 0: off (TensoRF).
+  float distortion_weight = 0.f;
+  // TensoRF's TV_weight_density / TV_weight_app (VmGrid::PlaneTotalVariation), decayed as the
+  // learning rates are (to lr_decay_ratio of it by the end) but never reset. TensoRF: 1.0 / 1.0 on
+  // LLFF, 0 on Blender scenes. 0: off.
+  float tv_weight_density = 0.f;
+  float tv_weight_app = 0.f;
   // Whether the low and medium rate points train a finer grid reached sooner (ApplyRatePoint).
   // Measured on `fast` only: on chair it gains 0.3-0.5 dB at equal size. `tiny` keeps its
   // schedule: on the built-in scene (1500 iterations) the finer grid lost 0.4 dB in the float

@@ -22,6 +22,7 @@
 #include "trainer/scenes/builtin_scene.h"
 #include "trainer/scenes/capture_scene.h"
 #include "trainer/scenes/forward_scene.h"
+#include "trainer/scenes/sparse_capture.h"
 #include "trainer/train/adam.h"
 #include "trainer/train/checkpoint.h"
 #include "trainer/train/component_prune.h"
@@ -82,6 +83,9 @@ void PrintProgress(int it, int iters, double loss, double psnr, const TensorfMod
 Dataset LoadTrainingViews(const TrainOptions& o, const std::string& split) {
   if (o.procedural_scene == "capture") {
     return MakeCaptureScene(split, o.capture_width, o.capture_height, o.capture_frames, o.seed);
+  }
+  if (o.procedural_scene == "capture-sparse") {
+    return MakeSparseCaptureScene(split, o.capture_width, o.capture_height, o.seed);
   }
   if (o.procedural_scene == "forward") {
     return MakeForwardScene(split, o.capture_width, o.capture_height, o.capture_frames, o.seed);
@@ -421,7 +425,8 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
       }
       qat.Apply(model);
     }
-    stats = TrainStep(*model, n, origins.data(), dirs.data(), rgb.data(), rng());
+    stats =
+        TrainStep(*model, n, origins.data(), dirs.data(), rgb.data(), rng(), o.distortion_weight);
     qat.Restore(model);  // the gradients of Q(G) go to G unchanged (straight-through)
     // One NaN reaches every parameter within a few steps, and Adam never washes it out: stop
     // before it is applied. The head's gradient is small and sees every ray.
@@ -429,6 +434,12 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
     if (!AllFinite(model->head().grads()))
       FailDiverged(it, "a gradient of the appearance MLP is not finite", ckpt_path);
     if (l1_weight > 0) model->DensityL1(l1_weight);
+    if (o.tv_weight_density > 0 || o.tv_weight_app > 0) {
+      const float decay = std::pow(o.lr_decay_ratio, float(it) / float(o.iters));
+      if (o.tv_weight_density > 0)
+        model->density().PlaneTotalVariation(o.tv_weight_density * decay);
+      if (o.tv_weight_app > 0) model->appearance().PlaneTotalVariation(o.tv_weight_app * decay);
+    }
     if (rate.active && use_rate) rate.Step(*model, live, rng());
     opt.Step(*model, o);
     opt.lr_scale *= lr_factor;

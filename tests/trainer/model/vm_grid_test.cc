@@ -324,6 +324,79 @@ TEST(VmGridTest, L1ValueAndGradient) {
   }
 }
 
+// TensoRF's TVLoss on the [1, C, H, W] plane, straight from its definition, times 1e-2 per plane.
+double ReferencePlaneTv(const VmGrid& g) {
+  double total = 0;
+  for (int m = 0; m < 3; ++m) {
+    const int W = g.res()[kMatMode[m][0]], H = g.res()[kMatMode[m][1]], C = g.ranks()[m];
+    auto at = [&](int y, int x, int c) {
+      return static_cast<double>(g.plane(m)[(static_cast<size_t>(y) * W + x) * C + c]);
+    };
+    double h_tv = 0, w_tv = 0;
+    for (int c = 0; c < C; ++c) {
+      for (int y = 0; y < H; ++y) {
+        for (int x = 0; x < W; ++x) {
+          if (y + 1 < H) h_tv += std::pow(at(y + 1, x, c) - at(y, x, c), 2);
+          if (x + 1 < W) w_tv += std::pow(at(y, x + 1, c) - at(y, x, c), 2);
+        }
+      }
+    }
+    const double count_h = double(C) * (H - 1) * W, count_w = double(C) * H * (W - 1);
+    total += 1e-2 * 2 * (h_tv / count_h + w_tv / count_w);
+  }
+  return total;
+}
+
+TEST(VmGridTest, PlaneTotalVariationValueAndGradient) {
+  VmGrid g = MakeGrid({4, 5, 3}, {2, 3, 2}, 21);
+  g.ZeroGrads();
+  const float weight = 3.f;
+  const double value = g.PlaneTotalVariation(weight);
+  EXPECT_GT(value, 1e-4);
+  EXPECT_NEAR(value, ReferencePlaneTv(g), 1e-7 * value);
+  const float eps = 1e-2f;  // the loss is quadratic: central differences are exact but rounding
+  int nonzero = 0;
+  for (size_t i = 0; i < g.params().size(); ++i) {
+    VmGrid tmp = g;
+    const float v = g.params()[i];
+    tmp.params()[i] = v + eps;
+    const double lp = ReferencePlaneTv(tmp);
+    tmp.params()[i] = v - eps;
+    const double lm = ReferencePlaneTv(tmp);
+    const double fd = weight * (lp - lm) / (2 * eps);
+    EXPECT_NEAR(g.grads()[i], fd, 1e-6 + 1e-4 * std::fabs(fd)) << i;
+    nonzero += g.grads()[i] != 0.f;
+  }
+  // Every plane entry has a neighbour; the lines are not regularised.
+  size_t plane_entries = 0;
+  for (int m = 0; m < 3; ++m) plane_entries += g.plane_size(m);
+  EXPECT_EQ(nonzero, static_cast<int>(plane_entries));
+  for (int m = 0; m < 3; ++m) {
+    for (size_t k = 0; k < g.line_size(m); ++k) EXPECT_EQ(g.line_grad(m)[k], 0.f);
+  }
+  // A constant plane has no variation.
+  VmGrid flat = g;
+  for (float& v : flat.params()) v = 0.25f;
+  flat.ZeroGrads();
+  EXPECT_EQ(flat.PlaneTotalVariation(1.f), 0.0);
+  for (float v : flat.grads()) EXPECT_EQ(v, 0.f);
+}
+
+TEST(VmGridTest, PlaneTotalVariationSameForAnyThreadCount) {
+  VmGrid a = MakeGrid({90, 80, 70}, {4, 4, 4}, 5);  // planes above the parallel threshold
+  VmGrid b = a;
+  a.ZeroGrads();
+  b.ZeroGrads();
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const double va = a.PlaneTotalVariation(0.7f);
+  omp_set_num_threads(3);
+  const double vb = b.PlaneTotalVariation(0.7f);
+  omp_set_num_threads(threads);
+  EXPECT_NEAR(va, vb, 1e-12 * va);
+  EXPECT_EQ(a.grads(), b.grads());
+}
+
 }  // namespace
 }  // namespace trainer
 }  // namespace ecrf

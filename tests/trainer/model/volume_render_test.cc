@@ -165,6 +165,7 @@ struct FdSetup {
   TensorfModel model;
   std::vector<float> o, d, target;
   int n;
+  float distortion_weight = 0.f;
 };
 
 FdSetup MakeFdSetup() {
@@ -173,7 +174,7 @@ FdSetup MakeFdSetup() {
   c.distance_scale = 1.f;
   c.init_scale = 0.4f;
   c.weight_threshold = 0.f;  // no colour-sample switching under perturbation
-  FdSetup s{TensorfModel(c), {}, {}, {}, 8};
+  FdSetup s{TensorfModel(c), {}, {}, {}, 8, 0.f};
   s.model.Initialize({6, 6, 6}, 12);
   testing_models::RaysFromSphere(s.n, 3, &s.o, &s.d);
   std::mt19937 rng(4);
@@ -185,7 +186,8 @@ FdSetup MakeFdSetup() {
 
 double Loss(const FdSetup& s, const TensorfModel& m) {
   TensorfModel copy = m;
-  return TrainStep(copy, s.n, s.o.data(), s.d.data(), s.target.data(), 99).loss;
+  return TrainStep(copy, s.n, s.o.data(), s.d.data(), s.target.data(), 99, s.distortion_weight)
+      .loss;
 }
 
 void CheckFd(FdSetup& s, std::vector<float>& params, const std::vector<float>& grads,
@@ -248,6 +250,87 @@ TEST(VolumeRenderTest, TrainStepGradientsMatchFiniteDifferences) {
     const double fd = (lp - lm) / (2 * h);
     EXPECT_NEAR(gv, fd, 1e-6 + 2e-2 * std::fabs(fd)) << "head direction " << dir;
   }
+}
+
+TEST(VolumeRenderTest, DistortionLossMatchesPairSumAndFiniteDifferences) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const int n = 17;
+  std::vector<double> w(n), m(n);
+  double pos = 0.1;
+  for (int i = 0; i < n; ++i) {
+    w[i] = u(rng) * 0.3;
+    pos += 0.02 + 0.1 * u(rng);
+    m[i] = pos;
+  }
+  m[5] = m[4];  // two samples at one position
+  w[9] = 0.0;
+  const double delta = 0.05;
+  auto pair_sum = [&](const std::vector<double>& ww) {
+    double l = 0;
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < n; ++j) l += ww[i] * ww[j] * std::fabs(m[i] - m[j]);
+      l += delta / 3 * ww[i] * ww[i];
+    }
+    return l;
+  };
+  std::vector<double> grad(n);
+  const double loss = DistortionLoss(n, w.data(), m.data(), delta, grad.data());
+  EXPECT_NEAR(loss, pair_sum(w), 1e-12);
+  for (int i = 0; i < n; ++i) {
+    std::vector<double> ww = w;
+    const double eps = 1e-6;
+    ww[i] = w[i] + eps;
+    const double lp = pair_sum(ww);
+    ww[i] = w[i] - eps;
+    const double lm = pair_sum(ww);
+    EXPECT_NEAR(grad[i], (lp - lm) / (2 * eps), 1e-7) << "weight " << i;
+  }
+  // The same total weight in one interval costs less than spread along the ray.
+  std::vector<double> one(n, 0.0), spread(n, 0.6 / n);
+  one[8] = 0.6;
+  EXPECT_LT(DistortionLoss(n, one.data(), m.data(), delta, static_cast<double*>(nullptr)),
+            0.2 * DistortionLoss(n, spread.data(), m.data(), delta, static_cast<double*>(nullptr)));
+}
+
+TEST(VolumeRenderTest, TrainStepDistortionLossIsTheTracedRaysLoss) {
+  FdSetup s = MakeFdSetup();
+  s.model.ZeroGrads();
+  const float weight = 0.3f;
+  const TrainStepStats st =
+      TrainStep(s.model, s.n, s.o.data(), s.d.data(), s.target.data(), 99, weight);
+  // Positions in units of the ray's sample cap: t / (step * n_samples) differs from them by a
+  // constant per ray, which the loss does not see.
+  const double unit = 1.0 / (static_cast<double>(s.model.step_size()) * s.model.n_samples());
+  double sum = 0;
+  for (int r = 0; r < s.n; ++r) {
+    const std::vector<RaySampleInfo> samples =
+        TraceRay(s.model, &s.o[3 * r], &s.d[3 * r], RayJitter(99, r));
+    std::vector<double> w, m;
+    for (const RaySampleInfo& x : samples) {
+      w.push_back(x.weight);
+      m.push_back(x.t * unit);
+    }
+    sum += DistortionLoss(static_cast<int>(w.size()), w.data(), m.data(), 1.0 / s.model.n_samples(),
+                          static_cast<double*>(nullptr));
+  }
+  EXPECT_GT(st.distortion, 1e-4);
+  EXPECT_NEAR(st.distortion, sum / s.n, 1e-4 * st.distortion);
+  EXPECT_NEAR(st.loss, st.mse + weight * st.distortion, 1e-9);
+}
+
+TEST(VolumeRenderTest, TrainStepDistortionGradientsMatchFiniteDifferences) {
+  FdSetup s = MakeFdSetup();
+  s.distortion_weight = 0.5f;
+  s.model.ZeroGrads();
+  const TrainStepStats st =
+      TrainStep(s.model, s.n, s.o.data(), s.d.data(), s.target.data(), 99, s.distortion_weight);
+  // The term must weigh: at least a tenth of the loss.
+  EXPECT_GT(s.distortion_weight * st.distortion, 0.1 * st.loss);
+  std::vector<size_t> all_d;
+  for (size_t i = 0; i < s.model.density().params().size(); i += 2) all_d.push_back(i);
+  std::vector<float> dgrad = s.model.density().grads();
+  CheckFd(s, s.model.density().params(), dgrad, all_d, 1e-2f, "density");
 }
 
 TEST(VolumeRenderTest, TrainStepSameGradientsForAnyThreadCount) {
