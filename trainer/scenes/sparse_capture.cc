@@ -50,7 +50,8 @@ void SparseCaptureGain(int frame, uint32_t seed, float gain[3]) {
   }
   Random random((uint64_t{seed} << 32) ^ (0xe8f05u + static_cast<uint64_t>(frame) * 7919u));
   const double exposure = std::exp2(kExposureStops * random.Signed());
-  for (int c = 0; c < 3; ++c) gain[c] = static_cast<float>(exposure * (1 + kTint * random.Signed()));
+  for (int c = 0; c < 3; ++c)
+    gain[c] = static_cast<float>(exposure * (1 + kTint * random.Signed()));
 }
 
 Dataset MakeSparseCaptureScene(const std::string& split, int width, int height, uint32_t seed) {

@@ -82,7 +82,8 @@ TEST(SparseCapture, CoverageIsUneven) {
   const Dataset test = MakeSparseCaptureScene("test", 16, 12, 11);
   std::vector<double> azimuth;
   for (const Dataset* d : {&train, &test}) {
-    for (const View& v : d->views) azimuth.push_back(std::atan2(v.camera.c2w[1][3], v.camera.c2w[0][3]));
+    for (const View& v : d->views)
+      azimuth.push_back(std::atan2(v.camera.c2w[1][3], v.camera.c2w[0][3]));
   }
   std::sort(azimuth.begin(), azimuth.end());
   std::vector<double> gaps;
