@@ -195,6 +195,13 @@ void AddTrainFlags(CLI::App* app, TrainFlags* f) {
       ->check(CLI::Range(0.0, 1000.0))
       ->capture_default_str()
       ->group(schedule);
+  app->add_option("--exposure-codes", o.exposure_codes,
+                  "learn a gain per training image and channel (auto exposure, white balance), "
+                  "left out of the file; auto: on for unbounded and forward-facing scenes")
+      ->type_name("auto|on|off")
+      ->check(CLI::IsMember({"auto", "on", "off"}))
+      ->capture_default_str()
+      ->group(schedule);
   app->add_option("--tv-app", o.tv_weight_app,
                   "weight of total variation on the appearance planes (TensoRF's TV_weight_app)")
       ->type_name("W")

@@ -32,11 +32,14 @@ void RaySet::Sample(int n, std::mt19937_64& rng, float* origins, float* dirs, fl
   }
 }
 
+uint32_t RaySet::ViewOf(uint32_t index) const {
+  return uint32_t(std::upper_bound(view_offset_.begin(), view_offset_.end(), uint64_t(index)) -
+                  view_offset_.begin()) -
+         1;
+}
+
 void RaySet::Ray(uint32_t index, float origin[3], float dir[3], float rgb[3]) const {
-  const size_t v =
-      size_t(std::upper_bound(view_offset_.begin(), view_offset_.end(), uint64_t(index)) -
-             view_offset_.begin()) -
-      1;
+  const size_t v = ViewOf(index);
   const View& view = views_[v];
   const uint32_t pixel = uint32_t(index - view_offset_[v]);
   const int x = int(pixel % uint32_t(view.rgb.width));
@@ -98,11 +101,14 @@ void RaySet::Shuffle(std::mt19937_64& rng) {
   cursor_ = 0;
 }
 
-void RaySet::NextBatch(int n, std::mt19937_64& rng, float* origins, float* dirs, float* rgb) {
+void RaySet::NextBatch(int n, std::mt19937_64& rng, float* origins, float* dirs, float* rgb,
+                       uint32_t* views_or_null) {
   if (active_.empty()) throw std::runtime_error("no training rays left (all were filtered out)");
   for (int i = 0; i < n; ++i) {
     if (order_.empty() || cursor_ >= order_.size()) Shuffle(rng);
-    Ray(order_[cursor_++], origins + 3 * i, dirs + 3 * i, rgb + 3 * i);
+    const uint32_t index = order_[cursor_++];
+    Ray(index, origins + 3 * i, dirs + 3 * i, rgb + 3 * i);
+    if (views_or_null) views_or_null[i] = ViewOf(index);
   }
 }
 

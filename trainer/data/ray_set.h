@@ -32,14 +32,18 @@ class RaySet {
                      size_t min_keep = 1);
 
   // The next n rays of a shuffled order (TensoRF's SimpleSampler: consecutive slices of a random
-  // permutation, reshuffled when exhausted). Outputs are n x 3 each.
-  void NextBatch(int n, std::mt19937_64& rng, float* origins, float* dirs, float* rgb);
+  // permutation, reshuffled when exhausted). Outputs are n x 3 each; views_or_null gets each
+  // ray's view index (for per-image codes).
+  void NextBatch(int n, std::mt19937_64& rng, float* origins, float* dirs, float* rgb,
+                 uint32_t* views_or_null = nullptr);
 
   // n kept rays drawn uniformly with replacement, without moving NextBatch's position (a probe of
   // the training rays that leaves the training sequence as it was).
   void Sample(int n, std::mt19937_64& rng, float* origins, float* dirs, float* rgb) const;
 
   void Ray(uint32_t index, float origin[3], float dir[3], float rgb[3]) const;
+  // The view a ray index belongs to.
+  uint32_t ViewOf(uint32_t index) const;
 
   // For --resume: the sampler position is part of the training state.
   size_t cursor() const { return cursor_; }

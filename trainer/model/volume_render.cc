@@ -477,7 +477,8 @@ int ScatterTaskCount(const TensorfModel& model) {
 }
 
 TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, const float* dirs,
-                         const float* target_rgb, uint64_t rng_seed, float distortion_weight) {
+                         const float* target_rgb, uint64_t rng_seed, float distortion_weight,
+                         const float* ray_gain, float* dl_dgain) {
   TrainStepStats stats;
   stats.rays = n_rays;
   if (n_rays <= 0) return stats;
@@ -567,11 +568,15 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
       float g[3];
       for (int ch = 0; ch < 3; ++ch) {
         if (white) c[ch] += 1.f - acc;
-        const bool in_range = c[ch] >= 0.f && c[ch] <= 1.f;
-        const float cc = std::min(std::max(c[ch], 0.f), 1.f);
+        const float gain = ray_gain ? ray_gain[3 * r + ch] : 1.f;
+        const float pixel = ray_gain ? gain * c[ch] : c[ch];
+        const bool in_range = pixel >= 0.f && pixel <= 1.f;
+        const float cc = std::min(std::max(pixel, 0.f), 1.f);
         const float diff = cc - target_rgb[3 * r + ch];
         sse += static_cast<double>(diff) * diff;
-        g[ch] = in_range ? grad_scale * diff : 0.f;
+        const float g_pixel = in_range ? grad_scale * diff : 0.f;
+        if (dl_dgain) dl_dgain[3 * r + ch] = g_pixel * c[ch];
+        g[ch] = ray_gain ? g_pixel * gain : g_pixel;
       }
       const float bg_dot = white ? g[0] + g[1] + g[2] : 0.f;
       float suffix = 0.f;

@@ -59,8 +59,12 @@ struct TrainStepStats {
 // distortion_weight > 0 adds that times the mean over rays of DistortionLoss (positions in units
 // of the ray's sample cap, so a ray's samples span [0, 1] as in mip-NeRF 360's normalized
 // distance; contracted distance for unbounded scenes) to the loss and its gradient.
+// ray_gain (n_rays x 3, may be null: all 1) scales each ray's pixel, background included, before
+// the clamp and the loss (per-image exposure codes, trainer/train/exposure_codes.h); dl_dgain
+// (n_rays x 3, may be null) receives the loss's gradient with respect to those gains.
 TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, const float* dirs,
-                         const float* target_rgb, uint64_t rng_seed, float distortion_weight = 0.f);
+                         const float* target_rgb, uint64_t rng_seed, float distortion_weight = 0.f,
+                         const float* ray_gain = nullptr, float* dl_dgain = nullptr);
 
 // The most tasks TrainStep's gradient scatter runs as: one per 32x32-vertex tile of every plane of
 // both grids (empty tiles are skipped).

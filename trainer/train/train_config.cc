@@ -40,6 +40,7 @@ void VisitSettings(TrainOptions& o, F&& f) {
   f("distortion_weight", o.distortion_weight);
   f("tv_weight_density", o.tv_weight_density);
   f("tv_weight_app", o.tv_weight_app);
+  f("exposure_codes", o.exposure_codes);
   f("fine_grid_at_rate_points", o.fine_grid_at_rate_points);
   f("density_rank", o.density_rank);
   f("appearance_rank", o.appearance_rank);

@@ -63,6 +63,10 @@ struct TrainOptions {
   // LLFF, 0 on Blender scenes. 0: off.
   float tv_weight_density = 0.f;
   float tv_weight_app = 0.f;
+  // Per-image exposure codes (trainer/train/exposure_codes.h): "on", "off", or "auto" (on for
+  // unbounded and forward-facing scenes, which come from cameras with auto exposure; off for
+  // objects, whose renders share one exposure).
+  std::string exposure_codes = "auto";
   // Whether the low and medium rate points train a finer grid reached sooner (ApplyRatePoint).
   // Measured on `fast` only: on chair it gains 0.3-0.5 dB at equal size. `tiny` keeps its
   // schedule: on the built-in scene (1500 iterations) the finer grid lost 0.4 dB in the float

@@ -71,6 +71,11 @@ Checkpoint SaveTrainState(const Optimizers& opt, const RateState& rate, const Ra
   ck.arrays.push_back(std::move(keep));
   j["rays_shuffle_rng"] = shuffle_rng;
   j["rays_cursor"] = cursor;
+  if (progress.exposure.enabled()) {
+    const std::vector<float>& g = progress.exposure.log_gain();
+    ck.arrays.push_back({"exposure.log_gain", {int64_t(g.size() / 3), 3}, g});
+    SaveAdam("exposure", progress.exposure.adam(), &ck, &j);
+  }
   ck.json = j.dump();
   return ck;
 }
@@ -98,6 +103,17 @@ bool LoadTrainState(const Checkpoint& ck, const std::string& path, Optimizers* o
     rng >> progress->rng;
     if (rng.fail())
       throw std::runtime_error(path + ": training state: damaged random generator state");
+    if (progress->exposure.enabled()) {
+      // The codes were reset to the training views before the state is loaded.
+      const CheckpointArray* g = ck.Find("exposure.log_gain");
+      if (!g || g->data.size() != progress->exposure.log_gain().size()) {
+        throw std::runtime_error(path +
+                                 ": training state: the exposure codes are missing or for other "
+                                 "views (was the checkpoint written with --exposure-codes off?)");
+      }
+      progress->exposure.log_gain() = g->data;
+      LoadAdam("exposure", ck, j, path, g->data.size(), &progress->exposure.adam());
+    }
     const CheckpointArray* keep = ck.Find("rays.keep16");
     if (!keep) throw std::runtime_error(path + ": training state: the kept-ray set is missing");
     try {

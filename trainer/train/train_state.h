@@ -14,6 +14,7 @@
 #include "trainer/model/tensorf_model.h"
 #include "trainer/train/adam.h"
 #include "trainer/train/checkpoint.h"
+#include "trainer/train/exposure_codes.h"
 #include "trainer/train/rate_state.h"
 #include "trainer/train/train_options.h"
 
@@ -33,6 +34,7 @@ struct TrainProgress {
   float l1_weight = 0.f;
   double train_seconds = 0.0;  // training time before this process, evaluation excluded
   std::vector<std::pair<double, double>> psnr_curve;  // (training minutes, test PSNR)
+  ExposureCodes exposure;                             // per-image exposure codes (off: no views)
 };
 
 // The state as checkpoint arrays plus a JSON object (Checkpoint::json), for SaveModelCheckpoint.

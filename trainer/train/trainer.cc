@@ -333,6 +333,12 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   Optimizers opt;
   opt.Reset(*model);
   TrainProgress progress;
+  if (o.exposure_codes != "auto" && o.exposure_codes != "on" && o.exposure_codes != "off")
+    throw std::invalid_argument("exposure_codes: '" + o.exposure_codes +
+                                "' is none of auto, on, off");
+  const bool exposure_on = o.exposure_codes == "on" ||
+                           (o.exposure_codes == "auto" && (model->unbounded() || model->forward()));
+  progress.exposure.Reset(exposure_on ? static_cast<int>(train.views.size()) : 0);
   progress.rng.seed(o.seed);
   progress.l1_weight = o.l1_weight_initial;
   const float lr_factor = std::pow(o.lr_decay_ratio, 1.0f / float(o.iters));
@@ -370,6 +376,8 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   result.psnr_curve = progress.psnr_curve;
   const int n = o.batch_rays;
   std::vector<float> origins(size_t(n) * 3), dirs(size_t(n) * 3), rgb(size_t(n) * 3);
+  std::vector<uint32_t> ray_views(exposure_on ? size_t(n) : 0);
+  std::vector<float> ray_gain(ray_views.size() * 3), dl_dgain(ray_gain.size());
   double mse_sum = 0.0;
   int mse_count = 0;
   auto interval_start = Clock::now();
@@ -387,7 +395,9 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   };
 
   for (int it = first_iter; it < o.iters; ++it) {
-    rays.NextBatch(n, rng, origins.data(), dirs.data(), rgb.data());
+    rays.NextBatch(n, rng, origins.data(), dirs.data(), rgb.data(),
+                   exposure_on ? ray_views.data() : nullptr);
+    if (exposure_on) progress.exposure.Gains(n, ray_views.data(), ray_gain.data());
     model->ZeroGrads();
     if (use_rate && it >= rate_start && !controller && o.target_bytes > 0) {
       const size_t float_bytes =
@@ -426,7 +436,8 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
       qat.Apply(model);
     }
     stats =
-        TrainStep(*model, n, origins.data(), dirs.data(), rgb.data(), rng(), o.distortion_weight);
+        TrainStep(*model, n, origins.data(), dirs.data(), rgb.data(), rng(), o.distortion_weight,
+                  exposure_on ? ray_gain.data() : nullptr, exposure_on ? dl_dgain.data() : nullptr);
     qat.Restore(model);  // the gradients of Q(G) go to G unchanged (straight-through)
     // One NaN reaches every parameter within a few steps, and Adam never washes it out: stop
     // before it is applied. The head's gradient is small and sees every ray.
@@ -442,6 +453,10 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
     }
     if (rate.active && use_rate) rate.Step(*model, live, rng());
     opt.Step(*model, o);
+    if (exposure_on) {
+      progress.exposure.Step(n, ray_views.data(), ray_gain.data(), dl_dgain.data(),
+                             o.lr_network * opt.lr_scale);
+    }
     opt.lr_scale *= lr_factor;
     mse_sum += stats.mse;
     ++mse_count;
@@ -522,6 +537,14 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
     }
   }
   if (isatty(2)) std::fprintf(stderr, "\n");
+  if (exposure_on) {
+    const std::vector<float>& g = progress.exposure.log_gain();
+    const auto [lo, hi] = std::minmax_element(g.begin(), g.end());
+    std::fprintf(stderr,
+                 "exposure codes: the %d training images' gains span %.3f-%.3f of the neutral "
+                 "exposure the file renders\n",
+                 progress.exposure.views(), std::exp(*lo), std::exp(*hi));
+  }
   result.iterations = o.iters;
   result.final_lambda_e = live.lambda_e;
   result.train_seconds = train_seconds();

@@ -166,6 +166,7 @@ struct FdSetup {
   std::vector<float> o, d, target;
   int n;
   float distortion_weight = 0.f;
+  std::vector<float> gain;  // per-ray exposure gains (empty: none)
 };
 
 FdSetup MakeFdSetup() {
@@ -186,7 +187,8 @@ FdSetup MakeFdSetup() {
 
 double Loss(const FdSetup& s, const TensorfModel& m) {
   TensorfModel copy = m;
-  return TrainStep(copy, s.n, s.o.data(), s.d.data(), s.target.data(), 99, s.distortion_weight)
+  return TrainStep(copy, s.n, s.o.data(), s.d.data(), s.target.data(), 99, s.distortion_weight,
+                   s.gain.empty() ? nullptr : s.gain.data())
       .loss;
 }
 
@@ -331,6 +333,43 @@ TEST(VolumeRenderTest, TrainStepDistortionGradientsMatchFiniteDifferences) {
   for (size_t i = 0; i < s.model.density().params().size(); i += 2) all_d.push_back(i);
   std::vector<float> dgrad = s.model.density().grads();
   CheckFd(s, s.model.density().params(), dgrad, all_d, 1e-2f, "density");
+}
+
+// Per-ray exposure gains (trainer/train/exposure_codes.h): the gradient with respect to each gain
+// and the grids' gradients through the gains, against finite differences of the loss.
+TEST(VolumeRenderTest, TrainStepExposureGainGradientsMatchFiniteDifferences) {
+  FdSetup s = MakeFdSetup();
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<float> u(0.7f, 1.4f);
+  s.gain.resize(3 * s.n);
+  for (auto& g : s.gain) g = u(rng);
+  std::vector<float> dl_dgain(3 * s.n, -1.f);
+  s.model.ZeroGrads();
+  const TrainStepStats st = TrainStep(s.model, s.n, s.o.data(), s.d.data(), s.target.data(), 99,
+                                      0.f, s.gain.data(), dl_dgain.data());
+  EXPECT_GT(st.loss, 1e-3);
+  // The gains change the loss: without them it differs.
+  TensorfModel plain = s.model;
+  EXPECT_NE(TrainStep(plain, s.n, s.o.data(), s.d.data(), s.target.data(), 99).loss, st.loss);
+  int moved = 0;
+  for (size_t i = 0; i < s.gain.size(); ++i) {
+    const float g0 = s.gain[i], h = 1e-2f;
+    s.gain[i] = g0 + h;
+    const double lp = Loss(s, s.model);
+    s.gain[i] = g0 - h;
+    const double lm = Loss(s, s.model);
+    s.gain[i] = g0;
+    const double fd = (lp - lm) / (2 * h);
+    EXPECT_NEAR(dl_dgain[i], fd, 2e-6 + 2e-2 * std::fabs(fd)) << "gain " << i;
+    moved += fd != 0.0;
+  }
+  EXPECT_GT(moved, 3 * s.n / 2);
+  std::vector<size_t> some_d, some_a;
+  for (size_t i = 0; i < s.model.density().params().size(); i += 3) some_d.push_back(i);
+  for (size_t i = 1; i < s.model.appearance().params().size(); i += 3) some_a.push_back(i);
+  std::vector<float> dgrad = s.model.density().grads(), agrad = s.model.appearance().grads();
+  CheckFd(s, s.model.density().params(), dgrad, some_d, 1e-2f, "density");
+  CheckFd(s, s.model.appearance().params(), agrad, some_a, 1e-2f, "appearance");
 }
 
 TEST(VolumeRenderTest, TrainStepSameGradientsForAnyThreadCount) {

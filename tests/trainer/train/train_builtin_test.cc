@@ -243,6 +243,7 @@ TEST(TrainBuiltin, ResumedRunEqualsTheUninterruptedOneBitForBit) {
   o.prune_at = {0.3f};  // at 162: the resume from 120 prunes, the one from 180 loads a pruned model
   o.prune_rays = 256;
   o.mlp_hidden = 32;
+  o.exposure_codes = "on";  // their values and optimizer are part of the state too
   const Dataset train = LoadTrainingViews(o, "train");
   const Dataset test = LoadTrainingViews(o, "test");
   char tmpl[] = "/tmp/ecrf_resume_XXXXXX";
