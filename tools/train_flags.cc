@@ -190,10 +190,10 @@ void AddTrainFlags(CLI::App* app, TrainFlags* f) {
       ->group(schedule);
   app->add_option("--tv-density", o.tv_weight_density,
                   "weight of total variation on the density planes (TensoRF's TV_weight_density; "
-                  "1 on LLFF scenes; 0: off)")
+                  "0: off; auto: 1 for unbounded scenes, 0 for the others)")
       ->type_name("W")
       ->check(CLI::Range(0.0, 1000.0))
-      ->capture_default_str()
+      ->default_str("auto")
       ->group(schedule);
   app->add_option("--exposure-codes", o.exposure_codes,
                   "learn a gain per training image and channel (auto exposure, white balance), "
@@ -202,11 +202,19 @@ void AddTrainFlags(CLI::App* app, TrainFlags* f) {
       ->check(CLI::IsMember({"auto", "on", "off"}))
       ->capture_default_str()
       ->group(schedule);
+  app->add_option("--weight-threshold", o.weight_threshold,
+                  "colour (run the MLP on) only samples of larger weight, in training and in the "
+                  "file; auto: 0.003 for unbounded scenes, 1e-4 (TensoRF) for the others")
+      ->type_name("W")
+      ->check(CLI::Range(0.0, 0.5))
+      ->default_str("auto")
+      ->group(schedule);
   app->add_option("--tv-app", o.tv_weight_app,
-                  "weight of total variation on the appearance planes (TensoRF's TV_weight_app)")
+                  "weight of total variation on the appearance planes (TensoRF's TV_weight_app; "
+                  "auto as --tv-density)")
       ->type_name("W")
       ->check(CLI::Range(0.0, 1000.0))
-      ->capture_default_str()
+      ->default_str("auto")
       ->group(schedule);
   app->add_option("--mask-at", f->mask_at, "iterations of the alpha-mask updates and box shrink")
       ->type_name("I,J,...")

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <stdexcept>
@@ -245,6 +246,18 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
                                                    {"coefficients", r.rate.coeffs[t]}};
   }
   m["estimated_bits_per_tensor"] = per_tensor;
+  if (!r.exposure_log_gain.empty() && r.exposure_log_gain.size() == 3 * train.views.size()) {
+    // What the exposure codes learnt: each training image's gain against the file's exposure.
+    nlohmann::json gains = nlohmann::json::array();
+    for (size_t v = 0; v < train.views.size(); ++v) {
+      gains.push_back(
+          {{"view", train.views[v].name},
+           {"gain",
+            {std::exp(r.exposure_log_gain[3 * v]), std::exp(r.exposure_log_gain[3 * v + 1]),
+             std::exp(r.exposure_log_gain[3 * v + 2])}}});
+    }
+    m["exposure_gains"] = gains;
+  }
   if (!r.psnr_curve.empty()) {
     nlohmann::json curve = nlohmann::json::array();
     for (const auto& p : r.psnr_curve)

@@ -20,6 +20,12 @@ namespace trainer {
 // compression figure of ecrf is measured on).
 constexpr int kDefaultScoredTestViews = 20;
 
+// The auto weight threshold of unbounded scenes (TrainOptions::weight_threshold; measured in
+// docs/real-captures.md).
+inline constexpr float kUnboundedWeightThreshold = 3e-3f;
+// The auto plane total variation of unbounded scenes (TrainOptions::tv_weight_density/app).
+inline constexpr float kUnboundedTvWeight = 1.f;
+
 struct TrainOptions {
   std::string preset = "fast";
   // The rate point the settings started from ("none": plain TensoRF, lambda_e 0; "low",
@@ -60,13 +66,18 @@ struct TrainOptions {
   float distortion_weight = 0.f;
   // TensoRF's TV_weight_density / TV_weight_app (VmGrid::PlaneTotalVariation), decayed as the
   // learning rates are (to lr_decay_ratio of it by the end) but never reset. TensoRF: 1.0 / 1.0 on
-  // LLFF, 0 on Blender scenes. 0: off.
-  float tv_weight_density = 0.f;
-  float tv_weight_app = 0.f;
+  // LLFF, 0 on Blender scenes. 0: off; < 0: auto, kUnboundedTvWeight for unbounded scenes (where
+  // it gave the best held-out views in a smaller file, docs/real-captures.md), 0 for the others.
+  float tv_weight_density = -1.f;
+  float tv_weight_app = -1.f;
   // Per-image exposure codes (trainer/train/exposure_codes.h): "on", "off", or "auto" (on for
   // unbounded and forward-facing scenes, which come from cameras with auto exposure; off for
   // objects, whose renders share one exposure).
   std::string exposure_codes = "auto";
+  // The weight above which a sample is coloured by the MLP, in training and in the file's header
+  // (SPEC 7.5). < 0: auto, kUnboundedWeightThreshold for unbounded scenes (whose hazy background
+  // otherwise sends ~100 samples a ray through the MLP), TensoRF's 1e-4 for the others.
+  float weight_threshold = -1.f;
   // Whether the low and medium rate points train a finer grid reached sooner (ApplyRatePoint).
   // Measured on `fast` only: on chair it gains 0.3-0.5 dB at equal size. `tiny` keeps its
   // schedule: on the built-in scene (1500 iterations) the finer grid lost 0.4 dB in the float

@@ -126,6 +126,11 @@ TensorfConfig ConfigFor(const TrainOptions& o, const Dataset& data, const SceneF
     c.near = 0.f;      // rays start on the near plane (NDC z = -1)
     c.far = 10.f;  // past the far side of any NDC box of cameras narrower than about 160 degrees
   }
+  if (o.weight_threshold >= 0.f) {
+    c.weight_threshold = o.weight_threshold;
+  } else if (fit.model == SceneModel::kUnbounded) {
+    c.weight_threshold = kUnboundedWeightThreshold;
+  }
   if (fit.model == SceneModel::kUnbounded) {
     c.roi = fit.roi;
     for (int a = 0; a < 3; ++a) {
@@ -339,6 +344,12 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   const bool exposure_on = o.exposure_codes == "on" ||
                            (o.exposure_codes == "auto" && (model->unbounded() || model->forward()));
   progress.exposure.Reset(exposure_on ? static_cast<int>(train.views.size()) : 0);
+  const float tv_density = o.tv_weight_density >= 0.f ? o.tv_weight_density
+                           : model->unbounded()       ? kUnboundedTvWeight
+                                                      : 0.f;
+  const float tv_app = o.tv_weight_app >= 0.f ? o.tv_weight_app
+                       : model->unbounded()   ? kUnboundedTvWeight
+                                              : 0.f;
   progress.rng.seed(o.seed);
   progress.l1_weight = o.l1_weight_initial;
   const float lr_factor = std::pow(o.lr_decay_ratio, 1.0f / float(o.iters));
@@ -445,11 +456,10 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
     if (!AllFinite(model->head().grads()))
       FailDiverged(it, "a gradient of the appearance MLP is not finite", ckpt_path);
     if (l1_weight > 0) model->DensityL1(l1_weight);
-    if (o.tv_weight_density > 0 || o.tv_weight_app > 0) {
+    if (tv_density > 0 || tv_app > 0) {
       const float decay = std::pow(o.lr_decay_ratio, float(it) / float(o.iters));
-      if (o.tv_weight_density > 0)
-        model->density().PlaneTotalVariation(o.tv_weight_density * decay);
-      if (o.tv_weight_app > 0) model->appearance().PlaneTotalVariation(o.tv_weight_app * decay);
+      if (tv_density > 0) model->density().PlaneTotalVariation(tv_density * decay);
+      if (tv_app > 0) model->appearance().PlaneTotalVariation(tv_app * decay);
     }
     if (rate.active && use_rate) rate.Step(*model, live, rng());
     opt.Step(*model, o);
@@ -544,6 +554,7 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
                  "exposure codes: the %d training images' gains span %.3f-%.3f of the neutral "
                  "exposure the file renders\n",
                  progress.exposure.views(), std::exp(*lo), std::exp(*hi));
+    result.exposure_log_gain = g;
   }
   result.iterations = o.iters;
   result.final_lambda_e = live.lambda_e;

@@ -40,6 +40,8 @@ struct TrainResult {
   std::vector<std::pair<double, double>> psnr_curve;  // (minutes, test PSNR) when --eval-every
   RateReport rate;             // bits per tensor of the rounded coefficients (when lambda_e > 0)
   float final_lambda_e = 0.f;  // options.lambda_e, or where rate control left it
+  // Per training view and channel, the learnt exposure codes' log gains (empty when off).
+  std::vector<float> exposure_log_gain;
 };
 
 // How a trained run is encoded: its block shapes and frozen steps, coefficient depth and MLP

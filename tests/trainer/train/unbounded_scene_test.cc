@@ -99,6 +99,27 @@ TEST(SceneFit, CaptureIsUnboundedWithASmallBoxAroundTheStillLife) {
               fit.roi.max[2], 100 * fit.roi_share);
 }
 
+// The auto weight threshold: unbounded scenes colour only samples above
+// kUnboundedWeightThreshold (their hazy background sent ~100 samples a ray through the MLP), object
+// scenes keep TensoRF's 1e-4, and an explicit --weight-threshold wins; the encoder writes it.
+TEST(SceneFit, AutoWeightThresholdIsCoarserForUnboundedScenesOnly) {
+  TrainOptions o = PresetOptions("tiny");
+  const Dataset capture = MakeCaptureScene("train", 48, 36, 32, 7);
+  const Dataset object = MakeBuiltinScene("train", 32, 32, 8, 7);
+  ASSERT_EQ(FitScene("auto", capture).model, SceneModel::kUnbounded);
+  ASSERT_EQ(FitScene("auto", object).model, SceneModel::kObject);
+  EXPECT_EQ(ConfigFor(o, capture).weight_threshold, kUnboundedWeightThreshold);
+  EXPECT_EQ(ConfigFor(o, object).weight_threshold, 1e-4f);
+  o.weight_threshold = 2e-4f;
+  EXPECT_EQ(ConfigFor(o, capture).weight_threshold, 2e-4f);
+  o.weight_threshold = 0.f;
+  EXPECT_EQ(ConfigFor(o, object).weight_threshold, 0.f);
+  TensorfModel model(ConfigFor(PresetOptions("tiny"), capture));
+  model.Initialize({16, 16, 16}, 3);
+  const dec::SceneField field = DecodeOrDie(EncodeScene(model, EncodeOptions()));
+  EXPECT_EQ(field.weight_threshold, kUnboundedWeightThreshold);
+}
+
 TEST(SceneFit, BlenderLayoutStaysAnObjectAndNamesAreChecked) {
   const Dataset train = MakeBuiltinScene("train", 32, 32, 20, 3);
   EXPECT_EQ(FitScene("auto", train).model, SceneModel::kObject);
