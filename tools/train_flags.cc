@@ -202,6 +202,11 @@ void AddTrainFlags(CLI::App* app, TrainFlags* f) {
       ->check(CLI::IsMember({"auto", "on", "off"}))
       ->capture_default_str()
       ->group(schedule);
+  app->add_option("--lr-exposure", o.lr_exposure, "learning rate of the exposure codes")
+      ->type_name("LR")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str()
+      ->group(schedule);
   app->add_option("--weight-threshold", o.weight_threshold,
                   "colour (run the MLP on) only samples of larger weight, in training and in the "
                   "file; auto: 0.003 for unbounded scenes, 1e-4 (TensoRF) for the others")

@@ -41,6 +41,7 @@ void VisitSettings(TrainOptions& o, F&& f) {
   f("tv_weight_density", o.tv_weight_density);
   f("tv_weight_app", o.tv_weight_app);
   f("exposure_codes", o.exposure_codes);
+  f("lr_exposure", o.lr_exposure);
   f("weight_threshold", o.weight_threshold);
   f("fine_grid_at_rate_points", o.fine_grid_at_rate_points);
   f("density_rank", o.density_rank);

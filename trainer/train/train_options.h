@@ -74,6 +74,7 @@ struct TrainOptions {
   // unbounded and forward-facing scenes, which come from cameras with auto exposure; off for
   // objects, whose renders share one exposure).
   std::string exposure_codes = "auto";
+  float lr_exposure = 5e-3f;  // the codes' Adam learning rate (decays and resets with the others)
   // The weight above which a sample is coloured by the MLP, in training and in the file's header
   // (SPEC 7.5). < 0: auto, kUnboundedWeightThreshold for unbounded scenes (whose hazy background
   // otherwise sends ~100 samples a ray through the MLP), TensoRF's 1e-4 for the others.

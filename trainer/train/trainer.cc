@@ -465,7 +465,7 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
     opt.Step(*model, o);
     if (exposure_on) {
       progress.exposure.Step(n, ray_views.data(), ray_gain.data(), dl_dgain.data(),
-                             o.lr_network * opt.lr_scale);
+                             o.lr_exposure * opt.lr_scale);
     }
     opt.lr_scale *= lr_factor;
     mse_sum += stats.mse;
