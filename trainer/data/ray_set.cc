@@ -39,7 +39,11 @@ uint32_t RaySet::ViewOf(uint32_t index) const {
 }
 
 void RaySet::Ray(uint32_t index, float origin[3], float dir[3], float rgb[3]) const {
-  const size_t v = ViewOf(index);
+  RayInView(ViewOf(index), index, origin, dir, rgb);
+}
+
+void RaySet::RayInView(size_t v, uint32_t index, float origin[3], float dir[3],
+                       float rgb[3]) const {
   const View& view = views_[v];
   const uint32_t pixel = uint32_t(index - view_offset_[v]);
   const int x = int(pixel % uint32_t(view.rgb.width));
@@ -107,8 +111,9 @@ void RaySet::NextBatch(int n, std::mt19937_64& rng, float* origins, float* dirs,
   for (int i = 0; i < n; ++i) {
     if (order_.empty() || cursor_ >= order_.size()) Shuffle(rng);
     const uint32_t index = order_[cursor_++];
-    Ray(index, origins + 3 * i, dirs + 3 * i, rgb + 3 * i);
-    if (views_or_null) views_or_null[i] = ViewOf(index);
+    const uint32_t v = ViewOf(index);  // one search per ray, for the ray and its view
+    RayInView(v, index, origins + 3 * i, dirs + 3 * i, rgb + 3 * i);
+    if (views_or_null) views_or_null[i] = v;
   }
 }
 

@@ -57,6 +57,8 @@ class RaySet {
                     uint64_t cursor);
 
  private:
+  // Ray() for an index whose view v is known.
+  void RayInView(size_t v, uint32_t index, float origin[3], float dir[3], float rgb[3]) const;
   void Shuffle(std::mt19937_64& rng);
   void KeepFlagged(const std::vector<uint8_t>& flags);
 

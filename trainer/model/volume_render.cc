@@ -568,15 +568,16 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
       float g[3];
       for (int ch = 0; ch < 3; ++ch) {
         if (white) c[ch] += 1.f - acc;
+        // 1 * x is exact, so rays without a gain train bit for bit as before.
         const float gain = ray_gain ? ray_gain[3 * r + ch] : 1.f;
-        const float pixel = ray_gain ? gain * c[ch] : c[ch];
+        const float pixel = gain * c[ch];
         const bool in_range = pixel >= 0.f && pixel <= 1.f;
         const float cc = std::min(std::max(pixel, 0.f), 1.f);
         const float diff = cc - target_rgb[3 * r + ch];
         sse += static_cast<double>(diff) * diff;
         const float g_pixel = in_range ? grad_scale * diff : 0.f;
         if (dl_dgain) dl_dgain[3 * r + ch] = g_pixel * c[ch];
-        g[ch] = ray_gain ? g_pixel * gain : g_pixel;
+        g[ch] = g_pixel * gain;
       }
       const float bg_dot = white ? g[0] + g[1] + g[2] : 0.f;
       float suffix = 0.f;

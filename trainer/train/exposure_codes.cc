@@ -15,10 +15,13 @@ void ExposureCodes::Reset(int views) {
 }
 
 void ExposureCodes::Gains(int n, const uint32_t* view, float* gains) const {
+  // One exp per view and channel, not per ray.
+  std::vector<float> per_view(log_gain_.size());
+  for (size_t k = 0; k < per_view.size(); ++k) per_view[k] = std::exp(log_gain_[k]);
   for (int i = 0; i < n; ++i) {
     if (view[i] >= static_cast<uint32_t>(views()))
       throw std::out_of_range("ExposureCodes::Gains: view index past the codes");
-    for (int c = 0; c < 3; ++c) gains[3 * i + c] = std::exp(log_gain_[3 * size_t(view[i]) + c]);
+    for (int c = 0; c < 3; ++c) gains[3 * i + c] = per_view[3 * size_t(view[i]) + c];
   }
 }
 
