@@ -63,9 +63,8 @@ std::vector<float> ParseShareList(const char* flag, const std::string& text) {
     const double v = std::strtod(item.c_str(), &stop);
     if (item.empty() || *stop != '\0' || !(v > 0.0 && v < 1.0) ||
         (!at.empty() && !(float(v) > at.back()))) {
-      throw std::invalid_argument(
-          std::string(flag) + ": '" + text +
-          "' is not a list of increasing shares of the rate phase in (0, 1)");
+      throw std::invalid_argument(std::string(flag) + ": '" + text +
+                                  "' is not a list of increasing shares in (0, 1)");
     }
     at.push_back(float(v));
     begin = end + 1;
@@ -206,6 +205,21 @@ void AddTrainFlags(CLI::App* app, TrainFlags* f) {
       ->type_name("LR")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str()
+      ->group(schedule);
+  app->add_option("--refine-cameras", o.refine_cameras,
+                  "refine the cameras (poses and shared intrinsics) against the field while "
+                  "training, and align the held-out cameras before scoring; auto: on for datasets "
+                  "with estimated poses (Instant-NGP / nerfstudio, LLFF, ecrf prepare)")
+      ->type_name("auto|on|off")
+      ->check(CLI::IsMember({"auto", "on", "off"}))
+      ->capture_default_str()
+      ->group(schedule);
+  app->add_option("--refine-cameras-every", o.refine_cameras_every,
+                  "refine the cameras every N iterations, from 10 % to 80 % of the run (0: "
+                  "iterations / 50)")
+      ->type_name("N")
+      ->check(CLI::Range(0, 100000000))
+      ->default_str("0")
       ->group(schedule);
   app->add_option("--weight-threshold", o.weight_threshold,
                   "colour (run the MLP on) only samples of larger weight, in training and in the "
@@ -418,6 +432,7 @@ trainer::TrainOptions FinishTrainFlags(const CLI::App& app, TrainFlags* f) {
     o.upsample_iters = ParseIterationList("--upsample-at", f->upsample_at);
   if (given("--mask-at")) o.alpha_mask_iters = ParseIterationList("--mask-at", f->mask_at);
   if (given("--prune-at")) o.prune_at = ParseShareList("--prune-at", f->prune_at);
+
   if (!(o.prune_share > 0.f && o.prune_share <= 1.f))
     throw std::invalid_argument("--prune-share must be in (0, 1]");
   if (given("--dct-block")) ParseShape("--dct-block", f->dct_block, 3, o.plane_block);

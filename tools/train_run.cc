@@ -10,6 +10,7 @@
 
 #include "encoder/encode_rate_control.h"
 #include "encoder/scene_encoder.h"
+#include "tools/camera_path_json.h"
 #include "tools/cli_args.h"
 #include "tools/decoded_scene.h"
 #include "tools/encode_report.h"
@@ -156,8 +157,10 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
                                                dec::GridStorage::kFloat32, kUnlimitedMemory);
   dec::RenderOptions ro;
   ro.num_threads = 0;
-  const trainer::EvalResult d = EvaluateDecoded(*decoded.field, test, o.test_view_stride,
-                                                o.max_test_views, ro, o.save_renders);
+  // With refined cameras the held-out views are scored from their cameras aligned to the field.
+  const trainer::EvalResult d =
+      EvaluateDecoded(*decoded.field, trainer::WithCameras(test, r.test_cameras),
+                      o.test_view_stride, o.max_test_views, ro, o.save_renders);
 
   std::printf(
       "trained %d iterations in %.1f s (%.3f s/it); float32 model %.2f MB; estimated coded grids "
@@ -257,6 +260,33 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
              std::exp(r.exposure_log_gain[3 * v + 2])}}});
     }
     m["exposure_gains"] = gains;
+  }
+  if (!r.train_cameras.empty()) {
+    // The refined training cameras and the aligned held-out ones, as a camera path that
+    // `ecrf render --path` takes (views named as in the dataset).
+    std::vector<PathCamera> cameras;
+    for (size_t v = 0; v < r.train_cameras.size(); ++v)
+      cameras.push_back({train.views[v].name, r.train_cameras[v]});
+    for (size_t v = 0; v < r.test_cameras.size(); ++v)
+      cameras.push_back({test.views[v].name, r.test_cameras[v]});
+    WriteCameraPath(o.out_dir + "/cameras_refined.json", cameras);
+  }
+  if (!r.camera_refinement.empty()) {
+    // Each refinement round's pixel error before and after, and how far the cameras moved; the
+    // last entry is the held-out views' alignment.
+    nlohmann::json rounds = nlohmann::json::array();
+    for (const trainer::CameraRefineStats& s : r.camera_refinement) {
+      rounds.push_back({{"mse_before", s.mse_before},
+                        {"mse_after", s.mse_after},
+                        {"steps", s.steps_taken},
+                        {"max_rotation_deg", s.max_rotation_deg},
+                        {"max_shift_px", s.max_shift_px}});
+    }
+    m["camera_refinement"] = rounds;
+    const trainer::Camera& c = r.train_cameras.front();
+    m["refined_intrinsics"] = {{"fl_x", c.fx}, {"fl_y", c.fy}, {"cx", c.cx}, {"cy", c.cy},
+                               {"k1", c.k1},   {"k2", c.k2},   {"p1", c.p1}, {"p2", c.p2},
+                               {"w", c.width}, {"h", c.height}};
   }
   if (!r.psnr_curve.empty()) {
     nlohmann::json curve = nlohmann::json::array();

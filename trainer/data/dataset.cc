@@ -433,11 +433,16 @@ DatasetManifest ReadDatasetManifest(const std::string& dir, const std::string& s
   if (fs::exists(blender, error))
     return ParseTransforms(root, blender.string(), Layout::kBlender, split);
   const fs::path ngp = root / "transforms.json";
-  if (fs::exists(ngp, error)) return ParseTransforms(root, ngp.string(), Layout::kNgp, split);
+  if (fs::exists(ngp, error)) {
+    DatasetManifest manifest = ParseTransforms(root, ngp.string(), Layout::kNgp, split);
+    manifest.estimated_poses = true;
+    return manifest;
+  }
   if (fs::exists(root / "poses_bounds.npy", error)) {
     int prescaled = 1;
     DatasetManifest manifest = ReadLlffManifest(dir, split, downscale, &prescaled);
     manifest.prescaled = prescaled;
+    manifest.estimated_poses = true;
     return manifest;
   }
   throw std::runtime_error(dir + ": neither transforms_" + split +
@@ -460,6 +465,7 @@ Dataset LoadDataset(const std::string& dir, const std::string& split, int downsc
   std::copy(&manifest.scene_aabb[0][0], &manifest.scene_aabb[0][0] + 6, &dataset.scene_aabb[0][0]);
   dataset.near = manifest.near;
   dataset.far = manifest.far;
+  dataset.estimated_poses = manifest.estimated_poses;
   // Transparent pixels were composited on white, so those backgrounds are white now.
   dataset.white_background = manifest.white_background || any_alpha;
   return dataset;

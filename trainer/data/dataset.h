@@ -24,6 +24,10 @@ struct Dataset {
   double near = 2.0;
   double far = 6.0;
   bool white_background = true;  // background pixels are white (transparent pixels composited)
+  // The poses were estimated (structure from motion: the Instant-NGP / nerfstudio and LLFF
+  // layouts) and are a few pixels off, unlike the rendered cameras of the Blender layout and of
+  // the procedural scenes: what --refine-cameras auto goes by.
+  bool estimated_poses = false;
 };
 
 // A view before its image is decoded: what the JSON says.
@@ -40,6 +44,7 @@ struct DatasetManifest {
   double near = 2.0;
   double far = 6.0;
   bool white_background = true;
+  bool estimated_poses = false;  // as Dataset::estimated_poses
   int prescaled = 1;  // the images are already this factor smaller (LLFF images_N folders)
 };
 

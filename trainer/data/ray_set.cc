@@ -24,6 +24,12 @@ RaySet::RaySet(const std::vector<View>& views) : views_(views) {
   for (size_t i = 0; i < active_.size(); ++i) active_[i] = uint32_t(i);
 }
 
+void RaySet::UseCameras(const std::vector<Camera>* cameras) {
+  if (cameras && cameras->size() != views_.size())
+    throw std::invalid_argument("RaySet::UseCameras: one camera per view is needed");
+  cameras_ = cameras;
+}
+
 void RaySet::Sample(int n, std::mt19937_64& rng, float* origins, float* dirs, float* rgb) const {
   if (active_.empty()) throw std::runtime_error("RaySet::Sample: no rays are kept");
   std::uniform_int_distribution<size_t> pick(0, active_.size() - 1);
@@ -48,7 +54,7 @@ void RaySet::RayInView(size_t v, uint32_t index, float origin[3], float dir[3],
   const uint32_t pixel = uint32_t(index - view_offset_[v]);
   const int x = int(pixel % uint32_t(view.rgb.width));
   const int y = int(pixel / uint32_t(view.rgb.width));
-  GenerateRay(view.camera, x, y, origin, dir);
+  GenerateRay(cameras_ ? (*cameras_)[v] : view.camera, x, y, origin, dir);
   for (int c = 0; c < 3; ++c) rgb[c] = view.rgb.at(x, y, c);
 }
 

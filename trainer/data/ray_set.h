@@ -20,6 +20,10 @@ class RaySet {
   explicit RaySet(const std::vector<View>& views);
 
   size_t size() const { return active_.size(); }
+
+  // Rays from these cameras (one per view, e.g. refined ones; must outlive the RaySet) instead of
+  // the views' own; null: the views' cameras again.
+  void UseCameras(const std::vector<Camera>* cameras);
   size_t total() const { return view_offset_.back(); }
 
   // Keeps the rays for which keep(origin, dir) holds; evaluated in parallel.
@@ -63,9 +67,10 @@ class RaySet {
   void KeepFlagged(const std::vector<uint8_t>& flags);
 
   const std::vector<View>& views_;
-  std::vector<uint64_t> view_offset_;  // prefix sums of pixels per view
-  std::vector<uint32_t> active_;       // global pixel indices of the kept rays
-  std::vector<uint32_t> order_;        // permutation of active_
+  const std::vector<Camera>* cameras_ = nullptr;  // overrides views_[v].camera when set
+  std::vector<uint64_t> view_offset_;             // prefix sums of pixels per view
+  std::vector<uint32_t> active_;                  // global pixel indices of the kept rays
+  std::vector<uint32_t> order_;                   // permutation of active_
   size_t cursor_ = 0;
   std::string shuffle_rng_;  // the generator before order_ was drawn
 };

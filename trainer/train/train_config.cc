@@ -42,6 +42,8 @@ void VisitSettings(TrainOptions& o, F&& f) {
   f("tv_weight_app", o.tv_weight_app);
   f("exposure_codes", o.exposure_codes);
   f("lr_exposure", o.lr_exposure);
+  f("refine_cameras", o.refine_cameras);
+  f("refine_cameras_every", o.refine_cameras_every);
   f("weight_threshold", o.weight_threshold);
   f("fine_grid_at_rate_points", o.fine_grid_at_rate_points);
   f("density_rank", o.density_rank);

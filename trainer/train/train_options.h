@@ -26,6 +26,10 @@ inline constexpr float kUnboundedWeightThreshold = 3e-3f;
 // The auto plane total variation of unbounded scenes (TrainOptions::tv_weight_density/app).
 inline constexpr float kUnboundedTvWeight = 1.f;
 
+// The stretch of a run in which cameras are refined (shares of the iterations): from early coarse
+// grids (a wide basin) to before the last steps, which then settle the field on final cameras.
+inline constexpr float kRefineCamerasFrom = 0.1f, kRefineCamerasUntil = 0.8f;
+
 struct TrainOptions {
   std::string preset = "fast";
   // The rate point the settings started from ("none": plain TensoRF, lambda_e 0; "low",
@@ -75,6 +79,17 @@ struct TrainOptions {
   // objects, whose renders share one exposure).
   std::string exposure_codes = "auto";
   float lr_exposure = 5e-3f;  // the codes' Adam learning rate (decays and resets with the others)
+  // Photometric refinement of the training cameras against the field (trainer/train/
+  // camera_refine.h): "on", "off", or "auto" (on for datasets whose poses were estimated, i.e.
+  // Dataset::estimated_poses). When on, the held-out cameras follow the training ones and are
+  // aligned to the trained field (6 degrees of freedom each) before they are scored, as evaluations
+  // of NeRFs with learnt poses do.
+  std::string refine_cameras = "auto";
+  // The cameras are refined every this many iterations (0: iters / 50) from kRefineCamerasFrom
+  // to kRefineCamerasUntil of the run: small steps interleaved with the field's, so that both
+  // move together (a few large rounds left the field, blurred by the wrong cameras, to hold them
+  // back between rounds).
+  int refine_cameras_every = 0;
   // The weight above which a sample is coloured by the MLP, in training and in the file's header
   // (SPEC 7.5). < 0: auto, kUnboundedWeightThreshold for unbounded scenes (whose hazy background
   // otherwise sends ~100 samples a ray through the MLP), TensoRF's 1e-4 for the others.

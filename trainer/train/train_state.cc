@@ -76,6 +76,14 @@ Checkpoint SaveTrainState(const Optimizers& opt, const RateState& rate, const Ra
     ck.arrays.push_back({"exposure.log_gain", {int64_t(g.size() / 3), 3}, g});
     SaveAdam("exposure", progress.exposure.adam(), &ck, &j);
   }
+  // Doubles survive JSON exactly, so a resumed run refines from the same cameras.
+  for (const Camera& c : progress.cameras) {
+    nlohmann::json cam = {c.fx, c.fy, c.cx, c.cy, c.k1, c.k2, c.p1, c.p2};
+    for (const auto& row : c.c2w) {
+      for (double x : row) cam.push_back(x);
+    }
+    j["cameras"].push_back(cam);
+  }
   ck.json = j.dump();
   return ck;
 }
@@ -113,6 +121,22 @@ bool LoadTrainState(const Checkpoint& ck, const std::string& path, Optimizers* o
       }
       progress->exposure.log_gain() = g->data;
       LoadAdam("exposure", ck, j, path, g->data.size(), &progress->exposure.adam());
+    }
+    if (!progress->cameras.empty()) {
+      // The cameras were set to the training views' before the state is loaded.
+      if (!j.contains("cameras") || j["cameras"].size() != progress->cameras.size()) {
+        throw std::runtime_error(path +
+                                 ": training state: the refined cameras are missing or for other "
+                                 "views (was the checkpoint written with --refine-cameras off?)");
+      }
+      for (size_t v = 0; v < progress->cameras.size(); ++v) {
+        const std::vector<double> cam = j["cameras"][v].get<std::vector<double>>();
+        if (cam.size() != 20) throw std::runtime_error(path + ": training state: damaged camera");
+        Camera& c = progress->cameras[v];
+        double* lens[8] = {&c.fx, &c.fy, &c.cx, &c.cy, &c.k1, &c.k2, &c.p1, &c.p2};
+        for (int k = 0; k < 8; ++k) *lens[k] = cam[size_t(k)];
+        for (int k = 0; k < 12; ++k) c.c2w[k / 4][k % 4] = cam[size_t(8 + k)];
+      }
     }
     const CheckpointArray* keep = ck.Find("rays.keep16");
     if (!keep) throw std::runtime_error(path + ": training state: the kept-ray set is missing");

@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "trainer/data/camera.h"
 #include "trainer/data/ray_set.h"
 #include "trainer/model/tensorf_model.h"
 #include "trainer/train/adam.h"
@@ -35,6 +36,9 @@ struct TrainProgress {
   double train_seconds = 0.0;  // training time before this process, evaluation excluded
   std::vector<std::pair<double, double>> psnr_curve;  // (training minutes, test PSNR)
   ExposureCodes exposure;                             // per-image exposure codes (off: no views)
+  // The training cameras as refined so far (--refine-cameras; empty when off): the rays are made
+  // from these.
+  std::vector<Camera> cameras;
 };
 
 // The state as checkpoint arrays plus a JSON object (Checkpoint::json), for SaveModelCheckpoint.

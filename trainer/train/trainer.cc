@@ -292,6 +292,13 @@ void PruneAt(int done, float lambda_e, const TrainOptions& o, const RaySet& rays
 
 }  // namespace
 
+bool RefineCamerasOn(const TrainOptions& o, const Dataset& train) {
+  if (o.refine_cameras != "auto" && o.refine_cameras != "on" && o.refine_cameras != "off")
+    throw std::invalid_argument("refine_cameras: '" + o.refine_cameras +
+                                "' is none of auto, on, off");
+  return o.refine_cameras == "on" || (o.refine_cameras == "auto" && train.estimated_poses);
+}
+
 TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& test,
                   TensorfModel* model, RateState* rate_out) {
   TrainResult result;
@@ -344,6 +351,15 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   const bool exposure_on = o.exposure_codes == "on" ||
                            (o.exposure_codes == "auto" && (model->unbounded() || model->forward()));
   progress.exposure.Reset(exposure_on ? static_cast<int>(train.views.size()) : 0);
+  const bool refine_on = RefineCamerasOn(o, train);
+  const int refine_every =
+      o.refine_cameras_every > 0 ? o.refine_cameras_every : std::max(1, o.iters / 50);
+  const int refine_from = int(std::lround(kRefineCamerasFrom * o.iters));
+  const int refine_until = int(std::lround(kRefineCamerasUntil * o.iters));
+  if (refine_on) {
+    for (const View& v : train.views) progress.cameras.push_back(v.camera);
+    rays.UseCameras(&progress.cameras);
+  }
   const float tv_density = o.tv_weight_density >= 0.f ? o.tv_weight_density
                            : model->unbounded()       ? kUnboundedTvWeight
                                                       : 0.f;
@@ -527,6 +543,26 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
       opt.Reset(*model);
     }
 
+    if (refine_on && done >= refine_from && done <= refine_until &&
+        (done - refine_from) % refine_every == 0) {
+      const auto refine_start = Clock::now();
+      CameraRefineOptions ro;
+      ro.seed = o.seed + uint64_t(done);
+      ro.pixels_per_view = 256;
+      ro.steps = 1;
+      const CameraRefineStats s = RefineCameras(
+          *model, train.views, exposure_on ? progress.exposure.log_gain().data() : nullptr, ro,
+          &progress.cameras);
+      result.camera_refinement.push_back(s);
+      const int round = (done - refine_from) / refine_every;
+      if (round % 10 == 0 || done + refine_every > refine_until)
+        std::fprintf(
+            stderr,
+            "%scameras refined (round %d) at iteration %d: pixel error %.5f -> %.5f (%d steps), "
+            "largest change %.3f deg, ~%.2f px; %.1f s\n",
+            isatty(2) ? "\n" : "", round + 1, done, s.mse_before, s.mse_after, s.steps_taken,
+            s.max_rotation_deg, s.max_shift_px, Seconds(refine_start));
+    }
     if (o.eval_every > 0 && done % o.eval_every == 0 && done < o.iters) {
       const auto eval_start = Clock::now();
       const EvalResult e = Evaluate(*model, test, ScoredTestViewStride(o, test.views.size()),
@@ -556,6 +592,11 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
                  progress.exposure.views(), std::exp(*lo), std::exp(*hi));
     result.exposure_log_gain = g;
   }
+  if (refine_on) {
+    result.train_cameras = progress.cameras;
+    result.test_cameras = AlignHeldOutCameras(*model, train, test, progress.cameras, o.seed,
+                                              &result.camera_refinement);
+  }
   result.iterations = o.iters;
   result.final_lambda_e = live.lambda_e;
   result.train_seconds = train_seconds();
@@ -574,8 +615,9 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   // The float model is scored on request only: the decoded file is what a user gets (and is
   // always scored by the caller); scoring both doubled the evaluation time of a default run.
   if (o.score_float) {
-    result.test = Evaluate(*model, test, ScoredTestViewStride(o, test.views.size()),
-                           o.max_test_views, o.save_renders);
+    result.test =
+        Evaluate(*model, WithCameras(test, result.test_cameras),
+                 ScoredTestViewStride(o, test.views.size()), o.max_test_views, o.save_renders);
     if (o.eval_every > 0)
       result.psnr_curve.emplace_back(result.train_seconds / 60.0, result.test.psnr);
   }

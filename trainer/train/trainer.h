@@ -14,6 +14,7 @@
 #include "trainer/data/image_io.h"
 #include "trainer/data/scene_fit.h"
 #include "trainer/model/tensorf_model.h"
+#include "trainer/train/camera_refine.h"
 #include "trainer/train/checkpoint.h"
 #include "trainer/train/rate_state.h"
 #include "trainer/train/train_options.h"
@@ -42,6 +43,10 @@ struct TrainResult {
   float final_lambda_e = 0.f;  // options.lambda_e, or where rate control left it
   // Per training view and channel, the learnt exposure codes' log gains (empty when off).
   std::vector<float> exposure_log_gain;
+  // With camera refinement (--refine-cameras): the refined training cameras, and the held-out
+  // cameras aligned to the trained field, the ones to score the test views with (else empty).
+  std::vector<Camera> train_cameras, test_cameras;
+  std::vector<CameraRefineStats> camera_refinement;  // per round, the held-out alignment last
 };
 
 // How a trained run is encoded: its block shapes and frozen steps, coefficient depth and MLP
@@ -62,6 +67,9 @@ TensorfConfig ConfigFor(const TrainOptions& options, const Dataset& data);
 // `rate` receives the rate objective's state (steps, entropy model); it may be null.
 TrainResult Train(const TrainOptions& options, const Dataset& train, const Dataset& test,
                   TensorfModel* model, RateState* rate = nullptr);
+
+// Whether --refine-cameras is on for this dataset ("auto": when its poses were estimated).
+bool RefineCamerasOn(const TrainOptions& options, const Dataset& train);
 
 // The iteration at which the rate terms switch on: options.rate_start of the run, but never
 // before the grid is final (after the last upsample and alpha-mask update).

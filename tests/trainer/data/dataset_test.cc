@@ -89,6 +89,7 @@ TEST_F(DatasetTest, LoadsBlenderLayout) {
   const Dataset dataset = LoadDataset(Dir(), "train", 1);
   ASSERT_EQ(dataset.views.size(), 3u);
   EXPECT_TRUE(dataset.white_background);
+  EXPECT_FALSE(dataset.estimated_poses);  // rendered: the cameras are exact
   EXPECT_EQ(dataset.near, 2.0);
   EXPECT_EQ(dataset.far, 6.0);
   for (int a = 0; a < 3; ++a) {
@@ -323,6 +324,9 @@ TEST_F(NgpDatasetTest, SplitsEveryEighthFrameForTest) {
   EXPECT_EQ(test.views[1].name, "images/frame_8");  // sorted by path: 0 1 2 3 4 5 6 7 8 9
   EXPECT_EQ(LoadDataset(Dir(), "val", 1).views.size(), 2u);
   EXPECT_FALSE(train.white_background);  // RGB images, nothing composited
+  // Instant-NGP / nerfstudio poses come from structure from motion (--refine-cameras auto).
+  EXPECT_TRUE(train.estimated_poses);
+  EXPECT_TRUE(test.estimated_poses);
 }
 
 TEST_F(NgpDatasetTest, ReadsIntrinsicsDistortionAndBounds) {

@@ -143,7 +143,8 @@ TEST_F(LlffTest, ParsesPosesIntrinsicsBoundsAndSplit) {
   const DatasetManifest train = ReadDatasetManifest(Dir(), "train");
   const DatasetManifest test = ReadDatasetManifest(Dir(), "test");
   ASSERT_EQ(train.views.size(), 8u);
-  ASSERT_EQ(test.views.size(), 2u);  // NeRF's llffhold 8: images 0 and 8
+  ASSERT_EQ(test.views.size(), 2u);    // NeRF's llffhold 8: images 0 and 8
+  EXPECT_TRUE(train.estimated_poses);  // LLFF poses come from COLMAP
   EXPECT_EQ(test.views[0].name, "img_00");
   EXPECT_EQ(test.views[1].name, "img_08");
   EXPECT_EQ(train.views[0].name, "img_01");

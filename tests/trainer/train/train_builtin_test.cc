@@ -243,7 +243,9 @@ TEST(TrainBuiltin, ResumedRunEqualsTheUninterruptedOneBitForBit) {
   o.prune_at = {0.3f};  // at 162: the resume from 120 prunes, the one from 180 loads a pruned model
   o.prune_rays = 256;
   o.mlp_hidden = 32;
-  o.exposure_codes = "on";  // their values and optimizer are part of the state too
+  o.exposure_codes = "on";       // their values and optimizer are part of the state too
+  o.refine_cameras = "on";       // and so are the refined cameras (refined at 24 and 124; the
+  o.refine_cameras_every = 100;  // resumes start from 120 and 180)
   const Dataset train = LoadTrainingViews(o, "train");
   const Dataset test = LoadTrainingViews(o, "test");
   char tmpl[] = "/tmp/ecrf_resume_XXXXXX";
@@ -277,6 +279,14 @@ TEST(TrainBuiltin, ResumedRunEqualsTheUninterruptedOneBitForBit) {
       EXPECT_TRUE(b.appearance().params() == a.appearance().params());
       EXPECT_TRUE(b.head().params() == a.head().params());
       EXPECT_EQ(rb.test.psnr, ra.test.psnr);
+      ASSERT_EQ(rb.train_cameras.size(), train.views.size());
+      ASSERT_EQ(rb.test_cameras.size(), test.views.size());
+      for (size_t v = 0; v < train.views.size(); ++v) {
+        EXPECT_EQ(std::memcmp(rb.train_cameras[v].c2w, ra.train_cameras[v].c2w,
+                              sizeof(ra.train_cameras[v].c2w)),
+                  0);
+        EXPECT_EQ(rb.train_cameras[v].fx, ra.train_cameras[v].fx);
+      }
       ASSERT_EQ(rb.psnr_curve.size(), ra.psnr_curve.size());  // the curve survives the stops
       for (size_t k = 0; k < ra.psnr_curve.size(); ++k)
         EXPECT_EQ(rb.psnr_curve[k].second, ra.psnr_curve[k].second);
