@@ -215,7 +215,7 @@ void AddTrainFlags(CLI::App* app, TrainFlags* f) {
       ->capture_default_str()
       ->group(schedule);
   app->add_option("--refine-cameras-every", o.refine_cameras_every,
-                  "refine the cameras every N iterations, from 10 % to 80 % of the run (0: "
+                  "refine the cameras every N iterations, from 20 % to 80 % of the run (0: "
                   "iterations / 50)")
       ->type_name("N")
       ->check(CLI::Range(0, 100000000))

@@ -26,9 +26,11 @@ using PoseLens = Eigen::Matrix<double, kPose, kLens>;
 using PoseVector = Eigen::Matrix<double, kPose, 1>;
 using LensVector = Eigen::Matrix<double, kLens, 1>;
 
-// A step that large (in units of the finite-difference steps, about half a pixel each) is not a
-// refinement but a jump to another basin: such steps are scaled down to this.
-constexpr double kMaxStep = 16.0;
+// The largest step, in units of the finite-difference steps (about half a pixel each): larger
+// ones are scaled down to it. A trust region: while the field is still blurred by the cameras'
+// errors, a full Gauss-Newton step fits the field's errors as much as the cameras' and moved the
+// exact cameras of the rendered capture by degrees (docs/photos-to-dataset.md).
+constexpr double kMaxStep = 4.0;
 
 Eigen::Matrix3d Rotation(const Camera& c) {
   Eigen::Matrix3d r;

@@ -28,7 +28,7 @@ inline constexpr float kUnboundedTvWeight = 1.f;
 
 // The stretch of a run in which cameras are refined (shares of the iterations): from early coarse
 // grids (a wide basin) to before the last steps, which then settle the field on final cameras.
-inline constexpr float kRefineCamerasFrom = 0.1f, kRefineCamerasUntil = 0.8f;
+inline constexpr float kRefineCamerasFrom = 0.2f, kRefineCamerasUntil = 0.8f;
 
 struct TrainOptions {
   std::string preset = "fast";

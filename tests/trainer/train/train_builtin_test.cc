@@ -244,7 +244,7 @@ TEST(TrainBuiltin, ResumedRunEqualsTheUninterruptedOneBitForBit) {
   o.prune_rays = 256;
   o.mlp_hidden = 32;
   o.exposure_codes = "on";       // their values and optimizer are part of the state too
-  o.refine_cameras = "on";       // and so are the refined cameras (refined at 24 and 124; the
+  o.refine_cameras = "on";       // and so are the refined cameras (refined at 48 and 148; the
   o.refine_cameras_every = 100;  // resumes start from 120 and 180)
   const Dataset train = LoadTrainingViews(o, "train");
   const Dataset test = LoadTrainingViews(o, "test");
