@@ -157,11 +157,13 @@ class ResidualRenderer {
     for (const Job& j : jobs_) {
       const std::vector<Pixel>& px = pixels_[j.view];
       Eigen::VectorXd r(3 * px.size());
+      double gain[3] = {1.0, 1.0, 1.0};  // one exp per job and channel, not per pixel
+      for (int c = 0; log_gain_ && c < 3; ++c)
+        gain[c] = std::exp(double(log_gain_[3 * j.view + c]));
       for (size_t i = 0; i < px.size(); ++i, ++at) {
         for (int c = 0; c < 3; ++c) {
-          const double gain = log_gain_ ? std::exp(double(log_gain_[3 * j.view + c])) : 1.0;
           // The clamp of TrainStep: a gain scales the pixel before it.
-          const double shown = std::min(std::max(gain * rgb[3 * at + c], 0.0), 1.0);
+          const double shown = std::min(std::max(gain[c] * rgb[3 * at + c], 0.0), 1.0);
           r[3 * Eigen::Index(i) + c] = shown - views_[j.view].rgb.at(px[i].x, px[i].y, c);
         }
       }
@@ -214,8 +216,9 @@ Vector Capped(const Vector& v) {
 }  // namespace
 
 bool SharedIntrinsics(const std::vector<Camera>& cameras) {
+  if (cameras.empty()) return true;
+  const Camera& f = cameras.front();
   for (const Camera& c : cameras) {
-    const Camera& f = cameras.front();
     if (c.width != f.width || c.height != f.height || c.fx != f.fx || c.fy != f.fy ||
         c.cx != f.cx || c.cy != f.cy || c.k1 != f.k1 || c.k2 != f.k2 || c.p1 != f.p1 ||
         c.p2 != f.p2)
@@ -377,11 +380,8 @@ std::vector<Camera> FollowRefinedCameras(const std::vector<Camera>& before,
     if (lens) {
       // The held-out views may be scored at another size: the intrinsics scale with it.
       const double sx = c.fx / before.front().fx, sy = c.fy / before.front().fy;
-      const int w = c.width, h = c.height;
-      c = WithLens(c, LensOf(after.front()));
+      c = WithLens(c, LensOf(after.front()));  // the size stays the view's
       c.fy = after.front().fy;
-      c.width = w;
-      c.height = h;
       c.fx *= sx;
       c.cx *= sx;
       c.fy *= sy;
