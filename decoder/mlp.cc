@@ -11,18 +11,32 @@ namespace {
 
 constexpr int kPad = 8;  // output widths of the hidden layers / basis are padded to this
 constexpr int kOutPad = 8;
-static_assert(kPad % 8 == 0 && kOutPad % 8 == 0, "Gemm4 writes columns in runs of 8");
+static_assert(kPad % 8 == 0 && kOutPad % 8 == 0, "Gemm8 writes columns in runs of 8");
 
 int RoundUp(int v, int m) { return (v + m - 1) / m * m; }
 
-// rows (multiple of 4) x K times wt, rows contiguous with strides ldx / ldy.
-void GemmRows(Gemm4Fn gemm4, int rows, const float* x, int ldx, int K, const float* wt, int ldw,
-              const float* bias, bool relu, float* y, int ldy) {
-  for (int r = 0; r < rows; r += 4) {
-    const float* xr = x + static_cast<size_t>(r) * ldx;
-    float* yr = y + static_cast<size_t>(r) * ldy;
-    gemm4(xr, xr + ldx, xr + 2 * ldx, xr + 3 * ldx, K, wt, ldw, bias, ldw, relu, yr, yr + ldy,
-          yr + 2 * ldy, yr + 3 * ldy);
+// rows (multiple of 8) x K times wt, rows contiguous with strides ldx / ldy. With skip_zeros, each
+// group of 8 rows sums only over the k where one of its inputs is not zero: the hidden layers'
+// inputs come out of a ReLU and are about half zeros in trained scenes. Leaving out x * w = +-0
+// changes no sum's value (decoder/mlp_gemm.h), so the results are the same bits either way
+// (tests/decoder/mlp_test.cc checks this against a scalar reference).
+void GemmRows(Gemm8Fn gemm8, int rows, const float* x, int ldx, int K, bool skip_zeros,
+              const float* wt, int ldw, const float* bias, bool relu, float* y, int ldy) {
+  int ks[kMaxMlpHidden];  // skip_zeros: K is a hidden width
+  for (int r = 0; r < rows; r += 8) {
+    const float* xr[8];
+    float* yr[8];
+    for (int q = 0; q < 8; ++q) {
+      xr[q] = x + static_cast<size_t>(r + q) * ldx;
+      yr[q] = y + static_cast<size_t>(r + q) * ldy;
+    }
+    const int* use = nullptr;
+    int nk = K;
+    if (skip_zeros) {
+      nk = NonZeroColumns8(xr, K, ks);
+      use = ks;
+    }
+    gemm8(xr, use, nk, wt, ldw, bias, ldw, relu, yr);
   }
 }
 
@@ -96,7 +110,7 @@ AppearanceMlp& AppearanceMlp::operator=(AppearanceMlp&& o) noexcept {
   o_b3_ = o.o_b3_;
   o_zero_ = o.o_zero_;
   kernel_ = o.kernel_;
-  gemm4_ = o.gemm4_;
+  gemm8_ = o.gemm8_;
   o.weights_ = nullptr;
   o.weights_count_ = 0;
   return *this;
@@ -125,7 +139,7 @@ Status AppearanceMlp::Init(const MlpConfig& config) {
                        "mlp: hidden width %d out of range [1, %d]", config.hidden, kMaxMlpHidden);
   config_ = config;
   kernel_ = BestGemmKernel();
-  gemm4_ = Gemm4For(kernel_);
+  gemm8_ = Gemm8For(kernel_);
   in_dim_ = config.input_dim();
   in_stride_ = RoundUp(in_dim_, 8);
   fd_pad_ = RoundUp(config.feature_dim, kPad);
@@ -162,7 +176,7 @@ Status AppearanceMlp::UseGemmKernel(GemmKernel kernel) {
                        "mlp: the %s kernel is not available on this CPU or in this build",
                        GemmKernelName(kernel));
   kernel_ = kernel;
-  gemm4_ = Gemm4For(kernel);
+  gemm8_ = Gemm8For(kernel);
   return Status::Ok();
 }
 
@@ -253,19 +267,19 @@ void AppearanceMlp::Infer(int rows, const float* products, size_t products_strid
 
   for (int r0 = 0; r0 < rows; r0 += C) {
     const int n = rows - r0 < C ? rows - r0 : C;
-    const int n4 = (n + 3) & ~3;
+    const int n8 = (n + 7) & ~7;
     // Basis: features = products * basis^T (no bias). Rows past n read the zero row.
-    for (int r = 0; r < n4; r += 4) {
-      const float* x[4];
-      for (int q = 0; q < 4; ++q) {
+    for (int r = 0; r < n8; r += 8) {
+      const float* x[8];
+      float* y[8];
+      for (int q = 0; q < 8; ++q) {
         x[q] = r + q < n ? products + static_cast<size_t>(r0 + r + q) * products_stride : zero_row;
+        y[q] = feat + static_cast<size_t>(r + q) * fd_pad_;
       }
-      float* y = feat + static_cast<size_t>(r) * fd_pad_;
-      gemm4_(x[0], x[1], x[2], x[3], P, weights_ + o_basis_, fd_pad_, wz, fd_pad_, false, y,
-             y + fd_pad_, y + 2 * fd_pad_, y + 3 * fd_pad_);
+      gemm8_(x, nullptr, P, weights_ + o_basis_, fd_pad_, wz, fd_pad_, false, y);
     }
     // PE arguments for the whole chunk, one vectorised sin/cos pass.
-    for (int r = 0; r < n4; ++r) {
+    for (int r = 0; r < n8; ++r) {
       const float* f = feat + static_cast<size_t>(r) * fd_pad_;
       const float* vd = r < n ? viewdirs + static_cast<size_t>(r0 + r) * 3 : wz;
       float* a = pe_arg + static_cast<size_t>(r) * (nf + nv);
@@ -278,9 +292,9 @@ void AppearanceMlp::Infer(int rows, const float* products, size_t products_strid
         for (int q = 0; q < Fv; ++q, m *= 2.f) a[nf + c * Fv + q] = vd[c] * m;
       }
     }
-    FastSinCos(pe_arg, n4 * (nf + nv), pe_sin, pe_cos);
+    FastSinCos(pe_arg, n8 * (nf + nv), pe_sin, pe_cos);
     // Input rows: [features, viewdir, sin(feat args), cos(feat args), sin(vd args), cos(vd args)].
-    for (int r = 0; r < n4; ++r) {
+    for (int r = 0; r < n8; ++r) {
       float* x = in + static_cast<size_t>(r) * in_stride_;
       const float* vd = r < n ? viewdirs + static_cast<size_t>(r0 + r) * 3 : wz;
       const float* s = pe_sin + static_cast<size_t>(r) * (nf + nv);
@@ -297,12 +311,12 @@ void AppearanceMlp::Infer(int rows, const float* products, size_t products_strid
       std::memcpy(x, s + nf, nv * sizeof(float));
       std::memcpy(x + nv, c + nf, nv * sizeof(float));
     }
-    GemmRows(gemm4_, n4, in, in_stride_, in_dim_, weights_ + o_w1_, hid_pad_, weights_ + o_b1_,
-             true, h1, hid_pad_);
-    GemmRows(gemm4_, n4, h1, hid_pad_, H, weights_ + o_w2_, hid_pad_, weights_ + o_b2_, true, h2,
-             hid_pad_);
-    GemmRows(gemm4_, n4, h2, hid_pad_, H, weights_ + o_w3_, kOutPad, weights_ + o_b3_, false, out,
-             kOutPad);
+    GemmRows(gemm8_, n8, in, in_stride_, in_dim_, false, weights_ + o_w1_, hid_pad_,
+             weights_ + o_b1_, true, h1, hid_pad_);
+    GemmRows(gemm8_, n8, h1, hid_pad_, H, true, weights_ + o_w2_, hid_pad_, weights_ + o_b2_, true,
+             h2, hid_pad_);
+    GemmRows(gemm8_, n8, h2, hid_pad_, H, true, weights_ + o_w3_, kOutPad, weights_ + o_b3_, false,
+             out, kOutPad);
     for (int r = 0; r < n; ++r) {
       for (int c = 0; c < 3; ++c) {
         rgb[static_cast<size_t>(r0 + r) * 3 + c] =

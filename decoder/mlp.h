@@ -84,7 +84,7 @@ class AppearanceMlp {
   // One allocation: basis_t [P x fd_pad], w1_t [in x hid_pad], b1 [hid_pad], w2_t [H x hid_pad],
   // b2 [hid_pad], w3_t [H x 8], b3 [8], zero bias [fd_pad].
   GemmKernel kernel_ = GemmKernel::kPortable;
-  Gemm4Fn gemm4_ = nullptr;
+  Gemm8Fn gemm8_ = nullptr;
   float* weights_ = nullptr;
   size_t weights_count_ = 0;
   size_t o_basis_ = 0, o_w1_ = 0, o_b1_ = 0, o_w2_ = 0, o_b2_ = 0, o_w3_ = 0, o_b3_ = 0,

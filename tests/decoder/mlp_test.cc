@@ -161,6 +161,119 @@ TEST(MlpTest, EveryGemmKernelGivesThePortableKernelsBits) {
               GemmKernelName(BestGemmKernel()));
 }
 
+// SPEC.md 7.6 in plain float arithmetic: every dot product from the bias in increasing k over
+// every term, one rounded multiply and one rounded add each (this file builds with
+// -ffp-contract=off), the positional encoding through FastSinCos as the reference renderer's.
+void ScalarReferenceMlp(const MlpConfig& cfg, const std::vector<float>& params, const float* prod,
+                        const float* vd, float rgb[3]) {
+  const int P = cfg.num_products, F = cfg.feature_dim, H = cfg.hidden, in = cfg.input_dim();
+  const float* basis = params.data();
+  const float* w1 = basis + static_cast<size_t>(F) * P;
+  const float* b1 = w1 + static_cast<size_t>(H) * in;
+  const float* w2 = b1 + H;
+  const float* b2 = w2 + static_cast<size_t>(H) * H;
+  const float* w3 = b2 + H;
+  const float* b3 = w3 + 3 * H;
+  std::vector<float> x;
+  std::vector<float> feat(F);
+  for (int j = 0; j < F; ++j) {
+    float s = 0.f;
+    for (int k = 0; k < P; ++k) s += basis[j * P + k] * prod[k];
+    feat[j] = s;
+  }
+  std::vector<float> af, av;
+  for (int c = 0; c < F; ++c) {
+    for (int q = 0; q < cfg.feature_pe_freqs; ++q) af.push_back(feat[c] * std::ldexp(1.f, q));
+  }
+  for (int c = 0; c < 3; ++c) {
+    for (int q = 0; q < cfg.viewdir_pe_freqs; ++q) av.push_back(vd[c] * std::ldexp(1.f, q));
+  }
+  std::vector<float> sf(af.size()), cf(af.size()), sv(av.size()), cv(av.size());
+  FastSinCos(af.data(), static_cast<int>(af.size()), sf.data(), cf.data());
+  FastSinCos(av.data(), static_cast<int>(av.size()), sv.data(), cv.data());
+  x = feat;
+  x.insert(x.end(), vd, vd + 3);
+  for (const auto* part : {&sf, &cf, &sv, &cv}) x.insert(x.end(), part->begin(), part->end());
+  std::vector<float> h1(H), h2(H);
+  for (int o = 0; o < H; ++o) {
+    float s = b1[o];
+    for (int k = 0; k < in; ++k) s += w1[o * in + k] * x[k];
+    h1[o] = s > 0.f ? s : 0.f;
+  }
+  for (int o = 0; o < H; ++o) {
+    float s = b2[o];
+    for (int k = 0; k < H; ++k) s += w2[o * H + k] * h1[k];
+    h2[o] = s > 0.f ? s : 0.f;
+  }
+  for (int c = 0; c < 3; ++c) {
+    float s = b3[c];
+    for (int k = 0; k < H; ++k) s += w3[c * H + k] * h2[k];
+    rgb[c] = 1.f / (1.f + std::exp(-s));
+  }
+}
+
+// The hidden layers skip the inputs that are zero in all 8 rows of a block (decoder/mlp.cc). With
+// biases that switch off most units (and some units dead in every row) the output must still be
+// the reference's bits, on every kernel, for batches of any size.
+TEST(MlpTest, SkippingZeroActivationsGivesTheReferenceBits) {
+  for (const int hidden : {20, 128}) {
+    MlpConfig cfg;
+    cfg.num_products = 48;
+    cfg.hidden = hidden;
+    AppearanceMlp mlp;
+    ASSERT_TRUE(mlp.Init(cfg).ok());
+    std::vector<float> params = RandomParams(mlp, 21 + hidden, 0.3f);
+    const int F = cfg.feature_dim, P = cfg.num_products, H = hidden, in = cfg.input_dim();
+    float* b1 = params.data() + static_cast<size_t>(F) * P + static_cast<size_t>(H) * in;
+    float* b2 = b1 + H + static_cast<size_t>(H) * H;
+    for (int o = 0; o < H; ++o) {
+      b1[o] = o % 3 == 0 ? -100.f : b1[o] - 0.6f;  // every third unit dead, the rest mostly off
+      b2[o] = o % 4 == 0 ? -100.f : b2[o] - 0.3f;
+    }
+    ASSERT_TRUE(mlp.SetParams(params.data(), params.size()).ok());
+    std::vector<float> prod, vd;
+    const int rows = 77;
+    RandomInputs(rows, P, 8, &prod, &vd);
+    std::vector<float> ref(rows * 3);
+    for (int r = 0; r < rows; ++r)
+      ScalarReferenceMlp(cfg, params, prod.data() + r * P, vd.data() + r * 3, &ref[r * 3]);
+    for (const GemmKernel kernel :
+         {GemmKernel::kPortable, GemmKernel::kAvx2, GemmKernel::kAvx512}) {
+      if (!GemmKernelAvailable(kernel)) continue;
+      SCOPED_TRACE(std::string(GemmKernelName(kernel)) + " hidden " + std::to_string(hidden));
+      ASSERT_TRUE(mlp.UseGemmKernel(kernel).ok());
+      std::vector<float> rgb(rows * 3, -1.f), scratch(mlp.ScratchFloats());
+      mlp.Infer(rows, prod.data(), P, vd.data(), rgb.data(), scratch.data());
+      EXPECT_EQ(std::memcmp(rgb.data(), ref.data(), rgb.size() * sizeof(float)), 0);
+      for (int r = 0; r < rows; r += 5) {
+        float one[3];
+        mlp.Infer(1, prod.data() + r * P, P, vd.data() + r * 3, one, scratch.data());
+        EXPECT_EQ(std::memcmp(one, &ref[r * 3], sizeof(one)), 0) << "row " << r;
+      }
+    }
+  }
+}
+
+// Which columns a block of 8 rows must sum over: +0 and -0 are skipped, anything else is kept
+// (denormals, NaN, infinities), in increasing order.
+TEST(MlpTest, NonZeroColumnsKeepsEveryValueThatIsNotZero) {
+  const int K = 150;  // more than one internal step of 64
+  std::vector<float> rows(8 * K, 0.f);
+  for (int k = 0; k < K; ++k) rows[(k % 8) * K + k] = k % 2 == 0 ? -0.f : 0.f;
+  const std::vector<int> kept = {3, 64, 65, 100, 149};
+  rows[0 * K + 3] = 1e-40f;  // denormal
+  rows[7 * K + 64] = std::nanf("");
+  rows[5 * K + 65] = -INFINITY;
+  rows[2 * K + 100] = -2.5f;
+  rows[1 * K + 149] = 7.f;
+  const float* x[8];
+  for (int r = 0; r < 8; ++r) x[r] = rows.data() + r * K;
+  std::vector<int> ks(K, -1);
+  const int nk = NonZeroColumns8(x, K, ks.data());
+  ASSERT_EQ(nk, static_cast<int>(kept.size()));
+  for (int i = 0; i < nk; ++i) EXPECT_EQ(ks[i], kept[i]);
+}
+
 TEST(MlpTest, RejectsBadConfigAndParams) {
   AppearanceMlp mlp;
   MlpConfig cfg;
