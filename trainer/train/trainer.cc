@@ -24,6 +24,7 @@
 #include "trainer/scenes/forward_scene.h"
 #include "trainer/scenes/sparse_capture.h"
 #include "trainer/train/adam.h"
+#include "trainer/train/camera_schedule.h"
 #include "trainer/train/checkpoint.h"
 #include "trainer/train/component_prune.h"
 #include "trainer/train/eval_progress.h"
@@ -141,49 +142,6 @@ TensorfConfig ConfigFor(const TrainOptions& o, const Dataset& data, const SceneF
   return c;
 }
 
-Image RenderView(const TensorfModel& model, const Camera& camera) {
-  Image img;
-  img.width = camera.width;
-  img.height = camera.height;
-  img.channels = 3;
-  img.pixels.resize(size_t(img.width) * img.height * 3);
-  const int rows_per_chunk = std::max(1, 16384 / std::max(1, camera.width));
-  std::vector<float> origins, dirs;
-  for (int y0 = 0; y0 < camera.height; y0 += rows_per_chunk) {
-    const int rows = std::min(rows_per_chunk, camera.height - y0);
-    const int n = rows * camera.width;
-    GenerateRowRays(camera, y0, rows, &origins, &dirs);
-    RenderRays(model, n, origins.data(), dirs.data(), &img.pixels[size_t(y0) * camera.width * 3],
-               nullptr);
-  }
-  return img;
-}
-
-EvalResult Evaluate(const TensorfModel& model, const Dataset& test, int stride, int max_views,
-                    bool keep_renders) {
-  EvalResult r;
-  const auto start = Clock::now();
-  stride = std::max(1, stride);
-  EvalProgress progress("evaluating the float model",
-                        EvalViewCount(test.views.size(), stride, max_views));
-  for (size_t v = 0; v < test.views.size(); v += size_t(stride)) {
-    if (max_views > 0 && r.views >= max_views) break;
-    Image img = RenderView(model, test.views[v].camera);
-    // A view rendered exactly has infinite PSNR; cap it so one such view cannot swamp the mean.
-    r.psnr += std::min(100.0, Psnr(img, test.views[v].rgb));
-    r.ssim += Ssim(img, test.views[v].rgb);
-    ++r.views;
-    if (keep_renders) r.renders.push_back(std::move(img));
-    progress.ViewDone();
-  }
-  if (r.views > 0) {
-    r.psnr /= r.views;
-    r.ssim /= r.views;
-    r.seconds_per_view = Seconds(start) / r.views;
-  }
-  return r;
-}
-
 namespace {
 
 bool AllFinite(const std::vector<float>& v) {
@@ -292,13 +250,6 @@ void PruneAt(int done, float lambda_e, const TrainOptions& o, const RaySet& rays
 
 }  // namespace
 
-bool RefineCamerasOn(const TrainOptions& o, const Dataset& train) {
-  if (o.refine_cameras != "auto" && o.refine_cameras != "on" && o.refine_cameras != "off")
-    throw std::invalid_argument("refine_cameras: '" + o.refine_cameras +
-                                "' is none of auto, on, off");
-  return o.refine_cameras == "on" || (o.refine_cameras == "auto" && train.estimated_poses);
-}
-
 TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& test,
                   TensorfModel* model, RateState* rate_out) {
   TrainResult result;
@@ -351,12 +302,8 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   const bool exposure_on = o.exposure_codes == "on" ||
                            (o.exposure_codes == "auto" && (model->unbounded() || model->forward()));
   progress.exposure.Reset(exposure_on ? static_cast<int>(train.views.size()) : 0);
-  const bool refine_on = RefineCamerasOn(o, train);
-  const int refine_every =
-      o.refine_cameras_every > 0 ? o.refine_cameras_every : std::max(1, o.iters / 50);
-  const int refine_from = int(std::lround(kRefineCamerasFrom * o.iters));
-  const int refine_until = int(std::lround(kRefineCamerasUntil * o.iters));
-  if (refine_on) {
+  const CameraRefineSchedule refine = CameraRefineScheduleFor(o, train);
+  if (refine.on) {
     for (const View& v : train.views) progress.cameras.push_back(v.camera);
     rays.UseCameras(&progress.cameras);
   }
@@ -543,30 +490,21 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
       opt.Reset(*model);
     }
 
-    if (refine_on && done >= refine_from && done <= refine_until &&
-        (done - refine_from) % refine_every == 0) {
-      const auto refine_start = Clock::now();
-      CameraRefineOptions ro;
-      ro.seed = o.seed + uint64_t(done);
-      ro.pixels_per_view = 256;
-      ro.steps = 1;
-      const CameraRefineStats s = RefineCameras(
-          *model, train.views, exposure_on ? progress.exposure.log_gain().data() : nullptr, ro,
-          &progress.cameras);
-      result.camera_refinement.push_back(s);
-      const int round = (done - refine_from) / refine_every;
-      if (round % 10 == 0 || done + refine_every > refine_until)
-        std::fprintf(
-            stderr,
-            "%scameras refined (round %d) at iteration %d: pixel error %.5f -> %.5f (%d steps), "
-            "largest change %.3f deg, ~%.2f px; %.1f s\n",
-            isatty(2) ? "\n" : "", round + 1, done, s.mse_before, s.mse_after, s.steps_taken,
-            s.max_rotation_deg, s.max_shift_px, Seconds(refine_start));
+    if (refine.Due(done)) {
+      RefineCamerasRound(done, refine, *model, train.views,
+                         exposure_on ? progress.exposure.log_gain().data() : nullptr,
+                         o.seed + uint64_t(done), &progress.cameras, &result.camera_refinement);
     }
     if (o.eval_every > 0 && done % o.eval_every == 0 && done < o.iters) {
       const auto eval_start = Clock::now();
-      const EvalResult e = Evaluate(*model, test, ScoredTestViewStride(o, test.views.size()),
-                                    o.max_test_views, false);
+      // With refined cameras, the held-out ones are aligned first, as for the final score.
+      const Dataset scored =
+          refine.on ? WithCameras(test, AlignHeldOutCameras(*model, train, test, progress.cameras,
+                                                            o.seed, nullptr))
+                    : Dataset();
+      const EvalResult e =
+          Evaluate(*model, refine.on ? scored : test, ScoredTestViewStride(o, test.views.size()),
+                   o.max_test_views, false);
       eval_seconds += Seconds(eval_start);
       result.psnr_curve.emplace_back(train_seconds() / 60.0, e.psnr);
       std::fprintf(stderr, "%s  test psnr %.2f dB at %.1f min (training time)\n",
@@ -592,7 +530,7 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
                  progress.exposure.views(), std::exp(*lo), std::exp(*hi));
     result.exposure_log_gain = g;
   }
-  if (refine_on) {
+  if (refine.on) {
     result.train_cameras = progress.cameras;
     result.test_cameras = AlignHeldOutCameras(*model, train, test, progress.cameras, o.seed,
                                               &result.camera_refinement);

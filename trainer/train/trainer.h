@@ -16,22 +16,12 @@
 #include "trainer/model/tensorf_model.h"
 #include "trainer/train/camera_refine.h"
 #include "trainer/train/checkpoint.h"
+#include "trainer/train/evaluate.h"
 #include "trainer/train/rate_state.h"
 #include "trainer/train/train_options.h"
 
 namespace ecrf {
 namespace trainer {
-
-struct EvalResult {
-  double psnr = 0.0;  // mean over views
-  double ssim = 0.0;  // mean over views
-  int views = 0;
-  double seconds_per_view = 0.0;
-  // Density and MLP evaluations per ray (what bounds render time), where the renderer counts them.
-  double samples_per_ray = 0.0;
-  double color_samples_per_ray = 0.0;
-  std::vector<Image> renders;  // filled when requested
-};
 
 struct TrainResult {
   int iterations = 0;
@@ -68,21 +58,12 @@ TensorfConfig ConfigFor(const TrainOptions& options, const Dataset& data);
 TrainResult Train(const TrainOptions& options, const Dataset& train, const Dataset& test,
                   TensorfModel* model, RateState* rate = nullptr);
 
-// Whether --refine-cameras is on for this dataset ("auto": when its poses were estimated).
-bool RefineCamerasOn(const TrainOptions& options, const Dataset& train);
-
 // The iteration at which the rate terms switch on: options.rate_start of the run, but never
 // before the grid is final (after the last upsample and alpha-mask update).
 int RateStartIteration(const TrainOptions& options);
 // The iteration quantization-aware training starts at (options.iters: never); never before the
 // rate phase.
 int QatStartIteration(const TrainOptions& options);
-
-// Renders every options.test_view_stride-th view and compares it with the ground truth.
-EvalResult Evaluate(const TensorfModel& model, const Dataset& test, int stride, int max_views,
-                    bool keep_renders);
-
-Image RenderView(const TensorfModel& model, const Camera& camera);
 
 // Thrown by Train when options.stop_after is reached: the checkpoint written at that
 // iteration (if it is a checkpoint iteration) is the run's state.

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "trainer/scenes/capture_scene.h"
+#include "trainer/train/camera_schedule.h"
 #include "trainer/train/trainer.h"
 
 namespace ecrf {

@@ -1,0 +1,65 @@
+#include "trainer/train/evaluate.h"
+
+#include <algorithm>
+#include <chrono>
+
+#include "trainer/data/camera.h"
+#include "trainer/data/image_metrics.h"
+#include "trainer/model/volume_render.h"
+#include "trainer/train/eval_progress.h"
+
+namespace ecrf {
+namespace trainer {
+namespace {
+
+double Seconds(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+}  // namespace
+
+Image RenderView(const TensorfModel& model, const Camera& camera) {
+  Image img;
+  img.width = camera.width;
+  img.height = camera.height;
+  img.channels = 3;
+  img.pixels.resize(size_t(img.width) * img.height * 3);
+  const int rows_per_chunk = std::max(1, 16384 / std::max(1, camera.width));
+  std::vector<float> origins, dirs;
+  for (int y0 = 0; y0 < camera.height; y0 += rows_per_chunk) {
+    const int rows = std::min(rows_per_chunk, camera.height - y0);
+    const int n = rows * camera.width;
+    GenerateRowRays(camera, y0, rows, &origins, &dirs);
+    RenderRays(model, n, origins.data(), dirs.data(), &img.pixels[size_t(y0) * camera.width * 3],
+               nullptr);
+  }
+  return img;
+}
+
+EvalResult Evaluate(const TensorfModel& model, const Dataset& test, int stride, int max_views,
+                    bool keep_renders) {
+  EvalResult r;
+  const auto start = std::chrono::steady_clock::now();
+  stride = std::max(1, stride);
+  EvalProgress progress("evaluating the float model",
+                        EvalViewCount(test.views.size(), stride, max_views));
+  for (size_t v = 0; v < test.views.size(); v += size_t(stride)) {
+    if (max_views > 0 && r.views >= max_views) break;
+    Image img = RenderView(model, test.views[v].camera);
+    // A view rendered exactly has infinite PSNR; cap it so one such view cannot swamp the mean.
+    r.psnr += std::min(100.0, Psnr(img, test.views[v].rgb));
+    r.ssim += Ssim(img, test.views[v].rgb);
+    ++r.views;
+    if (keep_renders) r.renders.push_back(std::move(img));
+    progress.ViewDone();
+  }
+  if (r.views > 0) {
+    r.psnr /= r.views;
+    r.ssim /= r.views;
+    r.seconds_per_view = Seconds(start) / r.views;
+  }
+  return r;
+}
+
+}  // namespace trainer
+}  // namespace ecrf

@@ -1,0 +1,35 @@
+// Scoring the float model on held-out views: renders them and compares with their images.
+#ifndef ECRF_TRAINER_TRAIN_EVALUATE_H_
+#define ECRF_TRAINER_TRAIN_EVALUATE_H_
+
+#include <vector>
+
+#include "trainer/data/dataset.h"
+#include "trainer/data/image_io.h"
+#include "trainer/model/tensorf_model.h"
+
+namespace ecrf {
+namespace trainer {
+
+struct EvalResult {
+  double psnr = 0.0;  // mean over views
+  double ssim = 0.0;  // mean over views
+  int views = 0;
+  double seconds_per_view = 0.0;
+  // Density and MLP evaluations per ray (what bounds render time), where the renderer counts them.
+  double samples_per_ray = 0.0;
+  double color_samples_per_ray = 0.0;
+  std::vector<Image> renders;  // filled when requested
+};
+
+// Renders every stride-th view of `test` (at most max_views, 0: all) and compares it with its
+// image.
+EvalResult Evaluate(const TensorfModel& model, const Dataset& test, int stride, int max_views,
+                    bool keep_renders);
+
+Image RenderView(const TensorfModel& model, const Camera& camera);
+
+}  // namespace trainer
+}  // namespace ecrf
+
+#endif  // ECRF_TRAINER_TRAIN_EVALUATE_H_
