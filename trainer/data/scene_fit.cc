@@ -38,14 +38,12 @@ double Volume(const double lo[3], const double hi[3]) {
 
 }  // namespace
 
-Aabb FitRegionOfInterest(const std::vector<Camera>& cameras, const double box[2][3]) {
-  Aabb out;
-  for (int a = 0; a < 3; ++a) {
-    out.min[a] = float(box[0][a]);
-    out.max[a] = float(box[1][a]);
-  }
-  if (cameras.empty()) return out;
-  const int needed = std::max(1, int(std::ceil(kRoiViewShare * double(cameras.size()))));
+namespace {
+
+// The lattice bounds (lo, hi, in lattice steps of `box`) of the kLattice^3 points of `box` that
+// `needed` cameras see; false when fewer than 8 qualify.
+bool SeenLatticeBounds(const std::vector<Camera>& cameras, const double box[2][3], int needed,
+                       int lo[3], int hi[3]) {
   double unit[3];
   for (int a = 0; a < 3; ++a) unit[a] = (box[1][a] - box[0][a]) / (kLattice - 1);
   // Per lattice slab k: whether each point qualifies (slabs in parallel, combined in order).
@@ -62,7 +60,7 @@ Aabb FitRegionOfInterest(const std::vector<Camera>& cameras, const double box[2]
       }
     }
   }
-  int lo[3] = {kLattice, kLattice, kLattice}, hi[3] = {-1, -1, -1};
+  for (int a = 0; a < 3; ++a) lo[a] = kLattice, hi[a] = -1;
   long qualified = 0;
   for (int k = 0; k < kLattice; ++k) {
     for (int j = 0; j < kLattice; ++j) {
@@ -77,11 +75,42 @@ Aabb FitRegionOfInterest(const std::vector<Camera>& cameras, const double box[2]
       }
     }
   }
-  if (qualified < 8) return out;
+  return qualified >= 8;
+}
+
+}  // namespace
+
+Aabb FitRegionOfInterest(const std::vector<Camera>& cameras, const double box[2][3]) {
+  Aabb out;
+  for (int a = 0; a < 3; ++a) {
+    out.min[a] = float(box[0][a]);
+    out.max[a] = float(box[1][a]);
+  }
+  if (cameras.empty()) return out;
+  const int needed = std::max(1, int(std::ceil(kRoiViewShare * double(cameras.size()))));
+  int lo[3], hi[3];
+  if (!SeenLatticeBounds(cameras, box, needed, lo, hi)) return out;
+  // Again on a lattice over the first one's box widened by one step: the fit then does not
+  // depend on how large the dataset box is (Instant-NGP's aabb_scale 16 made one step of the
+  // first lattice a quarter of the region, and the region 1.6x too large in volume on the
+  // rendered capture, docs/photos-to-dataset.md).
+  double fine[2][3], unit[3];
+  for (int a = 0; a < 3; ++a) {
+    const double step = (box[1][a] - box[0][a]) / (kLattice - 1);
+    fine[0][a] = std::max(box[0][a], box[0][a] + step * (lo[a] - 1));
+    fine[1][a] = std::min(box[1][a], box[0][a] + step * (hi[a] + 1));
+  }
+  int fine_lo[3], fine_hi[3];
+  const bool refined = SeenLatticeBounds(cameras, fine, needed, fine_lo, fine_hi);
+  const double(*fitted)[3] = refined ? fine : box;
+  if (refined) {
+    for (int a = 0; a < 3; ++a) lo[a] = fine_lo[a], hi[a] = fine_hi[a];
+  }
+  for (int a = 0; a < 3; ++a) unit[a] = (fitted[1][a] - fitted[0][a]) / (kLattice - 1);
   for (int a = 0; a < 3; ++a) {
     // A margin of kRoiMargin of the extent and one lattice step: what stands where the views
     // meet often reaches a little beyond (the top of an object seen from slightly above).
-    const double lo_p = box[0][a] + unit[a] * lo[a], hi_p = box[0][a] + unit[a] * hi[a];
+    const double lo_p = fitted[0][a] + unit[a] * lo[a], hi_p = fitted[0][a] + unit[a] * hi[a];
     const double margin = kRoiMargin * (hi_p - lo_p) + unit[a];
     out.min[a] = float(std::max(box[0][a], lo_p - margin));
     out.max[a] = float(std::min(box[1][a], hi_p + margin));

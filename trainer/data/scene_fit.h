@@ -24,8 +24,9 @@ inline constexpr double kRoiMargin = 0.1;
 inline constexpr double kObjectRoiShare = 0.25;
 
 // The box of the points of `box` that at least kRoiViewShare of the cameras see (in front of the
-// camera, inside its image, lens distortion applied), on a 64^3 lattice, grown by kRoiMargin of
-// its extent and one lattice step: where the frusta meet. `box` itself when fewer than 8 lattice
+// camera, inside its image, lens distortion applied), on a 64^3 lattice and then on a 64^3
+// lattice over what the first found, grown by kRoiMargin of its extent and one step of the second
+// lattice: where the frusta meet. `box` itself when fewer than 8 lattice
 // points qualify.
 Aabb FitRegionOfInterest(const std::vector<Camera>& cameras, const double box[2][3]);
 
