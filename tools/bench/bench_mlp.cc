@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "decoder/mlp.h"
 #include "tools/bench/bench_json.h"
 #include "tools/bench/cpu_peak.h"
 #include "trainer/data/file_io.h"
@@ -107,6 +108,22 @@ int RunMlpBench(int argc, char** argv) {
       dl_dproducts(products.size());
   for (float& v : dl_drgb) v = normal(rng);
 
+  // The decoder's MLP (decoder/mlp.h: separate multiplies and adds, SPEC.md 7.6) on the same
+  // weights and rows, each thread on its share of the rows. Its figure counts every term, also
+  // those it skips (inputs that are zero after a ReLU): a dense-equivalent rate.
+  dec::MlpConfig dcfg;
+  dcfg.num_products = P;
+  dcfg.feature_dim = F;
+  dcfg.feature_pe_freqs = cfg.feature_pe_freqs;
+  dcfg.viewdir_pe_freqs = cfg.viewdir_pe_freqs;
+  dcfg.hidden = H;
+  dec::AppearanceMlp decoder_mlp;
+  if (!decoder_mlp.Init(dcfg).ok() ||
+      !decoder_mlp.SetParams(head.params().data(), head.params().size()).ok()) {
+    std::fprintf(stderr, "bench mlp: the decoder MLP refused the head's parameters\n");
+    return 1;
+  }
+
   nlohmann::json report;
   report["n"] = n;
   report["chunk_rows"] = chunk;
@@ -133,6 +150,18 @@ int RunMlpBench(int argc, char** argv) {
         MedianSeconds(reps, [&] { head.Backward(n, dl_drgb.data(), dl_dproducts.data()); });
     const double inf_s =
         MedianSeconds(reps, [&] { head.Infer(n, products.data(), viewdirs.data(), rgb.data()); });
+    std::vector<std::vector<float>> scratch(threads,
+                                            std::vector<float>(decoder_mlp.ScratchFloats()));
+    const double dec_s = MedianSeconds(reps, [&] {
+#pragma omp parallel num_threads(threads)
+      {
+        const int t = omp_get_thread_num(), nt = omp_get_num_threads();
+        const int r0 = int(long(n) * t / nt), r1 = int(long(n) * (t + 1) / nt);
+        decoder_mlp.Infer(r1 - r0, products.data() + size_t(r0) * P, P,
+                          viewdirs.data() + size_t(r0) * 3, rgb.data() + size_t(r0) * 3,
+                          scratch[t].data());
+      }
+    });
     double adam_s = 0.0;
     if (adam_size > 0) {
       std::vector<float> p(static_cast<size_t>(adam_size), 0.5f), g(p.size(), 0.25f);
@@ -147,6 +176,11 @@ int RunMlpBench(int argc, char** argv) {
                 bwd_flops / bwd_s * 1e-9, 100.0 * bwd_flops / bwd_s * 1e-9 / peak);
     std::printf("  infer    %8.2f ms  %6.1f GFLOP/s (%.0f%% of peak)\n", inf_s * 1e3,
                 fwd_flops / inf_s * 1e-9, 100.0 * fwd_flops / inf_s * 1e-9 / peak);
+    std::printf(
+        "  decoder  %8.2f ms  %6.1f GFLOP/s (%.0f%% of the non-FMA peak %.1f; %s kernel, "
+        "separate multiplies and adds)\n",
+        dec_s * 1e3, fwd_flops / dec_s * 1e-9, 100.0 * fwd_flops / dec_s * 1e-9 / (peak / 2),
+        peak / 2, dec::GemmKernelName(decoder_mlp.gemm_kernel()));
     if (adam_size > 0) {
       std::printf("  adam     %8.2f ms for %ld floats (%.1f GB/s of 7 streams)\n", adam_s * 1e3,
                   adam_size, 7.0 * 4 * adam_size / adam_s * 1e-9);
@@ -160,6 +194,8 @@ int RunMlpBench(int argc, char** argv) {
     r["backward_gflops"] = bwd_flops / bwd_s * 1e-9;
     r["infer_ms"] = inf_s * 1e3;
     r["infer_gflops"] = fwd_flops / inf_s * 1e-9;
+    r["decoder_infer_ms"] = dec_s * 1e3;
+    r["decoder_infer_gflops"] = fwd_flops / dec_s * 1e-9;
     if (adam_size > 0) r["adam_ms"] = adam_s * 1e3;
   }
   omp_set_num_threads(saved_threads);
