@@ -23,7 +23,8 @@ enum class GemmKernel : int {
 // r and j < ncols (a multiple of 8), then max(0, .) when relu. ks lists the terms in increasing k:
 // nullptr for all of [0, nk) (a dense product), else only the k where some x[r][k] is not zero
 // (NonZeroColumns8). A term left out adds x * w = +-0 (the weights are finite), which leaves
-// every sum's value unchanged, so both give the same results (SPEC.md 7.6 sums over every k).
+// every sum's value unchanged (at most a zero sum's sign, which neither the ReLU nor the sigmoid
+// after it tells apart), so both give the same results (SPEC.md 7.6 sums over every k).
 using Gemm8Fn = void (*)(const float* const* x, const int* ks, int nk, const float* wt, int ldw,
                          const float* bias, int ncols, bool relu, float* const* y);
 

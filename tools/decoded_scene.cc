@@ -13,14 +13,6 @@
 
 namespace ecrf {
 namespace tools {
-namespace {
-
-double SecondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-}  // namespace
-
 LoadedScene DecodeSceneBytes(std::vector<uint8_t> bytes, const std::string& name,
                              dec::GridStorage storage, uint64_t max_memory_bytes,
                              uint64_t work_per_byte) {
@@ -34,7 +26,7 @@ LoadedScene DecodeSceneBytes(std::vector<uint8_t> bytes, const std::string& name
   const auto start = std::chrono::steady_clock::now();
   const Status st =
       dec::DecodeScene(s.bytes.data(), s.bytes.size(), options, s.field.get(), &s.info);
-  s.decode_seconds = SecondsSince(start);
+  s.decode_seconds = trainer::SecondsSince(start);
   if (!st.ok()) {
     throw std::runtime_error(name + ": cannot decode (" + ErrorCodeName(st.code()) +
                              "): " + st.message());
@@ -131,7 +123,7 @@ trainer::EvalResult EvaluateDecoded(const dec::SceneField& scene, const trainer:
     }
     const auto start = std::chrono::steady_clock::now();
     trainer::Image img = RenderDecoded(scene, camera, options, &all);
-    render_seconds += SecondsSince(start);
+    render_seconds += trainer::SecondsSince(start);
     if (image_scale > 1)
       img = ResizeBilinear(img, test.views[v].rgb.width, test.views[v].rgb.height);
     r.psnr += std::min(100.0, trainer::Psnr(img, test.views[v].rgb));

@@ -12,6 +12,11 @@
 namespace ecrf {
 namespace trainer {
 
+// Seconds from `start` until now (steady clock).
+inline double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
 // Views an evaluation of every stride-th of n views, at most max_views (0 = all), renders.
 int EvalViewCount(size_t n, int stride, int max_views);
 

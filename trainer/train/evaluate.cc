@@ -10,14 +10,6 @@
 
 namespace ecrf {
 namespace trainer {
-namespace {
-
-double Seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
-
-}  // namespace
-
 Image RenderView(const TensorfModel& model, const Camera& camera) {
   Image img;
   img.width = camera.width;
@@ -56,7 +48,7 @@ EvalResult Evaluate(const TensorfModel& model, const Dataset& test, int stride, 
   if (r.views > 0) {
     r.psnr /= r.views;
     r.ssim /= r.views;
-    r.seconds_per_view = Seconds(start) / r.views;
+    r.seconds_per_view = SecondsSince(start) / r.views;
   }
   return r;
 }

@@ -36,10 +36,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double Seconds(Clock::time_point since) {
-  return std::chrono::duration<double>(Clock::now() - since).count();
-}
-
 std::array<int, 3> ResolutionFor(long voxels, const Aabb& box) {
   double lo[3], hi[3];
   int res[3];
@@ -245,7 +241,7 @@ void PruneAt(int done, float lambda_e, const TrainOptions& o, const RaySet& rays
                "%spruning at iteration %d (lambda_e %g): %d components and %d hidden unit pairs "
                "removed; density %d,%d,%d, appearance %d,%d,%d, head %d wide remain (%.1f s)\n",
                isatty(2) ? "\n" : "", done, lambda_e, d.dropped, hd.dropped, dr[0], dr[1], dr[2],
-               ar[0], ar[1], ar[2], model->head().config().hidden, Seconds(start));
+               ar[0], ar[1], ar[2], model->head().config().hidden, SecondsSince(start));
 }
 
 }  // namespace
@@ -358,7 +354,7 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   TrainStepStats stats;
   double eval_seconds = 0.0;
   // Training time of this process plus what the checkpoint had accumulated.
-  auto train_seconds = [&] { return progress.train_seconds + Seconds(start) - eval_seconds; };
+  auto train_seconds = [&] { return progress.train_seconds + SecondsSince(start) - eval_seconds; };
   // The model with everything an exact resume needs (train_state.h).
   auto save_checkpoint = [&](int done, double seconds) {
     TrainProgress now = progress;
@@ -438,7 +434,7 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
     if (done % o.progress_every == 0 || done == o.iters) {
       const double mse = mse_sum / std::max(1, mse_count);
       result.final_train_psnr = -10.0 * std::log10(std::max(mse, 1e-12));
-      const double spi = Seconds(interval_start) / std::max(1, mse_count);
+      const double spi = SecondsSince(interval_start) / std::max(1, mse_count);
       PrintProgress(done, o.iters, mse, result.final_train_psnr, *model, stats, spi,
                     train_seconds(), rate.active ? rate.last_bits / 8e6 : -1.0);
       mse_sum = 0.0;
@@ -505,7 +501,7 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
       const EvalResult e =
           Evaluate(*model, refine.on ? scored : test, ScoredTestViewStride(o, test.views.size()),
                    o.max_test_views, false);
-      eval_seconds += Seconds(eval_start);
+      eval_seconds += SecondsSince(eval_start);
       result.psnr_curve.emplace_back(train_seconds() / 60.0, e.psnr);
       std::fprintf(stderr, "%s  test psnr %.2f dB at %.1f min (training time)\n",
                    isatty(2) ? "\n" : "", e.psnr, result.psnr_curve.back().first);
