@@ -221,6 +221,14 @@ void AddTrainFlags(CLI::App* app, TrainFlags* f) {
       ->check(CLI::Range(0, 100000000))
       ->default_str("0")
       ->group(schedule);
+  app->add_option("--camera-warmup-iters", o.camera_warmup_iters,
+                  "when the cameras are refined: first train a field for N iterations and refine "
+                  "the cameras against it, then train the run's field afresh from those cameras "
+                  "(RUN_DIR/warmup/; -1: iterations / 2, 0: no warm-up)")
+      ->type_name("N")
+      ->check(CLI::Range(-1, 100000000))
+      ->default_str("-1")
+      ->group(schedule);
   app->add_option("--weight-threshold", o.weight_threshold,
                   "colour (run the MLP on) only samples of larger weight, in training and in the "
                   "file; auto: 0.003 for unbounded scenes, 1e-4 (TensoRF) for the others")

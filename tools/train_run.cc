@@ -18,6 +18,7 @@
 #include "tools/train_flags.h"
 #include "trainer/data/file_io.h"
 #include "trainer/data/image_io.h"
+#include "trainer/train/camera_warmup.h"
 #include "trainer/train/checkpoint.h"
 #include "trainer/train/eval_progress.h"
 #include "trainer/train/train_config.h"
@@ -36,9 +37,19 @@ std::string FormatDb(double db) {
 
 // --resume continues the run the checkpoint holds: a changed setting would silently train a
 // different model from iteration N on, so it is refused unless the user accepts it.
+// A run stopped before its main pass wrote a checkpoint (in its camera warm-up, which keeps its
+// own) is checked against the run's config.json instead.
 void CheckResumedSettings(const trainer::TrainOptions& o) {
-  const std::string path = o.out_dir + "/checkpoint.ckpt";
-  const trainer::CheckpointRunInfo info = trainer::ReadCheckpointRunInfo(path);
+  std::string path = o.out_dir + "/checkpoint.ckpt";
+  trainer::CheckpointRunInfo info;
+  if (FileExists(path)) {
+    info = trainer::ReadCheckpointRunInfo(path);
+  } else {
+    path = o.out_dir + "/config.json";
+    const std::vector<uint8_t> text = trainer::ReadWholeFile(path);
+    info.config = trainer::TrainConfigFromJson(std::string(text.begin(), text.end()), path);
+    info.has_config = true;
+  }
   if (!info.has_config) {
     std::fprintf(
         stderr,
@@ -52,7 +63,7 @@ void CheckResumedSettings(const trainer::TrainOptions& o) {
   for (const std::string& c : changed) list += "\n  " + c;
   if (!o.accept_config_change) {
     throw std::invalid_argument(
-        "--resume: these settings differ from the checkpoint's (" + path + "):" + list +
+        "--resume: these settings differ from the run's (" + path + "):" + list +
         "\nresume with the run's settings (see " + o.out_dir +
         "/config.json), or add --accept-config-change to continue with the new ones");
   }
@@ -73,6 +84,24 @@ void RefuseExistingRun(const std::string& out_dir) {
                               "another -o");
 }
 
+// The scene model and region of interest FitScene chose, for the log.
+void PrintSceneFit(const trainer::SceneFit& fit) {
+  if (fit.model == SceneModel::kForward) {
+    std::fprintf(
+        stderr,
+        "scene model: forward (%s); NDC box [%.3g %.3g %.3g] - [%.3g %.3g %.3g], near plane %.3g\n",
+        fit.reason.c_str(), fit.roi.min[0], fit.roi.min[1], fit.roi.min[2], fit.roi.max[0],
+        fit.roi.max[1], fit.roi.max[2], fit.ndc.near_plane);
+  } else {
+    std::fprintf(
+        stderr,
+        "scene model: %s (%s); fitted region of interest [%.3g %.3g %.3g] - [%.3g %.3g %.3g], "
+        "%.2f%% of the dataset box's volume\n",
+        SceneModelName(fit.model), fit.reason.c_str(), fit.roi.min[0], fit.roi.min[1],
+        fit.roi.min[2], fit.roi.max[0], fit.roi.max[1], fit.roi.max[2], 100 * fit.roi_share);
+  }
+}
+
 }  // namespace
 
 nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
@@ -80,7 +109,8 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
   if (trainer::DataSource(options).empty()) {
     throw std::invalid_argument("no data: --data DIR or --scene builtin|capture|forward");
   }
-  if (options.resume && !FileExists(options.out_dir + "/checkpoint.ckpt")) {
+  if (options.resume && !FileExists(options.out_dir + "/checkpoint.ckpt") &&
+      !FileExists(trainer::CameraWarmupDir(options) + "/checkpoint.ckpt")) {
     throw std::invalid_argument("--resume: no checkpoint to resume from (" + options.out_dir +
                                 "/checkpoint.ckpt does not exist)");
   }
@@ -90,8 +120,8 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
   std::printf("settings: %s\n", DescribeSettings(options).c_str());
   std::fflush(stdout);
 
-  const trainer::Dataset train = trainer::LoadTrainingViews(options, "train");
-  const trainer::Dataset test =
+  trainer::Dataset train = trainer::LoadTrainingViews(options, "train");
+  trainer::Dataset test =
       trainer::DownscaleViews(trainer::LoadTrainingViews(options, "test"), options.eval_downscale);
   trainer::TrainOptions o = options;
   o.test_view_stride = trainer::ScoredTestViewStride(options, test.views.size());
@@ -116,21 +146,16 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
   std::fprintf(stderr,
                "configuration: %s/config.json (--print-config prints it without training)\n",
                options.out_dir.c_str());
-  const trainer::SceneFit fit = trainer::FitScene(o.scene_type, train);
-  if (fit.model == SceneModel::kForward) {
-    std::fprintf(
-        stderr,
-        "scene model: forward (%s); NDC box [%.3g %.3g %.3g] - [%.3g %.3g %.3g], near plane %.3g\n",
-        fit.reason.c_str(), fit.roi.min[0], fit.roi.min[1], fit.roi.min[2], fit.roi.max[0],
-        fit.roi.max[1], fit.roi.max[2], fit.ndc.near_plane);
-  } else {
-    std::fprintf(
-        stderr,
-        "scene model: %s (%s); fitted region of interest [%.3g %.3g %.3g] - [%.3g %.3g %.3g], "
-        "%.2f%% of the dataset box's volume\n",
-        SceneModelName(fit.model), fit.reason.c_str(), fit.roi.min[0], fit.roi.min[1],
-        fit.roi.min[2], fit.roi.max[0], fit.roi.max[1], fit.roi.max[2], 100 * fit.roi_share);
+  trainer::SceneFit fit = trainer::FitScene(o.scene_type, train);
+  PrintSceneFit(fit);
+  const bool warmed_up = trainer::WarmUpCameras(o, fit, &train, &test);
+  if (warmed_up) {
+    fit = trainer::FitScene(o.scene_type, train);  // on the refined cameras
+    PrintSceneFit(fit);
   }
+  // A run killed in its warm-up has no checkpoint of its own yet: it starts afresh from the
+  // warm-up's cameras, as the uninterrupted run did.
+  o.resume = options.resume && FileExists(options.out_dir + "/checkpoint.ckpt");
   trainer::TensorfModel model(trainer::ConfigFor(o, train, fit));
   trainer::RateState rate;
   const trainer::TrainResult r = trainer::Train(o, train, test, &model, &rate);
@@ -186,6 +211,7 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
   m["preset"] = o.preset;
   m["data"] = trainer::DataSource(o);
   m["iterations"] = r.iterations;
+  m["camera_warmup_iters"] = warmed_up ? trainer::CameraWarmupIterations(o, train) : 0;
   m["seed"] = o.seed;
   m["test_view_stride"] = o.test_view_stride;
   m["max_test_views"] = o.max_test_views;

@@ -123,6 +123,49 @@ TEST_F(TrainOutputTest, EvalDownscaleIsRecordedWithSamplesPerRay) {
   EXPECT_NE(testing::internal::GetCapturedStderr().find("--eval-downscale"), std::string::npos);
 }
 
+std::string ReadAll(const std::string& path) {
+  std::string text;
+  if (std::FILE* f = std::fopen(path.c_str(), "rb")) {
+    char buffer[4096];
+    for (size_t n; (n = std::fread(buffer, 1, sizeof(buffer), f)) > 0;) text.append(buffer, n);
+    std::fclose(f);
+  }
+  return text;
+}
+
+// A run with a camera warm-up (RUN/warmup/) resumes to the file the uninterrupted run writes,
+// byte for byte: stopped in its main pass; then with the main pass's checkpoint gone, as when a
+// run is killed before its first one (the finished warm-up is reloaded, the main pass starts
+// afresh); then from the main pass's checkpoint.
+TEST_F(TrainOutputTest, RunWithCameraWarmUpResumesToTheSameFile) {
+  // One refinement round per pass: the 60 views' rounds are most of the time.
+  // clang-format off
+  const std::vector<std::string> flags = {
+      "train", "--scene", "builtin", "--iters", "160", "--batch", "512", "--final-grid", "48",
+      "--lambda-e", "0", "--max-test-views", "1", "--refine-cameras", "on",
+      "--refine-cameras-every", "100", "--camera-warmup-iters", "80", "--checkpoint-every", "40"};
+  // clang-format on
+  auto with = [&flags](std::vector<std::string> more) {
+    std::vector<std::string> all = flags;
+    all.insert(all.end(), more.begin(), more.end());
+    return all;
+  };
+  const std::string whole = root_ + "/whole", parts = root_ + "/parts";
+  ASSERT_EQ(Invoke(RunTrain, with({"-o", whole})), 0);
+  const std::string file = ReadAll(whole + "/scene.ecrf");
+  ASSERT_FALSE(file.empty());
+  EXPECT_TRUE(FileExists(whole + "/warmup/checkpoint.ckpt"));
+  EXPECT_EQ(nlohmann::json::parse(ReadAll(whole + "/metrics.json"))["camera_warmup_iters"], 80);
+
+  ASSERT_EQ(Invoke(RunTrain, with({"--stop-after", "100", "-o", parts})), 0);
+  EXPECT_FALSE(FileExists(parts + "/scene.ecrf"));
+  ASSERT_EQ(std::remove((parts + "/checkpoint.ckpt").c_str()), 0);
+  ASSERT_EQ(Invoke(RunTrain, with({"--stop-after", "100", "--resume", "-o", parts})), 0);
+  EXPECT_FALSE(FileExists(parts + "/scene.ecrf"));
+  ASSERT_EQ(Invoke(RunTrain, with({"--resume", "-o", parts})), 0);
+  EXPECT_TRUE(ReadAll(parts + "/scene.ecrf") == file) << "the resumed run wrote another file";
+}
+
 TEST(OutputDirectory, ProbesAndRemovesOnlyWhatItCreatedWhileEmpty) {
   char tmpl[] = "/tmp/ecrf_outdir_XXXXXX";
   ASSERT_NE(mkdtemp(tmpl), nullptr);

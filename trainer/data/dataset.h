@@ -28,6 +28,9 @@ struct Dataset {
   // layouts) and are a few pixels off, unlike the rendered cameras of the Blender layout and of
   // the procedural scenes: what --refine-cameras auto goes by.
   bool estimated_poses = false;
+  // The cameras were refined already, by a camera warm-up (trainer/train/camera_warmup.h): the
+  // run refines them from later on (kRefineCamerasFromWarmedUp).
+  bool warmed_up_cameras = false;
 };
 
 // A view before its image is decoded: what the JSON says.

@@ -27,7 +27,8 @@ CameraRefineSchedule CameraRefineScheduleFor(const TrainOptions& o, const Datase
   CameraRefineSchedule s;
   s.on = RefineCamerasOn(o, train);
   s.every = o.refine_cameras_every > 0 ? o.refine_cameras_every : std::max(1, o.iters / 50);
-  s.from = int(std::lround(kRefineCamerasFrom * o.iters));
+  s.from = int(std::lround(
+      (train.warmed_up_cameras ? kRefineCamerasFromWarmedUp : kRefineCamerasFrom) * o.iters));
   s.until = int(std::lround(kRefineCamerasUntil * o.iters));
   return s;
 }

@@ -44,6 +44,7 @@ void VisitSettings(TrainOptions& o, F&& f) {
   f("lr_exposure", o.lr_exposure);
   f("refine_cameras", o.refine_cameras);
   f("refine_cameras_every", o.refine_cameras_every);
+  f("camera_warmup_iters", o.camera_warmup_iters);
   f("weight_threshold", o.weight_threshold);
   f("fine_grid_at_rate_points", o.fine_grid_at_rate_points);
   f("density_rank", o.density_rank);

@@ -29,6 +29,9 @@ inline constexpr float kUnboundedTvWeight = 1.f;
 // The stretch of a run in which cameras are refined (shares of the iterations): from early coarse
 // grids (a wide basin) to before the last steps, which then settle the field on final cameras.
 inline constexpr float kRefineCamerasFrom = 0.2f, kRefineCamerasUntil = 0.8f;
+// After a camera warm-up the cameras are close already: refining them against the young field of
+// the first half moved them away again (docs/photos-to-dataset.md).
+inline constexpr float kRefineCamerasFromWarmedUp = 0.5f;
 
 struct TrainOptions {
   std::string preset = "fast";
@@ -90,6 +93,11 @@ struct TrainOptions {
   // move together (a few large rounds left the field, blurred by the wrong cameras, to hold them
   // back between rounds).
   int refine_cameras_every = 0;
+  // When the cameras are refined, a warm-up pass first trains a field for this many iterations
+  // (no rate objective) and refines the cameras against it; the run then trains a fresh field
+  // from those cameras (trainer/train/camera_warmup.h). -1: auto (iters / 2 when the cameras are
+  // refined); 0: no warm-up.
+  int camera_warmup_iters = -1;
   // The weight above which a sample is coloured by the MLP, in training and in the file's header
   // (SPEC 7.5). < 0: auto, kUnboundedWeightThreshold for unbounded scenes (whose hazy background
   // otherwise sends ~100 samples a ray through the MLP), TensoRF's 1e-4 for the others.

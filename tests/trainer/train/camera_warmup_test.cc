@@ -1,0 +1,144 @@
+#include "trainer/train/camera_warmup.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <Eigen/Geometry>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "trainer/data/scene_fit.h"
+#include "trainer/train/camera_schedule.h"
+#include "trainer/train/trainer.h"
+
+namespace ecrf {
+namespace trainer {
+namespace {
+
+Eigen::Matrix3d RotationOf(const Camera& c) {
+  Eigen::Matrix3d r;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) r(i, j) = c.c2w[i][j];
+  return r;
+}
+
+double AngleDeg(const Camera& a, const Camera& b) {
+  return Eigen::AngleAxisd(RotationOf(a).transpose() * RotationOf(b)).angle() * 180.0 / M_PI;
+}
+
+double MeanAngleDeg(const Dataset& data, const std::vector<Camera>& truth) {
+  double sum = 0.0;
+  for (size_t v = 0; v < truth.size(); ++v) sum += AngleDeg(data.views[v].camera, truth[v]);
+  return sum / double(truth.size());
+}
+
+bool SameCameras(const Dataset& a, const Dataset& b) {
+  if (a.views.size() != b.views.size()) return false;
+  for (size_t v = 0; v < a.views.size(); ++v) {
+    const Camera &x = a.views[v].camera, &y = b.views[v].camera;
+    if (std::memcmp(x.c2w, y.c2w, sizeof(x.c2w)) != 0 || x.fx != y.fx || x.fy != y.fy ||
+        x.cx != y.cx || x.cy != y.cy || x.k1 != y.k1 || x.p1 != y.p1 || x.p2 != y.p2)
+      return false;
+  }
+  return true;
+}
+
+TEST(CameraWarmupTest, RunsOnlyWhenTheCamerasAreRefined) {
+  TrainOptions o = PresetOptions("tiny");
+  o.iters = 1500;
+  Dataset data;
+  EXPECT_EQ(CameraWarmupIterations(o, data), 0);  // exact (rendered) cameras are not refined
+  data.estimated_poses = true;
+  EXPECT_EQ(CameraWarmupIterations(o, data), 750);  // auto: half the run
+  o.camera_warmup_iters = 300;
+  EXPECT_EQ(CameraWarmupIterations(o, data), 300);
+  o.camera_warmup_iters = 0;
+  EXPECT_EQ(CameraWarmupIterations(o, data), 0);
+  o.camera_warmup_iters = -1;
+  o.refine_cameras = "off";
+  EXPECT_EQ(CameraWarmupIterations(o, data), 0);
+  o.refine_cameras = "on";
+  data.estimated_poses = false;
+  EXPECT_EQ(CameraWarmupIterations(o, data), 750);
+  o.out_dir = "run";
+  EXPECT_EQ(CameraWarmupDir(o), "run/warmup");
+  Dataset train = data, test = data;
+  o.camera_warmup_iters = 0;
+  EXPECT_FALSE(WarmUpCameras(o, SceneFit(), &train, &test));  // nothing due: nothing trained
+
+  // A run an older ecrf started (a checkpoint, no warm-up beside it) resumes without one: its
+  // field was trained on the dataset's cameras.
+  char tmpl[] = "/tmp/ecrf_warmup_old_XXXXXX";
+  ASSERT_NE(mkdtemp(tmpl), nullptr);
+  o.out_dir = tmpl;
+  o.camera_warmup_iters = -1;
+  o.resume = true;
+  std::fclose(std::fopen((o.out_dir + "/checkpoint.ckpt").c_str(), "wb"));
+  EXPECT_FALSE(WarmUpCameras(o, SceneFit(), &train, &test));
+  EXPECT_FALSE(train.warmed_up_cameras);
+  std::system(("rm -rf '" + o.out_dir + "'").c_str());
+}
+
+// The built-in scene's training cameras turned by about a degree, as structure from motion leaves
+// them: the warm-up brings them back part of the way (as far as a short, coarse field lets it), and
+// a finished warm-up resumed gives the same cameras bit for bit (the run trains from them, so its
+// resume depends on it).
+TEST(CameraWarmupTest, TurnedCamerasComeBackAndAFinishedWarmUpReloadsBitForBit) {
+  TrainOptions o = PresetOptions("tiny");
+  o.procedural_scene = "builtin";
+  o.builtin_size = 48;
+  o.builtin_views = 16;
+  o.iters = 400;
+  o.camera_warmup_iters = 200;
+  o.refine_cameras = "on";
+  o.refine_cameras_every = 15;
+  o.batch_rays = 1024;
+  o.progress_every = 1000;
+  o.mlp_hidden = 32;
+  char tmpl[] = "/tmp/ecrf_warmup_XXXXXX";
+  ASSERT_NE(mkdtemp(tmpl), nullptr);
+  o.out_dir = tmpl;
+
+  Dataset train = LoadTrainingViews(o, "train");
+  Dataset test = LoadTrainingViews(o, "test");
+  std::vector<Camera> truth;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> jitter(0.0, 0.012);
+  for (View& v : train.views) {
+    truth.push_back(v.camera);
+    const Eigen::Vector3d w(jitter(rng), jitter(rng), jitter(rng));
+    const Eigen::Matrix3d r =
+        RotationOf(v.camera) * Eigen::AngleAxisd(w.norm(), w.normalized()).toRotationMatrix();
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) v.camera.c2w[i][j] = r(i, j);
+  }
+  const double before = MeanAngleDeg(train, truth);
+  const SceneFit fit = FitScene(o.scene_type, train);
+
+  Dataset a_train = train, a_test = test;
+  ASSERT_TRUE(WarmUpCameras(o, fit, &a_train, &a_test));
+  const double after = MeanAngleDeg(a_train, truth);
+  std::printf("mean rotation error %.3f -> %.3f deg\n", before, after);
+  EXPECT_LT(after, 0.8 * before);
+  EXPECT_EQ(access((o.out_dir + "/warmup/checkpoint.ckpt").c_str(), R_OK), 0);
+  EXPECT_FALSE(SameCameras(a_test, test));  // the held-out cameras were aligned too
+  EXPECT_TRUE(a_train.warmed_up_cameras);
+  EXPECT_EQ(CameraRefineScheduleFor(o, a_train).from, 200);  // the run refines from half-way
+  EXPECT_EQ(CameraRefineScheduleFor(o, train).from, 80);
+
+  TrainOptions resumed = o;
+  resumed.resume = true;
+  Dataset b_train = train, b_test = test;
+  ASSERT_TRUE(WarmUpCameras(resumed, fit, &b_train, &b_test));
+  EXPECT_TRUE(SameCameras(a_train, b_train));
+  EXPECT_TRUE(SameCameras(a_test, b_test));
+  std::system(("rm -rf '" + o.out_dir + "'").c_str());
+}
+
+}  // namespace
+}  // namespace trainer
+}  // namespace ecrf
