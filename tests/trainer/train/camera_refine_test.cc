@@ -8,6 +8,7 @@
 #include <random>
 #include <vector>
 
+#include "tests/common/camera_angle.h"
 #include "trainer/scenes/capture_scene.h"
 #include "trainer/train/camera_schedule.h"
 #include "trainer/train/trainer.h"
@@ -16,16 +17,8 @@ namespace ecrf {
 namespace trainer {
 namespace {
 
-Eigen::Matrix3d RotationOf(const Camera& c) {
-  Eigen::Matrix3d r;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) r(i, j) = c.c2w[i][j];
-  return r;
-}
-
-double AngleDeg(const Camera& a, const Camera& b) {
-  return Eigen::AngleAxisd(RotationOf(a).transpose() * RotationOf(b)).angle() * 180.0 / M_PI;
-}
+using testing_camera::AngleDeg;
+using testing_camera::RotationOf;
 
 // A short training of the built-in scene: a field with texture to align against (trained once for
 // the tests that need one).

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "tests/common/camera_angle.h"
 #include "trainer/data/scene_fit.h"
 #include "trainer/train/camera_schedule.h"
 #include "trainer/train/trainer.h"
@@ -19,16 +20,8 @@ namespace ecrf {
 namespace trainer {
 namespace {
 
-Eigen::Matrix3d RotationOf(const Camera& c) {
-  Eigen::Matrix3d r;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) r(i, j) = c.c2w[i][j];
-  return r;
-}
-
-double AngleDeg(const Camera& a, const Camera& b) {
-  return Eigen::AngleAxisd(RotationOf(a).transpose() * RotationOf(b)).angle() * 180.0 / M_PI;
-}
+using testing_camera::AngleDeg;
+using testing_camera::RotationOf;
 
 double MeanAngleDeg(const Dataset& data, const std::vector<Camera>& truth) {
   double sum = 0.0;
