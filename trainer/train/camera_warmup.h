@@ -11,6 +11,8 @@
 #ifndef ECRF_TRAINER_TRAIN_CAMERA_WARMUP_H_
 #define ECRF_TRAINER_TRAIN_CAMERA_WARMUP_H_
 
+#include <string>
+
 #include "trainer/data/dataset.h"
 #include "trainer/data/scene_fit.h"
 #include "trainer/train/train_options.h"
