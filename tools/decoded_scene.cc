@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdio>
 #include <stdexcept>
+#include <vector>
 
 #include "trainer/data/camera.h"
 #include "trainer/data/file_io.h"
@@ -103,13 +104,11 @@ trainer::EvalResult EvaluateDecoded(const dec::SceneField& scene, const trainer:
                                     bool keep_renders, int image_scale, dec::RenderStats* stats) {
   trainer::EvalResult r;
   double render_seconds = 0.0;
-  stride = std::max(1, stride);
   image_scale = std::max(1, image_scale);
   dec::RenderStats all;
-  trainer::EvalProgress progress("evaluating the decoded file",
-                                 trainer::EvalViewCount(test.views.size(), stride, max_views));
-  for (size_t v = 0; v < test.views.size(); v += size_t(stride)) {
-    if (max_views > 0 && r.views >= max_views) break;
+  const std::vector<size_t> views = trainer::EvalViews(test.views.size(), stride, max_views);
+  trainer::EvalProgress progress("evaluating the decoded file", int(views.size()));
+  for (const size_t v : views) {
     trainer::Camera camera = test.views[v].camera;
     if (image_scale > 1) {
       camera.width = std::max(1, camera.width / image_scale);

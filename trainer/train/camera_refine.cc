@@ -133,8 +133,8 @@ std::vector<Pixel> ChoosePixels(const Image& im, int n, uint64_t seed) {
 // residuals gain * render - image, 3 per pixel, job after job.
 class ResidualRenderer {
  public:
-  ResidualRenderer(const TensorfModel& model, const std::vector<View>& views, const float* log_gain,
-                   const std::vector<std::vector<Pixel>>& pixels)
+  ResidualRenderer(const TensorfModel& model, const std::vector<const View*>& views,
+                   const float* log_gain, const std::vector<std::vector<Pixel>>& pixels)
       : model_(model), views_(views), log_gain_(log_gain), pixels_(pixels) {}
 
   void Add(const Camera& camera, size_t view) { jobs_.push_back({camera, view}); }
@@ -164,7 +164,7 @@ class ResidualRenderer {
         for (int c = 0; c < 3; ++c) {
           // The clamp of TrainStep: a gain scales the pixel before it.
           const double shown = std::min(std::max(gain[c] * rgb[3 * at + c], 0.0), 1.0);
-          r[3 * Eigen::Index(i) + c] = shown - views_[j.view].rgb.at(px[i].x, px[i].y, c);
+          r[3 * Eigen::Index(i) + c] = shown - views_[j.view]->rgb.at(px[i].x, px[i].y, c);
         }
       }
       out.push_back(std::move(r));
@@ -179,7 +179,7 @@ class ResidualRenderer {
     size_t view;
   };
   const TensorfModel& model_;
-  const std::vector<View>& views_;
+  const std::vector<const View*>& views_;
   const float* log_gain_;
   const std::vector<std::vector<Pixel>>& pixels_;
   std::vector<Job> jobs_;
@@ -227,9 +227,14 @@ bool SharedIntrinsics(const std::vector<Camera>& cameras) {
   return true;
 }
 
-CameraRefineStats RefineCameras(const TensorfModel& model, const std::vector<View>& views,
-                                const float* log_gain, const CameraRefineOptions& options,
-                                std::vector<Camera>* cameras) {
+namespace {
+
+// RefineCameras on views given by pointer: the held-out alignment refines a subset of a dataset's
+// views without copying their images.
+CameraRefineStats RefineViewCameras(const TensorfModel& model,
+                                    const std::vector<const View*>& views, const float* log_gain,
+                                    const CameraRefineOptions& options,
+                                    std::vector<Camera>* cameras) {
   if (cameras->size() != views.size())
     throw std::invalid_argument("RefineCameras: one camera per view is needed");
   CameraRefineStats stats;
@@ -237,7 +242,7 @@ CameraRefineStats RefineCameras(const TensorfModel& model, const std::vector<Vie
   if (n_views == 0) return stats;
   std::vector<std::vector<Pixel>> pixels(n_views);
   for (size_t v = 0; v < n_views; ++v)
-    pixels[v] = ChoosePixels(views[v].rgb, options.pixels_per_view, options.seed * 7919 + v);
+    pixels[v] = ChoosePixels(views[v]->rgb, options.pixels_per_view, options.seed * 7919 + v);
   ResidualRenderer render(model, views, log_gain, pixels);
   const bool lens = options.intrinsics && n_views > 1 && SharedIntrinsics(*cameras);
   const std::vector<Camera> start = *cameras;
@@ -358,6 +363,16 @@ CameraRefineStats RefineCameras(const TensorfModel& model, const std::vector<Vie
   return stats;
 }
 
+}  // namespace
+
+CameraRefineStats RefineCameras(const TensorfModel& model, const std::vector<View>& views,
+                                const float* log_gain, const CameraRefineOptions& options,
+                                std::vector<Camera>* cameras) {
+  std::vector<const View*> pointers;
+  for (const View& v : views) pointers.push_back(&v);
+  return RefineViewCameras(model, pointers, log_gain, options, cameras);
+}
+
 std::vector<Camera> FollowRefinedCameras(const std::vector<Camera>& before,
                                          const std::vector<Camera>& after,
                                          const std::vector<Camera>& moved) {
@@ -393,7 +408,7 @@ std::vector<Camera> FollowRefinedCameras(const std::vector<Camera>& before,
 
 std::vector<Camera> AlignHeldOutCameras(const TensorfModel& model, const Dataset& train,
                                         const Dataset& test, const std::vector<Camera>& refined,
-                                        uint64_t seed,
+                                        const std::vector<size_t>& scored, uint64_t seed,
                                         std::vector<CameraRefineStats>* stats_or_null) {
   std::vector<Camera> before, held_out;
   for (const View& v : train.views) before.push_back(v.camera);
@@ -419,11 +434,21 @@ std::vector<Camera> AlignHeldOutCameras(const TensorfModel& model, const Dataset
   o.steps = 6;
   o.intrinsics = false;
   o.seed = seed + 1000003;
-  const CameraRefineStats s = RefineCameras(model, test.views, nullptr, o, &held_out);
+  std::vector<const View*> views;
+  std::vector<Camera> cameras;
+  for (const size_t v : scored) {
+    if (v >= test.views.size())
+      throw std::invalid_argument("AlignHeldOutCameras: scored view out of range");
+    views.push_back(&test.views[v]);
+    cameras.push_back(held_out[v]);
+  }
+  const CameraRefineStats s = RefineViewCameras(model, views, nullptr, o, &cameras);
+  for (size_t i = 0; i < scored.size(); ++i) held_out[scored[i]] = cameras[i];
   std::fprintf(stderr,
-               "held-out cameras aligned to the field: pixel error %.5f -> %.5f (%d steps), "
-               "largest change %.3f deg, ~%.2f px\n",
-               s.mse_before, s.mse_after, s.steps_taken, s.max_rotation_deg, s.max_shift_px);
+               "held-out cameras aligned to the field (the %zu scored of %zu): pixel error %.5f "
+               "-> %.5f (%d steps), largest change %.3f deg, ~%.2f px\n",
+               scored.size(), test.views.size(), s.mse_before, s.mse_after, s.steps_taken,
+               s.max_rotation_deg, s.max_shift_px);
   if (stats_or_null) stats_or_null->push_back(s);
   return held_out;
 }

@@ -57,11 +57,14 @@ std::vector<Camera> FollowRefinedCameras(const std::vector<Camera>& before,
 
 // The held-out cameras of `test` for scoring a field trained with refined cameras: first moved
 // with the training cameras' common drift (FollowRefinedCameras from the views' own cameras to
-// `refined`), then each pose refined against `model` on its own image (exposure neutral; the
-// intrinsics stay the refined shared ones). Appends the alignment's statistics to stats_or_null.
+// `refined`), then the poses of the views in `scored` (indices into test.views, as EvalViews
+// gives them) refined against `model` on their own images (exposure neutral; the intrinsics stay
+// the refined shared ones). Views that are not scored only follow the drift: refining a camera
+// costs about as much as rendering its view, and a run that scores 20 of 200 held-out views
+// should not pay for 200. Appends the alignment's statistics to stats_or_null.
 std::vector<Camera> AlignHeldOutCameras(const TensorfModel& model, const Dataset& train,
                                         const Dataset& test, const std::vector<Camera>& refined,
-                                        uint64_t seed,
+                                        const std::vector<size_t>& scored, uint64_t seed,
                                         std::vector<CameraRefineStats>* stats_or_null);
 
 // `data` with cameras[v] for view v (cameras empty: `data` unchanged).

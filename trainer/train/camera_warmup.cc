@@ -57,7 +57,7 @@ bool WarmUpCameras(const TrainOptions& o, const SceneFit& fit, Dataset* train, D
   const TrainResult r = Train(w, *train, *test, &model, nullptr);
   std::fprintf(stderr,
                "camera warm-up done: the run starts from its %zu refined training cameras and %zu "
-               "aligned held-out ones\n",
+               "held-out ones carried with them (the scored ones aligned)\n",
                r.train_cameras.size(), r.test_cameras.size());
   *train = WithCameras(std::move(*train), r.train_cameras);
   *test = WithCameras(std::move(*test), r.test_cameras);

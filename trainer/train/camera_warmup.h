@@ -31,9 +31,9 @@ std::string CameraWarmupDir(const TrainOptions& options);
 // iterations without the rate objective, refining the cameras as a run does, checkpointed in
 // CameraWarmupDir (with options.resume it continues from there, or reloads a finished warm-up
 // without training). Then sets train's cameras to the refined ones and test's to the held-out
-// cameras aligned to the warm-up's field, marks train's cameras warmed up, and returns true.
-// Returns false, leaving both alone, when no warm-up is due, or when resuming a run whose
-// checkpoint was trained without one.
+// cameras carried along (the scored ones aligned to the warm-up's field), marks train's cameras
+// warmed up, and returns true. Returns false, leaving both alone, when no warm-up is due, or when
+// resuming a run whose checkpoint was trained without one.
 bool WarmUpCameras(const TrainOptions& options, const SceneFit& fit, Dataset* train, Dataset* test);
 
 }  // namespace trainer

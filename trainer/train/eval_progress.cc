@@ -8,10 +8,13 @@
 namespace ecrf {
 namespace trainer {
 
-int EvalViewCount(size_t n, int stride, int max_views) {
-  stride = std::max(1, stride);
-  const size_t count = (n + size_t(stride) - 1) / size_t(stride);
-  return int(max_views > 0 ? std::min(count, size_t(max_views)) : count);
+std::vector<size_t> EvalViews(size_t n, int stride, int max_views) {
+  std::vector<size_t> views;
+  for (size_t v = 0; v < n; v += size_t(std::max(1, stride))) {
+    if (max_views > 0 && views.size() >= size_t(max_views)) break;
+    views.push_back(v);
+  }
+  return views;
 }
 
 EvalProgress::EvalProgress(std::string label, int total_views, double quiet_seconds)

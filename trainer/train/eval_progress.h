@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstddef>
 #include <string>
+#include <vector>
 
 namespace ecrf {
 namespace trainer {
@@ -17,8 +18,13 @@ inline double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-// Views an evaluation of every stride-th of n views, at most max_views (0 = all), renders.
-int EvalViewCount(size_t n, int stride, int max_views);
+// The views an evaluation of every stride-th of n views, at most max_views (0 = all), renders,
+// in order: one rule for scoring the float model, the decoded file, and for choosing the held-out
+// cameras that are aligned before scoring.
+std::vector<size_t> EvalViews(size_t n, int stride, int max_views);
+inline int EvalViewCount(size_t n, int stride, int max_views) {
+  return int(EvalViews(n, stride, max_views).size());
+}
 
 class EvalProgress {
  public:

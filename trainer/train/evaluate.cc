@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <vector>
 
 #include "trainer/data/camera.h"
 #include "trainer/data/image_metrics.h"
@@ -32,11 +33,9 @@ EvalResult Evaluate(const TensorfModel& model, const Dataset& test, int stride, 
                     bool keep_renders) {
   EvalResult r;
   const auto start = std::chrono::steady_clock::now();
-  stride = std::max(1, stride);
-  EvalProgress progress("evaluating the float model",
-                        EvalViewCount(test.views.size(), stride, max_views));
-  for (size_t v = 0; v < test.views.size(); v += size_t(stride)) {
-    if (max_views > 0 && r.views >= max_views) break;
+  const std::vector<size_t> views = EvalViews(test.views.size(), stride, max_views);
+  EvalProgress progress("evaluating the float model", int(views.size()));
+  for (const size_t v : views) {
     Image img = RenderView(model, test.views[v].camera);
     // A view rendered exactly has infinite PSNR; cap it so one such view cannot swamp the mean.
     r.psnr += std::min(100.0, Psnr(img, test.views[v].rgb));

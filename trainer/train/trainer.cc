@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <random>
 #include <stdexcept>
+#include <vector>
 
 #include "decoder/contraction.h"
 #include "trainer/data/camera.h"
@@ -299,6 +300,10 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
                            (o.exposure_codes == "auto" && (model->unbounded() || model->forward()));
   progress.exposure.Reset(exposure_on ? static_cast<int>(train.views.size()) : 0);
   const CameraRefineSchedule refine = CameraRefineScheduleFor(o, train);
+  // The held-out views that are scored: with refined cameras only these are aligned.
+  const int scored_stride = ScoredTestViewStride(o, test.views.size());
+  const std::vector<size_t> scored_views =
+      EvalViews(test.views.size(), scored_stride, o.max_test_views);
   if (refine.on) {
     for (const View& v : train.views) progress.cameras.push_back(v.camera);
     rays.UseCameras(&progress.cameras);
@@ -496,11 +501,10 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
       // With refined cameras, the held-out ones are aligned first, as for the final score.
       const Dataset scored =
           refine.on ? WithCameras(test, AlignHeldOutCameras(*model, train, test, progress.cameras,
-                                                            o.seed, nullptr))
+                                                            scored_views, o.seed, nullptr))
                     : Dataset();
       const EvalResult e =
-          Evaluate(*model, refine.on ? scored : test, ScoredTestViewStride(o, test.views.size()),
-                   o.max_test_views, false);
+          Evaluate(*model, refine.on ? scored : test, scored_stride, o.max_test_views, false);
       eval_seconds += SecondsSince(eval_start);
       result.psnr_curve.emplace_back(train_seconds() / 60.0, e.psnr);
       std::fprintf(stderr, "%s  test psnr %.2f dB at %.1f min (training time)\n",
@@ -528,8 +532,8 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   }
   if (refine.on) {
     result.train_cameras = progress.cameras;
-    result.test_cameras = AlignHeldOutCameras(*model, train, test, progress.cameras, o.seed,
-                                              &result.camera_refinement);
+    result.test_cameras = AlignHeldOutCameras(*model, train, test, progress.cameras, scored_views,
+                                              o.seed, &result.camera_refinement);
   }
   result.iterations = o.iters;
   result.final_lambda_e = live.lambda_e;
@@ -549,9 +553,8 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   // The float model is scored on request only: the decoded file is what a user gets (and is
   // always scored by the caller); scoring both doubled the evaluation time of a default run.
   if (o.score_float) {
-    result.test =
-        Evaluate(*model, WithCameras(test, result.test_cameras),
-                 ScoredTestViewStride(o, test.views.size()), o.max_test_views, o.save_renders);
+    result.test = Evaluate(*model, WithCameras(test, result.test_cameras), scored_stride,
+                           o.max_test_views, o.save_renders);
     if (o.eval_every > 0)
       result.psnr_curve.emplace_back(result.train_seconds / 60.0, result.test.psnr);
   }

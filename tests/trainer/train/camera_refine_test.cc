@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <stdexcept>
 #include <vector>
 
 #include "tests/common/camera_angle.h"
@@ -122,6 +123,51 @@ TEST(CameraRefineTest, LeavesExactCamerasAlone) {
   for (size_t v = 0; v < views.size(); ++v)
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 4; ++j) EXPECT_EQ(cameras[v].c2w[i][j], truth[v].c2w[i][j]);
+}
+
+// Only the scored held-out views are aligned photometrically (the others follow the training
+// cameras' drift alone, at no rendering cost), and an aligned camera does not depend on which
+// other views were aligned with it.
+TEST(CameraRefineTest, AlignsOnlyTheScoredHeldOutViews) {
+  const TrainedField& f = TrainedField::Get();
+  Dataset train, test;
+  std::vector<Camera> refined;
+  std::mt19937 rng(9);
+  std::normal_distribution<double> jitter(0.0, 0.01);
+  for (size_t v = 0; v < 4; ++v) {
+    const Camera& c = f.train.views[v].camera;
+    train.views.push_back({c, Image(), f.train.views[v].name});
+    refined.push_back(c);  // the training cameras did not move: nothing to follow
+    // Held-out views the field renders exactly, their cameras turned by about half a degree.
+    const Camera& h = f.train.views[v + 4].camera;
+    Camera turned = h;
+    const Eigen::Vector3d w(jitter(rng), jitter(rng), jitter(rng));
+    const Eigen::Matrix3d r =
+        RotationOf(h) * Eigen::AngleAxisd(w.norm(), w.normalized()).toRotationMatrix();
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) turned.c2w[i][j] = r(i, j);
+    test.views.push_back({turned, RenderView(f.model, h), f.train.views[v + 4].name});
+  }
+  std::vector<CameraRefineStats> stats;
+  const std::vector<Camera> some =
+      AlignHeldOutCameras(f.model, train, test, refined, {1, 3}, 7, &stats);
+  const std::vector<Camera> all =
+      AlignHeldOutCameras(f.model, train, test, refined, {0, 1, 2, 3}, 7, nullptr);
+  ASSERT_EQ(stats.size(), 1u);
+  EXPECT_LT(stats[0].mse_after, 0.5 * stats[0].mse_before);
+  for (const size_t v : {size_t(0), size_t(2)}) {  // not scored: where the drift leaves them
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 4; ++j)
+        EXPECT_NEAR(some[v].c2w[i][j], test.views[v].camera.c2w[i][j], 1e-12);
+  }
+  for (const size_t v : {size_t(1), size_t(3)}) {
+    const Camera& truth = f.train.views[v + 4].camera;
+    EXPECT_LT(AngleDeg(some[v], truth), 0.5 * AngleDeg(test.views[v].camera, truth));
+    // Each view's pose is solved on its own pixels: aligning the others beside it changes little.
+    EXPECT_LT(AngleDeg(some[v], all[v]), 0.1 * AngleDeg(test.views[v].camera, truth));
+  }
+  EXPECT_THROW(AlignHeldOutCameras(f.model, train, test, refined, {4}, 7, nullptr),
+               std::invalid_argument);
 }
 
 // Held-out cameras posed with the training ones follow their common drift exactly, and take the

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <stdexcept>
+#include <vector>
 
 #include "trainer/data/camera.h"
 #include "trainer/data/dataset.h"
@@ -18,6 +19,10 @@ TEST(EvalProgress, CountsTheViewsAStrideAndBudgetLeave) {
   EXPECT_EQ(EvalViewCount(8, 1, 3), 3);
   EXPECT_EQ(EvalViewCount(8, 0, 0), 8);  // a stride below 1 is 1, as the evaluators treat it
   EXPECT_EQ(EvalViewCount(0, 4, 2), 0);
+  // Which views, in order: the same rule picks the held-out cameras that are aligned.
+  EXPECT_EQ(EvalViews(201, 10, 3), (std::vector<size_t>{0, 10, 20}));
+  EXPECT_EQ(EvalViews(7, 3, 0), (std::vector<size_t>{0, 3, 6}));
+  EXPECT_EQ(EvalViews(3, 0, 0), (std::vector<size_t>{0, 1, 2}));
 }
 
 TEST(EvalProgress, LineStatesViewsTimePerViewAndWhatIsLeft) {
