@@ -30,11 +30,15 @@ void RaySet::UseCameras(const std::vector<Camera>* cameras) {
   cameras_ = cameras;
 }
 
-void RaySet::Sample(int n, std::mt19937_64& rng, float* origins, float* dirs, float* rgb) const {
+void RaySet::Sample(int n, std::mt19937_64& rng, float* origins, float* dirs, float* rgb,
+                    uint32_t* views_or_null) const {
   if (active_.empty()) throw std::runtime_error("RaySet::Sample: no rays are kept");
   std::uniform_int_distribution<size_t> pick(0, active_.size() - 1);
   for (int i = 0; i < n; ++i) {
-    Ray(active_[pick(rng)], origins + 3 * size_t(i), dirs + 3 * size_t(i), rgb + 3 * size_t(i));
+    const uint32_t index = active_[pick(rng)];
+    const uint32_t view = ViewOf(index);
+    RayInView(view, index, origins + 3 * size_t(i), dirs + 3 * size_t(i), rgb + 3 * size_t(i));
+    if (views_or_null) views_or_null[i] = view;
   }
 }
 

@@ -42,8 +42,9 @@ class RaySet {
                  uint32_t* views_or_null = nullptr);
 
   // n kept rays drawn uniformly with replacement, without moving NextBatch's position (a probe of
-  // the training rays that leaves the training sequence as it was).
-  void Sample(int n, std::mt19937_64& rng, float* origins, float* dirs, float* rgb) const;
+  // the training rays that leaves the training sequence as it was); views_or_null as NextBatch's.
+  void Sample(int n, std::mt19937_64& rng, float* origins, float* dirs, float* rgb,
+              uint32_t* views_or_null = nullptr) const;
 
   void Ray(uint32_t index, float origin[3], float dir[3], float rgb[3]) const;
   // The view a ray index belongs to.

@@ -632,7 +632,7 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
 }
 
 void RenderRays(const TensorfModel& model, int n_rays, const float* origins, const float* dirs,
-                float* rgb_out, float* depth_or_null) {
+                float* rgb_out, float* depth_or_null, const float* ray_gain) {
   if (n_rays <= 0) return;
   const MarchParams p = MakeMarchParams(model);
   const bool white = model.config().white_background;
@@ -668,8 +668,10 @@ void RenderRays(const TensorfModel& model, int n_rays, const float* origins, con
         }
       }
       float* out = rgb_out + 3 * (static_cast<size_t>(begin) + r);
+      const float* gain = ray_gain ? ray_gain + 3 * (static_cast<size_t>(begin) + r) : nullptr;
       for (int ch = 0; ch < 3; ++ch) {
         if (white) c[ch] += 1.f - acc;
+        if (gain) c[ch] *= gain[ch];
         out[ch] = std::min(std::max(c[ch], 0.f), 1.f);
       }
       if (depth_or_null) depth_or_null[begin + r] = depth;
@@ -678,9 +680,9 @@ void RenderRays(const TensorfModel& model, int n_rays, const float* origins, con
 }
 
 double RenderMse(const TensorfModel& model, int n, const float* origins, const float* dirs,
-                 const float* rgb) {
+                 const float* rgb, const float* ray_gain) {
   std::vector<float> out(static_cast<size_t>(n) * 3);
-  RenderRays(model, n, origins, dirs, out.data(), nullptr);
+  RenderRays(model, n, origins, dirs, out.data(), nullptr, ray_gain);
   double sum = 0.0;
   for (size_t i = 0; i < out.size(); ++i) {
     const double e = double(out[i]) - rgb[i];

@@ -72,12 +72,14 @@ int ScatterTaskCount(const TensorfModel& model);
 
 // Inference (no jitter, no gradients), chunked to bound memory. rgb_out: n_rays x 3 in [0,1];
 // depth_or_null: n_rays, the expected ray parameter sum_i w_i t_i (not normalized by acc).
+// ray_gain (n_rays x 3, may be null: all 1) scales each pixel before the clamp, as in TrainStep.
 void RenderRays(const TensorfModel& model, int n_rays, const float* origins, const float* dirs,
-                float* rgb_out, float* depth_or_null);
+                float* rgb_out, float* depth_or_null, const float* ray_gain = nullptr);
 
-// Mean squared error per channel of RenderRays's colours of n rays against rgb (n x 3).
+// Mean squared error per channel of RenderRays's colours of n rays against rgb (n x 3), with the
+// rays' exposure gains when ray_gain is not null.
 double RenderMse(const TensorfModel& model, int n, const float* origins, const float* dirs,
-                 const float* rgb);
+                 const float* rgb, const float* ray_gain = nullptr);
 
 // One evaluated sample of a ray (inside the aabb and the alpha mask), as TrainStep/RenderRays see
 // it.

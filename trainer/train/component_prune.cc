@@ -61,7 +61,7 @@ void SetHiddenUnit(AppearanceHead* head, int layer, int unit, std::vector<float>
 
 HiddenDecision TestHiddenUnits(const TensorfModel& model, int mlp_levels, double lambda_e, int n,
                                const float* origins, const float* dirs, const float* rgb,
-                               double max_share) {
+                               double max_share, const float* ray_gain) {
   if (!(max_share > 0.0 && max_share <= 1.0) || n < 1 || !(lambda_e >= 0.0)) {
     throw std::invalid_argument("TestHiddenUnits: bad share, ray count or lambda_e");
   }
@@ -70,14 +70,14 @@ HiddenDecision TestHiddenUnits(const TensorfModel& model, int mlp_levels, double
   d.keep1.assign(h, 1);
   d.keep2.assign(h, 1);
   TensorfModel work = model;
-  d.mse = RenderMse(work, n, origins, dirs, rgb);
+  d.mse = RenderMse(work, n, origins, dirs, rgb, ray_gain);
   std::vector<float> saved;
   for (int layer = 1; layer <= 2; ++layer) {
     std::vector<double>& dmse = layer == 1 ? d.dmse1 : d.dmse2;
     dmse.resize(h);
     for (int u = 0; u < h; ++u) {
       SetHiddenUnit(&work.head(), layer, u, &saved, false);
-      dmse[u] = RenderMse(work, n, origins, dirs, rgb) - d.mse;
+      dmse[u] = RenderMse(work, n, origins, dirs, rgb, ray_gain) - d.mse;
       SetHiddenUnit(&work.head(), layer, u, &saved, true);
     }
   }
@@ -120,7 +120,7 @@ HiddenDecision TestHiddenUnits(const TensorfModel& model, int mlp_levels, double
       SetHiddenUnit(&trial.head(), 1, order1[p], &saved, false);
       SetHiddenUnit(&trial.head(), 2, order2[p], &saved, false);
     }
-    return RenderMse(trial, n, origins, dirs, rgb) - d.mse < lambda_e * bits_saved(k);
+    return RenderMse(trial, n, origins, dirs, rgb, ray_gain) - d.mse < lambda_e * bits_saved(k);
   };
   int k = marked;
   while (k > 0 && !joint_pays(k)) k /= 2;
@@ -143,7 +143,7 @@ void PruneHidden(const HiddenDecision& decision, TensorfModel* model, Optimizers
 
 PruneDecision TestComponents(const TensorfModel& model, const RateState& rate, double lambda_e,
                              int n, const float* origins, const float* dirs, const float* rgb,
-                             double max_share) {
+                             double max_share, const float* ray_gain) {
   if (!rate.active || rate.steps.size() != 2 * kTensorsPerGrid) {
     throw std::invalid_argument("TestComponents: the rate objective is not active");
   }
@@ -152,7 +152,7 @@ PruneDecision TestComponents(const TensorfModel& model, const RateState& rate, d
   }
   PruneDecision d;
   TensorfModel work = model;  // its line channels are zeroed one at a time
-  d.mse = RenderMse(work, n, origins, dirs, rgb);
+  d.mse = RenderMse(work, n, origins, dirs, rgb, ray_gain);
   for (int g = 0; g < 2; ++g) {
     const VmGrid& grid = GridOf(model, g);
     for (int m = 0; m < 3; ++m) {
@@ -174,7 +174,7 @@ PruneDecision TestComponents(const TensorfModel& model, const RateState& rate, d
           kept[i] = line[i * rank + r];
           line[i * rank + r] = 0.f;
         }
-        t.dmse = RenderMse(work, n, origins, dirs, rgb) - d.mse;
+        t.dmse = RenderMse(work, n, origins, dirs, rgb, ray_gain) - d.mse;
         for (size_t i = 0; i < cells; ++i) line[i * rank + r] = kept[i];
         if (rank > 1) {
           std::array<std::vector<uint8_t>, 3> keep;
@@ -213,7 +213,7 @@ PruneDecision TestComponents(const TensorfModel& model, const RateState& rate, d
           bits += tests[order[j]].bits;
           for (size_t i = 0; i < cells; ++i) line[i * rank + order[j]] = 0.f;
         }
-        const double dmse = RenderMse(work, n, origins, dirs, rgb) - d.mse;
+        const double dmse = RenderMse(work, n, origins, dirs, rgb, ray_gain) - d.mse;
         std::copy(line_kept.begin(), line_kept.end(), line);
         return dmse < lambda_e * bits;
       };

@@ -7,8 +7,9 @@
 // are worth. At each pruning point the trainer therefore tests every component in the units of
 // its own loss, MSE + lambda_e * bits:
 //   dmse: the rise in MSE on a batch of training rays when the component's products are zeroed
-//         (the model as training renders it, quantized grids included under QAT); no other
-//         parameter adapts, so this overstates what the component is worth;
+//         (the model as training renders it: quantized grids under QAT, each ray at its image's
+//         exposure gain when the exposure codes are on); no other parameter adapts, so this
+//         overstates what the component is worth;
 //   bits: the rate estimate (the entropy model and frozen steps of the rate term, rounded
 //         coefficients) of its mode's plane and line tensors with it, minus without it (the
 //         component removed and the channel blocks packed again, as the encoder would code them).
@@ -48,10 +49,12 @@ struct PruneDecision {
 
 // Tests every component of `model` (rendered as it is: apply QAT first to test the quantized
 // grids) on n rays against rgb, with the rate state's steps and entropy model (rate.active).
-// max_share in (0, 1]: the most components of one mode one test may drop.
+// max_share in (0, 1]: the most components of one mode one test may drop. ray_gain (n x 3, may be
+// null: all 1) are the rays' exposure gains, applied before the clamp as the training loss applies
+// them: against the images' own exposures, a component would also be worth how well it fakes them.
 PruneDecision TestComponents(const TensorfModel& model, const RateState& rate, double lambda_e,
                              int n, const float* origins, const float* dirs, const float* rgb,
-                             double max_share);
+                             double max_share, const float* ray_gain = nullptr);
 
 // The head's width, chosen the same way. A hidden unit of either layer is tested by zeroing its
 // row of weights and its bias (its output is then 0 after the ReLU, as if it were gone); its
@@ -69,7 +72,7 @@ struct HiddenDecision {
 
 HiddenDecision TestHiddenUnits(const TensorfModel& model, int mlp_levels, double lambda_e, int n,
                                const float* origins, const float* dirs, const float* rgb,
-                               double max_share);
+                               double max_share, const float* ray_gain = nullptr);
 void PruneHidden(const HiddenDecision& decision, TensorfModel* model, Optimizers* opt);
 
 // Removes the components the decision drops from the model (grids, head basis, config ranks) and

@@ -29,6 +29,7 @@
 #include "trainer/train/checkpoint.h"
 #include "trainer/train/component_prune.h"
 #include "trainer/train/eval_progress.h"
+#include "trainer/train/exposure_codes.h"
 #include "trainer/train/train_state.h"
 
 namespace ecrf {
@@ -219,20 +220,26 @@ bool PruneIteration(const TrainOptions& o, int rate_start, int done) {
 }
 
 // One pruning test (trainer/train/component_prune.h) on rays drawn without moving the sampler,
-// of the model as training renders it (the quantized grids under QAT).
+// of the model as training renders it (the quantized grids under QAT, each ray at its image's
+// exposure gain when the exposure codes are on).
 void PruneAt(int done, float lambda_e, const TrainOptions& o, const RaySet& rays,
-             QuantAwareModel* qat, TensorfModel* model, Optimizers* opt, const RateState& rate) {
+             const ExposureCodes& exposure, QuantAwareModel* qat, TensorfModel* model,
+             Optimizers* opt, const RateState& rate) {
   const auto start = Clock::now();
   const int n = std::max(1, o.prune_rays);
   std::vector<float> origins(size_t(n) * 3), dirs(size_t(n) * 3), rgb(size_t(n) * 3);
+  std::vector<uint32_t> views(static_cast<size_t>(n));
+  std::vector<float> gains(exposure.enabled() ? size_t(n) * 3 : 0);
   std::mt19937_64 rng(uint64_t(o.seed) * 0x9E3779B97F4A7C15ull + uint64_t(done));
-  rays.Sample(n, rng, origins.data(), dirs.data(), rgb.data());
+  rays.Sample(n, rng, origins.data(), dirs.data(), rgb.data(), views.data());
+  if (exposure.enabled()) exposure.Gains(n, views.data(), gains.data());
+  const float* gain = exposure.enabled() ? gains.data() : nullptr;
   if (qat) qat->Apply(model);
   const PruneDecision d = TestComponents(*model, rate, lambda_e, n, origins.data(), dirs.data(),
-                                         rgb.data(), o.prune_share);
+                                         rgb.data(), o.prune_share, gain);
   // Both tests see the same model; a component's removal leaves the hidden units as they are.
   const HiddenDecision hd = TestHiddenUnits(*model, o.mlp_levels, lambda_e, n, origins.data(),
-                                            dirs.data(), rgb.data(), o.prune_share);
+                                            dirs.data(), rgb.data(), o.prune_share, gain);
   if (qat) qat->Restore(model);
   PruneComponents(d, model, opt);  // QAT notices the new shapes and refreshes
   PruneHidden(hd, model, opt);
@@ -448,7 +455,8 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
     }
 
     if (use_rate && rate.active && PruneIteration(o, rate_start, done)) {
-      PruneAt(done, live.lambda_e, o, rays, quant_aware ? &qat : nullptr, model, &opt, rate);
+      PruneAt(done, live.lambda_e, o, rays, progress.exposure, quant_aware ? &qat : nullptr, model,
+              &opt, rate);
     }
 
     // TensoRF order: alpha mask (and shrink / ray filtering) first, then upsampling.

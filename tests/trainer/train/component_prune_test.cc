@@ -152,6 +152,35 @@ TEST(TestComponents, RemovesTheComponentTheTargetLacks) {
   EXPECT_LT(RenderMse(model, kRays, rays.o.data(), rays.d.data(), target.data()), 0.5 * d.mse);
 }
 
+// With exposure gains the test judges each ray's render at its image's gain, before the clamp, as
+// the training loss does: against images that are the model's render at per-ray gains, the
+// model's error is nil with the gains and not without them.
+TEST(TestComponents, JudgesTheRenderAtEachRaysExposureGain) {
+  const TensorfModel model = DenseSmallModel();
+  const Rays rays;
+  std::vector<float> gains(size_t(kRays) * 3), target(size_t(kRays) * 3);
+  for (size_t i = 0; i < gains.size(); ++i) gains[i] = 0.8f + 0.04f * float((i * 7) % 11);
+  RenderRays(model, kRays, rays.o.data(), rays.d.data(), target.data(), nullptr, gains.data());
+  const std::vector<float> plain = Render(model, rays);
+  int unclamped = 0;
+  for (size_t i = 0; i < plain.size(); ++i) {
+    EXPECT_EQ(target[i], std::min(std::max(gains[i] * plain[i], 0.f), 1.f)) << i;
+    if (gains[i] * plain[i] < 1.f && gains[i] != 1.f) ++unclamped;
+  }
+  EXPECT_GT(unclamped, kRays / 4);  // the gains change most pixels
+  const RateState rate = ActiveRate(model);
+  const PruneDecision with = TestComponents(model, rate, 0.0, kRays, rays.o.data(), rays.d.data(),
+                                            target.data(), 0.5, gains.data());
+  const PruneDecision without =
+      TestComponents(model, rate, 0.0, kRays, rays.o.data(), rays.d.data(), target.data(), 0.5);
+  EXPECT_EQ(with.mse, 0.0);
+  EXPECT_GT(without.mse, 1e-4);
+  for (const ComponentTest& t : with.tests) EXPECT_GE(t.dmse, 0.0);  // from a perfect fit
+  const HiddenDecision hidden = TestHiddenUnits(model, 15, 0.0, kRays, rays.o.data(), rays.d.data(),
+                                                target.data(), 0.5, gains.data());
+  EXPECT_EQ(hidden.mse, 0.0);
+}
+
 TEST(TestComponents, BitsAreTheRateOfTheModeWithoutTheComponent) {
   const Rays rays;
   const TensorfModel model = DenseSmallModel();

@@ -81,6 +81,28 @@ TEST(RaySet, BatchesCoverEveryRayOncePerEpochAndFilterKeepsMatches) {
   EXPECT_THROW(rays.NextBatch(1, rng, o.data(), dir.data(), rgb.data()), std::runtime_error);
 }
 
+// Sample names each ray's view (the pruning test applies that image's exposure gain), and draws
+// the same rays whether it names them or not.
+TEST(RaySet, SampleNamesTheViewOfEachRay) {
+  const Dataset d = MakeBuiltinScene("train", 8, 6, 3, 1);
+  const RaySet rays(d.views);
+  std::mt19937_64 a(9), b(9);
+  std::vector<float> o(3 * 64), dir(3 * 64), rgb(3 * 64), o2(3 * 64), dir2(3 * 64), rgb2(3 * 64);
+  std::vector<uint32_t> views(64, 99);
+  rays.Sample(64, a, o.data(), dir.data(), rgb.data(), views.data());
+  rays.Sample(64, b, o2.data(), dir2.data(), rgb2.data());
+  EXPECT_EQ(rgb, rgb2);
+  EXPECT_EQ(dir, dir2);
+  std::vector<int> seen(d.views.size(), 0);
+  for (int i = 0; i < 64; ++i) {
+    ASSERT_LT(views[size_t(i)], d.views.size());
+    ++seen[views[size_t(i)]];
+    const Camera& c = d.views[views[size_t(i)]].camera;  // a pinhole's rays start at its centre
+    for (int k = 0; k < 3; ++k) EXPECT_FLOAT_EQ(o[3 * size_t(i) + size_t(k)], float(c.c2w[k][3]));
+  }
+  for (const int s : seen) EXPECT_GT(s, 0);
+}
+
 TEST(RatePoints, NamedPointsSetLambdaStepsAndMlpLevels) {
   TrainOptions o = PresetOptions("fast");
   ApplyRatePoint("low", &o);
