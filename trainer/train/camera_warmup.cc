@@ -28,6 +28,9 @@ bool WarmUpCameras(const TrainOptions& o, const SceneFit& fit, Dataset* train, D
   TrainOptions w = o;
   w.iters = iters;
   w.camera_warmup_iters = 0;
+  // Refinement rounds as far apart in iterations as the run's own (auto: iters / 50 of the run,
+  // not of the shorter warm-up): each round costs about as much as 30 training iterations.
+  if (w.refine_cameras_every <= 0) w.refine_cameras_every = std::max(1, o.iters / 50);
   // Only the cameras are kept: no rate objective, quantization, pruning or scoring.
   w.lambda_e = 0.0f;
   w.target_bytes = 0;
