@@ -27,6 +27,11 @@ int CameraWarmupIterations(const TrainOptions& options, const Dataset& train);
 // The warm-up's directory inside the run directory ("" without one).
 std::string CameraWarmupDir(const TrainOptions& options);
 
+// The options the warm-up pass of `iters` iterations trains with (resume off; WarmUpCameras sets
+// it from the checkpoint it finds): the run's, without rate objective, quantization, pruning or
+// scoring, in CameraWarmupDir, and refining the cameras as often in iterations as the run does.
+TrainOptions CameraWarmupOptions(const TrainOptions& options, int iters);
+
 // Runs the warm-up pass when one is due (CameraWarmupIterations > 0): trains a field for that many
 // iterations without the rate objective, refining the cameras as a run does, checkpointed in
 // CameraWarmupDir (with options.resume it continues from there, or reloads a finished warm-up

@@ -76,6 +76,34 @@ TEST(CameraWarmupTest, RunsOnlyWhenTheCamerasAreRefined) {
   std::system(("rm -rf '" + o.out_dir + "'").c_str());
 }
 
+// The warm-up trains without what only the file needs, and refines as often in iterations as the
+// run: every 30 iterations for a 1,500-iteration run (16 rounds in its 750), not every 15.
+TEST(CameraWarmupTest, TrainsForTheCamerasAndRefinesAsOftenAsTheRun) {
+  TrainOptions o = PresetOptions("tiny");
+  o.iters = 1500;
+  o.out_dir = "run";
+  o.prune_at = {0.5f};
+  o.eval_every = 100;
+  o.resume = true;
+  Dataset data;
+  data.estimated_poses = true;
+  const TrainOptions w = CameraWarmupOptions(o, CameraWarmupIterations(o, data));
+  EXPECT_EQ(w.iters, 750);
+  EXPECT_EQ(w.lambda_e, 0.0f);
+  EXPECT_TRUE(w.prune_at.empty());
+  EXPECT_EQ(w.eval_every, 0);
+  EXPECT_EQ(w.camera_warmup_iters, 0);
+  EXPECT_FALSE(w.resume);
+  EXPECT_EQ(w.out_dir, "run/warmup");
+  const CameraRefineSchedule s = CameraRefineScheduleFor(w, data);
+  EXPECT_EQ(s.every, 30);
+  int rounds = 0;
+  for (int done = 1; done <= w.iters; ++done) rounds += s.Due(done) ? 1 : 0;
+  EXPECT_EQ(rounds, 16);
+  o.refine_cameras_every = 7;  // an explicit cadence is kept
+  EXPECT_EQ(CameraWarmupOptions(o, 750).refine_cameras_every, 7);
+}
+
 // The built-in scene's training cameras turned by about a degree, as structure from motion leaves
 // them: the warm-up brings them back part of the way (as far as a short, coarse field lets it), and
 // a finished warm-up resumed gives the same cameras bit for bit (the run trains from them, so its
