@@ -24,6 +24,7 @@
 #include "tools/video_writer.h"
 #include "trainer/data/camera.h"
 #include "trainer/data/file_io.h"
+#include "trainer/data/seconds_since.h"
 #include "trainer/train/checkpoint.h"
 
 namespace ecrf {
@@ -130,10 +131,6 @@ void SplitViewsPath(const std::string& path, std::string* dir, std::string* spli
     throw std::invalid_argument("--views: '" + path + "' is not named transforms_SPLIT.json");
   }
   *split = base.substr(prefix.size(), base.size() - prefix.size() - suffix.size());
-}
-
-double Seconds(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 // Where render's cameras come from: exactly one of --views, --orbit, --spiral, --path.
@@ -397,7 +394,7 @@ int RunRender(int argc, char** argv) {
     const auto start = std::chrono::steady_clock::now();
     dec::RenderStats view;
     const trainer::Image img = RenderDecoded(*s.field, camera, RenderOptionsFor(c), &view);
-    seconds += Seconds(start);
+    seconds += trainer::SecondsSince(start);
     stats.Add(view);
     max_work = std::max(max_work, static_cast<double>(view.work) /
                                       (static_cast<double>(camera.width) * camera.height));
@@ -438,7 +435,7 @@ int RunRender(int argc, char** argv) {
   if (frames_dir != out) std::filesystem::remove_all(frames_dir);
   std::printf("wrote %s: %d frames of %dx%d at %d fps (H.264), encoded in %.1f s%s\n",
               video.output.c_str(), job.count, job.width - job.width % 2,
-              job.height - job.height % 2, job.fps, Seconds(start), kept.c_str());
+              job.height - job.height % 2, job.fps, trainer::SecondsSince(start), kept.c_str());
   return 0;
 }
 

@@ -175,8 +175,7 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
         o.target_bytes, r.final_lambda_e, step_scale, bytes.size(),
         100.0 * (double(bytes.size()) / double(o.target_bytes) - 1.0));
   }
-  const double encode_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - encode_start).count();
+  const double encode_seconds = trainer::SecondsSince(encode_start);
   trainer::WriteFileAtomically(o.out_dir + "/scene.ecrf", bytes.data(), bytes.size());
   const LoadedScene decoded = DecodeSceneBytes(std::move(bytes), o.out_dir + "/scene.ecrf",
                                                dec::GridStorage::kFloat32, kUnlimitedMemory);

@@ -16,14 +16,11 @@
 #include "tests/common/costly_streams.h"
 #include "tools/bench/bench_json.h"
 #include "tools/bench/benches.h"
+#include "trainer/data/seconds_since.h"
 
 namespace ecrf {
 namespace tools {
 namespace {
-
-double Seconds(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 struct CostlyCase {
   const char* name;
@@ -103,7 +100,7 @@ int RunBudgetBench(int argc, char** argv) {
     auto start = std::chrono::steady_clock::now();
     const Status decoded =
         dec::DecodeScene(bytes.data(), bytes.size(), dec::DecodeOptions(), &field, &info);
-    const double decode_s = Seconds(start);
+    const double decode_s = trainer::SecondsSince(start);
     double render_s = 0.0, work_per_pixel = 0.0;
     Status rendered = decoded;
     if (decoded.ok()) {
@@ -116,7 +113,7 @@ int RunBudgetBench(int argc, char** argv) {
       start = std::chrono::steady_clock::now();
       rendered = marcher.Init(&field, options);
       if (rendered.ok()) rendered = marcher.RenderImage(camera, rgba.data(), nullptr, &stats);
-      render_s = Seconds(start);
+      render_s = trainer::SecondsSince(start);
       work_per_pixel = static_cast<double>(stats.work) / (64.0 * 64.0);
     }
     const std::string outcome = !decoded.ok()    ? "decode refused"

@@ -12,6 +12,7 @@
 #include "format/entropy/range_coder.h"
 #include "tools/bench/bench_json.h"
 #include "tools/bench/benches.h"
+#include "trainer/data/seconds_since.h"
 
 namespace ecrf {
 namespace tools {
@@ -55,7 +56,7 @@ double CoefficientsPerSecond(const std::vector<int32_t>& blocks, const int dims[
       sink = sink + out[b % v];
     }
     coefficients += long(count) * v;
-    elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    elapsed = trainer::SecondsSince(start);
   } while (elapsed < 0.5);
   return coefficients / elapsed;
 }
@@ -73,7 +74,7 @@ double FloatCoefficientsPerSecond(const std::vector<int32_t>& blocks, const int 
       InverseDct(work.data(), dims);
     }
     coefficients += long(count) * v;
-    elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    elapsed = trainer::SecondsSince(start);
   } while (elapsed < 0.5);
   return coefficients / elapsed;
 }
@@ -104,7 +105,7 @@ double DecodePlusIdctPerSecond(const std::vector<int32_t>& blocks, const int dim
       sink = sink + out[b % v];
     }
     coefficients += long(count) * v;
-    elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    elapsed = trainer::SecondsSince(start);
   } while (elapsed < 0.5);
   return coefficients / elapsed;
 }

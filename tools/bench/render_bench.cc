@@ -10,6 +10,7 @@
 #include "decoder/field_sampler.h"
 #include "tools/bench/bench_json.h"
 #include "tools/bench/benches.h"
+#include "trainer/data/seconds_since.h"
 
 namespace ecrf {
 namespace tools {
@@ -175,8 +176,7 @@ Status BenchmarkRender(const SceneField& scene, int width, int height, int threa
                                              image.data(), nullptr, &stats));
     total.Add(stats);
   }
-  const double sec =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double sec = trainer::SecondsSince(start);
   result->threads = threads;
   result->views = views;
   result->ms_per_view = sec * 1e3 / views;
@@ -263,9 +263,8 @@ int RunRenderBench(int argc, char** argv) {
   }
   std::printf(
       "bench render: %d^3 blob scene (%s grids, built in %.0f ms), %dx%d, %d views, skipping %s\n",
-      res, int16 ? "int16" : "float32",
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() * 1e3, width,
-      height, views, no_skip ? "off" : "on");
+      res, int16 ? "int16" : "float32", trainer::SecondsSince(t0) * 1e3, width, height, views,
+      no_skip ? "off" : "on");
   BenchReport report;
   RenderOptions options;
   options.skip_empty_space = !no_skip;

@@ -29,6 +29,7 @@
 #include "tools/report/sweep_plan.h"
 #include "tools/train_flags.h"
 #include "tools/train_run.h"
+#include "trainer/data/seconds_since.h"
 #include "trainer/train/checkpoint.h"
 #include "trainer/train/train_config.h"
 #include "trainer/train/train_options.h"
@@ -513,8 +514,7 @@ int RunReportSweep(int argc, char** argv) {
       run.overwrite = true;  // a point the sweep left unfinished is trained again from the start
       const auto start = std::chrono::steady_clock::now();
       metrics = TrainEncodeEvaluate(run);
-      trained_seconds +=
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      trained_seconds += trainer::SecondsSince(start);
       ++trained;
     }
     nlohmann::json point = RatePointFromMetrics(metrics, "runs/" + names[k]);

@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "trainer/data/seconds_since.h"
+
 namespace ecrf {
 namespace trainer {
 
@@ -45,8 +47,7 @@ void RefineCamerasRound(int done, const CameraRefineSchedule& schedule, const Te
   log->push_back(s);
   const int round = (done - schedule.from) / schedule.every;
   if (round % 10 == 0 || done + schedule.every > schedule.until) {
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double seconds = SecondsSince(start);
     std::fprintf(stderr,
                  "%scameras refined (round %d) at iteration %d: pixel error %.5f -> %.5f (%d "
                  "steps), largest change %.3f deg, ~%.2f px; %.1f s\n",

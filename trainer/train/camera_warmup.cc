@@ -31,13 +31,15 @@ TrainOptions CameraWarmupOptions(const TrainOptions& o, int iters) {
   // half as many rounds took the prepared capture from 25.66 to 25.93 dB held-out in 6.1 instead
   // of 8.1 min (docs/photos-to-dataset.md).
   if (w.refine_cameras_every <= 0) w.refine_cameras_every = std::max(1, o.iters / 50);
-  // Only the cameras are kept: no rate objective, quantization, pruning or scoring.
+  // Only the cameras are kept: no rate objective or size report, quantization, pruning or
+  // scoring.
   w.lambda_e = 0.0f;
   w.target_bytes = 0;
   w.qat_start = 1.0f;
   w.prune_at.clear();
   w.eval_every = 0;
   w.score_float = false;
+  w.report_rate = false;
   w.save_renders = false;
   w.stop_after = 0;
   w.out_dir = CameraWarmupDir(o);

@@ -10,13 +10,10 @@
 #include <string>
 #include <vector>
 
+#include "trainer/data/seconds_since.h"
+
 namespace ecrf {
 namespace trainer {
-
-// Seconds from `start` until now (steady clock).
-inline double SecondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 // The views an evaluation of every stride-th of n views, at most max_views (0 = all), renders,
 // in order: one rule for scoring the float model, the decoded file, and for choosing the held-out

@@ -179,6 +179,10 @@ struct TrainOptions {
   // scored; the float model costs about as much again (chair-400, 2 cores: 1.0 s a view, the
   // decoded file 0.9 s).
   bool score_float = false;
+  // After a run without the rate term, fit an entropy model to its grids (300 steps) so that it
+  // reports what its coefficients would cost (TrainResult::rate: the lambda_e = 0 point of a
+  // sweep). Off for the camera warm-up, whose field is discarded. Not a flag, not in config.json.
+  bool report_rate = true;
   int eval_downscale = 1;  // test views scored at 1/N of their size (area filter, cameras scaled)
   bool save_renders = false;
   int progress_every = 50;

@@ -548,7 +548,7 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   result.train_seconds = train_seconds();
   CheckModelFinite(*model, o.iters - 1, ckpt_path);
   if (!ckpt_path.empty()) save_checkpoint(o.iters, result.train_seconds);
-  if (!use_rate) {
+  if (!use_rate && o.report_rate) {
     // Without the rate objective, fit an entropy model to the final grids anyway so every run
     // reports the size its coefficients would cost (the lambda_e = 0 point of a sweep).
     if (!rate.active) rate.Activate(*model, o);
@@ -556,7 +556,7 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
     fit.lambda_e = 0.0f;
     for (int k = 0; k < 300; ++k) rate.Step(*model, fit, rng());
   }
-  result.rate = rate.Evaluate(*model);
+  if (rate.active || o.report_rate) result.rate = rate.Evaluate(*model);
 
   // The float model is scored on request only: the decoded file is what a user gets (and is
   // always scored by the caller); scoring both doubled the evaluation time of a default run.

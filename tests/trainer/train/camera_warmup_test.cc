@@ -92,6 +92,8 @@ TEST(CameraWarmupTest, TrainsForTheCamerasAndRefinesAsOftenAsTheRun) {
   EXPECT_EQ(w.lambda_e, 0.0f);
   EXPECT_TRUE(w.prune_at.empty());
   EXPECT_EQ(w.eval_every, 0);
+  EXPECT_TRUE(o.report_rate);
+  EXPECT_FALSE(w.report_rate);  // no entropy fit for a size nobody reads
   EXPECT_EQ(w.camera_warmup_iters, 0);
   EXPECT_FALSE(w.resume);
   EXPECT_EQ(w.out_dir, "run/warmup");

@@ -142,6 +142,34 @@ TEST(TrainBuiltin, SameModelForAnyThreadCount) {
   }
 }
 
+// A run without the rate term fits an entropy model to its final grids to report what their
+// coefficients would cost (the lambda_e = 0 point of a sweep); the camera warm-up, whose field is
+// discarded, turns that off. The fit reads the grids without changing them.
+TEST(TrainBuiltin, ARunWithoutTheRateTermReportsItsSizeUnlessTurnedOff) {
+  TrainOptions o = SmallRun();
+  o.builtin_size = 32;
+  o.builtin_views = 8;
+  o.iters = 60;
+  o.lambda_e = 0.0f;
+  o.score_float = false;
+  o.max_test_views = 1;
+  const Dataset train = LoadTrainingViews(o, "train");
+  const Dataset test = LoadTrainingViews(o, "test");
+  TensorfModel reported(ConfigFor(o, train));
+  const TrainResult with = Train(o, train, test, &reported);
+  o.report_rate = false;
+  TensorfModel silent(ConfigFor(o, train));
+  const TrainResult without = Train(o, train, test, &silent);
+  EXPECT_EQ(with.rate.bits.size(), 12u);  // 6 tensors of each grid
+  EXPECT_GT(with.rate.total_bits, 0.0);
+  EXPECT_TRUE(without.rate.bits.empty());
+  EXPECT_EQ(without.rate.total_bits, 0.0);
+  const Image a = RenderView(reported, test.views[0].camera);
+  const Image b = RenderView(silent, test.views[0].camera);
+  ASSERT_EQ(a.pixels.size(), b.pixels.size());
+  for (size_t i = 0; i < a.pixels.size(); ++i) ASSERT_EQ(a.pixels[i], b.pixels[i]) << i;
+}
+
 // --target-size: lambda_e adapts during the rate phase (with quantization-aware steps) and
 // encode-time rate control finishes.
 TEST(TrainBuiltin, TargetSizeLands) {
