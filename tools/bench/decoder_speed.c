@@ -1,0 +1,142 @@
+/* Times the embeddable decoder through its C API alone, so the same program builds against the
+ * decoder sources of any commit (scripts/decoder-speed.sh compares two): decodes a stream, renders
+ * VIEWS orbit views (radius 4, 30 degrees up, azimuths 360/VIEWS apart, as `ecrf render --orbit`)
+ * REPS times, and prints the best repetition's milliseconds per view and a hash of every pixel
+ * (FNV-1a over the RGBA bytes of all views) that tells whether two builds render the same image.
+ *
+ *   decoder_speed SCENE.ecrf [VIEWS [SIZE [THREADS [REPS]]]]     defaults 4 400 2 4
+ *
+ * One output line: "ms_per_view=... decode_ms=... hash=... views=... size=... threads=...". */
+#define _POSIX_C_SOURCE 199309L /* clock_gettime under -std=c99 */
+#include <ecrf/decoder.h>
+
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <time.h>
+
+static double now_ms(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+}
+
+static unsigned char* read_file(const char* path, size_t* size) {
+  FILE* f = fopen(path, "rb");
+  unsigned char* data = NULL;
+  long n;
+  if (!f) return NULL;
+  if (fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) >= 0 && fseek(f, 0, SEEK_SET) == 0) {
+    data = (unsigned char*)malloc(n > 0 ? (size_t)n : 1);
+    if (data && fread(data, 1, (size_t)n, f) != (size_t)n) {
+      free(data);
+      data = NULL;
+    }
+    *size = (size_t)n;
+  }
+  fclose(f);
+  return data;
+}
+
+/* SPEC.md 7.1 (informative OrbitCamera), in double for the angles as `ecrf render` takes them. */
+static void orbit_camera(ecrf_camera* cam, int size, double az_deg, double el_deg, float radius) {
+  const float az = (float)(az_deg * 3.14159265358979323846 / 180.0);
+  const float el = (float)(el_deg * 3.14159265358979323846 / 180.0);
+  const float pos[3] = {radius * cosf(el) * cosf(az), radius * cosf(el) * sinf(az),
+                        radius * sinf(el)};
+  const float z[3] = {pos[0] / radius, pos[1] / radius, pos[2] / radius};
+  float x[3] = {-z[1], z[0], 0.f};
+  const float xn = sqrtf(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+  float y[3];
+  int a;
+  for (a = 0; a < 3; ++a) x[a] /= xn;
+  y[0] = z[1] * x[2] - z[2] * x[1];
+  y[1] = z[2] * x[0] - z[0] * x[2];
+  y[2] = z[0] * x[1] - z[1] * x[0];
+  for (a = 0; a < 3; ++a) {
+    cam->c2w[4 * a + 0] = x[a];
+    cam->c2w[4 * a + 1] = y[a];
+    cam->c2w[4 * a + 2] = z[a];
+    cam->c2w[4 * a + 3] = pos[a];
+  }
+  cam->width = cam->height = size;
+  cam->fx = cam->fy = 0.5f * (float)size / tanf(0.5f * 0.6911112070083618f);
+  cam->cx = cam->cy = 0.5f * (float)size;
+}
+
+int main(int argc, char** argv) {
+  int views = 4, size = 400, threads = 2, reps = 4, v, r, rc = 0;
+  size_t bytes_size = 0, i, n;
+  unsigned char *bytes, *rgba;
+  ecrf_scene* scene;
+  ecrf_render_options options;
+  double t0, decode_ms, best = -1.0;
+  uint64_t hash = 1469598103934665603ull;
+
+  if (argc < 2 || argc > 6) {
+    fprintf(stderr, "usage: %s SCENE.ecrf [VIEWS [SIZE [THREADS [REPS]]]]\n", argv[0]);
+    return 2;
+  }
+  if (argc > 2) views = atoi(argv[2]);
+  if (argc > 3) size = atoi(argv[3]);
+  if (argc > 4) threads = atoi(argv[4]);
+  if (argc > 5) reps = atoi(argv[5]);
+  if (views < 1 || views > 1000 || size < 1 || size > 8192 || threads < 0 || threads > 64 ||
+      reps < 1 || reps > 100) {
+    fprintf(stderr, "views 1..1000, size 1..8192, threads 0..64, reps 1..100\n");
+    return 2;
+  }
+  bytes = read_file(argv[1], &bytes_size);
+  if (!bytes) {
+    fprintf(stderr, "cannot read %s\n", argv[1]);
+    return 1;
+  }
+  scene = ecrf_scene_create();
+  if (!scene) {
+    free(bytes);
+    fprintf(stderr, "out of memory\n");
+    return 1;
+  }
+  t0 = now_ms();
+  rc = ecrf_scene_decode(scene, bytes, bytes_size, ECRF_STORAGE_FLOAT32);
+  decode_ms = now_ms() - t0;
+  free(bytes);
+  if (rc < 0) {
+    fprintf(stderr, "%s: %s (%s)\n", argv[1], ecrf_scene_message(scene), ecrf_error_name(rc));
+    ecrf_scene_destroy(scene);
+    return 1;
+  }
+  ecrf_render_options_default(&options);
+  options.num_threads = threads;
+  n = (size_t)size * (size_t)size * 4;
+  rgba = (unsigned char*)malloc(n);
+  if (!rgba) {
+    ecrf_scene_destroy(scene);
+    fprintf(stderr, "out of memory\n");
+    return 1;
+  }
+  for (r = 0; r < reps && rc >= 0; ++r) {
+    double total = 0.0;
+    for (v = 0; v < views && rc >= 0; ++v) {
+      ecrf_camera cam;
+      orbit_camera(&cam, size, 360.0 * v / views, 30.0, 4.f);
+      t0 = now_ms();
+      rc = ecrf_scene_render(scene, &cam, &options, rgba, NULL);
+      total += now_ms() - t0;
+      if (r == 0) {
+        for (i = 0; i < n; ++i) hash = (hash ^ rgba[i]) * 1099511628211ull;
+      }
+    }
+    if (best < 0.0 || total < best) best = total;
+  }
+  if (rc < 0) {
+    fprintf(stderr, "render: %s (%s)\n", ecrf_scene_message(scene), ecrf_error_name(rc));
+  } else {
+    printf("ms_per_view=%.1f decode_ms=%.1f hash=%016llx views=%d size=%d threads=%d reps=%d\n",
+           best / views, decode_ms, (unsigned long long)hash, views, size, threads, reps);
+  }
+  free(rgba);
+  ecrf_scene_destroy(scene);
+  return rc < 0 ? 1 : 0;
+}
