@@ -1,6 +1,7 @@
 // render's camera paths: the orbit and the spiral have the documented poses (the formula in
 // tools/camera_path.h and `ecrf render --help`) and look at the origin, and a path written as
 // JSON (--save-path) reads back (--path) to the same cameras, bit for bit.
+#include "tests/common/scoped_temp_dir.h"
 #include "tools/camera_path.h"
 
 #include <gtest/gtest.h>
@@ -67,12 +68,6 @@ void ExpectSameCamera(const trainer::Camera& a, const trainer::Camera& b) {
   for (int r = 0; r < 3; ++r) {
     for (int k = 0; k < 4; ++k) EXPECT_EQ(a.c2w[r][k], b.c2w[r][k]) << r << "," << k;
   }
-}
-
-std::string TempDir() {
-  char tmpl[] = "/tmp/ecrf_camera_path_test_XXXXXX";
-  const char* dir = mkdtemp(tmpl);
-  return dir ? dir : "";
 }
 
 void WriteText(const std::string& path, const std::string& text) {
@@ -193,8 +188,8 @@ TEST(CameraPath, SpiralStaysClearOfThePoles) {
 }
 
 TEST(CameraPathJson, SavedPathReadsBackBitForBit) {
-  const std::string dir = TempDir();
-  ASSERT_FALSE(dir.empty());
+  const testing_util::ScopedTempDir tmp("ecrf_camera_path_test");
+  const std::string dir = tmp.path();
   OrbitShape shape;
   shape.width = 64;
   shape.height = 48;
@@ -217,12 +212,11 @@ TEST(CameraPathJson, SavedPathReadsBackBitForBit) {
     EXPECT_EQ(back[k].name, FrameName("path", int(k)));
     ExpectSameCamera(back[k].camera, spiral[k].camera);
   }
-  std::filesystem::remove_all(dir);
 }
 
 TEST(CameraPathJson, CamerasOfDifferentSizesKeepTheirIntrinsicsPerFrame) {
-  const std::string dir = TempDir();
-  ASSERT_FALSE(dir.empty());
+  const testing_util::ScopedTempDir tmp("ecrf_camera_path_test");
+  const std::string dir = tmp.path();
   std::vector<PathCamera> path = OrbitPath(2, OrbitShape());
   path[1].camera = OrbitView(32, 16, {45.0, 10.0, 2.5});
   path[1].camera.k1 = 0.01;  // distortion travels too
@@ -236,12 +230,11 @@ TEST(CameraPathJson, CamerasOfDifferentSizesKeepTheirIntrinsicsPerFrame) {
   ASSERT_EQ(back.size(), 2u);
   ExpectSameCamera(back[0].camera, path[0].camera);
   ExpectSameCamera(back[1].camera, path[1].camera);
-  std::filesystem::remove_all(dir);
 }
 
 TEST(CameraPathJson, AHandWrittenPathNeedsNoImagesNorSizes) {
-  const std::string dir = TempDir();
-  ASSERT_FALSE(dir.empty());
+  const testing_util::ScopedTempDir tmp("ecrf_camera_path_test");
+  const std::string dir = tmp.path();
   WriteText(dir + "/path.json", R"({
     "camera_angle_x": 0.6911112070083618,
     "frames": [
@@ -260,12 +253,11 @@ TEST(CameraPathJson, AHandWrittenPathNeedsNoImagesNorSizes) {
   EXPECT_EQ(c.cy, 24.0);
   EXPECT_EQ(c.c2w[2][3], 4.0);
   EXPECT_EQ(path[1].camera.c2w[0][3], 4.0);
-  std::filesystem::remove_all(dir);
 }
 
 TEST(CameraPathJson, ErrorsNameTheFileTheFrameAndTheProblem) {
-  const std::string dir = TempDir();
-  ASSERT_FALSE(dir.empty());
+  const testing_util::ScopedTempDir tmp("ecrf_camera_path_test");
+  const std::string dir = tmp.path();
   const std::string file = dir + "/bad.json";
   WriteText(file, R"({"camera_angle_x": 0.7, "frames": [{"transform_matrix": [[1, 0, 0, 0],
     [0, 1, 0, 0], [0, 0, 1, 4], [0, 0, 0, 1]]}, {"transform_matrix": [[2, 0, 0, 0],
@@ -286,7 +278,6 @@ TEST(CameraPathJson, ErrorsNameTheFileTheFrameAndTheProblem) {
   EXPECT_EQ(e.rfind(file + ": invalid JSON", 0), 0u) << e;
   e = ErrorOf(dir + "/missing.json");
   EXPECT_EQ(e.rfind(dir + "/missing.json: cannot open", 0), 0u) << e;
-  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -17,6 +17,7 @@
 #include "decoder/scene_decoder.h"
 #include "ecrf/decoder.h"
 #include "tests/common/invoke.h"
+#include "tests/common/scoped_temp_dir.h"
 #include "tools/bench/benches.h"
 #include "tools/cli.h"
 #include "tools/commands.h"
@@ -313,15 +314,9 @@ TEST(Cli, ErrorsWhileRunningNameTheCommand) {
   EXPECT_EQ(r.err.rfind("ecrf info: error: /nonexistent/scene.ecrf", 0), 0u) << r.err;
 }
 
-std::string TempDir() {
-  char tmpl[] = "/tmp/ecrf_cli_test_XXXXXX";
-  const char* dir = mkdtemp(tmpl);
-  return dir ? dir : "";
-}
-
 TEST(Cli, RenderAndEvalUseEveryCoreByDefault) {
-  const std::string dir = TempDir();
-  ASSERT_FALSE(dir.empty());
+  const testing_util::ScopedTempDir tmp("ecrf_cli_test");
+  const std::string dir = tmp.path();
   const int all = std::min(AllCores(), dec::kMaxRenderThreads);
   const std::string threads = "(" + std::to_string(all) + (all == 1 ? " thread" : " threads");
   const Output render = Capture(RunRender, {"render", kScene, "--orbit", "2", "-W", "16", "-H",
@@ -341,7 +336,6 @@ TEST(Cli, RenderAndEvalUseEveryCoreByDefault) {
   EXPECT_EQ(j["threads"], all);
   EXPECT_EQ(j["views"], 1);
   EXPECT_EQ(j["downscale"], 4);
-  std::system(("rm -rf '" + dir + "'").c_str());
 }
 
 }  // namespace

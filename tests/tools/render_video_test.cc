@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "tests/common/invoke.h"
+#include "tests/common/scoped_temp_dir.h"
 #include "tools/commands.h"
 #include "tools/run_program.h"
 
@@ -48,16 +49,8 @@ Output Ecrf(std::vector<std::string> args) {
 
 class RenderVideo : public ::testing::Test {
  protected:
-  void SetUp() override {
-    char tmpl[] = "/tmp/ecrf_render_video_test_XXXXXX";
-    ASSERT_NE(mkdtemp(tmpl), nullptr);
-    dir_ = tmpl;
-  }
-  void TearDown() override {
-    std::error_code error;
-    fs::remove_all(dir_, error);
-  }
-  std::string dir_;
+  const testing_util::ScopedTempDir tmp_{"ecrf_render_video_test"};
+  const std::string dir_ = tmp_.path();
 };
 
 std::vector<std::string> Listing(const std::string& dir) {

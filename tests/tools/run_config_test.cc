@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "tests/common/invoke.h"
+#include "tests/common/scoped_temp_dir.h"
 #include "tools/cli_args.h"
 #include "tools/commands.h"
 #include "tools/report/report.h"
@@ -31,12 +32,6 @@ const std::vector<std::string> kSmallRun = {"--scene",   "builtin", "--iters",  
 
 class RunConfigTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    char tmpl[] = "/tmp/ecrf_run_config_XXXXXX";
-    ASSERT_NE(mkdtemp(tmpl), nullptr);
-    root_ = tmpl;
-  }
-  void TearDown() override { std::system(("rm -rf '" + root_ + "'").c_str()); }
 
   // Trains kSmallRun plus args into root_/name; returns the run directory.
   std::string Train(const std::string& name, std::vector<std::string> args) {
@@ -52,7 +47,8 @@ class RunConfigTest : public ::testing::Test {
     return trainer::ReadWholeFile(path);
   }
 
-  std::string root_;
+  const testing_util::ScopedTempDir tmp_{"ecrf_run_config"};
+  const std::string root_ = tmp_.path();
 };
 
 TEST_F(RunConfigTest, EncodeRunRebuildsTheFileTrainWroteForEveryRatePoint) {

@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "tests/common/invoke.h"
+#include "tests/common/scoped_temp_dir.h"
 #include "tools/cli_args.h"
 #include "tools/commands.h"
 #include "trainer/data/file_io.h"
@@ -34,13 +35,8 @@ std::string ErrorOf(std::vector<std::string> args) {
 
 class TrainOutputTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    char tmpl[] = "/tmp/ecrf_train_output_XXXXXX";
-    ASSERT_NE(mkdtemp(tmpl), nullptr);
-    root_ = tmpl;
-  }
-  void TearDown() override { std::system(("rm -rf '" + root_ + "'").c_str()); }
-  std::string root_;
+  const testing_util::ScopedTempDir tmp_{"ecrf_train_output"};
+  const std::string root_ = tmp_.path();
 };
 
 TEST_F(TrainOutputTest, FailedRunLeavesNoEmptyDirectories) {
@@ -167,9 +163,8 @@ TEST_F(TrainOutputTest, RunWithCameraWarmUpResumesToTheSameFile) {
 }
 
 TEST(OutputDirectory, ProbesAndRemovesOnlyWhatItCreatedWhileEmpty) {
-  char tmpl[] = "/tmp/ecrf_outdir_XXXXXX";
-  ASSERT_NE(mkdtemp(tmpl), nullptr);
-  const std::string root = tmpl;
+  const testing_util::ScopedTempDir tmp("ecrf_outdir");
+  const std::string root = tmp.path();
   {
     OutputDirectory d(root + "/a/b");
     EXPECT_TRUE(IsDirectory(root + "/a/b"));
@@ -185,7 +180,6 @@ TEST(OutputDirectory, ProbesAndRemovesOnlyWhatItCreatedWhileEmpty) {
     OutputDirectory d(root);  // existed before: never removed
   }
   EXPECT_TRUE(IsDirectory(root));
-  std::system(("rm -rf '" + root + "'").c_str());
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "tests/common/invoke.h"
+#include "tests/common/scoped_temp_dir.h"
 #include "tools/commands.h"
 #include "tools/report/report.h"
 
@@ -171,9 +172,8 @@ void CompareAgainstItselfIsZero() {
 }
 
 TEST(Report, BuiltinSweepMatchesEvalResumesAndCompares) {
-  char tmpl[] = "/tmp/ecrf_report_test_XXXXXX";
-  ASSERT_NE(mkdtemp(tmpl), nullptr);
-  root_ = tmpl;
+  const testing_util::ScopedTempDir tmp("ecrf_report_test");
+  root_ = tmp.path();
   dir_ = root_ + "/nested/report";  // parents do not exist yet
   // Plots are drawn when matplotlib is installed; the checks below read the tables either way.
   ASSERT_EQ(Invoke(RunReport, {"report",           "sweep",    "--scene",      "builtin",
@@ -203,7 +203,6 @@ TEST(Report, BuiltinSweepMatchesEvalResumesAndCompares) {
     SCOPED_TRACE("resume");
     SweepResumesFromFinishedRunsAndRefusesIncompatibleOnes();
   }
-  std::system(("rm -rf '" + root_ + "'").c_str());
 }
 
 TEST(ReportCli, HelpExitsZeroAndBadUsageTwo) {
@@ -225,9 +224,8 @@ TEST(ReportCli, HelpExitsZeroAndBadUsageTwo) {
 }
 
 TEST(ReportReference, BorrowedFromTheSameScheduleOrThePresetsOwn) {
-  char tmpl[] = "/tmp/ecrf_report_ref_XXXXXX";
-  ASSERT_NE(mkdtemp(tmpl), nullptr);
-  const std::string dir = tmpl;
+  const testing_util::ScopedTempDir tmp("ecrf_report_ref");
+  const std::string dir = tmp.path();
   const nlohmann::json sweep_3000 = {{"preset", "fast"},    {"iterations", 3000},
                                      {"seed", 7},           {"test_view_stride", 10},
                                      {"max_test_views", 0}, {"downscale", 1}};
@@ -263,7 +261,6 @@ TEST(ReportReference, BorrowedFromTheSameScheduleOrThePresetsOwn) {
   WriteTextFile(dir + "/report.json", earlier.dump());
   refused("iterations", 4500, "its sweep has iterations 2000, this one 4500");
   EXPECT_EQ(borrow("iterations", 2000)["float32_bytes"], 100);
-  std::system(("rm -rf '" + dir + "'").c_str());
 }
 
 TEST(ReportReference, APointWithoutAFloatScoreHasNoQuantizationLoss) {

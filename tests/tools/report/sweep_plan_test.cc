@@ -1,3 +1,4 @@
+#include "tests/common/scoped_temp_dir.h"
 #include "tools/report/sweep_plan.h"
 
 #include <gtest/gtest.h>
@@ -20,11 +21,6 @@ std::string ReadText(const std::string& path) {
   return ss.str();
 }
 
-std::string TempDir() {
-  char tmpl[] = "/tmp/ecrf_plan_test_XXXXXX";
-  EXPECT_NE(mkdtemp(tmpl), nullptr);
-  return tmpl;
-}
 
 TEST(SweepPlan, ShellQuoteLeavesPlainWordsAndQuotesTheRest) {
   EXPECT_EQ(ShellQuote("--lambda-e"), "--lambda-e");
@@ -36,7 +32,8 @@ TEST(SweepPlan, ShellQuoteLeavesPlainWordsAndQuotesTheRest) {
 }
 
 TEST(SweepPlan, WritesOneScriptPerTaskTheArrayAndTheCollector) {
-  const std::string root = TempDir();
+  const testing_util::ScopedTempDir tmp("ecrf_plan_test");
+  const std::string root = tmp.path();
   SweepPlan p;
   p.plan_dir = root + "/report/plan";
   ASSERT_EQ(mkdir((root + "/report").c_str(), 0755), 0);
@@ -78,7 +75,8 @@ TEST(SweepPlan, WritesOneScriptPerTaskTheArrayAndTheCollector) {
 }
 
 TEST(SweepPlan, RefusesAPlanDirectorySlurmCannotName) {
-  const std::string root = TempDir();
+  const testing_util::ScopedTempDir tmp("ecrf_plan_test");
+  const std::string root = tmp.path();
   SweepPlan p;
   p.plan_dir = root + "/my report/plan";
   try {
@@ -90,7 +88,8 @@ TEST(SweepPlan, RefusesAPlanDirectorySlurmCannotName) {
 }
 
 TEST(SweepPlan, LastLinesKeepsWhatAProgressBarShowedLast) {
-  const std::string path = TempDir() + "/task_0.log";
+  const testing_util::ScopedTempDir tmp("ecrf_plan_test");
+  const std::string path = tmp.path() + "/task_0.log";
   std::ofstream(path) << "one\ntwo\n[##  ] 10/20\r[####] 20/20\nerror: out of memory\n";
   EXPECT_EQ(LastLines(path, 2), "[####] 20/20\nerror: out of memory\n");
   EXPECT_EQ(LastLines(path + ".missing", 2), "");

@@ -1,3 +1,4 @@
+#include "tests/common/scoped_temp_dir.h"
 #include "trainer/train/camera_warmup.h"
 
 #include <gtest/gtest.h>
@@ -65,15 +66,13 @@ TEST(CameraWarmupTest, RunsOnlyWhenTheCamerasAreRefined) {
 
   // A run an older ecrf started (a checkpoint, no warm-up beside it) resumes without one: its
   // field was trained on the dataset's cameras.
-  char tmpl[] = "/tmp/ecrf_warmup_old_XXXXXX";
-  ASSERT_NE(mkdtemp(tmpl), nullptr);
-  o.out_dir = tmpl;
+  const testing_util::ScopedTempDir tmp("ecrf_warmup_old");
+  o.out_dir = tmp.path();
   o.camera_warmup_iters = -1;
   o.resume = true;
   std::fclose(std::fopen((o.out_dir + "/checkpoint.ckpt").c_str(), "wb"));
   EXPECT_FALSE(WarmUpCameras(o, SceneFit(), &train, &test));
   EXPECT_FALSE(train.warmed_up_cameras);
-  std::system(("rm -rf '" + o.out_dir + "'").c_str());
 }
 
 // The warm-up trains without what only the file needs, and refines as often in iterations as the
@@ -122,9 +121,8 @@ TEST(CameraWarmupTest, TurnedCamerasComeBackAndAFinishedWarmUpReloadsBitForBit) 
   o.batch_rays = 1024;
   o.progress_every = 1000;
   o.mlp_hidden = 32;
-  char tmpl[] = "/tmp/ecrf_warmup_XXXXXX";
-  ASSERT_NE(mkdtemp(tmpl), nullptr);
-  o.out_dir = tmpl;
+  const testing_util::ScopedTempDir tmp("ecrf_warmup");
+  o.out_dir = tmp.path();
 
   Dataset train = LoadTrainingViews(o, "train");
   Dataset test = LoadTrainingViews(o, "test");
@@ -159,7 +157,6 @@ TEST(CameraWarmupTest, TurnedCamerasComeBackAndAFinishedWarmUpReloadsBitForBit) 
   ASSERT_TRUE(WarmUpCameras(resumed, fit, &b_train, &b_test));
   EXPECT_TRUE(SameCameras(a_train, b_train));
   EXPECT_TRUE(SameCameras(a_test, b_test));
-  std::system(("rm -rf '" + o.out_dir + "'").c_str());
 }
 
 }  // namespace

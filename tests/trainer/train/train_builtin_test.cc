@@ -13,6 +13,7 @@
 #include "decoder/scene_decoder.h"
 #include "encoder/encode_rate_control.h"
 #include "encoder/scene_encoder.h"
+#include "tests/common/scoped_temp_dir.h"
 #include "trainer/data/camera.h"
 #include "trainer/data/image_metrics.h"
 #include "trainer/train/trainer.h"
@@ -214,9 +215,8 @@ TEST(TrainBuiltin, NonFiniteInputsStopTrainingAndKeepTheLastGoodCheckpoint) {
   o.iters = 120;
   o.checkpoint_every = 2;
   const Dataset test = LoadTrainingViews(o, "test");
-  char tmpl[] = "/tmp/ecrf_diverge_XXXXXX";
-  ASSERT_NE(mkdtemp(tmpl), nullptr);
-  o.out_dir = tmpl;
+  const testing_util::ScopedTempDir tmp("ecrf_diverge");
+  o.out_dir = tmp.path();
   const std::string ckpt = o.out_dir + "/checkpoint.ckpt";
   for (int kind = 0; kind < 2; ++kind) {
     SCOPED_TRACE(kind == 0 ? "NaN pixels" : "NaN pose");
@@ -251,7 +251,6 @@ TEST(TrainBuiltin, NonFiniteInputsStopTrainingAndKeepTheLastGoodCheckpoint) {
       for (float x : restored.appearance().params()) ASSERT_TRUE(std::isfinite(x));
     }
   }
-  std::system(("rm -rf '" + o.out_dir + "'").c_str());
 }
 
 // Killed twice and resumed: once after the second alpha-mask update (its ray filtering) and
@@ -277,9 +276,8 @@ TEST(TrainBuiltin, ResumedRunEqualsTheUninterruptedOneBitForBit) {
   o.refine_cameras_every = 100;  // resumes start from 120 and 180)
   const Dataset train = LoadTrainingViews(o, "train");
   const Dataset test = LoadTrainingViews(o, "test");
-  char tmpl[] = "/tmp/ecrf_resume_XXXXXX";
-  ASSERT_NE(mkdtemp(tmpl), nullptr);
-  const std::string root = tmpl;
+  const testing_util::ScopedTempDir tmp("ecrf_resume");
+  const std::string root = tmp.path();
 
   TrainOptions whole = o;
   whole.out_dir = root + "/whole";
@@ -325,7 +323,6 @@ TEST(TrainBuiltin, ResumedRunEqualsTheUninterruptedOneBitForBit) {
     }
     parts.resume = true;
   }
-  std::system(("rm -rf '" + root + "'").c_str());
 }
 
 }  // namespace
