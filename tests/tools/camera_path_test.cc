@@ -1,8 +1,8 @@
 // render's camera paths: the orbit and the spiral have the documented poses (the formula in
 // tools/camera_path.h and `ecrf render --help`) and look at the origin, and a path written as
 // JSON (--save-path) reads back (--path) to the same cameras, bit for bit.
-#include "tests/common/scoped_temp_dir.h"
 #include "tools/camera_path.h"
+#include "tests/common/scoped_temp_dir.h"
 
 #include <gtest/gtest.h>
 #include <stdlib.h>

@@ -32,7 +32,6 @@ const std::vector<std::string> kSmallRun = {"--scene",   "builtin", "--iters",  
 
 class RunConfigTest : public ::testing::Test {
  protected:
-
   // Trains kSmallRun plus args into root_/name; returns the run directory.
   std::string Train(const std::string& name, std::vector<std::string> args) {
     const std::string dir = root_ + "/" + name;

@@ -1,5 +1,5 @@
-#include "tests/common/scoped_temp_dir.h"
 #include "tools/report/sweep_plan.h"
+#include "tests/common/scoped_temp_dir.h"
 
 #include <gtest/gtest.h>
 #include <stdlib.h>
@@ -20,7 +20,6 @@ std::string ReadText(const std::string& path) {
   ss << in.rdbuf();
   return ss.str();
 }
-
 
 TEST(SweepPlan, ShellQuoteLeavesPlainWordsAndQuotesTheRest) {
   EXPECT_EQ(ShellQuote("--lambda-e"), "--lambda-e");

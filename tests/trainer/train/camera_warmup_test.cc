@@ -1,5 +1,5 @@
-#include "tests/common/scoped_temp_dir.h"
 #include "trainer/train/camera_warmup.h"
+#include "tests/common/scoped_temp_dir.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
