@@ -11,47 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-static unsigned char* read_file(const char* path, size_t* size) {
-  FILE* f = fopen(path, "rb");
-  unsigned char* data = NULL;
-  long n;
-  if (!f) return NULL;
-  if (fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) >= 0 && fseek(f, 0, SEEK_SET) == 0) {
-    data = (unsigned char*)malloc(n > 0 ? (size_t)n : 1);
-    if (data && fread(data, 1, (size_t)n, f) != (size_t)n) {
-      free(data);
-      data = NULL;
-    }
-    *size = (size_t)n;
-  }
-  fclose(f);
-  return data;
-}
-
-/* SPEC.md 7.1 (informative OrbitCamera): on a sphere around the origin, looking at it, z up. */
-static void orbit_camera(ecrf_camera* cam, int width, int height, float az, float el, float radius) {
-  const float pos[3] = {radius * cosf(el) * cosf(az), radius * cosf(el) * sinf(az), radius * sinf(el)};
-  const float z[3] = {pos[0] / radius, pos[1] / radius, pos[2] / radius};
-  float x[3] = {-z[1], z[0], 0.f}; /* (0, 0, 1) x z */
-  const float xn = sqrtf(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
-  float y[3];
-  int a;
-  for (a = 0; a < 3; ++a) x[a] /= xn;
-  y[0] = z[1] * x[2] - z[2] * x[1];
-  y[1] = z[2] * x[0] - z[0] * x[2];
-  y[2] = z[0] * x[1] - z[1] * x[0];
-  for (a = 0; a < 3; ++a) {
-    cam->c2w[4 * a + 0] = x[a];
-    cam->c2w[4 * a + 1] = y[a];
-    cam->c2w[4 * a + 2] = z[a];
-    cam->c2w[4 * a + 3] = pos[a];
-  }
-  cam->width = width;
-  cam->height = height;
-  cam->fx = cam->fy = 0.5f * (float)width / tanf(0.5f * 0.6911112070083618f);
-  cam->cx = 0.5f * (float)width;
-  cam->cy = 0.5f * (float)height;
-}
+#include "example_util.h"
 
 static int write_ppm(const char* path, const unsigned char* rgba, int width, int height) {
   FILE* f = fopen(path, "wb");

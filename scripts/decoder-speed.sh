@@ -58,7 +58,7 @@ build() {  # build TREE FLAVOUR -> TREE/decoder_speed_FLAVOUR
   mkdir -p "$obj"
   (cd "$tree" && grep -v '^#' cmake/decoder_sources.txt | sed '/^$/d' |
      xargs -P "$jobs" -I{} sh -c 'g++ -std=c++17 -O3 "$@" -fno-exceptions -fno-rtti -ffp-contract=off -I. -Iinclude -c {} -o "'"$obj"'/$(echo {} | tr / _).o"' _ "${march[@]}")
-  gcc -std=c99 -O2 -I"$tree/include" -c tools/bench/decoder_speed.c -o "$obj/decoder_speed.o"
+  gcc -std=c99 -O2 -I"$tree/include" -I. -c tools/bench/decoder_speed.c -o "$obj/decoder_speed.o"
   g++ "$obj"/*.o -o "$tree/decoder_speed_$flavour" -pthread -lm
 }
 

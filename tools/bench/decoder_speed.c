@@ -10,59 +10,17 @@
 #define _POSIX_C_SOURCE 199309L /* clock_gettime under -std=c99 */
 #include <ecrf/decoder.h>
 
-#include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <time.h>
 
+#include "examples/example_util.h"
+
 static double now_ms(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
   return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
-
-static unsigned char* read_file(const char* path, size_t* size) {
-  FILE* f = fopen(path, "rb");
-  unsigned char* data = NULL;
-  long n;
-  if (!f) return NULL;
-  if (fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) >= 0 && fseek(f, 0, SEEK_SET) == 0) {
-    data = (unsigned char*)malloc(n > 0 ? (size_t)n : 1);
-    if (data && fread(data, 1, (size_t)n, f) != (size_t)n) {
-      free(data);
-      data = NULL;
-    }
-    *size = (size_t)n;
-  }
-  fclose(f);
-  return data;
-}
-
-/* SPEC.md 7.1 (informative OrbitCamera), in double for the angles as `ecrf render` takes them. */
-static void orbit_camera(ecrf_camera* cam, int size, double az_deg, double el_deg, float radius) {
-  const float az = (float)(az_deg * 3.14159265358979323846 / 180.0);
-  const float el = (float)(el_deg * 3.14159265358979323846 / 180.0);
-  const float pos[3] = {radius * cosf(el) * cosf(az), radius * cosf(el) * sinf(az),
-                        radius * sinf(el)};
-  const float z[3] = {pos[0] / radius, pos[1] / radius, pos[2] / radius};
-  float x[3] = {-z[1], z[0], 0.f};
-  const float xn = sqrtf(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
-  float y[3];
-  int a;
-  for (a = 0; a < 3; ++a) x[a] /= xn;
-  y[0] = z[1] * x[2] - z[2] * x[1];
-  y[1] = z[2] * x[0] - z[0] * x[2];
-  y[2] = z[0] * x[1] - z[1] * x[0];
-  for (a = 0; a < 3; ++a) {
-    cam->c2w[4 * a + 0] = x[a];
-    cam->c2w[4 * a + 1] = y[a];
-    cam->c2w[4 * a + 2] = z[a];
-    cam->c2w[4 * a + 3] = pos[a];
-  }
-  cam->width = cam->height = size;
-  cam->fx = cam->fy = 0.5f * (float)size / tanf(0.5f * 0.6911112070083618f);
-  cam->cx = cam->cy = 0.5f * (float)size;
 }
 
 int main(int argc, char** argv) {
@@ -120,7 +78,9 @@ int main(int argc, char** argv) {
     double total = 0.0;
     for (v = 0; v < views && rc >= 0; ++v) {
       ecrf_camera cam;
-      orbit_camera(&cam, size, 360.0 * v / views, 30.0, 4.f);
+      /* Degrees to radians in double, as `ecrf render --orbit` converts them. */
+      orbit_camera(&cam, size, size, (float)(2.0 * 3.14159265358979323846 * v / views),
+                   (float)(30.0 * 3.14159265358979323846 / 180.0), 4.f);
       t0 = now_ms();
       rc = ecrf_scene_render(scene, &cam, &options, rgba, NULL);
       total += now_ms() - t0;
