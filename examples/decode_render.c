@@ -24,8 +24,7 @@ static int write_ppm(const char* path, const unsigned char* rgba, int width, int
 }
 
 int main(int argc, char** argv) {
-  size_t size = 0;
-  unsigned char *bytes, *rgba;
+  unsigned char* rgba;
   ecrf_scene* scene;
   ecrf_scene_info info;
   ecrf_render_options options;
@@ -49,24 +48,8 @@ int main(int argc, char** argv) {
     }
   }
   printf("ecrf decoder %s (bitstream %d)\n", ecrf_version_string(), ecrf_bitstream_version());
-  bytes = read_file(argv[1], &size);
-  if (!bytes) {
-    fprintf(stderr, "cannot read %s\n", argv[1]);
-    return 1;
-  }
-  scene = ecrf_scene_create();
-  if (!scene) {
-    free(bytes);
-    fprintf(stderr, "out of memory\n");
-    return 1;
-  }
-  rc = ecrf_scene_decode(scene, bytes, size, ECRF_STORAGE_FLOAT32);
-  free(bytes);
-  if (rc < 0) {
-    fprintf(stderr, "%s: %s (%s)\n", argv[1], ecrf_scene_message(scene), ecrf_error_name(rc));
-    ecrf_scene_destroy(scene);
-    return 1;
-  }
+  scene = decode_scene_file(argv[1], ECRF_STORAGE_FLOAT32);
+  if (!scene) return 1;
   ecrf_scene_get_info(scene, &info);
   printf("%s: %zu bytes, grid %dx%dx%d, density ranks %d/%d/%d, appearance ranks %d/%d/%d\n",
          argv[1], info.stream_bytes, info.grid_res[0], info.grid_res[1], info.grid_res[2],

@@ -1,6 +1,7 @@
-/* What the C programs beside the library share: reading a whole file and SPEC.md 7.1's orbit
- * camera. Used by examples/decode_render.c and tools/bench/decoder_speed.c (static inline, so a
- * program that needs one of them builds without warnings about the other). Plain C99. */
+/* What the C programs beside the library share: reading a whole file, decoding a stream file
+ * into a scene, and SPEC.md 7.1's orbit camera. Used by examples/decode_render.c and
+ * tools/bench/decoder_speed.c (static inline, so a program that needs one of them builds without
+ * warnings about the other). Plain C99. */
 #ifndef ECRF_EXAMPLES_EXAMPLE_UTIL_H_
 #define ECRF_EXAMPLES_EXAMPLE_UTIL_H_
 
@@ -27,6 +28,33 @@ static inline unsigned char* read_file(const char* path, size_t* size) {
   }
   fclose(f);
   return data;
+}
+
+/* The stream file at path decoded into a new scene (grids in `storage`); NULL, with the reason on
+ * stderr, when it cannot be read or decoded. The caller destroys the scene. */
+static inline ecrf_scene* decode_scene_file(const char* path, int storage) {
+  size_t size = 0;
+  unsigned char* bytes = read_file(path, &size);
+  ecrf_scene* scene;
+  int rc;
+  if (!bytes) {
+    fprintf(stderr, "cannot read %s\n", path);
+    return NULL;
+  }
+  scene = ecrf_scene_create();
+  if (!scene) {
+    free(bytes);
+    fprintf(stderr, "out of memory\n");
+    return NULL;
+  }
+  rc = ecrf_scene_decode(scene, bytes, size, storage);
+  free(bytes);
+  if (rc < 0) {
+    fprintf(stderr, "%s: %s (%s)\n", path, ecrf_scene_message(scene), ecrf_error_name(rc));
+    ecrf_scene_destroy(scene);
+    return NULL;
+  }
+  return scene;
 }
 
 /* SPEC.md 7.1 (informative OrbitCamera): on a sphere around the origin, looking at it, z up. */

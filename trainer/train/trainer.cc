@@ -228,12 +228,14 @@ void PruneAt(int done, float lambda_e, const TrainOptions& o, const RaySet& rays
   const auto start = Clock::now();
   const int n = std::max(1, o.prune_rays);
   std::vector<float> origins(size_t(n) * 3), dirs(size_t(n) * 3), rgb(size_t(n) * 3);
-  std::vector<uint32_t> views(static_cast<size_t>(n));
-  std::vector<float> gains(exposure.enabled() ? size_t(n) * 3 : 0);
+  // The rays' views and gains only with exposure codes (the draws are the same either way).
+  const bool exposed = exposure.enabled();
+  std::vector<uint32_t> views(exposed ? size_t(n) : 0);
+  std::vector<float> gains(exposed ? size_t(n) * 3 : 0);
   std::mt19937_64 rng(uint64_t(o.seed) * 0x9E3779B97F4A7C15ull + uint64_t(done));
-  rays.Sample(n, rng, origins.data(), dirs.data(), rgb.data(), views.data());
-  if (exposure.enabled()) exposure.Gains(n, views.data(), gains.data());
-  const float* gain = exposure.enabled() ? gains.data() : nullptr;
+  rays.Sample(n, rng, origins.data(), dirs.data(), rgb.data(), exposed ? views.data() : nullptr);
+  if (exposed) exposure.Gains(n, views.data(), gains.data());
+  const float* gain = exposed ? gains.data() : nullptr;
   if (qat) qat->Apply(model);
   const PruneDecision d = TestComponents(*model, rate, lambda_e, n, origins.data(), dirs.data(),
                                          rgb.data(), o.prune_share, gain);
