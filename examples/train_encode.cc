@@ -46,7 +46,7 @@ static double DecodedPsnr(ecrf_scene* scene, const tr::View& view) {
 int main(int argc, char** argv) {
   try {
     tr::TrainOptions o = tr::PresetOptions("tiny");
-    o.procedural_scene = "builtin";
+    o.procedural_scene = tr::ProceduralScene::kBuiltin;
     o.iters = argc > 1 ? std::atoi(argv[1]) : 200;
     if (o.iters < 1) {
       std::fprintf(stderr, "usage: %s [iterations]\n", argv[0]);

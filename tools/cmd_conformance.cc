@@ -72,7 +72,7 @@ std::vector<uint8_t> LoadRgb8(const std::string& path) {
 // The built-in scene, briefly trained and encoded: a realistic stream for decoders to check.
 std::vector<uint8_t> TrainBuiltinStream() {
   trainer::TrainOptions o = trainer::PresetOptions("tiny");
-  o.procedural_scene = "builtin";
+  o.procedural_scene = trainer::ProceduralScene::kBuiltin;
   o.builtin_size = 48;
   o.builtin_views = 40;
   o.iters = 300;

@@ -455,7 +455,7 @@ int RunEval(int argc, char** argv) {
       app->add_option("--scene", procedural,
                       "a procedural scene as `ecrf train --scene NAME` makes it")
           ->type_name("NAME")
-          ->check(CLI::IsMember({"builtin", "capture", "capture-sparse", "forward"}));
+          ->check(CLI::IsMember(trainer::TypedNames<trainer::ProceduralScene>()));
   data_flag->excludes(scene_flag);
   app->add_option("--split", split, "the split to score")->type_name("NAME")->capture_default_str();
   app->add_option("--seed", seed, "the procedural scene's seed (as given to train)")

@@ -19,7 +19,7 @@ int RunTrain(int argc, char** argv) {
       "train",
       "Trains a TensoRF VM model with the ECRF rate objective, encodes RUN_DIR/scene.ecrf, decodes "
       "it with the embeddable decoder and scores the decoded file.\n"
-      "usage: ecrf train (--data DIR | --scene builtin|capture|forward) [options] -o RUN_DIR\n"
+      "usage: ecrf train (--data DIR | --scene NAME) [options] -o RUN_DIR\n"
       "The defaults below are those of this command line's --preset and --rate.");
   TrainFlags flags;
   flags.options = BaseTrainOptions(std::vector<std::string>(argv + 1, argv + argc));

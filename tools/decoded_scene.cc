@@ -66,10 +66,15 @@ trainer::Image RenderDecoded(const dec::SceneField& scene, const trainer::Camera
   return img;
 }
 
+bool IsProceduralScene(const std::string& name) {
+  const std::vector<std::string> names = trainer::TypedNames<trainer::ProceduralScene>();
+  return std::find(names.begin(), names.end(), name) != names.end();
+}
+
 trainer::Dataset ProceduralDataset(const std::string& scene, const std::string& split,
                                    uint32_t seed) {
   trainer::TrainOptions o = trainer::PresetOptions("tiny");
-  trainer::SelectProceduralScene(scene, &o);
+  o.procedural_scene = trainer::ChoiceFromName<trainer::ProceduralScene>(scene, "scene");
   o.seed = seed;
   return trainer::LoadTrainingViews(o, split);
 }

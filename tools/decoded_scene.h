@@ -52,6 +52,8 @@ trainer::EvalResult EvaluateDecoded(const dec::SceneField& scene, const trainer:
 
 // A procedural scene's split as `ecrf train --scene NAME --seed seed` makes it (NAME builtin or
 // capture; throws std::invalid_argument for others).
+// Whether `name` is a procedural scene's (ecrf train --scene NAME), not a data directory.
+bool IsProceduralScene(const std::string& name);
 trainer::Dataset ProceduralDataset(const std::string& scene, const std::string& split,
                                    uint32_t seed);
 

@@ -12,10 +12,13 @@ trainer::EncodeOptions TrainedRunEncodeOptions(const trainer::TrainOptions& o,
                                                const trainer::RateState& rate, int iterations,
                                                float final_lambda_e) {
   trainer::EncodeOptions eo = trainer::RunEncodeOptions(o, rate);
-  eo.metadata_json = nlohmann::json{{"encoder", "ecrf"},          {"data", trainer::DataSource(o)},
-                                    {"preset", o.preset},         {"iterations", iterations},
-                                    {"lambda_e", final_lambda_e}, {"alpha", o.alpha}}
-                         .dump();
+  eo.metadata_json = nlohmann::json{
+      {"encoder", "ecrf"},
+      {"data", trainer::DataSource(o)},
+      {"preset", trainer::NameOf(o.preset)},
+      {"iterations", iterations},
+      {"lambda_e", final_lambda_e},
+      {"alpha", o.alpha}}.dump();
   return eo;
 }
 

@@ -1,13 +1,14 @@
 #include "tools/train_flags.h"
-#include "encoder/coef_rdoq.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
+#include <type_traits>
 
 #include "tools/cli_args.h"
+#include "tools/train_field_text.h"
 #include "trainer/data/scene_fit.h"
 #include "trainer/train/train_options.h"
 
@@ -15,67 +16,30 @@ namespace ecrf {
 namespace tools {
 namespace {
 
-// The value of the last `flag VALUE` or `flag=VALUE` in args, or nullptr.
-const std::string* LastValue(const std::vector<std::string>& args, const std::string& flag,
-                             std::string* storage) {
-  const std::string* found = nullptr;
-  for (size_t i = 0; i < args.size(); ++i) {
-    if (args[i] == flag && i + 1 < args.size()) {
-      found = &args[i + 1];
-    } else if (args[i].compare(0, flag.size() + 1, flag + "=") == 0) {
-      *storage = args[i].substr(flag.size() + 1);
-      found = storage;
-    }
+// The flags that choose layers 1 and 2 of a command line: the last value of each (empty when
+// absent), read by CLI11 before the other flags are declared, so that --help can show the
+// defaults of that preset and rate point. The full parse that follows reports every error.
+struct LayerFlags {
+  std::string preset, scene, rate, lambda_e, target_size;
+};
+
+LayerFlags ReadLayerFlags(const std::vector<std::string>& args) {
+  CLI::App app;
+  app.allow_extras();
+  app.set_help_flag();
+  app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+  LayerFlags f;
+  app.add_option("--preset", f.preset);
+  app.add_option("--scene", f.scene);
+  app.add_option("--rate", f.rate);
+  app.add_option("--lambda-e", f.lambda_e);
+  app.add_option("--target-size", f.target_size);
+  try {
+    app.parse(std::vector<std::string>(args.rbegin(), args.rend()));  // CLI11 takes it reversed
+  } catch (const CLI::ParseError&) {
+    // A malformed line: the full parse says what is wrong with it.
   }
-  return found;
-}
-
-bool Given(const std::vector<std::string>& args, const std::string& flag) {
-  std::string storage;
-  return LastValue(args, flag, &storage) != nullptr;
-}
-
-// "I,J,...": increasing positive iterations.
-std::vector<int> ParseIterationList(const char* flag, const std::string& text) {
-  std::vector<int> at;
-  for (size_t begin = 0; begin <= text.size();) {
-    size_t end = text.find(',', begin);
-    if (end == std::string::npos) end = text.size();
-    at.push_back(ParseInt(flag, text.substr(begin, end - begin).c_str()));
-    if (at.back() < 1 || (at.size() > 1 && at.back() <= at[at.size() - 2])) {
-      throw std::invalid_argument(std::string(flag) + ": '" + text +
-                                  "' is not increasing positive iterations");
-    }
-    begin = end + 1;
-  }
-  return at;
-}
-
-// "F,G,..." of shares (of the rate phase), each in (0, 1) and increasing; "" is the empty list.
-std::vector<float> ParseShareList(const char* flag, const std::string& text) {
-  std::vector<float> at;
-  if (text.empty()) return at;
-  for (size_t begin = 0; begin <= text.size();) {
-    size_t end = text.find(',', begin);
-    if (end == std::string::npos) end = text.size();
-    const std::string item = text.substr(begin, end - begin);
-    char* stop = nullptr;
-    const double v = std::strtod(item.c_str(), &stop);
-    if (item.empty() || *stop != '\0' || !(v > 0.0 && v < 1.0) ||
-        (!at.empty() && !(float(v) > at.back()))) {
-      throw std::invalid_argument(std::string(flag) + ": '" + text +
-                                  "' is not a list of increasing shares in (0, 1)");
-    }
-    at.push_back(float(v));
-    begin = end + 1;
-  }
-  return at;
-}
-
-std::string JoinInts(const std::vector<int>& v, const char* separator) {
-  std::string s;
-  for (size_t k = 0; k < v.size(); ++k) s += (k ? separator : "") + std::to_string(v[k]);
-  return s;
+  return f;
 }
 
 std::string FloatText(double v) {
@@ -90,383 +54,121 @@ int FinalGridEdge(const trainer::TrainOptions& o) {
 
 }  // namespace
 
+trainer::FieldInfo TrainFieldInfo(const std::string& key) {
+  trainer::FieldInfo found;
+  const trainer::TrainOptions o;
+  trainer::ForEachTrainField(o, [&](const trainer::FieldInfo& info, const auto&) {
+    if (key == info.key) found = info;
+  });
+  if (key != found.key) throw std::logic_error("no training setting named '" + key + "'");
+  return found;
+}
+
 trainer::TrainOptions BaseTrainOptions(const std::vector<std::string>& args) {
-  std::string storage;
-  const std::string* preset = LastValue(args, "--preset", &storage);
-  const bool procedural = Given(args, "--scene");  // every procedural scene is CI-sized
-  trainer::TrainOptions o = trainer::PresetOptions(preset ? *preset : procedural ? "tiny" : "fast");
-  std::string rate_storage, lambda_storage;
-  const std::string* rate = LastValue(args, "--rate", &rate_storage);
-  const std::string* lambda = LastValue(args, "--lambda-e", &lambda_storage);
-  if (rate) {
-    trainer::ApplyRatePoint(*rate, &o);
-  } else if (lambda && std::strtod(lambda->c_str(), nullptr) == 0.0) {
-    trainer::ApplyRatePoint("none", &o);  // --lambda-e 0: plain TensoRF, as documented
-  } else if (!Given(args, "--target-size")) {
-    trainer::ApplyRatePoint("medium", &o);  // a compressor by default
+  const LayerFlags f = ReadLayerFlags(args);
+  // Every procedural scene is CI-sized.
+  trainer::TrainOptions o =
+      trainer::PresetOptions(!f.preset.empty() ? f.preset : !f.scene.empty() ? "tiny" : "fast");
+  if (!f.rate.empty()) {
+    trainer::ApplyRatePoint(f.rate, &o);
+  } else if (!f.lambda_e.empty() && std::strtod(f.lambda_e.c_str(), nullptr) == 0.0) {
+    trainer::ApplyRatePoint(trainer::RatePoint::kNone, &o);  // --lambda-e 0: plain TensoRF
+  } else if (f.target_size.empty()) {
+    trainer::ApplyRatePoint(trainer::RatePoint::kMedium, &o);  // a compressor by default
   }
   return o;
 }
 
+namespace {
+
+// What --help shows after a flag's placeholder: its range or its names.
+template <class T>
+std::string ValueDescription(const trainer::FieldInfo& info) {
+  if constexpr (trainer::IsNamedChoice<T>::value) {
+    std::string names;
+    for (const std::string& n : trainer::TypedNames<T>()) names += (names.empty() ? "" : ",") + n;
+    return "{" + names + "}";
+  } else {
+    const std::string limits = trainer::LimitsText(info.limits);
+    if (limits.empty()) return "";
+    if (info.text == trainer::FlagText::kAutoNumber) return "auto or " + limits;
+    return limits[0] == '[' || limits[0] == '(' ? "in " + limits : limits;
+  }
+}
+
+// One flag of the table on app: bool fields are switches bound to the field; the others keep
+// their text in f->texts until FinishTrainFlags converts it (the validator converts it once
+// during parsing, so that a bad value is a parse error with CLI11's usual line).
+template <class T>
+void AddFieldFlag(CLI::App* app, TrainFlags* f, const trainer::FieldInfo& info, T& field) {
+  const char* group = trainer::kFlagGroupTitles[size_t(info.group)];
+  if constexpr (std::is_same_v<T, bool>) {
+    app->add_flag(info.flag, field, info.help)->group(group);
+  } else {
+    std::string& text = f->texts[info.key];
+    CLI::Option* option = app->add_option(info.flag, text, info.help);
+    option->check(CLI::Validator(
+        [info](std::string& value) {
+          try {
+            T parsed{};
+            ParseFieldText(info, value, &parsed);
+          } catch (const std::invalid_argument& e) {
+            return std::string(e.what());
+          }
+          return std::string();
+        },
+        ValueDescription<T>(info)));
+    if (*info.value_name) option->type_name(info.value_name);
+    if (info.text != trainer::FlagText::kSize || field != T{})
+      option->default_str(FieldText(info, field));
+    option->group(group);
+  }
+}
+
+}  // namespace
+
 void AddTrainFlags(CLI::App* app, TrainFlags* f) {
   trainer::TrainOptions& o = f->options;
   app->option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
-  f->preset = o.preset;
-  f->rate = o.rate_point;
-  f->final_grid = FinalGridEdge(o);
+  // The table's flags, section by section.
+  for (size_t group = 0; group < std::size(trainer::kFlagGroupTitles); ++group) {
+    trainer::ForEachTrainField(o, [&](const trainer::FieldInfo& info, auto& field) {
+      if (info.flag && size_t(info.group) == group) AddFieldFlag(app, f, info, field);
+    });
+  }
+  // --ranks D,A: both component counts at once, each within its own field's limits.
   f->ranks = std::to_string(o.density_rank) + "," + std::to_string(o.appearance_rank);
-  f->dct_block = JoinInts({o.plane_block[0], o.plane_block[1], o.plane_block[2]}, "x");
-  f->line_block = JoinInts({o.line_block[1], o.line_block[2]}, "x");
-  f->upsample_at = JoinInts(o.upsample_iters, ",");
-  f->mask_at = JoinInts(o.alpha_mask_iters, ",");
-
-  const char* data = "Data";
-  app->add_option("--data", o.data_dir,
-                  "posed images: NeRF Blender, Instant-NGP / nerfstudio or LLFF")
-      ->type_name("DIR")
-      ->group(data);
-  app->add_option("--scene", f->scene, "a procedural scene instead of --data (no files needed)")
-      ->check(CLI::IsMember({"builtin", "capture", "capture-sparse", "forward"}))
-      ->group(data);
-  app->add_option(
-         "--scene-type", o.scene_type,
-         "scene model: object keeps the dataset box; unbounded contracts space around the fitted "
-         "region of interest (SPEC.md 7.2.1); forward samples the NDC of the average camera "
-         "(7.2.2); "
-         "auto picks from the camera layout")
-      ->check(CLI::IsMember({"auto", "object", "unbounded", "forward"}))
-      ->capture_default_str()
-      ->group(data);
-  app->add_option("--downscale", o.downscale,
-                  "shrink the training and test images by N (area filter)")
-      ->type_name("N")
-      ->check(CLI::Range(1, 64))
-      ->capture_default_str()
-      ->group(data);
-
-  const char* schedule = "Schedule and model";
-  app->add_option("--preset", f->preset, "schedule and grid sizes (tiny: the default for --scene)")
-      ->check(CLI::IsMember({"fast", "paper", "tiny"}))
-      ->capture_default_str()
-      ->group(schedule);
-  app->add_option("--iters", o.iters, "iterations (the milestones scale with it)")
-      ->type_name("N")
-      ->check(CLI::Range(1, 100000000))
-      ->capture_default_str()
-      ->group(schedule);
-  app->add_option("--batch", o.batch_rays, "rays per iteration")
-      ->type_name("N")
-      ->check(CLI::Range(1, 1 << 24))
-      ->capture_default_str()
-      ->group(schedule);
   app->add_option("--ranks", f->ranks,
-                  "density and appearance components per plane and line, each in [1, 256]")
+                  "density and appearance components per plane and line, each in " +
+                      trainer::LimitsText(TrainFieldInfo("density_rank").limits))
       ->type_name("D,A")
       ->capture_default_str()
-      ->group(schedule);
-  app->add_option("--final-grid", f->final_grid,
-                  "about N^3 voxels in the box after the last upsampling")
-      ->type_name("N")
-      ->check(CLI::Range(2, 1024))
-      ->capture_default_str()
-      ->group(schedule);
-  app->add_option("--upsample-at", f->upsample_at, "iterations of the grid upsamplings")
-      ->type_name("I,J,...")
-      ->capture_default_str()
-      ->group(schedule);
-  app->add_option("--mask-downscale", o.mask_downscale,
-                  "alpha-mask grid points N grid cells apart (a smaller OCCU chunk, more samples "
-                  "evaluated)")
-      ->type_name("N")
-      ->check(CLI::Range(1, 16))
-      ->capture_default_str()
-      ->group(schedule);
-  app->add_option("--distortion-loss", o.distortion_weight,
-                  "weight of mip-NeRF 360's distortion loss, against floaters (0: off)")
-      ->type_name("W")
-      ->check(CLI::Range(0.0, 10.0))
-      ->capture_default_str()
-      ->group(schedule);
-  app->add_option("--tv-density", o.tv_weight_density,
-                  "weight of total variation on the density planes (TensoRF's TV_weight_density; "
-                  "0: off; auto: 1 for unbounded scenes, 0 for the others)")
-      ->type_name("W")
-      ->check(CLI::Range(0.0, 1000.0))
-      ->default_str("auto")
-      ->group(schedule);
-  app->add_option("--exposure-codes", o.exposure_codes,
-                  "learn a gain per training image and channel (auto exposure, white balance), "
-                  "left out of the file; auto: on for unbounded and forward-facing scenes")
-      ->type_name("auto|on|off")
-      ->check(CLI::IsMember({"auto", "on", "off"}))
-      ->capture_default_str()
-      ->group(schedule);
-  app->add_option("--lr-exposure", o.lr_exposure, "learning rate of the exposure codes")
-      ->type_name("LR")
-      ->check(CLI::Range(0.0, 1.0))
-      ->capture_default_str()
-      ->group(schedule);
-  app->add_option("--refine-cameras", o.refine_cameras,
-                  "refine the cameras (poses and shared intrinsics) against the field while "
-                  "training, and align the held-out cameras before scoring; auto: on for datasets "
-                  "with estimated poses (Instant-NGP / nerfstudio, LLFF, ecrf prepare)")
-      ->type_name("auto|on|off")
-      ->check(CLI::IsMember({"auto", "on", "off"}))
-      ->capture_default_str()
-      ->group(schedule);
-  app->add_option("--refine-cameras-every", o.refine_cameras_every,
-                  "refine the cameras every N iterations, from 20 % to 80 % of the run (0: "
-                  "iterations / 50)")
-      ->type_name("N")
-      ->check(CLI::Range(0, 100000000))
-      ->default_str("0")
-      ->group(schedule);
-  app->add_option("--camera-warmup-iters", o.camera_warmup_iters,
-                  "when the cameras are refined: first train a field for N iterations and refine "
-                  "the cameras against it, then train the run's field afresh from those cameras "
-                  "(RUN_DIR/warmup/; -1: iterations / 2, 0: no warm-up)")
-      ->type_name("N")
-      ->check(CLI::Range(-1, 100000000))
-      ->default_str("-1")
-      ->group(schedule);
-  app->add_option("--weight-threshold", o.weight_threshold,
-                  "colour (run the MLP on) only samples of larger weight, in training and in the "
-                  "file; auto: 0.003 for unbounded scenes, 1e-4 (TensoRF) for the others")
-      ->type_name("W")
-      ->check(CLI::Range(0.0, 0.5))
-      ->default_str("auto")
-      ->group(schedule);
-  app->add_option("--tv-app", o.tv_weight_app,
-                  "weight of total variation on the appearance planes (TensoRF's TV_weight_app; "
-                  "auto as --tv-density)")
-      ->type_name("W")
-      ->check(CLI::Range(0.0, 1000.0))
-      ->default_str("auto")
-      ->group(schedule);
-  app->add_option("--mask-at", f->mask_at, "iterations of the alpha-mask updates and box shrink")
-      ->type_name("I,J,...")
-      ->capture_default_str()
-      ->group(schedule);
-  app->add_option("--mlp-hidden", o.mlp_hidden,
-                  "width of the appearance MLP's hidden layers (SPEC.md 6.2 limit)")
-      ->type_name("N")
-      ->check(CLI::Range(1, 1024))
-      ->capture_default_str()
-      ->group(schedule);
-  app->add_option("--seed", o.seed, "random seed")
-      ->type_name("N")
-      ->capture_default_str()
-      ->group(schedule);
-
-  const char* rate = "ECRF objective (defaults: the chosen rate point)";
-  app->add_option("--rate", f->rate,
-                  "rate point, the base the other flags adjust: low, medium and high trade size "
-                  "for PSNR; none is "
-                  "plain TensoRF (lambda_e 0). Default medium, none for --lambda-e 0, the nearest "
-                  "point's settings "
-                  "for --target-size")
-      ->check(CLI::IsMember({"low", "medium", "high", "none"}))
-      ->capture_default_str()
-      ->group(rate);
-  app->add_option("--lambda-e", o.lambda_e,
-                  "weight of the estimated size in bits (changes only lambda_e; 0 without --rate: "
-                  "plain TensoRF)")
-      ->type_name("X")
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str()
-      ->group(rate);
-  app->add_option("--target-size", f->target_size,
-                  "adapt lambda_e while training, then the steps when encoding, for a file of at "
-                  "most SIZE (units "
-                  "B, KB, MB, KiB, MiB); steps, MLP levels, components and grid schedule follow "
-                  "the nearest rate "
-                  "point unless given")
-      ->type_name("SIZE")
-      ->group(rate);
-  app->add_option("--quant-step-scale", o.quant_step_scale,
-                  "quantization steps S times the 8-bit peak step (> 0)")
-      ->type_name("S")
-      ->capture_default_str()
-      ->group(rate);
-  app->add_option("--density-step-factor", o.density_step_factor,
-                  "the density tensors' steps F times what --quant-step-scale gives them (> 0)")
-      ->type_name("F")
-      ->capture_default_str()
-      ->group(rate);
-  app->add_option("--mlp-levels", o.mlp_levels,
-                  "code the basis and MLP as integer levels, at most L per row (0 = binary16)")
-      ->type_name("L")
-      ->check(CLI::Range(0, 32767))
-      ->capture_default_str()
-      ->group(rate);
-  app->add_option("--alpha", o.alpha, "lambda_r = A * lambda_e for the DCT-coefficient L2 term")
-      ->type_name("A")
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str()
-      ->group(rate);
-  app->add_option(
-         "--rate-start", o.rate_start,
-         "share of the run after which the rate terms switch on, in [0, 1) (never before the last "
-         "upsampling and mask update)")
-      ->type_name("F")
-      ->capture_default_str()
-      ->group(rate);
-  app->add_option("--qat-start", o.qat_start,
-                  "quantization-aware training from this share of the run (< 0: with the rate "
-                  "phase; >= 1: off)")
-      ->type_name("F")
-      ->capture_default_str()
-      ->group(rate);
-  app->add_option("--qat-refresh", o.qat_refresh, "recompute the decoded grids every N iterations")
-      ->type_name("N")
-      ->check(CLI::Range(1, 1000000))
-      ->capture_default_str()
-      ->group(rate);
-  app->add_option(
-         "--rounding-offset", o.rounding_offset,
-         "coefficient quantizer floor(|c| / step + X), 0 < X <= 0.5, in training and encoding")
-      ->type_name("X")
-      ->capture_default_str()
-      ->group(rate);
-  app->add_option("--rdoq", o.rdoq_lambda,
-                  "rate-distortion optimised quantization with lambda L (squared steps per bit; "
-                  "0 = off), in training and encoding")
-      ->type_name("L")
-      ->capture_default_str()
-      ->group(rate);
-  app->add_option("--prune-at", f->prune_at,
-                  "shares of the rate phase after which the components that cost more (lambda_e x "
-                  "bits) than they give (MSE) are removed, e.g. 0.2,0.4 (empty: never)")
-      ->type_name("F,...")
-      ->group(rate);
-  app->add_option("--prune-share", o.prune_share,
-                  "the most of one mode's components a pruning test removes, in (0, 1]")
-      ->type_name("S")
-      ->capture_default_str()
-      ->group(rate);
-  app->add_option("--dct-block", f->dct_block, "plane block shape, powers of two <= 32")
-      ->type_name("CxHxW")
-      ->capture_default_str()
-      ->group(rate);
-  app->add_option("--line-block", f->line_block, "line block shape, powers of two <= 32")
-      ->type_name("CxL")
-      ->capture_default_str()
-      ->group(rate);
-  app->add_option("--rate-fraction", o.rate_fraction,
-                  "share of blocks in each step's rate estimate, in (0, 1]")
-      ->type_name("F")
-      ->capture_default_str()
-      ->group(rate);
-
-  const char* run = "Evaluation and bookkeeping (no effect on the file)";
-  app->add_option(
-         "--test-stride", o.test_view_stride,
-         "score every K-th test view; 0: every K-th with the smallest K that keeps at most " +
-             std::to_string(trainer::kDefaultScoredTestViews) + " views (1 scores all)")
-      ->type_name("K")
-      ->check(CLI::Range(0, 1000000))
-      ->capture_default_str()
-      ->group(run);
-  app->add_option("--max-test-views", o.max_test_views, "score at most N test views (0 = no limit)")
-      ->type_name("N")
-      ->check(CLI::Range(0, 1000000))
-      ->capture_default_str()
-      ->group(run);
-  app->add_option("--eval-downscale", o.eval_downscale,
-                  "score the test views at 1/N of their size (area filter)")
-      ->type_name("N")
-      ->check(CLI::Range(1, 64))
-      ->capture_default_str()
-      ->group(run);
-  app->add_flag("--score-float", o.score_float,
-                "also score the float model before encoding, on the same views (as long again)")
-      ->group(run);
-  app->add_option("--eval-every", o.eval_every,
-                  "score the float model every N iterations (a PSNR-vs-minutes curve)")
-      ->type_name("N")
-      ->check(CLI::Range(0, 100000000))
-      ->capture_default_str()
-      ->group(run);
-  app->add_flag("--save-renders", o.save_renders,
-                "write the scored renders as PNG into RUN_DIR/renders")
-      ->group(run);
-  app->add_option("--checkpoint-every", o.checkpoint_every,
-                  "write RUN_DIR/checkpoint.ckpt every N iterations")
-      ->type_name("N")
-      ->check(CLI::Range(0, 100000000))
-      ->capture_default_str()
-      ->group(run);
-  app->add_flag("--resume", o.resume,
-                "continue from RUN_DIR/checkpoint.ckpt (exactly as if never stopped)")
-      ->group(run);
-  app->add_flag("--accept-config-change", o.accept_config_change,
-                "with --resume: continue although settings differ from the checkpoint's")
-      ->group(run);
-  app->add_flag("--overwrite", o.overwrite,
-                "replace the run RUN_DIR already holds (without it, or --resume, such a RUN_DIR "
-                "is refused)")
-      ->group(run);
-  app->add_option("--stop-after", o.stop_after,
-                  "leave after N iterations (continue later with --resume)")
-      ->type_name("N")
-      ->check(CLI::Range(0, 100000000))
-      ->capture_default_str()
-      ->group(run);
-  AddThreadsFlag(app, &f->threads)->group(run);
+      ->group(trainer::kFlagGroupTitles[size_t(trainer::FlagGroup::kSchedule)]);
+  AddThreadsFlag(app, &f->threads)
+      ->group(trainer::kFlagGroupTitles[size_t(trainer::FlagGroup::kRun)]);
 }
 
 trainer::TrainOptions FinishTrainFlags(const CLI::App& app, TrainFlags* f) {
   trainer::TrainOptions& o = f->options;
   auto given = [&](const char* flag) { return app.count(flag) > 0; };
-  if (given("--scene")) trainer::SelectProceduralScene(f->scene, &o);
+  trainer::ForEachTrainField(o, [&](const trainer::FieldInfo& info, auto& field) {
+    using T = std::decay_t<decltype(field)>;
+    if constexpr (!std::is_same_v<T, bool>) {
+      if (info.flag && given(info.flag)) ParseFieldText(info, f->texts.at(info.key), &field);
+    }
+  });
   if (given("--ranks")) {
     const size_t comma = f->ranks.find(',');
     if (comma == std::string::npos)
       throw std::invalid_argument("--ranks: '" + f->ranks + "' is not D,A");
-    const int d = ParseInt("--ranks", f->ranks.substr(0, comma).c_str());
-    const int a = ParseInt("--ranks", f->ranks.substr(comma + 1).c_str());
-    if (d < 1 || d > 256 || a < 1 || a > 256) {
-      throw std::invalid_argument("--ranks: '" + f->ranks +
-                                  "' is not two integers in [1, 256] joined by ','");
-    }
-    o.density_rank = d;
-    o.appearance_rank = a;
+    trainer::FieldInfo density = TrainFieldInfo("density_rank");
+    trainer::FieldInfo appearance = TrainFieldInfo("appearance_rank");
+    density.flag = appearance.flag = "--ranks";
+    ParseFieldText(density, f->ranks.substr(0, comma), &o.density_rank);
+    ParseFieldText(appearance, f->ranks.substr(comma + 1), &o.appearance_rank);
   }
-  if (given("--final-grid")) {
-    o.voxels_final = long(f->final_grid) * f->final_grid * f->final_grid;
-    o.voxels_init = std::min(o.voxels_init, o.voxels_final);  // upsampling never shrinks
-  }
-  if (given("--upsample-at"))
-    o.upsample_iters = ParseIterationList("--upsample-at", f->upsample_at);
-  if (given("--mask-at")) o.alpha_mask_iters = ParseIterationList("--mask-at", f->mask_at);
-  if (given("--prune-at")) o.prune_at = ParseShareList("--prune-at", f->prune_at);
-
-  if (!(o.prune_share > 0.f && o.prune_share <= 1.f))
-    throw std::invalid_argument("--prune-share must be in (0, 1]");
-  if (given("--dct-block")) ParseShape("--dct-block", f->dct_block, 3, o.plane_block);
-  if (given("--line-block")) {
-    int shape[2];
-    ParseShape("--line-block", f->line_block, 2, shape);
-    o.line_block[0] = 1;
-    o.line_block[1] = shape[0];
-    o.line_block[2] = shape[1];
-  }
-  if (given("--target-size")) o.target_bytes = ParseSizeWithUnit("--target-size", f->target_size);
-  if (!(o.quant_step_scale > 0.f)) throw std::invalid_argument("--quant-step-scale must be > 0");
-  if (!(o.density_step_factor > 0.f) || !std::isfinite(o.density_step_factor))
-    throw std::invalid_argument("--density-step-factor must be > 0");
-  if (!(o.rate_start >= 0.f && o.rate_start < 1.f))
-    throw std::invalid_argument("--rate-start must be in [0, 1)");
-  if (!(o.rounding_offset > 0.f && o.rounding_offset <= 0.5f)) {
-    throw std::invalid_argument("--rounding-offset must be in (0, 0.5]");
-  }
-  if (!(o.rdoq_lambda >= 0.f && o.rdoq_lambda <= trainer::kMaxRdoqLambda)) {
-    throw std::invalid_argument("--rdoq must be in [0, " +
-                                std::to_string(int(trainer::kMaxRdoqLambda)) + "]");
-  }
-  if (!(o.rate_fraction > 0.f && o.rate_fraction <= 1.f))
-    throw std::invalid_argument("--rate-fraction must be in (0, 1]");
-  trainer::CheckSceneType(o.scene_type);
+  // Upsampling never shrinks the grid.
+  if (given("--final-grid")) o.voxels_init = std::min(o.voxels_init, o.voxels_final);
 
   // --target-size picks the settings the line did not give (a rate point counts as giving all).
   trainer::TargetSizeFlagsGiven settings_given;
@@ -507,7 +209,8 @@ trainer::TrainOptions ResolveTrainOptions(const std::vector<std::string>& args) 
 }
 
 std::string DescribeSettings(const trainer::TrainOptions& o) {
-  std::string s = "preset " + o.preset + ", rate point " + o.rate_point;
+  std::string s = std::string("preset ") + trainer::NameOf(o.preset) + ", rate point " +
+                  trainer::NameOf(o.rate_point);
   if (o.target_bytes > 0) s += ", target " + std::to_string(o.target_bytes) + " B";
   s += "; lambda_e " + FloatText(o.lambda_e) + ", steps x" + FloatText(o.quant_step_scale) +
        (o.density_step_factor != 1.f
@@ -518,7 +221,7 @@ std::string DescribeSettings(const trainer::TrainOptions& o) {
                          : std::string("binary16 MLP")) +
        ", ranks " + std::to_string(o.density_rank) + "," + std::to_string(o.appearance_rank) +
        ", final grid " + std::to_string(FinalGridEdge(o)) + "^3, upsampling at " +
-       JoinInts(o.upsample_iters, ",") + " of " + std::to_string(o.iters) +
+       JoinText(o.upsample_iters, ",") + " of " + std::to_string(o.iters) +
        " iterations, rate terms from " + FloatText(o.rate_start) + " of the run";
   return s;
 }

@@ -13,11 +13,12 @@
 #ifndef ECRF_TOOLS_TRAIN_FLAGS_H_
 #define ECRF_TOOLS_TRAIN_FLAGS_H_
 
+#include <map>
 #include <string>
 #include <vector>
 
 #include "tools/cli.h"
-#include "trainer/train/train_options.h"
+#include "trainer/train/train_fields.h"
 
 namespace ecrf {
 namespace tools {
@@ -25,14 +26,16 @@ namespace tools {
 // Layers 1 and 2 of a command line (arguments without the command's name).
 trainer::TrainOptions BaseTrainOptions(const std::vector<std::string>& args);
 
-// Values of the flags that need converting before they become options.
+// The flags' text until FinishTrainFlags converts it into options.
 struct TrainFlags {
-  trainer::TrainOptions options;  // the base, then what the flags set
-  std::string preset, rate, scene, target_size, ranks, dct_block, line_block, upsample_at, mask_at,
-      prune_at;
-  int final_grid = 0;
+  trainer::TrainOptions options;             // the base, then what the flags set
+  std::map<std::string, std::string> texts;  // by field name (train_fields.def)
+  std::string ranks;                         // --ranks D,A
   int threads = 0;
 };
+
+// The table line of the field named `key`; throws std::logic_error for names it lacks.
+trainer::FieldInfo TrainFieldInfo(const std::string& key);
 
 // Declares the training flags on app, bound to flags (whose options must hold the base).
 void AddTrainFlags(CLI::App* app, TrainFlags* flags);

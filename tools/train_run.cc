@@ -107,7 +107,8 @@ void PrintSceneFit(const trainer::SceneFit& fit) {
 nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
   if (options.out_dir.empty()) throw std::invalid_argument("no output directory (-o RUN_DIR)");
   if (trainer::DataSource(options).empty()) {
-    throw std::invalid_argument("no data: --data DIR or --scene builtin|capture|forward");
+    throw std::invalid_argument("no data: --data DIR or --scene " +
+                                trainer::NameList<trainer::ProceduralScene>());
   }
   if (options.resume && !FileExists(options.out_dir + "/checkpoint.ckpt") &&
       !FileExists(trainer::CameraWarmupDir(options) + "/checkpoint.ckpt")) {
@@ -207,7 +208,7 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
       d.samples_per_ray, d.color_samples_per_ray);
 
   nlohmann::json m;
-  m["preset"] = o.preset;
+  m["preset"] = trainer::NameOf(o.preset);
   m["data"] = trainer::DataSource(o);
   m["iterations"] = r.iterations;
   m["camera_warmup_iters"] = warmed_up ? trainer::CameraWarmupIterations(o, train) : 0;
@@ -223,7 +224,7 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
   m["test_views"] = d.views;
   m["render_seconds_per_view"] =
       o.score_float ? nlohmann::json(r.test.seconds_per_view) : nlohmann::json();
-  m["rate_point"] = o.rate_point;
+  m["rate_point"] = trainer::NameOf(o.rate_point);
   m["grid_res"] = model.res();
   // The components the model ended with, per mode (--prune-at removes what does not pay).
   m["density_ranks"] = model.density().ranks();

@@ -61,7 +61,7 @@ TEST_F(RunConfigTest, EncodeRunRebuildsTheFileTrainWroteForEveryRatePoint) {
         std::string(reinterpret_cast<const char*>(Bytes(run + "/config.json").data()),
                     Bytes(run + "/config.json").size()),
         run);
-    EXPECT_EQ(stored.rate_point, rate);
+    EXPECT_STREQ(trainer::NameOf(stored.rate_point), rate);
     std::vector<std::string> args = kSmallRun;
     args.insert(args.end(), {"--rate", rate, "-o", run});
     EXPECT_TRUE(trainer::ChangedSettings(stored, ResolveTrainOptions(args)).empty());
@@ -105,9 +105,10 @@ TEST_F(RunConfigTest, ASweepPointWritesTheBytesOfTheTrainRunOfItsSettings) {
   for (const nlohmann::json& p : report["points"]) {
     ASSERT_TRUE(p.contains("config"));
     const trainer::TrainOptions c = trainer::TrainConfigFromJson(p["config"].dump(), "report.json");
-    const std::string expected = c.target_bytes > 0         ? "target 50KB"
-                                 : c.rate_point == "medium" ? "medium base"
-                                                            : c.rate_point;
+    const std::string expected = c.target_bytes > 0 ? "target 50KB"
+                                 : c.rate_point == trainer::RatePoint::kMedium
+                                     ? "medium base"
+                                     : trainer::NameOf(c.rate_point);
     EXPECT_EQ(p["rate_point"], expected);
     if (c.target_bytes == 0) EXPECT_FLOAT_EQ(float(p["lambda_e"].get<double>()), c.lambda_e);
     // A size point's lambda_e is the one it adapted to (it starts from 0, "choose one").
@@ -160,12 +161,13 @@ TEST(TrainHelp, ShowsTheResolvedDefaultsOfEachRatePoint) {
     testing::internal::CaptureStdout();
     EXPECT_EQ(Invoke(RunReportSweep, {"sweep", "--rate", rate, "--help"}), 0);
     help += testing::internal::GetCapturedStdout();
-    for (const std::string& shown : {"--lambda-e X:NONNEGATIVE=" + Shown(o.lambda_e),
-                                     "--quant-step-scale S=" + Shown(o.quant_step_scale),
-                                     "--mlp-levels L:INT in [0 - 32767]=" + Shown(o.mlp_levels),
-                                     "--rate-start F=" + Shown(o.rate_start),
-                                     "--iters N:INT in [1 - 100000000]=" + Shown(o.iters),
-                                     "--rate TEXT:{low,medium,high,none}=" + o.rate_point}) {
+    for (const std::string& shown :
+         {"--lambda-e X:NONNEGATIVE=" + Shown(o.lambda_e),
+          "--quant-step-scale S=" + Shown(o.quant_step_scale),
+          "--mlp-levels L:INT in [0 - 32767]=" + Shown(o.mlp_levels),
+          "--rate-start F=" + Shown(o.rate_start),
+          "--iters N:INT in [1 - 100000000]=" + Shown(o.iters),
+          "--rate TEXT:{low,medium,high,none}=" + std::string(trainer::NameOf(o.rate_point))}) {
       const size_t first = help.find(shown);
       EXPECT_NE(first, std::string::npos) << rate << ": help lacks '" << shown << "'";
       EXPECT_NE(help.find(shown, first + 1), std::string::npos)

@@ -22,12 +22,12 @@ trainer::TrainOptions Parse(std::vector<std::string> args) { return ResolveTrain
 TEST(TrainFlags, RateStartAndSceneTypeAreReadAndChecked) {
   const trainer::TrainOptions defaults = Parse({"--scene", "forward"});
   EXPECT_FLOAT_EQ(defaults.rate_start, 16000.f / 30000.f);  // tiny keeps its schedule at medium
-  EXPECT_EQ(defaults.procedural_scene, "forward");
-  EXPECT_EQ(defaults.scene_type, "auto");
+  EXPECT_EQ(defaults.procedural_scene, trainer::ProceduralScene::kForward);
+  EXPECT_EQ(defaults.scene_type, trainer::SceneType::kAuto);
   const trainer::TrainOptions o =
       Parse({"--scene", "forward", "--rate-start", "0.8", "--scene-type", "forward"});
   EXPECT_FLOAT_EQ(o.rate_start, 0.8f);
-  EXPECT_EQ(o.scene_type, "forward");
+  EXPECT_EQ(o.scene_type, trainer::SceneType::kForward);
   EXPECT_THROW(Parse({"--rate-start", "1"}), std::invalid_argument);
   EXPECT_THROW(Parse({"--rate-start", "-0.1"}), std::invalid_argument);
   EXPECT_THROW(Parse({"--scene-type", "ndc"}), std::invalid_argument);
@@ -138,7 +138,7 @@ TEST(TrainFlags, LambdaEAloneAdjustsTheDefaultPointAndZeroIsPlainTensorf) {
   trainer::ApplyRatePoint("medium", &medium);
   const trainer::TrainOptions defaults = Parse({});
   EXPECT_TRUE(trainer::ChangedSettings(medium, defaults).empty());
-  EXPECT_EQ(defaults.rate_point, "medium");
+  EXPECT_EQ(defaults.rate_point, trainer::RatePoint::kMedium);
   // --lambda-e at the default's value is the default run, setting for setting.
   char text[32];
   std::snprintf(text, sizeof(text), "%.9g", double(medium.lambda_e));
@@ -179,7 +179,9 @@ TEST(TrainFlags, PruneAtIsAListOfIncreasingSharesThatRoundTrips) {
   EXPECT_THROW(Parse({"--prune-share", "1.5"}), std::invalid_argument);
 }
 
-TEST(TrainFlags, ConfigJsonRoundTripsEverySetting) {
+// That every field survives config.json is tests/tools/train_fields_test.cc's; this one checks the
+// values a command line gives, floats bit for bit through their shortest decimal.
+TEST(TrainFlags, ConfigJsonKeepsACommandLinesValuesExactly) {
   const trainer::TrainOptions o = Parse({"--scene",
                                          "capture",
                                          "--rate",

@@ -142,7 +142,7 @@ void RunSpeedSweep(const std::string& dir, const SpeedSweepOptions& so, nlohmann
 
   const std::string data = report->at("data").get<std::string>();
   const trainer::Dataset test =
-      data == "builtin" || data == "capture" || data == "capture-sparse" || data == "forward"
+      IsProceduralScene(data)
           ? ProceduralDataset(data, "test",
                               report->at("sweep").value("seed", trainer::TrainOptions().seed))
           : trainer::LoadDataset(data, "test", report->at("sweep").value("downscale", 1));

@@ -39,7 +39,8 @@ namespace tools {
 namespace {
 
 std::string SceneName(const trainer::TrainOptions& o) {
-  if (!o.procedural_scene.empty()) return o.procedural_scene;
+  if (o.procedural_scene != trainer::ProceduralScene::kNone)
+    return trainer::NameOf(o.procedural_scene);
   std::string d = o.data_dir;
   while (d.size() > 1 && d.back() == '/') d.pop_back();
   const size_t slash = d.find_last_of('/');
@@ -187,7 +188,8 @@ void CheckReusable(const nlohmann::json& m, const trainer::TrainOptions& o,
                              "; remove that run directory or report into another -o");
   };
   const std::string& data = trainer::DataSource(o);
-  if (m.value("preset", "") != o.preset) mismatch("preset", m.value("preset", "?"), o.preset);
+  if (m.value("preset", "") != trainer::NameOf(o.preset))
+    mismatch("preset", m.value("preset", "?"), trainer::NameOf(o.preset));
   if (!SameData(m.value("data", ""), data)) mismatch("data", m.value("data", "?"), data);
   if (m.value("iterations", -1) != o.iters) {
     mismatch("iterations", std::to_string(m.value("iterations", -1)), std::to_string(o.iters));
@@ -230,7 +232,8 @@ nlohmann::json BorrowReference(const std::string& dir, const nlohmann::json& swe
       other.contains("sweep") ? other["sweep"].value("iterations", nlohmann::json()) : nullptr;
   const bool preset_schedule =
       other_iters.is_number_integer() &&
-      other_iters.get<int>() == trainer::PresetOptions(sweep.at("preset")).reference_iters;
+      other_iters.get<int>() ==
+          trainer::PresetOptions(sweep.at("preset").get<std::string>()).reference_iters;
   for (const char* key :
        {"preset", "iterations", "seed", "test_view_stride", "max_test_views", "downscale"}) {
     if (std::string(key) == "iterations" && preset_schedule) continue;
@@ -375,7 +378,9 @@ int RunReportSweep(int argc, char** argv) {
   // told (the views of every ecrf compression figure), 1 for the small procedural scenes.
   std::vector<std::string> train_args = TrainArgs(args);
   if (!app->count("--test-stride")) {
-    train_args.insert(train_args.end(), {"--test-stride", o.procedural_scene.empty() ? "10" : "1"});
+    train_args.insert(
+        train_args.end(),
+        {"--test-stride", o.procedural_scene == trainer::ProceduralScene::kNone ? "10" : "1"});
   }
   if (!app->count("--eval-every"))
     train_args.insert(train_args.end(), {"--eval-every", std::to_string(std::max(1, o.iters / 4))});
@@ -410,12 +415,13 @@ int RunReportSweep(int argc, char** argv) {
     lambdas.push_back(runs[k].lambda_e);
     step_scales.push_back(runs[k].quant_step_scale);
     rate_points.push_back(!points[k].target.empty() ? "target " + points[k].target
-                          : points[k].rate.empty()  ? runs[k].rate_point + " base"
-                                                    : points[k].rate);
+                          : points[k].rate.empty()
+                              ? std::string(trainer::NameOf(runs[k].rate_point)) + " base"
+                              : points[k].rate);
   }
   report["scene"] = SceneName(o);
   report["data"] = trainer::DataSource(o);
-  report["sweep"] = {{"preset", o.preset},
+  report["sweep"] = {{"preset", trainer::NameOf(o.preset)},
                      {"iterations", o.iters},
                      {"lambdas", lambdas},
                      {"step_scales", step_scales},

@@ -219,16 +219,7 @@ Aabb FitNdcBox(const std::vector<Camera>& cameras, const NdcFrame& frame) {
   return box;
 }
 
-void CheckSceneType(const std::string& scene_type) {
-  if (scene_type != "auto" && scene_type != "object" && scene_type != "unbounded" &&
-      scene_type != "forward") {
-    throw std::invalid_argument("--scene-type: unknown scene type '" + scene_type +
-                                "' (auto, object, unbounded or forward)");
-  }
-}
-
-SceneFit FitScene(const std::string& scene_type, const Dataset& data) {
-  CheckSceneType(scene_type);
+SceneFit FitScene(SceneType scene_type, const Dataset& data) {
   std::vector<Camera> cameras;
   cameras.reserve(data.views.size());
   for (const View& v : data.views) cameras.push_back(v.camera);
@@ -238,13 +229,13 @@ SceneFit FitScene(const std::string& scene_type, const Dataset& data) {
   for (int a = 0; a < 3; ++a) lo[a] = fit.roi.min[a], hi[a] = fit.roi.max[a];
   fit.roi_share = Volume(lo, hi) / Volume(data.scene_aabb[0], data.scene_aabb[1]);
   fit.forward_facing = CamerasFaceOneWay(cameras);
-  if (scene_type == "object") {
+  if (scene_type == SceneType::kObject) {
     fit.model = SceneModel::kObject;
     fit.reason = "--scene-type object";
-  } else if (scene_type == "unbounded") {
+  } else if (scene_type == SceneType::kUnbounded) {
     fit.model = SceneModel::kUnbounded;
     fit.reason = "--scene-type unbounded";
-  } else if (scene_type == "forward") {
+  } else if (scene_type == SceneType::kForward) {
     fit.model = SceneModel::kForward;
     fit.reason = "--scene-type forward";
   } else if (data.white_background) {

@@ -12,6 +12,7 @@
 #include "trainer/data/aabb.h"
 #include "trainer/data/camera.h"
 #include "trainer/data/dataset.h"
+#include "trainer/data/named_choice.h"
 
 namespace ecrf::trainer {
 
@@ -49,6 +50,14 @@ NdcFrame FitNdcFrame(const std::vector<Camera>& cameras, double near);
 // at NDC z = -1 and z = 1, grown by kNdcBoxMargin; z is [-1, 1] (the near plane to infinity).
 Aabb FitNdcBox(const std::vector<Camera>& cameras, const NdcFrame& frame);
 
+// The scene model a run asks for (--scene-type).
+enum class SceneType { kAuto, kObject, kUnbounded, kForward };
+template <>
+struct ChoiceNames<SceneType> {
+  static constexpr const char* what = "scene type";
+  static constexpr const char* names[] = {"auto", "object", "unbounded", "forward"};
+};
+
 struct SceneFit {
   SceneModel model = SceneModel::kObject;
   NdcFrame ndc;            // forward: the reference camera; roi is then the NDC box
@@ -58,13 +67,11 @@ struct SceneFit {
   std::string reason;  // why this model (for the log)
 };
 
-// scene_type "auto" chooses from the layout: the object model for white-background datasets
+// SceneType::kAuto chooses from the layout: the object model for white-background datasets
 // (Blender) and boxes the views already fill (roi_share >= kObjectRoiShare), the forward-facing
 // model when every camera looks one way (CamerasFaceOneWay), the unbounded model otherwise.
-// "object", "unbounded" and "forward" force it; other names throw std::invalid_argument.
-SceneFit FitScene(const std::string& scene_type, const Dataset& data);
-// Throws std::invalid_argument unless scene_type is auto, object, unbounded or forward.
-void CheckSceneType(const std::string& scene_type);
+// The other types force their model.
+SceneFit FitScene(SceneType scene_type, const Dataset& data);
 
 }  // namespace ecrf::trainer
 

@@ -15,10 +15,7 @@ namespace ecrf {
 namespace trainer {
 
 bool RefineCamerasOn(const TrainOptions& o, const Dataset& train) {
-  if (o.refine_cameras != "auto" && o.refine_cameras != "on" && o.refine_cameras != "off")
-    throw std::invalid_argument("refine_cameras: '" + o.refine_cameras +
-                                "' is none of auto, on, off");
-  return o.refine_cameras == "on" || (o.refine_cameras == "auto" && train.estimated_poses);
+  return IsOn(o.refine_cameras, train.estimated_poses);
 }
 
 bool CameraRefineSchedule::Due(int done) const {

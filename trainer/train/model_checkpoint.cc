@@ -24,7 +24,7 @@ void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int itera
   nlohmann::json j;
   j["format"] = "ecrf-checkpoint-1";
   j["iteration"] = iteration;
-  j["preset"] = o.preset;
+  j["preset"] = NameOf(o.preset);
   j["iters"] = o.iters;
   j["lambda_e"] = o.lambda_e;                // the live value under rate control
   j["rounding_offset"] = o.rounding_offset;  // the quantizer the run trained through
@@ -67,10 +67,10 @@ void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int itera
   // The block shapes of the run, so that `ecrf encode` codes with the blocks training used.
   j["plane_block"] = rate && rate->active
                          ? std::vector<int>(rate->config.plane_block, rate->config.plane_block + 3)
-                         : std::vector<int>(o.plane_block, o.plane_block + 3);
+                         : std::vector<int>(o.plane_block.begin(), o.plane_block.end());
   j["line_block"] = rate && rate->active
                         ? std::vector<int>(rate->config.line_block, rate->config.line_block + 3)
-                        : std::vector<int>(o.line_block, o.line_block + 3);
+                        : std::vector<int>(o.line_block.begin(), o.line_block.end());
   if (rate && rate->active) {
     j["rate_active"] = true;
     ck.arrays.push_back({"rate.steps", {int64_t(rate->steps.size())}, rate->steps});

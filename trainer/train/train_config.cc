@@ -5,6 +5,10 @@
 #include <cstdlib>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
+#include <type_traits>
+
+#include "trainer/train/train_field_check.h"
+#include "trainer/train/train_fields.h"
 
 namespace ecrf {
 namespace trainer {
@@ -12,85 +16,8 @@ namespace {
 
 using Json = nlohmann::json;
 
-// Every field that changes what a run trains or writes. A field added to TrainOptions that
-// changes results belongs here (tests/trainer/train_config_test.cc checks the round trip).
-template <class F>
-void VisitSettings(TrainOptions& o, F&& f) {
-  f("preset", o.preset);
-  f("rate_point", o.rate_point);
-  f("data_dir", o.data_dir);
-  f("procedural_scene", o.procedural_scene);
-  f("scene_type", o.scene_type);
-  f("downscale", o.downscale);
-  f("seed", o.seed);
-  f("iters", o.iters);
-  f("reference_iters", o.reference_iters);
-  f("batch_rays", o.batch_rays);
-  f("voxels_init", o.voxels_init);
-  f("voxels_final", o.voxels_final);
-  f("upsample_iters", o.upsample_iters);
-  f("alpha_mask_iters", o.alpha_mask_iters);
-  f("mask_downscale", o.mask_downscale);
-  f("lr_grid", o.lr_grid);
-  f("lr_network", o.lr_network);
-  f("lr_decay_ratio", o.lr_decay_ratio);
-  f("l1_weight_initial", o.l1_weight_initial);
-  f("l1_weight_rest", o.l1_weight_rest);
-  f("max_samples_per_ray", o.max_samples_per_ray);
-  f("distortion_weight", o.distortion_weight);
-  f("tv_weight_density", o.tv_weight_density);
-  f("tv_weight_app", o.tv_weight_app);
-  f("exposure_codes", o.exposure_codes);
-  f("lr_exposure", o.lr_exposure);
-  f("refine_cameras", o.refine_cameras);
-  f("refine_cameras_every", o.refine_cameras_every);
-  f("camera_warmup_iters", o.camera_warmup_iters);
-  f("weight_threshold", o.weight_threshold);
-  f("fine_grid_at_rate_points", o.fine_grid_at_rate_points);
-  f("density_rank", o.density_rank);
-  f("appearance_rank", o.appearance_rank);
-  f("mlp_hidden", o.mlp_hidden);
-  f("lambda_e", o.lambda_e);
-  f("alpha", o.alpha);
-  f("plane_block", o.plane_block);
-  f("line_block", o.line_block);
-  f("rate_fraction", o.rate_fraction);
-  f("rate_start", o.rate_start);
-  f("entropy_lr", o.entropy_lr);
-  f("coef_bits", o.coef_bits);
-  f("quant_step_scale", o.quant_step_scale);
-  f("density_step_factor", o.density_step_factor);
-  f("qat_start", o.qat_start);
-  f("rounding_offset", o.rounding_offset);
-  f("rdoq_lambda", o.rdoq_lambda);
-  f("qat_refresh", o.qat_refresh);
-  f("prune_at", o.prune_at);
-  f("prune_share", o.prune_share);
-  f("prune_rays", o.prune_rays);
-  f("mlp_levels", o.mlp_levels);
-  f("target_bytes", o.target_bytes);
-  f("rate_control_every", o.rate_control_every);
-  f("builtin_size", o.builtin_size);
-  f("builtin_views", o.builtin_views);
-  f("capture_width", o.capture_width);
-  f("capture_height", o.capture_height);
-  f("capture_frames", o.capture_frames);
-}
-
-// Where a run writes and how it is scored: free to change between commands on one run.
-template <class F>
-void VisitBookkeeping(TrainOptions& o, F&& f) {
-  f("out_dir", o.out_dir);
-  f("checkpoint_every", o.checkpoint_every);
-  f("resume", o.resume);
-  f("stop_after", o.stop_after);
-  f("eval_every", o.eval_every);
-  f("test_view_stride", o.test_view_stride);
-  f("max_test_views", o.max_test_views);
-  f("eval_downscale", o.eval_downscale);
-  f("score_float", o.score_float);
-  f("save_renders", o.save_renders);
-  f("progress_every", o.progress_every);
+bool Recorded(const FieldInfo& info) {
+  return info.kind == FieldKind::kSetting || info.kind == FieldKind::kBookkeeping;
 }
 
 // The shortest decimal that reads back as the same float: config.json says 3e-11, not
@@ -104,47 +31,51 @@ Json FloatJson(float v) {
   return Json::parse(text);
 }
 
-struct Writer {
-  Json* out;
-  void operator()(const char* key, float& v) const { (*out)[key] = FloatJson(v); }
-  void operator()(const char* key, int (&v)[3]) const { (*out)[key] = {v[0], v[1], v[2]}; }
-  template <class T>
-  void operator()(const char* key, T& v) const {
-    (*out)[key] = v;
+template <class T>
+Json ValueJson(const T& v) {
+  if constexpr (std::is_same_v<T, float>) {
+    return FloatJson(v);
+  } else if constexpr (IsNamedChoice<T>::value) {
+    return NameOf(v);
+  } else {
+    return Json(v);
   }
-};
+}
 
-struct Reader {
-  const Json* in;
-  const std::string* where;
-  template <class T>
-  void Read(const char* key, T* v) const {
-    if (!in->contains(key)) return;
-    try {
-      in->at(key).get_to(*v);
-    } catch (const nlohmann::json::exception& e) {
-      throw std::runtime_error(*where + ": config field '" + key + "': " + e.what());
+// Reads j into *v; throws std::runtime_error naming `where` and the field.
+template <class T>
+void ReadValue(const Json& j, const std::string& where, const FieldInfo& info, T* v) {
+  const std::string field = where + ": config field '" + info.key + "'";
+  try {
+    if constexpr (IsNamedChoice<T>::value) {
+      *v = ChoiceFromName<T>(j.get<std::string>(), field);
+    } else if constexpr (std::is_same_v<T, Shape3>) {
+      const std::vector<int> shape = j.get<std::vector<int>>();
+      if (shape.size() != 3) throw std::runtime_error(field + " is not 3 integers");
+      for (size_t k = 0; k < 3; ++k) (*v)[k] = shape[k];
+    } else {
+      j.get_to(*v);
     }
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error(field + ": " + e.what());
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(e.what());
   }
-  void operator()(const char* key, int (&v)[3]) const {
-    std::vector<int> shape;
-    Read(key, &shape);
-    if (!in->contains(key)) return;
-    if (shape.size() != 3)
-      throw std::runtime_error(*where + ": config field '" + key + "' is not 3 integers");
-    for (int k = 0; k < 3; ++k) v[k] = shape[size_t(k)];
-  }
-  template <class T>
-  void operator()(const char* key, T& v) const {
-    Read(key, &v);
-  }
-};
+}
 
-Json ToJson(const TrainOptions& options) {
-  TrainOptions o = options;
+// The recorded fields of `kind` from `in` into o; fields `in` lacks keep their values.
+void ReadFields(const Json& in, FieldKind kind, const std::string& where, TrainOptions* o) {
+  ForEachTrainField(*o, [&](const FieldInfo& info, auto& value) {
+    if (info.kind == kind && in.contains(info.key)) ReadValue(in.at(info.key), where, info, &value);
+  });
+}
+
+Json ToJson(const TrainOptions& o) {
   Json settings = Json::object(), bookkeeping = Json::object();
-  VisitSettings(o, Writer{&settings});
-  VisitBookkeeping(o, Writer{&bookkeeping});
+  ForEachTrainField(o, [&](const FieldInfo& info, const auto& value) {
+    if (!Recorded(info)) return;
+    (info.kind == FieldKind::kSetting ? settings : bookkeeping)[info.key] = ValueJson(value);
+  });
   return Json{{"config_version", kTrainConfigVersion},
               {"settings", settings},
               {"bookkeeping", bookkeeping}};
@@ -173,10 +104,19 @@ TrainOptions TrainConfigFromJson(const std::string& text, const std::string& whe
                              std::to_string(kTrainConfigVersion) + ")");
   }
   const Json& settings = j["settings"];
-  TrainOptions o = PresetOptions(settings.value("preset", std::string("fast")));
-  VisitSettings(o, Reader{&settings, &where});
+  Preset preset = Preset::kFast;  // configs written before presets were recorded
+  if (settings.contains("preset")) {
+    ReadValue(settings["preset"], where, FieldInfo().Named("preset"), &preset);
+  }
+  TrainOptions o = PresetOptions(preset);
+  ReadFields(settings, FieldKind::kSetting, where, &o);
   if (j.contains("bookkeeping") && j["bookkeeping"].is_object()) {
-    VisitBookkeeping(o, Reader{&j["bookkeeping"], &where});
+    ReadFields(j["bookkeeping"], FieldKind::kBookkeeping, where, &o);
+  }
+  try {
+    CheckTrainFields(o, where);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(e.what());
   }
   return o;
 }
@@ -193,3 +133,20 @@ std::vector<std::string> ChangedSettings(const TrainOptions& before, const Train
 
 }  // namespace trainer
 }  // namespace ecrf
+
+namespace ecrf::trainer {
+
+void ApplySettingsJson(const std::string& text, const std::string& where, TrainOptions* o) {
+  const Json j = Json::parse(text);
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    bool known = false;
+    ForEachTrainField(*o, [&](const FieldInfo& info, auto& value) {
+      if (it.key() != info.key) return;
+      known = true;
+      ReadValue(*it, where, info, &value);
+    });
+    if (!known) throw std::invalid_argument(where + ": no setting named '" + it.key() + "'");
+  }
+}
+
+}  // namespace ecrf::trainer

@@ -4,52 +4,52 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "trainer/train/train_config.h"
+
 namespace ecrf {
 namespace trainer {
 
-TrainOptions PresetOptions(const std::string& name) {
+namespace {
+
+// The presets as data over the table: the settings each changes from the paper schedule, read by
+// config.json's reader (train_config.h), which refuses a name the table lacks.
+struct PresetSettings {
+  Preset preset;
+  const char* settings_json;
+};
+constexpr PresetSettings kPresets[] = {
+    {Preset::kPaper, "{}"},
+    // The CPU preset: TensoRF's schedule compressed 10x (3k iterations) with a 180^3 final grid
+    // from 64^3. On chair-400 with 2 cores it passes 32.4 dB test PSNR after 3.1 minutes of
+    // training and ends at 35.1 dB after 6.4 minutes (10 test views; docs/results.md). The small
+    // early grid and the early alpha mask matter most: after the shrink at iteration 300 a batch
+    // costs 0.13 M density samples instead of 0.49 M.
+    {Preset::kFast,
+     R"({"iters": 3000, "reference_iters": 3000, "voxels_init": 262144, "voxels_final": 5832000,
+         "upsample_iters": [300, 600, 900, 1200, 1500], "alpha_mask_iters": [300, 900],
+         "fine_grid_at_rate_points": true})"},
+    // The built-in scene at low resolution (32^3 to 96^3 voxels): a couple of minutes on 2 cores.
+    // Its plane blocks span 8 channels: blocks never span more channels than a mode has.
+    {Preset::kTiny,
+     R"({"iters": 1500, "reference_iters": 1500, "batch_rays": 2048, "voxels_init": 32768,
+         "voxels_final": 884736, "upsample_iters": [200, 400, 600, 800],
+         "alpha_mask_iters": [300, 700], "density_rank": 8, "appearance_rank": 24,
+         "plane_block": [8, 16, 16]})"},
+};
+
+}  // namespace
+
+TrainOptions PresetOptions(Preset preset) {
   TrainOptions o;
-  o.preset = name;
-  if (name == "paper") return o;
-  if (name == "fast") {
-    // The CPU preset: TensoRF's schedule compressed 10x (3k iterations) with a 180^3 final grid.
-    // On chair-400 with 2 cores it passes 32.4 dB test PSNR after 3.1 minutes of training and
-    // ends at 35.1 dB after 6.4 minutes (10 test views; docs/results.md). The small early grid
-    // and the early alpha mask matter most: after the shrink at iteration 300 a batch costs
-    // 0.13 M density samples instead of 0.49 M.
-    o.iters = 3000;
-    o.reference_iters = 3000;
-    o.voxels_init = 64L * 64 * 64;
-    o.voxels_final = 180L * 180 * 180;
-    o.upsample_iters = {300, 600, 900, 1200, 1500};
-    o.alpha_mask_iters = {300, 900};
-    o.fine_grid_at_rate_points = true;
-    return o;
+  for (const PresetSettings& p : kPresets) {
+    if (p.preset == preset) ApplySettingsJson(p.settings_json, "preset", &o);
   }
-  if (name == "tiny") {
-    // The built-in scene at low resolution: a couple of minutes on 2 cores.
-    o.iters = 1500;
-    o.reference_iters = 1500;
-    o.batch_rays = 2048;
-    o.voxels_init = 32L * 32 * 32;
-    o.voxels_final = 96L * 96 * 96;
-    o.upsample_iters = {200, 400, 600, 800};
-    o.alpha_mask_iters = {300, 700};
-    o.density_rank = 8;
-    o.appearance_rank = 24;
-    o.plane_block[0] = 8;  // blocks never span more channels than a mode has
-    return o;
-  }
-  throw std::invalid_argument("unknown preset '" + name + "' (expected paper, fast or tiny)");
+  o.preset = preset;
+  return o;
 }
 
-void SelectProceduralScene(const std::string& name, TrainOptions* o) {
-  if (name != "builtin" && name != "capture" && name != "capture-sparse" && name != "forward") {
-    throw std::invalid_argument(
-        "--scene: unknown scene '" + name +
-        "' (builtin, capture, capture-sparse or forward; for files use --data DIR)");
-  }
-  o->procedural_scene = name;
+TrainOptions PresetOptions(const std::string& name) {
+  return PresetOptions(ChoiceFromName<Preset>(name, "--preset"));
 }
 
 namespace {
@@ -91,39 +91,52 @@ int ScoredTestViewStride(const TrainOptions& o, size_t views) {
   return std::max(1, int((views + kDefaultScoredTestViews - 1) / kDefaultScoredTestViews));
 }
 
-void ApplyRatePoint(const std::string& name, TrainOptions* o) {
-  if (name == "none") {
-    o->lambda_e = 0.0f;
-    o->quant_step_scale = 1.0f;
-    o->mlp_levels = 127;
-  } else if (name == "low") {
+namespace {
+
+// The rate points as data: what each sets over the preset (0 in mlp_levels: the preset's).
+struct RatePointSettings {
+  RatePoint point;
+  float lambda_e;
+  float quant_step_scale;
+  int mlp_levels;
+  int max_appearance_rank;  // 0: the preset's
+  bool fine_grid;           // ApplyFineGridSchedule and RatePointIters, where the preset allows
+};
+constexpr RatePointSettings kRatePoints[] = {
+    // Plain TensoRF: the float model every ratio is measured against.
+    {RatePoint::kNone, 0.f, 1.f, 127, 0, false},
     // Coarser steps under QAT beat a larger lambda_e at the same size (chair: 182,217 B at
     // 33.76 dB against 266,445 B at 33.79 dB with steps x1). At this rate fewer appearance
     // components code better: chair with 32 instead of 48 gains 0.03-0.13 dB at equal size,
     // while a 64-unit head or 8 density components cost 0.3-0.4 dB (docs/results.md).
-    o->lambda_e = 2e-10f;
-    o->quant_step_scale = 4.0f;
-    o->mlp_levels = kLowRateMlpLevels;
-    o->appearance_rank = std::min(o->appearance_rank, kLowRateMaxAppearanceRank);
-    ApplyFineGridSchedule(o);
-    if (o->fine_grid_at_rate_points) o->iters = RatePointIters(*o);
-  } else if (name == "medium") {
+    {RatePoint::kLow, 2e-10f, 4.f, kLowRateMlpLevels, kLowRateMaxAppearanceRank, true},
     // With the finer grid, 3e-11 instead of 2e-11 keeps the float model's PSNR at 43x (chair:
     // 590,171 B, 35.34 dB; 2e-11: 634,085 B, 35.38 dB; the preset's grid at 2e-11 and 127
     // levels: 550,181 B, 34.94 dB).
-    o->lambda_e = 3e-11f;
-    o->quant_step_scale = 3.0f;
-    o->mlp_levels = kMediumRateMlpLevels;
-    ApplyFineGridSchedule(o);
-    if (o->fine_grid_at_rate_points) o->iters = RatePointIters(*o);
-  } else if (name == "high") {
-    o->lambda_e = 2e-11f;
-    o->quant_step_scale = 1.0f;
-  } else {
-    throw std::invalid_argument("unknown rate point '" + name +
-                                "' (expected low, medium, high or none)");
+    {RatePoint::kMedium, 3e-11f, 3.f, kMediumRateMlpLevels, 0, true},
+    {RatePoint::kHigh, 2e-11f, 1.f, 0, 0, false},
+};
+
+}  // namespace
+
+void ApplyRatePoint(RatePoint point, TrainOptions* o) {
+  for (const RatePointSettings& p : kRatePoints) {
+    if (p.point != point) continue;
+    o->lambda_e = p.lambda_e;
+    o->quant_step_scale = p.quant_step_scale;
+    if (p.mlp_levels > 0) o->mlp_levels = p.mlp_levels;
+    if (p.max_appearance_rank > 0)
+      o->appearance_rank = std::min(o->appearance_rank, p.max_appearance_rank);
+    if (p.fine_grid) {
+      ApplyFineGridSchedule(o);
+      if (o->fine_grid_at_rate_points) o->iters = RatePointIters(*o);
+    }
   }
-  o->rate_point = name;
+  o->rate_point = point;
+}
+
+void ApplyRatePoint(const std::string& name, TrainOptions* o) {
+  ApplyRatePoint(ChoiceFromName<RatePoint>(name, "--rate"), o);
 }
 
 double NominalFloat32GridBytes(const TrainOptions& o) {

@@ -80,20 +80,19 @@ void PrintProgress(int it, int iters, double loss, double psnr, const TensorfMod
 }  // namespace
 
 Dataset LoadTrainingViews(const TrainOptions& o, const std::string& split) {
-  if (o.procedural_scene == "capture") {
-    return MakeCaptureScene(split, o.capture_width, o.capture_height, o.capture_frames, o.seed);
-  }
-  if (o.procedural_scene == "capture-sparse") {
-    return MakeSparseCaptureScene(split, o.capture_width, o.capture_height, o.seed);
-  }
-  if (o.procedural_scene == "forward") {
-    return MakeForwardScene(split, o.capture_width, o.capture_height, o.capture_frames, o.seed);
-  }
-  if (!o.procedural_scene.empty()) {
-    if (o.procedural_scene != "builtin")
-      throw std::invalid_argument("unknown scene '" + o.procedural_scene + "'");
-    const int views = split == "train" ? o.builtin_views : std::max(4, o.builtin_views / 4);
-    return MakeBuiltinScene(split, o.builtin_size, o.builtin_size, views, o.seed);
+  switch (o.procedural_scene) {
+    case ProceduralScene::kCapture:
+      return MakeCaptureScene(split, o.capture_width, o.capture_height, o.capture_frames, o.seed);
+    case ProceduralScene::kCaptureSparse:
+      return MakeSparseCaptureScene(split, o.capture_width, o.capture_height, o.seed);
+    case ProceduralScene::kForward:
+      return MakeForwardScene(split, o.capture_width, o.capture_height, o.capture_frames, o.seed);
+    case ProceduralScene::kBuiltin: {
+      const int views = split == "train" ? o.builtin_views : std::max(4, o.builtin_views / 4);
+      return MakeBuiltinScene(split, o.builtin_size, o.builtin_size, views, o.seed);
+    }
+    case ProceduralScene::kNone:
+      break;
   }
   if (o.data_dir.empty())
     throw std::invalid_argument("no data: give --data DIR or --scene builtin");
@@ -302,11 +301,7 @@ TrainResult Train(const TrainOptions& o, const Dataset& train, const Dataset& te
   Optimizers opt;
   opt.Reset(*model);
   TrainProgress progress;
-  if (o.exposure_codes != "auto" && o.exposure_codes != "on" && o.exposure_codes != "off")
-    throw std::invalid_argument("exposure_codes: '" + o.exposure_codes +
-                                "' is none of auto, on, off");
-  const bool exposure_on = o.exposure_codes == "on" ||
-                           (o.exposure_codes == "auto" && (model->unbounded() || model->forward()));
+  const bool exposure_on = IsOn(o.exposure_codes, model->unbounded() || model->forward());
   progress.exposure.Reset(exposure_on ? static_cast<int>(train.views.size()) : 0);
   const CameraRefineSchedule refine = CameraRefineScheduleFor(o, train);
   // The held-out views that are scored: with refined cameras only these are aligned.

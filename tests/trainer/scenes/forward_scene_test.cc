@@ -234,8 +234,8 @@ TEST(ForwardScene, TheStillLifeIsInFrontOfTheFarWall) {
 
 TEST(ForwardScene, TheTrainerLoadsItAsSceneForward) {
   TrainOptions o = PresetOptions("tiny");
-  SelectProceduralScene("forward", &o);
-  EXPECT_EQ(o.procedural_scene, "forward");
+  o.procedural_scene = ChoiceFromName<ProceduralScene>("forward", "--scene");
+  EXPECT_EQ(o.procedural_scene, ProceduralScene::kForward);
   o.capture_width = 20;
   o.capture_height = 15;
   o.capture_frames = 17;
@@ -245,8 +245,8 @@ TEST(ForwardScene, TheTrainerLoadsItAsSceneForward) {
   EXPECT_EQ(test.views[2].rgb.width, 20);
   EXPECT_EQ(test.views[2].rgb.pixels,
             MakeForwardScene("test", 20, 15, 17, o.seed).views[2].rgb.pixels);
-  EXPECT_TRUE(FitScene("auto", test).forward_facing);
-  EXPECT_THROW(SelectProceduralScene("sideways", &o), std::invalid_argument);
+  EXPECT_TRUE(FitScene(SceneType::kAuto, test).forward_facing);
+  EXPECT_THROW(ChoiceFromName<ProceduralScene>("sideways", "--scene"), std::invalid_argument);
 }
 
 TEST(ForwardScene, IsFastAndRejectsBadArguments) {

@@ -35,7 +35,7 @@ struct TrainedField {
   }
   static TrainOptions Options() {
     TrainOptions o = PresetOptions("tiny");
-    o.procedural_scene = "builtin";
+    o.procedural_scene = ProceduralScene::kBuiltin;
     o.builtin_size = 48;
     o.builtin_views = 16;
     o.iters = 300;
@@ -216,13 +216,12 @@ TEST(CameraRefineTest, AutoRefinesEstimatedPosesOnly) {
   EXPECT_FALSE(RefineCamerasOn(o, data));  // rendered cameras (Blender layout, procedural scenes)
   data.estimated_poses = true;             // transforms.json of Instant-NGP / nerfstudio, LLFF
   EXPECT_TRUE(RefineCamerasOn(o, data));
-  o.refine_cameras = "off";
+  o.refine_cameras = Toggle::kOff;
   EXPECT_FALSE(RefineCamerasOn(o, data));
-  o.refine_cameras = "on";
+  o.refine_cameras = Toggle::kOn;
   data.estimated_poses = false;
   EXPECT_TRUE(RefineCamerasOn(o, data));
-  o.refine_cameras = "sometimes";
-  EXPECT_THROW(RefineCamerasOn(o, data), std::invalid_argument);
+  EXPECT_THROW(ChoiceFromName<Toggle>("sometimes", "--refine-cameras"), std::invalid_argument);
 }
 
 }  // namespace

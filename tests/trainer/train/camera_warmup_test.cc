@@ -53,9 +53,9 @@ TEST(CameraWarmupTest, RunsOnlyWhenTheCamerasAreRefined) {
   o.camera_warmup_iters = 0;
   EXPECT_EQ(CameraWarmupIterations(o, data), 0);
   o.camera_warmup_iters = -1;
-  o.refine_cameras = "off";
+  o.refine_cameras = Toggle::kOff;
   EXPECT_EQ(CameraWarmupIterations(o, data), 0);
-  o.refine_cameras = "on";
+  o.refine_cameras = Toggle::kOn;
   data.estimated_poses = false;
   EXPECT_EQ(CameraWarmupIterations(o, data), 750);
   o.out_dir = "run";
@@ -111,12 +111,12 @@ TEST(CameraWarmupTest, TrainsForTheCamerasAndRefinesAsOftenAsTheRun) {
 // resume depends on it).
 TEST(CameraWarmupTest, TurnedCamerasComeBackAndAFinishedWarmUpReloadsBitForBit) {
   TrainOptions o = PresetOptions("tiny");
-  o.procedural_scene = "builtin";
+  o.procedural_scene = ProceduralScene::kBuiltin;
   o.builtin_size = 48;
   o.builtin_views = 16;
   o.iters = 400;
   o.camera_warmup_iters = 200;
-  o.refine_cameras = "on";
+  o.refine_cameras = Toggle::kOn;
   o.refine_cameras_every = 15;
   o.batch_rays = 1024;
   o.progress_every = 1000;

@@ -24,7 +24,7 @@ namespace {
 
 TrainOptions SmallRun() {
   TrainOptions o = PresetOptions("tiny");
-  o.procedural_scene = "builtin";
+  o.procedural_scene = ProceduralScene::kBuiltin;
   o.builtin_size = 48;
   o.builtin_views = 40;
   o.iters = 400;
@@ -271,9 +271,9 @@ TEST(TrainBuiltin, ResumedRunEqualsTheUninterruptedOneBitForBit) {
   o.prune_at = {0.3f};  // at 162: the resume from 120 prunes, the one from 180 loads a pruned model
   o.prune_rays = 256;
   o.mlp_hidden = 32;
-  o.exposure_codes = "on";       // their values and optimizer are part of the state too
-  o.refine_cameras = "on";       // and so are the refined cameras (refined at 48 and 148; the
-  o.refine_cameras_every = 100;  // resumes start from 120 and 180)
+  o.exposure_codes = Toggle::kOn;  // their values and optimizer are part of the state too
+  o.refine_cameras = Toggle::kOn;  // and so are the refined cameras (refined at 48 and 148; the
+  o.refine_cameras_every = 100;    // resumes start from 120 and 180)
   const Dataset train = LoadTrainingViews(o, "train");
   const Dataset test = LoadTrainingViews(o, "test");
   const testing_util::ScopedTempDir tmp("ecrf_resume");

@@ -82,7 +82,7 @@ TEST(Contraction, SamplesAreEvenlySpacedInContractedDistanceAndEndAtTheEdge) {
 
 TEST(SceneFit, CaptureIsUnboundedWithASmallBoxAroundTheStillLife) {
   const Dataset train = MakeCaptureScene("train", 48, 36, 32, 7);
-  const SceneFit fit = FitScene("auto", train);
+  const SceneFit fit = FitScene(SceneType::kAuto, train);
   EXPECT_EQ(fit.model, SceneModel::kUnbounded) << fit.reason;
   EXPECT_FALSE(fit.forward_facing);
   // The still life: the slab [-1, 1]^2 x [bottom, -0.4] and the objects on it up to z 0.95.
@@ -131,8 +131,8 @@ TEST(SceneFit, AutoWeightThresholdIsCoarserForUnboundedScenesOnly) {
   TrainOptions o = PresetOptions("tiny");
   const Dataset capture = MakeCaptureScene("train", 48, 36, 32, 7);
   const Dataset object = MakeBuiltinScene("train", 32, 32, 8, 7);
-  ASSERT_EQ(FitScene("auto", capture).model, SceneModel::kUnbounded);
-  ASSERT_EQ(FitScene("auto", object).model, SceneModel::kObject);
+  ASSERT_EQ(FitScene(SceneType::kAuto, capture).model, SceneModel::kUnbounded);
+  ASSERT_EQ(FitScene(SceneType::kAuto, object).model, SceneModel::kObject);
   EXPECT_EQ(ConfigFor(o, capture).weight_threshold, kUnboundedWeightThreshold);
   EXPECT_EQ(ConfigFor(o, object).weight_threshold, 1e-4f);
   o.weight_threshold = 2e-4f;
@@ -147,11 +147,13 @@ TEST(SceneFit, AutoWeightThresholdIsCoarserForUnboundedScenesOnly) {
 
 TEST(SceneFit, BlenderLayoutStaysAnObjectAndNamesAreChecked) {
   const Dataset train = MakeBuiltinScene("train", 32, 32, 20, 3);
-  EXPECT_EQ(FitScene("auto", train).model, SceneModel::kObject);
-  EXPECT_EQ(FitScene("unbounded", train).model, SceneModel::kUnbounded);
-  EXPECT_THROW(FitScene("room", train), std::invalid_argument);
-  EXPECT_THROW(CheckSceneType("ndc"), std::invalid_argument);
-  EXPECT_NO_THROW(CheckSceneType("forward"));
+  EXPECT_EQ(FitScene(SceneType::kAuto, train).model, SceneModel::kObject);
+  EXPECT_EQ(FitScene(SceneType::kUnbounded, train).model, SceneModel::kUnbounded);
+  EXPECT_THROW(ChoiceFromName<SceneType>("ndc", "--scene-type"), std::invalid_argument);
+  EXPECT_EQ(ChoiceFromName<SceneType>("forward", "--scene-type"), SceneType::kForward);
+  for (const std::string& name : TypedNames<SceneType>()) {  // every name reads back as itself
+    EXPECT_EQ(NameOf(ChoiceFromName<SceneType>(name, "test")), name);
+  }
 }
 
 TensorfModel SmallUnboundedModel(uint64_t seed) {
