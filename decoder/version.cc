@@ -3,10 +3,16 @@
 #include "format/container.h"
 #include "format/status.h"
 
-static_assert(ECRF_ERR_TRUNCATED == ecrf::kErrTruncated && ECRF_ERR_CORRUPT == ecrf::kErrCorrupt &&
-                  ECRF_ERR_LIMIT == ecrf::kErrLimit &&
-                  ECRF_ERR_OUT_OF_MEMORY == ecrf::kErrOutOfMemory,
-              "C API error codes must equal the internal ones");
+// The C API returns the internal codes unchanged (Record in c_api.cc), so each ECRF_ERR_* must be
+// its ecrf::ErrorCode.
+static_assert(ECRF_OK == ecrf::kOk, "ECRF_OK");
+static_assert(ECRF_ERR_INVALID_ARGUMENT == ecrf::kErrInvalidArgument, "ECRF_ERR_INVALID_ARGUMENT");
+static_assert(ECRF_ERR_TRUNCATED == ecrf::kErrTruncated, "ECRF_ERR_TRUNCATED");
+static_assert(ECRF_ERR_CORRUPT == ecrf::kErrCorrupt, "ECRF_ERR_CORRUPT");
+static_assert(ECRF_ERR_UNSUPPORTED == ecrf::kErrUnsupported, "ECRF_ERR_UNSUPPORTED");
+static_assert(ECRF_ERR_LIMIT == ecrf::kErrLimit, "ECRF_ERR_LIMIT");
+static_assert(ECRF_ERR_CHECKSUM == ecrf::kErrChecksum, "ECRF_ERR_CHECKSUM");
+static_assert(ECRF_ERR_OUT_OF_MEMORY == ecrf::kErrOutOfMemory, "ECRF_ERR_OUT_OF_MEMORY");
 
 extern "C" {
 
