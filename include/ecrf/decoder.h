@@ -49,6 +49,12 @@ extern "C" {
 #define ECRF_ERR_CHECKSUM (-6)
 #define ECRF_ERR_OUT_OF_MEMORY (-7)
 
+/* Version of this library (not of the bitstream: ecrf_bitstream_version), written here only:
+ * CMake's project version, the SONAME and ecrf_version() are read from these three lines. */
+#define ECRF_VERSION_MAJOR 0
+#define ECRF_VERSION_MINOR 2
+#define ECRF_VERSION_PATCH 0
+
 /* Library version as (major << 16) | (minor << 8) | patch, and as text. */
 ECRF_API unsigned ecrf_version(void);
 ECRF_API const char* ecrf_version_string(void);
