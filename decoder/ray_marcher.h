@@ -26,6 +26,7 @@
 #include "decoder/camera.h"
 #include "decoder/field.h"
 #include "decoder/render_work.h"
+#include "ecrf/decoder.h"
 #include "format/status.h"
 
 namespace ecrf {
@@ -35,7 +36,7 @@ inline constexpr int kMaxRenderThreads = 64;
 inline constexpr int64_t kMaxImagePixels = int64_t{1} << 26;
 inline constexpr float kMinStepScale = 1.f / 16, kMaxStepScale = 64.f;
 // Default RenderOptions::sample_budget: 16x the samples of a 400x400 Synthetic-NeRF scene.
-inline constexpr int kDefaultSampleBudget = 16384;
+inline constexpr int kDefaultSampleBudget = ECRF_DEFAULT_SAMPLE_BUDGET;
 
 struct RenderOptions {
   int num_threads = 1;  // 0: std::thread::hardware_concurrency(); 1: no thread is created

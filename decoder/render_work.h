@@ -24,13 +24,14 @@
 #include <cstdint>
 
 #include "decoder/field.h"
+#include "ecrf/decoder.h"
 
 namespace ecrf {
 namespace dec {
 
 // Default RenderOptions::work_budget, per pixel on average over a view. Trained Synthetic-NeRF
 // scenes spend at most ~1/10 of it on their most expensive views (docs/benchmarks-and-fuzzing.md).
-inline constexpr uint64_t kDefaultWorkBudget = 6000000;
+inline constexpr uint64_t kDefaultWorkBudget = ECRF_DEFAULT_WORK_BUDGET;
 
 struct SampleCosts {
   uint64_t position = 0;  // a marched sample position: box, mask and contraction tests

@@ -11,17 +11,18 @@
 #include <cstdint>
 
 #include "decoder/field.h"
+#include "ecrf/decoder.h"
 #include "format/scene_header.h"
 #include "format/status.h"
 
 namespace ecrf {
 namespace dec {
 
-inline constexpr uint64_t kDefaultDecodeMemoryBudget = uint64_t{256} << 20;
+inline constexpr uint64_t kDefaultDecodeMemoryBudget = ECRF_DEFAULT_MEMORY_BUDGET;
 // Decode work (SPEC.md 8), in range-decoded symbols or what takes as long: a stream may cost
 // kDecodeWorkBase plus DecodeOptions::work_per_byte per byte of its size.
 inline constexpr uint64_t kDecodeWorkBase = uint64_t{1} << 24;
-inline constexpr uint64_t kDefaultDecodeWorkPerByte = 1024;
+inline constexpr uint64_t kDefaultDecodeWorkPerByte = ECRF_DEFAULT_DECODE_BUDGET;
 
 struct DecodeOptions {
   // kInt16 halves the grid memory (values rounded to 16-bit fixed point with one scale per

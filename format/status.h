@@ -23,7 +23,9 @@ enum ErrorCode : int {
 // Short, stable name of a code ("truncated", "corrupt", ...).
 const char* ErrorCodeName(int code);
 
-class Status {
+// [[nodiscard]]: a Status dropped on the floor is an error nobody sees; a caller that ignores one
+// on purpose casts it to void and says why.
+class [[nodiscard]] Status {
  public:
   Status() : code_(kOk) { message_[0] = '\0'; }
   static Status Ok() { return Status(); }

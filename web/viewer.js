@@ -43,10 +43,29 @@
     return {...camera, height: rows, cy: f32(camera.cy - y0)};
   }
 
-  // Byte layouts of the C structs on wasm32 (int, float, size_t and pointers are 4 bytes).
-  const INFO_BYTES = 112, CAMERA_BYTES = 72, OPTIONS_BYTES = 40, FIELD_BYTES = 64;
-  // Offset of ecrf_render_options.work_budget (a uint64_t, 8-byte aligned after seven 4-byte fields).
-  const WORK_BUDGET_OFFSET = 32;
+  // Byte offsets of the fields of the C structs of include/ecrf/decoder.h, and their sizes, on
+  // wasm32 (int, float, size_t and pointers are 4 bytes; a uint64_t is 8, aligned to 8). Written
+  // by hand, so the ctest WebViewerStructLayout (tests/web/check_struct_layout.py) compiles them
+  // against the header for wasm32 and fails on any difference.
+  const LAYOUT = {
+    ecrf_scene_info: {
+      sizeof: 112, aabb_min: 0, aabb_max: 12, grid_res: 24, density_ranks: 36,
+      appearance_ranks: 48, has_occupancy: 60, occupancy_res: 64, num_samples: 76, step_size: 80,
+      near_plane: 84, far_plane: 88, background: 92, stream_bytes: 104, grid_bytes: 108,
+    },
+    ecrf_camera: {sizeof: 72, c2w: 0, fx: 48, fy: 52, cx: 56, cy: 60, width: 64, height: 68},
+    ecrf_render_options: {
+      sizeof: 40, num_threads: 0, skip_empty_space: 4, early_stop_transmittance: 8,
+      max_samples: 12, work_budget: 32,
+    },
+    ecrf_scene_field: {
+      sizeof: 64, density_shift: 0, distance_scale: 4, weight_threshold: 8, occupancy_min: 12,
+      occupancy_max: 24, mlp_features: 36, mlp_products: 40, mlp_hidden: 44,
+      mlp_feature_freqs: 48, mlp_viewdir_freqs: 52, mlp_inputs: 56, mlp_params: 60,
+    },
+  };
+  const INFO = LAYOUT.ecrf_scene_info, CAMERA = LAYOUT.ecrf_camera;
+  const OPTIONS = LAYOUT.ecrf_render_options, FIELD = LAYOUT.ecrf_scene_field;
 
   // A non-negative integer (below 2^53) as the [low, high] 32-bit halves of a uint64_t.
   function u64Halves(value) {
@@ -88,17 +107,20 @@
 
     info() {
       const m = this.m;
-      const p = m._malloc(INFO_BYTES);
+      const p = m._malloc(INFO.sizeof);
       const rc = m._ecrf_scene_get_info(this.scene, p);
       if (rc < 0) { m._free(p); throw new Error(`ecrf_scene_get_info failed (${rc})`); }
       const f = (off, n) => Array.from(m.HEAPF32.subarray((p + off) >> 2, ((p + off) >> 2) + n));
       const i = (off, n) => Array.from(m.HEAP32.subarray((p + off) >> 2, ((p + off) >> 2) + n));
       const u = (off) => m.HEAP32[(p + off) >> 2] >>> 0;
       const info = {
-        aabbMin: f(0, 3), aabbMax: f(12, 3), gridRes: i(24, 3), densityRanks: i(36, 3),
-        appearanceRanks: i(48, 3), hasOccupancy: i(60, 1)[0] !== 0, occupancyRes: i(64, 3),
-        numSamples: i(76, 1)[0], stepSize: f(80, 1)[0], nearPlane: f(84, 1)[0],
-        farPlane: f(88, 1)[0], background: f(92, 3), streamBytes: u(104), gridBytes: u(108),
+        aabbMin: f(INFO.aabb_min, 3), aabbMax: f(INFO.aabb_max, 3), gridRes: i(INFO.grid_res, 3),
+        densityRanks: i(INFO.density_ranks, 3), appearanceRanks: i(INFO.appearance_ranks, 3),
+        hasOccupancy: i(INFO.has_occupancy, 1)[0] !== 0, occupancyRes: i(INFO.occupancy_res, 3),
+        numSamples: i(INFO.num_samples, 1)[0], stepSize: f(INFO.step_size, 1)[0],
+        nearPlane: f(INFO.near_plane, 1)[0], farPlane: f(INFO.far_plane, 1)[0],
+        background: f(INFO.background, 3), streamBytes: u(INFO.stream_bytes),
+        gridBytes: u(INFO.grid_bytes),
         // 0 object, 1 unbounded (SPEC.md 7.2.1: the box is the region of interest), 2 forward-facing
         // (7.2.2: the box is in NDC).
         sceneModel: m._ecrf_scene_model(this.scene),
@@ -119,13 +141,17 @@
     writeOptions(opt, options) {
       const m = this.m;
       m._ecrf_render_options_default(opt);
-      const o = opt >> 2;
-      m.HEAP32[o + 0] = 1;  // num_threads
-      if (options.skipEmptySpace !== undefined) m.HEAP32[o + 1] = options.skipEmptySpace ? 1 : 0;
-      if (options.earlyStopTransmittance !== undefined) m.HEAPF32[o + 2] = options.earlyStopTransmittance;
-      if (options.maxSamples !== undefined) m.HEAP32[o + 3] = options.maxSamples;
+      const at = (offset) => (opt + offset) >> 2;
+      m.HEAP32[at(OPTIONS.num_threads)] = 1;
+      if (options.skipEmptySpace !== undefined) {
+        m.HEAP32[at(OPTIONS.skip_empty_space)] = options.skipEmptySpace ? 1 : 0;
+      }
+      if (options.earlyStopTransmittance !== undefined) {
+        m.HEAPF32[at(OPTIONS.early_stop_transmittance)] = options.earlyStopTransmittance;
+      }
+      if (options.maxSamples !== undefined) m.HEAP32[at(OPTIONS.max_samples)] = options.maxSamples;
       if (options.workBudget !== undefined) {
-        m.HEAPU32.set(u64Halves(options.workBudget), (opt + WORK_BUDGET_OFFSET) >> 2);
+        m.HEAPU32.set(u64Halves(options.workBudget), at(OPTIONS.work_budget));
       }
     }
 
@@ -134,7 +160,7 @@
     // renderers of their own (the GPU path).
     checkRender(options = {}) {
       const m = this.m;
-      const opt = m._malloc(OPTIONS_BYTES);
+      const opt = m._malloc(OPTIONS.sizeof);
       this.writeOptions(opt, options);
       const rc = m._ecrf_scene_check_render(this.scene, opt);
       m._free(opt);
@@ -154,16 +180,16 @@
         this.imageBytes = this.image ? bytes : 0;
         if (!this.image) throw new Error('out of memory for the image');
       }
-      const cam = m._malloc(CAMERA_BYTES + OPTIONS_BYTES);
-      const opt = cam + CAMERA_BYTES;
-      const c = cam >> 2;
-      m.HEAPF32.set(camera.c2w, c);
-      m.HEAPF32[c + 12] = camera.fx;
-      m.HEAPF32[c + 13] = camera.fy;
-      m.HEAPF32[c + 14] = camera.cx;
-      m.HEAPF32[c + 15] = camera.cy;
-      m.HEAP32[c + 16] = camera.width;
-      m.HEAP32[c + 17] = camera.height;
+      const cam = m._malloc(CAMERA.sizeof + OPTIONS.sizeof);
+      const opt = cam + CAMERA.sizeof;
+      const at = (offset) => (cam + offset) >> 2;
+      m.HEAPF32.set(camera.c2w, at(CAMERA.c2w));
+      m.HEAPF32[at(CAMERA.fx)] = camera.fx;
+      m.HEAPF32[at(CAMERA.fy)] = camera.fy;
+      m.HEAPF32[at(CAMERA.cx)] = camera.cx;
+      m.HEAPF32[at(CAMERA.cy)] = camera.cy;
+      m.HEAP32[at(CAMERA.width)] = camera.width;
+      m.HEAP32[at(CAMERA.height)] = camera.height;
       this.writeOptions(opt, options);
       const rc = m._ecrf_scene_render(this.scene, cam, opt, this.image, 0);
       m._free(cam);
@@ -183,22 +209,24 @@
     sceneData() {
       const m = this.m;
       const info = this.info();
-      const scratch = m._malloc(FIELD_BYTES + 32);
+      const scratch = m._malloc(FIELD.sizeof + 32);
       try {
         if (m._ecrf_scene_get_field(this.scene, scratch) < 0) throw new Error('ecrf_scene_get_field failed');
         const f = (off, n) => Array.from(m.HEAPF32.subarray((scratch + off) >> 2, ((scratch + off) >> 2) + n));
         const i = (off) => m.HEAP32[(scratch + off) >> 2];
         const field = {
-          densityShift: f(0, 1)[0], distanceScale: f(4, 1)[0], weightThreshold: f(8, 1)[0],
-          occupancyMin: f(12, 3), occupancyMax: f(24, 3),
-          mlp: {features: i(36), products: i(40), hidden: i(44), featureFreqs: i(48),
-                viewdirFreqs: i(52), inputs: i(56)},
+          densityShift: f(FIELD.density_shift, 1)[0], distanceScale: f(FIELD.distance_scale, 1)[0],
+          weightThreshold: f(FIELD.weight_threshold, 1)[0],
+          occupancyMin: f(FIELD.occupancy_min, 3), occupancyMax: f(FIELD.occupancy_max, 3),
+          mlp: {features: i(FIELD.mlp_features), products: i(FIELD.mlp_products),
+                hidden: i(FIELD.mlp_hidden), featureFreqs: i(FIELD.mlp_feature_freqs),
+                viewdirFreqs: i(FIELD.mlp_viewdir_freqs), inputs: i(FIELD.mlp_inputs)},
         };
-        const mlpCount = m.HEAP32[(scratch + 60) >> 2] >>> 0;
+        const mlpCount = m.HEAP32[(scratch + FIELD.mlp_params) >> 2] >>> 0;
         const grid = (g) => {
           const out = {planes: [], lines: []};
           for (let t = 0; t < 6; ++t) {
-            const dataPtr = scratch + FIELD_BYTES, shapePtr = dataPtr + 4, countPtr = dataPtr + 16;
+            const dataPtr = scratch + FIELD.sizeof, shapePtr = dataPtr + 4, countPtr = dataPtr + 16;
             if (m._ecrf_scene_tensor(this.scene, g, t, dataPtr, shapePtr, countPtr) < 0) {
               throw new Error(`ecrf_scene_tensor(${g}, ${t}) failed: float32 storage only`);
             }
@@ -212,7 +240,7 @@
         const density = grid(0), appearance = grid(1);
         let occupancy = null;
         if (info.hasOccupancy) {
-          const bitsPtr = scratch + FIELD_BYTES, resPtr = bitsPtr + 4, bytesPtr = bitsPtr + 16;
+          const bitsPtr = scratch + FIELD.sizeof, resPtr = bitsPtr + 4, bytesPtr = bitsPtr + 16;
           if (m._ecrf_scene_occupancy(this.scene, bitsPtr, resPtr, bytesPtr) < 0) throw new Error('ecrf_scene_occupancy failed');
           const ptr = m.HEAP32[bitsPtr >> 2] >>> 0, n = m.HEAP32[bytesPtr >> 2] >>> 0;
           occupancy = {bits: new Uint8Array(m.HEAPU8.subarray(ptr, ptr + n)),

@@ -49,6 +49,12 @@ extern "C" {
 #define ECRF_ERR_CHECKSUM (-6)
 #define ECRF_ERR_OUT_OF_MEMORY (-7)
 
+/* Version of this library (not of the bitstream: ecrf_bitstream_version), written here only:
+ * CMake's project version, the SONAME and ecrf_version() are read from these three lines. */
+#define ECRF_VERSION_MAJOR 0
+#define ECRF_VERSION_MINOR 2
+#define ECRF_VERSION_PATCH 0
+
 /* Library version as (major << 16) | (minor << 8) | patch, and as text. */
 ECRF_API unsigned ecrf_version(void);
 ECRF_API const char* ecrf_version_string(void);
@@ -58,6 +64,12 @@ ECRF_API int ecrf_bitstream_version(void);
 ECRF_API const char* ecrf_error_name(int code);
 
 typedef struct ecrf_scene ecrf_scene;
+
+/* Defaults of the budgets of SPEC.md 8 (the decoder's own defaults are these values). */
+#define ECRF_DEFAULT_MEMORY_BUDGET ((uint64_t)256 << 20) /* bytes per scene handle */
+#define ECRF_DEFAULT_DECODE_BUDGET 1024                  /* work units per byte of the stream */
+#define ECRF_DEFAULT_SAMPLE_BUDGET 16384                 /* samples per ray */
+#define ECRF_DEFAULT_WORK_BUDGET 6000000                 /* multiply-adds per pixel */
 
 #define ECRF_STORAGE_FLOAT32 0 /* grids as decoded (normative values) */
 #define ECRF_STORAGE_INT16 1   /* grids rounded to 16-bit fixed point: half the memory */
@@ -95,11 +107,11 @@ typedef struct ecrf_render_options {
   float weight_threshold;         /* colour only samples of larger weight (< 0: the scene's) */
   int sample_budget;              /* refuse (ECRF_ERR_LIMIT) scenes whose rays take more samples
                                      than this after step_scale and max_samples (0: no limit;
-                                     default 16384) */
+                                     default ECRF_DEFAULT_SAMPLE_BUDGET) */
   uint64_t work_budget;           /* multiply-adds a view may spend per pixel on average
-                                     (SPEC.md 8; 0: no limit; default 2,000,000): refuse
-                                     (ECRF_ERR_LIMIT) a scene one colour sample of which costs
-                                     more, and a view that spends width x height x this */
+                                     (SPEC.md 8; 0: no limit; default ECRF_DEFAULT_WORK_BUDGET):
+                                     refuse (ECRF_ERR_LIMIT) a scene one colour sample of which
+                                     costs more, and a view that spends width x height x this */
 } ecrf_render_options;
 
 ECRF_API void ecrf_render_options_default(ecrf_render_options* options);
@@ -107,12 +119,14 @@ ECRF_API void ecrf_render_options_default(ecrf_render_options* options);
 /* NULL when out of memory. */
 ECRF_API ecrf_scene* ecrf_scene_create(void);
 ECRF_API void ecrf_scene_destroy(ecrf_scene* scene);
-/* Memory the next decodes may use for grids, occupancy mask and MLP (0: the default, 256 MiB);
- * a stream that needs more fails with ECRF_ERR_LIMIT before anything is allocated. */
+/* Memory the next decodes may use for grids, occupancy mask and MLP (0: the default,
+ * ECRF_DEFAULT_MEMORY_BUDGET); a stream that needs more fails with ECRF_ERR_LIMIT before
+ * anything is allocated. */
 ECRF_API int ecrf_scene_set_memory_budget(ecrf_scene* scene, uint64_t bytes);
 /* Work the next decodes may spend (SPEC.md 8): 2^24 + units_per_byte x the stream's size, in
  * range-decoded symbols (a coded block's inverse DCT counts its time in symbols); 0: no limit;
- * default 1024, 20 times what trained streams cost. A stream that costs more fails with
+ * default ECRF_DEFAULT_DECODE_BUDGET, 20 times what trained streams cost (the setting of a new
+ * scene handle). A stream that costs more fails with
  * ECRF_ERR_LIMIT as soon as its work passes the budget. */
 ECRF_API int ecrf_scene_set_decode_budget(ecrf_scene* scene, uint64_t units_per_byte);
 /* Message of the last failed call on this scene ("" after a success). */

@@ -466,6 +466,21 @@ TEST(DecoderCApi, DecodeInfoTensorRenderAndErrors) {
   ecrf_scene_destroy(scene);
 }
 
+// The version and the budget defaults decoder.h states are those the library reports and uses.
+TEST(DecoderCApi, VersionAndDefaultsAreTheHeaders) {
+  EXPECT_EQ(ecrf_version(),
+            unsigned{ECRF_VERSION_MAJOR << 16 | ECRF_VERSION_MINOR << 8 | ECRF_VERSION_PATCH});
+  EXPECT_EQ(std::string(ecrf_version_string()), std::to_string(ECRF_VERSION_MAJOR) + "." +
+                                                    std::to_string(ECRF_VERSION_MINOR) + "." +
+                                                    std::to_string(ECRF_VERSION_PATCH));
+  ecrf_render_options o;
+  ecrf_render_options_default(&o);
+  EXPECT_EQ(o.sample_budget, ECRF_DEFAULT_SAMPLE_BUDGET);
+  EXPECT_EQ(o.work_budget, uint64_t{ECRF_DEFAULT_WORK_BUDGET});
+  EXPECT_EQ(DecodeOptions().max_memory_bytes, ECRF_DEFAULT_MEMORY_BUDGET);
+  EXPECT_EQ(DecodeOptions().work_per_byte, uint64_t{ECRF_DEFAULT_DECODE_BUDGET});
+}
+
 // What a renderer of its own reads through the C API is what the reference renderer uses: the
 // scene constants, the mask's bits and the MLP parameters, for every conformance scene.
 TEST(SceneDecoder, CApiExposesTheFieldOccupancyAndMlpOfTheReferenceRenderer) {

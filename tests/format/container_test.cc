@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <map>
 #include <random>
 #include <string>
 
@@ -119,16 +120,131 @@ TEST(Container, HugeLengthIsRejectedBeforeUse) {
   EXPECT_EQ(ReadAll(f).code(), kErrTruncated);
 }
 
-TEST(Container, RandomBytesNeverCrash) {
-  std::mt19937 rng(99);
-  for (int t = 0; t < 2000; ++t) {
-    std::vector<uint8_t> f(rng() % 64);
-    for (auto& b : f) b = uint8_t(rng());
-    if (f.size() >= 8 && (t % 2)) {
-      std::memcpy(f.data(), "ECRF\x01\x00\x00\x00", 8);
+// What a reader must make of `f` by SPEC.md 2.1-2.2, written from the specification and not
+// from ContainerReader: the chunks up to DONE, or the category of the first check that fails.
+struct SpecifiedParse {
+  int code = kOk;
+  std::vector<ChunkView> chunks;
+};
+
+SpecifiedParse ParseAsSpecified(const std::vector<uint8_t>& f) {
+  SpecifiedParse p;
+  const auto fail = [&p](int code) {
+    p.code = code;
+    return p;
+  };
+  const auto u32 = [&f](size_t at) {
+    return uint32_t(f[at]) | uint32_t(f[at + 1]) << 8 | uint32_t(f[at + 2]) << 16 |
+           uint32_t(f[at + 3]) << 24;
+  };
+  const auto type_char = [](uint8_t c) {
+    return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == ' ';
+  };
+  if (f.size() < 4) return fail(kErrTruncated);
+  if (std::memcmp(f.data(), "ECRF", 4) != 0) return fail(kErrCorrupt);
+  if (f.size() < 8) return fail(kErrTruncated);
+  if (f[4] != 1) return fail(kErrUnsupported);
+  if (f[6] != 0 || f[7] != 0) return fail(kErrCorrupt);
+  for (size_t pos = 8;;) {
+    if (f.size() - pos < 8) return fail(kErrTruncated);
+    const uint32_t type = u32(pos), length = u32(pos + 4);
+    for (int i = 0; i < 4; ++i) {
+      if (!type_char(uint8_t(type >> (8 * i)))) return fail(kErrCorrupt);
     }
-    (void)ReadAll(f);
+    if (length > (1u << 28)) return fail(kErrLimit);
+    if (f.size() - pos - 8 < size_t(length) + 4) return fail(kErrTruncated);
+    if (Crc32(&f[pos], 8 + size_t(length)) != u32(pos + 8 + length)) return fail(kErrChecksum);
+    p.chunks.push_back({type, f.data() + pos + 8, length, pos});
+    pos += 12 + size_t(length);
+    if (type == FourCC("DONE")) return length == 0 && pos == f.size() ? p : fail(kErrCorrupt);
   }
+}
+
+// A stream that reaches every check: valid chunks of random types and sizes, then at most one
+// damage (truncation, a flipped byte, a random length or version, bytes after DONE).
+std::vector<uint8_t> RandomStream(std::mt19937& rng) {
+  static const char kTypeChars[] =
+      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789 ";
+  ContainerWriter w{static_cast<uint8_t>(rng())};
+  for (int chunks = int(rng() % 4); chunks > 0; --chunks) {
+    char type[5] = {0};
+    for (int i = 0; i < 4; ++i) type[i] = kTypeChars[rng() % (sizeof(kTypeChars) - 1)];
+    std::vector<uint8_t> payload(rng() % 40);
+    for (auto& b : payload) b = uint8_t(rng());
+    w.AddChunk(FourCC(type), payload);
+  }
+  std::vector<uint8_t> f = w.Finish();
+  const size_t at = rng() % f.size();
+  switch (rng() % 6) {
+    case 0:
+      f.resize(at);
+      break;
+    case 1:
+      f[at] ^= uint8_t(1 + rng() % 255);
+      break;
+    case 2: {  // a chunk length field, when `at` falls on a chunk header: any u32, often > 2^28
+      const uint32_t length = rng();
+      if (at + 8 <= f.size()) std::memcpy(&f[at + 4], &length, 4);
+      break;
+    }
+    case 3:
+      f[4] = uint8_t(rng() % 3);
+      break;
+    case 4:
+      f.push_back(uint8_t(rng()));
+      break;
+    default:
+      break;
+  }
+  return f;
+}
+
+// Every byte string gets the verdict SPEC.md 2 gives it: the same chunks (each inside the input)
+// or the same error category, with a message. Built with ECRF_SANITIZE the exactly-sized inputs
+// also prove the reader never reads past the end.
+TEST(Container, RandomBytesGetTheSpecifiedVerdict) {
+  std::mt19937 rng(99);
+  std::map<int, int> verdicts;
+  for (int t = 0; t < 6000; ++t) {
+    std::vector<uint8_t> f;
+    if (t % 3 == 0) {  // noise, half of it behind a valid file header
+      f.resize(rng() % 64);
+      for (auto& b : f) b = uint8_t(rng());
+      if (f.size() >= 8 && t % 2) std::memcpy(f.data(), "ECRF\x01\x00\x00\x00", 8);
+    } else {
+      f = RandomStream(rng);
+    }
+    const SpecifiedParse expected = ParseAsSpecified(f);
+    ContainerReader r;
+    std::vector<ChunkView> chunks;
+    Status s = r.Open(f.data(), f.size());
+    for (bool done = false; s.ok() && !done;) {
+      ChunkView c;
+      s = r.Next(&c, &done);
+      if (s.ok()) chunks.push_back(c);
+    }
+    ++verdicts[s.code()];
+    ASSERT_EQ(s.code(), expected.code)
+        << "input " << t << " (" << f.size() << " bytes): " << s.message();
+    if (!s.ok()) {
+      EXPECT_NE(s.message()[0], '\0') << "input " << t;
+      continue;
+    }
+    ASSERT_EQ(chunks.size(), expected.chunks.size()) << "input " << t;
+    for (size_t i = 0; i < chunks.size(); ++i) {
+      EXPECT_EQ(chunks[i].type, expected.chunks[i].type) << "input " << t << " chunk " << i;
+      EXPECT_EQ(chunks[i].offset, expected.chunks[i].offset) << "input " << t << " chunk " << i;
+      EXPECT_EQ(chunks[i].size, expected.chunks[i].size) << "input " << t << " chunk " << i;
+      EXPECT_EQ(chunks[i].data, expected.chunks[i].data) << "input " << t << " chunk " << i;
+      EXPECT_LE(chunks[i].data + chunks[i].size, f.data() + f.size()) << "input " << t;
+    }
+  }
+  // The inputs reach every verdict but the chunk-count limit (65,536 chunks), often enough that
+  // a reader which confused two of them would be caught.
+  for (int code : {kOk, kErrTruncated, kErrCorrupt, kErrUnsupported, kErrLimit, kErrChecksum}) {
+    EXPECT_GE(verdicts[code], 50) << ErrorCodeName(code);
+  }
+  EXPECT_EQ(verdicts.size(), 6u);
 }
 
 }  // namespace

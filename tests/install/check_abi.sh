@@ -18,10 +18,12 @@ if [ "$exported" != "$declared" ]; then
   diff <(echo "$exported") <(echo "$declared") || true
   fail=1
 fi
-version="$(grep -o '"[0-9]*\.[0-9]*\.[0-9]*"' "$(dirname "$0")/../../decoder/version.cc" | tr -d '"')"
-major="${version%%.*}"
+# The version as the installed header states it (ECRF_VERSION_*, its only source).
+version_part() { sed -n "s/^#define ECRF_VERSION_$1 \([0-9]*\)$/\1/p" "$header"; }
+major="$(version_part MAJOR)"; minor="$(version_part MINOR)"
+version="$major.$minor.$(version_part PATCH)"
 expected_soname="libecrf_decoder.so.$major"
-[ "$major" = 0 ] && expected_soname="libecrf_decoder.so.0.$(echo "$version" | cut -d. -f2)"
+[ "$major" = 0 ] && expected_soname="libecrf_decoder.so.0.$minor"
 soname="$(readelf -d "$so" | sed -n 's/.*SONAME.*\[\(.*\)\]/\1/p')"
 if [ "$soname" != "$expected_soname" ]; then
   echo "FAIL: SONAME $soname, expected $expected_soname (version $version)"
