@@ -5,6 +5,7 @@
 
 #include "tools/cli.h"
 #include "tools/commands.h"
+#include "tools/prepare/colmap_model.h"
 #include "tools/prepare/prepare_dataset.h"
 
 namespace ecrf {
@@ -33,12 +34,11 @@ int RunPrepare(int argc, char** argv) {
   app->add_option("--matcher", o.matcher,
                   "COLMAP matching: exhaustive (every pair), sequential (neighbours in time) or "
                   "auto (sequential for a video)")
-      ->check(CLI::IsMember({"auto", "exhaustive", "sequential"}))
+      ->check(CLI::IsMember(trainer::TypedNames<ColmapMatcher>()))
       ->capture_default_str();
   app->add_option("--camera-model", o.camera_model,
-                  "one camera for all frames: OPENCV (k1 k2 p1 p2), RADIAL, SIMPLE_RADIAL, "
-                  "PINHOLE or SIMPLE_PINHOLE")
-      ->check(CLI::IsMember({"OPENCV", "RADIAL", "SIMPLE_RADIAL", "PINHOLE", "SIMPLE_PINHOLE"}))
+                  "one camera for all frames (OPENCV: k1 k2 p1 p2)")
+      ->check(CLI::IsMember(trainer::TypedNames<ColmapCameraModel>()))
       ->capture_default_str();
   app->add_option("--max-features", o.max_features,
                   "SIFT features per frame (0: COLMAP's default); fewer match faster")

@@ -61,13 +61,12 @@ int Integer(const std::string& word, const std::string& where, size_t line, cons
   return int(v);
 }
 
-// Parameter count of each supported model, in COLMAP's order.
+// Parameter count of a supported model; -1 for the others.
 int ParamCount(const std::string& model) {
-  if (model == "SIMPLE_PINHOLE") return 3;  // f, cx, cy
-  if (model == "PINHOLE") return 4;         // fx, fy, cx, cy
-  if (model == "SIMPLE_RADIAL") return 4;   // f, cx, cy, k
-  if (model == "RADIAL") return 5;          // f, cx, cy, k1, k2
-  if (model == "OPENCV") return 8;          // fx, fy, cx, cy, k1, k2, p1, p2
+  const std::vector<std::string> names = trainer::TypedNames<ColmapCameraModel>();
+  for (size_t k = 0; k < names.size(); ++k) {
+    if (model == names[k]) return kColmapParamCount[k];
+  }
   return -1;
 }
 
@@ -124,9 +123,8 @@ std::map<int, ColmapCamera> ParseColmapCameras(const std::string& text, const st
     const int count = ParamCount(c.model);
     if (count < 0) {
       Fail(where, i,
-           "camera model " + c.model +
-               " is not supported (SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL or OPENCV: "
-               "the distortion the trainer models)");
+           "camera model " + c.model + " is not supported (" +
+               trainer::NameList<ColmapCameraModel>() + ": the distortion the trainer models)");
     }
     if (int(w.size()) != 4 + count) {
       Fail(where, i,

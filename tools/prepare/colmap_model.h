@@ -14,7 +14,31 @@
 #include <string>
 #include <vector>
 
+#include "trainer/data/named_choice.h"
+
 namespace ecrf {
+namespace tools {
+
+// The COLMAP camera models whose distortion the trainer models (`ecrf prepare --camera-model`,
+// and what cameras.txt may hold), with their parameter counts in COLMAP's order.
+enum class ColmapCameraModel { kOpencv, kRadial, kSimpleRadial, kPinhole, kSimplePinhole };
+inline constexpr int kColmapParamCount[] = {
+    8,  // fx, fy, cx, cy, k1, k2, p1, p2
+    5,  // f, cx, cy, k1, k2
+    4,  // f, cx, cy, k
+    4,  // fx, fy, cx, cy
+    3,  // f, cx, cy
+};
+
+}  // namespace tools
+
+template <>
+struct trainer::ChoiceNames<tools::ColmapCameraModel> {
+  static constexpr const char* what = "camera model";
+  static constexpr const char* names[] = {"OPENCV", "RADIAL", "SIMPLE_RADIAL", "PINHOLE",
+                                          "SIMPLE_PINHOLE"};
+};
+
 namespace tools {
 
 struct ColmapCamera {

@@ -136,17 +136,8 @@ void ExtractFrames(const std::string& ffmpeg, const PrepareOptions& o, const fs:
 }  // namespace
 
 PrepareResult PrepareDataset(const PrepareOptions& o) {
-  static const std::vector<std::string> kModels = {"OPENCV", "RADIAL", "SIMPLE_RADIAL", "PINHOLE",
-                                                   "SIMPLE_PINHOLE"};
-  if (std::find(kModels.begin(), kModels.end(), o.camera_model) == kModels.end()) {
-    throw std::invalid_argument("--camera-model " + o.camera_model +
-                                ": expected OPENCV, RADIAL, SIMPLE_RADIAL, PINHOLE or "
-                                "SIMPLE_PINHOLE (the distortion the trainer models)");
-  }
-  if (o.matcher != "auto" && o.matcher != "exhaustive" && o.matcher != "sequential") {
-    throw std::invalid_argument("--matcher " + o.matcher +
-                                ": expected auto, exhaustive or sequential");
-  }
+  trainer::ChoiceFromName<ColmapCameraModel>(o.camera_model, "--camera-model " + o.camera_model);
+  trainer::ChoiceFromName<ColmapMatcher>(o.matcher, "--matcher " + o.matcher);
   if (!(o.fps > 0) || o.max_frames < 3 || o.max_features < 0 || o.max_size < 0 ||
       o.aabb_scale < 1 || !(o.min_registered >= 0 && o.min_registered <= 1)) {
     throw std::invalid_argument(

@@ -11,9 +11,24 @@
 #define ECRF_TOOLS_PREPARE_PREPARE_DATASET_H_
 
 #include <string>
+
 #include <vector>
+#include "trainer/data/named_choice.h"
 
 namespace ecrf {
+namespace tools {
+
+// COLMAP's matching: every pair, neighbours in time, or auto (sequential for a video).
+enum class ColmapMatcher { kAuto, kExhaustive, kSequential };
+
+}  // namespace tools
+
+template <>
+struct trainer::ChoiceNames<tools::ColmapMatcher> {
+  static constexpr const char* what = "matcher";
+  static constexpr const char* names[] = {"auto", "exhaustive", "sequential"};
+};
+
 namespace tools {
 
 struct PrepareOptions {
