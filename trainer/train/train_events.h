@@ -2,8 +2,9 @@
 // iteration: the step on a batch, and the events scheduled before and after it. Each event asks
 // the run's TrainSchedule (train_schedule.h) whether it is due at iteration `it` (counted from
 // 0) and does nothing when it is not. RunIteration calls them in their order, Train (trainer.h)
-// runs the iterations and then FinishTraining. The order is part of the result: events draw from
-// the run's generator or change what the next one sees, so reordering them changes the bits.
+// runs the iterations and then FinishTraining. The order is part of the result: the events change
+// what the step sees next (grids, optimizer moments, rays, lambda_e, cameras), so reordering them
+// changes the trained bits.
 #ifndef ECRF_TRAINER_TRAIN_TRAIN_EVENTS_H_
 #define ECRF_TRAINER_TRAIN_TRAIN_EVENTS_H_
 
