@@ -19,6 +19,7 @@
 #include "trainer/train/evaluate.h"
 #include "trainer/train/rate_state.h"
 #include "trainer/train/train_options.h"
+#include "trainer/train/train_schedule.h"  // RateStartIteration, QatStartIteration
 
 namespace ecrf {
 namespace trainer {
@@ -52,18 +53,12 @@ TensorfConfig ConfigFor(const TrainOptions& options, const Dataset& data, const 
 // The same with FitScene(options.scene_type, data).
 TensorfConfig ConfigFor(const TrainOptions& options, const Dataset& data);
 
-// Trains on `train`, evaluating on `test` at the end (and every options.eval_every iterations).
+// Trains on `train`, evaluating on `test` at the end (and every options.eval_every iterations):
+// a loop over the step and the scheduled events of train_events.h.
 // Writes checkpoints and metrics.json into options.out_dir when it is not empty.
 // `rate` receives the rate objective's state (steps, entropy model); it may be null.
 TrainResult Train(const TrainOptions& options, const Dataset& train, const Dataset& test,
                   TensorfModel* model, RateState* rate = nullptr);
-
-// The iteration at which the rate terms switch on: options.rate_start of the run, but never
-// before the grid is final (after the last upsample and alpha-mask update).
-int RateStartIteration(const TrainOptions& options);
-// The iteration quantization-aware training starts at (options.iters: never); never before the
-// rate phase.
-int QatStartIteration(const TrainOptions& options);
 
 // Thrown by Train when options.stop_after is reached: the checkpoint written at that
 // iteration (if it is a checkpoint iteration) is the run's state.
