@@ -27,10 +27,11 @@ void FilterRaysThroughTheMask(TrainSession& s, int it) {
   } else {
     // An empty alpha mask this early means the density has not formed yet (a very short run
     // scales the mask updates down with it); filtering would leave nothing to train on.
-    std::fprintf(stderr,
-                 "\nray filtering skipped at iteration %d: the alpha mask keeps fewer rays than one "
-                 "batch (the model has too little density yet; more --iters give it time)\n",
-                 it);
+    std::fprintf(
+        stderr,
+        "\nray filtering skipped at iteration %d: the alpha mask keeps fewer rays than one "
+        "batch (the model has too little density yet; more --iters give it time)\n",
+        it);
   }
 }
 
@@ -64,8 +65,7 @@ void RefineCameraRound(TrainSession& s, int it) {
   if (!s.schedule.cameras.Due(done)) return;
   RefineCamerasRound(done, s.schedule.cameras, *s.model, s.train.views,
                      s.exposure_on ? s.progress.exposure.log_gain().data() : nullptr,
-                     s.o.seed + uint64_t(done), &s.progress.cameras,
-                     &s.result.camera_refinement);
+                     s.o.seed + uint64_t(done), &s.progress.cameras, &s.result.camera_refinement);
 }
 
 }  // namespace trainer

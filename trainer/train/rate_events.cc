@@ -22,8 +22,8 @@ void StartRatePhase(TrainSession& s, int it) {
   if (!s.controller && o.target_bytes > 0) {
     const TensorfModel& m = *s.model;
     const size_t float_bytes =
-        sizeof(float) * (m.density().params().size() + m.appearance().params().size() +
-                         m.head().params().size());
+        sizeof(float) *
+        (m.density().params().size() + m.appearance().params().size() + m.head().params().size());
     s.live.lambda_e =
         o.lambda_e > 0.f ? o.lambda_e : InitialLambdaForSize(o.target_bytes, float_bytes);
     s.controller = std::make_unique<LambdaController>(o.target_bytes, s.live.lambda_e);

@@ -23,16 +23,16 @@ void EvaluateTestCurve(TrainSession& s, int it) {
   // With refined cameras, the held-out ones are aligned first, as for the final score.
   const bool refined = s.schedule.cameras.on;
   const Dataset scored =
-      refined ? WithCameras(s.test, AlignHeldOutCameras(*s.model, s.train, s.test,
-                                                        s.progress.cameras, s.scored_views,
-                                                        s.o.seed, nullptr))
-              : Dataset();
-  const EvalResult e = Evaluate(*s.model, refined ? scored : s.test, s.scored_stride,
-                                s.o.max_test_views, false);
+      refined
+          ? WithCameras(s.test, AlignHeldOutCameras(*s.model, s.train, s.test, s.progress.cameras,
+                                                    s.scored_views, s.o.seed, nullptr))
+          : Dataset();
+  const EvalResult e =
+      Evaluate(*s.model, refined ? scored : s.test, s.scored_stride, s.o.max_test_views, false);
   s.eval_seconds += SecondsSince(eval_start);
   s.result.psnr_curve.emplace_back(s.TrainSeconds() / 60.0, e.psnr);
-  std::fprintf(stderr, "%s  test psnr %.2f dB at %.1f min (training time)\n",
-               isatty(2) ? "\n" : "", e.psnr, s.result.psnr_curve.back().first);
+  std::fprintf(stderr, "%s  test psnr %.2f dB at %.1f min (training time)\n", isatty(2) ? "\n" : "",
+               e.psnr, s.result.psnr_curve.back().first);
 }
 
 void SaveRunCheckpoint(TrainSession& s, int it) {

@@ -64,7 +64,7 @@ struct TrainSession {
   const Dataset& test;
   TensorfModel* model;
   RateState& rate;
-  TrainOptions live;  // options.lambda_e moves under rate control
+  TrainOptions live;                             // options.lambda_e moves under rate control
   std::unique_ptr<LambdaController> controller;  // --target-size, from the rate phase on
   const int first_iter;
   const TrainClock::time_point started;
