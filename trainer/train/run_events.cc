@@ -44,9 +44,21 @@ void SaveRunCheckpoint(TrainSession& s, int it) {
 
 void StopIfAsked(TrainSession& s, int it) {
   const int done = it + 1;
-  if (!s.schedule.StopDue(done)) return;
-  throw TrainingStopped("training stopped after iteration " + std::to_string(done) +
-                        " (--stop-after)");
+  if (s.schedule.StopDue(done)) {
+    throw TrainingStopped("training stopped after iteration " + std::to_string(done) +
+                          " (--stop-after)");
+  }
+  const double minutes = SecondsSince(s.started) / 60.0;
+  if (s.o.stop_after_minutes > 0.f && minutes >= s.o.stop_after_minutes && done < s.o.iters) {
+    // Unlike --stop-after, the stop is not known in advance: its checkpoint is written here.
+    if (!s.checkpoint_path.empty() && !s.schedule.CheckpointDue(done)) {
+      CheckModelFinite(*s.model, it, s.checkpoint_path);
+      s.SaveCheckpoint(done, s.TrainSeconds());
+    }
+    throw TrainingStopped("training stopped after " + std::to_string(int(minutes)) +
+                          " minutes at iteration " + std::to_string(done) +
+                          " (--stop-after-minutes; --resume continues it)");
+  }
 }
 
 namespace {

@@ -10,6 +10,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -280,6 +281,20 @@ TEST(TrainEvents, EvaluationsCheckpointsAndStopsFollowTheStepsDone) {
 
   EXPECT_NO_THROW(StopIfAsked(s, 1));
   EXPECT_THROW(StopIfAsked(s, 2), TrainingStopped);
+}
+
+TEST(TrainEvents, AStopByTimeWritesItsOwnCheckpoint) {
+  const testing_util::ScopedTempDir tmp("ecrf_events");
+  TrainOptions o = TinyRun();
+  o.out_dir = tmp.path();
+  o.stop_after_minutes = 60.f;
+  TinySession not_yet(o);
+  EXPECT_NO_THROW(StopIfAsked(not_yet.s, 4));  // an hour has not passed
+  EXPECT_FALSE(std::filesystem::exists(o.out_dir + "/checkpoint.ckpt"));
+  o.stop_after_minutes = 1e-6f;
+  TinySession now(o);
+  EXPECT_THROW(StopIfAsked(now.s, 4), TrainingStopped);
+  EXPECT_EQ(ReadCheckpointRunInfo(o.out_dir + "/checkpoint.ckpt").iteration, 5);
 }
 
 }  // namespace
