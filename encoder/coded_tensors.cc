@@ -4,19 +4,14 @@
 #include <cmath>
 
 namespace ecrf {
-namespace trainer {
+namespace encoder {
 
-GridBlockLayout RateTensorLayout(const VmGrid& grid, int t, const RateConfig& config) {
-  return t < 3 ? PlaneBlockLayout(grid, t, config.plane_block)
-               : LineBlockLayout(grid, t - 3, config.line_block);
-}
-
-const float* RateTensorData(const VmGrid& grid, int t) {
-  return t < 3 ? grid.plane(t) : grid.line(t - 3);
-}
-
-float* RateTensorGrad(VmGrid& grid, int t) {
-  return t < 3 ? grid.plane_grad(t) : grid.line_grad(t - 3);
+GridBlockLayout CodedTensorLayout(const SceneHeader& header, int g, int t,
+                                  const RateConfig& config) {
+  const std::array<int, 3> res = {header.res[0], header.res[1], header.res[2]};
+  const int rank = header.ranks[g][t % 3];
+  return t < 3 ? PlaneBlockLayout(res, rank, t, config.plane_block)
+               : LineBlockLayout(res, rank, t - 3, config.line_block);
 }
 
 const char* RateTensorName(int t) {
@@ -27,13 +22,13 @@ const char* RateTensorName(int t) {
   return t >= 0 && t < 12 ? kNames[t] : "?";
 }
 
-std::vector<float> PeakCoefficients(const TensorfModel& model, const RateConfig& config) {
+std::vector<float> PeakCoefficients(const SceneDescription& scene, const RateConfig& config) {
   std::vector<float> peaks;
-  for (const VmGrid* grid : {&model.density(), &model.appearance()}) {
+  for (int g = 0; g < 2; ++g) {
     for (int t = 0; t < kTensorsPerGrid; ++t) {
-      const GridBlockLayout layout = RateTensorLayout(*grid, t, config);
+      const GridBlockLayout layout = CodedTensorLayout(scene.header, g, t, config);
       std::vector<float> coeffs(layout.num_coeffs());
-      ForwardBlocks(RateTensorData(*grid, t), layout, coeffs.data());
+      ForwardBlocks(scene.tensors[g][t].data(), layout, coeffs.data());
       float peak = 0.f;
       for (float c : coeffs) peak = std::max(peak, std::fabs(c));
       peaks.push_back(peak);
@@ -42,14 +37,14 @@ std::vector<float> PeakCoefficients(const TensorfModel& model, const RateConfig&
   return peaks;
 }
 
-std::vector<float> ChooseQuantSteps(const TensorfModel& model, const RateConfig& config,
+std::vector<float> ChooseQuantSteps(const SceneDescription& scene, const RateConfig& config,
                                     int coef_bits) {
   const float max_level = coef_bits == 16 ? 32767.f : 127.f;
-  std::vector<float> steps = PeakCoefficients(model, config);
+  std::vector<float> steps = PeakCoefficients(scene, config);
   // An all-zero tensor still needs a positive step; any value codes it as zeros.
   for (float& s : steps) s = s > 0.f ? s / max_level : 1.f;
   return steps;
 }
 
-}  // namespace trainer
+}  // namespace encoder
 }  // namespace ecrf

@@ -1,4 +1,4 @@
-// The coded tensors of a model: each VM grid (density, then appearance) has six, planes 0..2
+// The coded tensors of a scene: each VM grid (density, then appearance) has six, planes 0..2
 // then lines 0..2, coded in that order (tensor index = grid * 6 + t, SPEC.md 4.3). Their block
 // shapes, layouts, names, and the quantization steps that map each tensor's largest block-DCT
 // coefficient to the largest level. Shared by the encoder and the rate objective that trains
@@ -9,11 +9,11 @@
 #include <vector>
 
 #include "encoder/grid_dct.h"
-#include "trainer/model/tensorf_model.h"
-#include "trainer/model/vm_grid.h"
+#include "encoder/scene_description.h"
+#include "format/scene_header.h"
 
 namespace ecrf {
-namespace trainer {
+namespace encoder {
 
 inline constexpr int kTensorsPerGrid = 6;
 
@@ -23,24 +23,23 @@ struct RateConfig {
   int line_block[3] = {1, 8, 8};      // 1 x channel x L
 };
 
-// Layout and storage of tensor t (0..5) of a grid.
-GridBlockLayout RateTensorLayout(const VmGrid& grid, int t, const RateConfig& config);
-const float* RateTensorData(const VmGrid& grid, int t);
-float* RateTensorGrad(VmGrid& grid, int t);
+// Block layout of tensor t (0..5) of grid g with the header's resolution and ranks.
+GridBlockLayout CodedTensorLayout(const SceneHeader& header, int g, int t,
+                                  const RateConfig& config);
 
 // Quantization step of each tensor for coef_bits-bit coefficients: the largest magnitude of its
 // block-DCT coefficients maps to the largest level (127 for 8 bits), so nothing clips. The
 // encoder uses this rule when the rate objective was off.
-std::vector<float> ChooseQuantSteps(const TensorfModel& model, const RateConfig& config,
+std::vector<float> ChooseQuantSteps(const SceneDescription& scene, const RateConfig& config,
                                     int coef_bits);
 // The largest block-DCT coefficient magnitude of each tensor (0 for an all-zero tensor), in the
 // order of ChooseQuantSteps.
-std::vector<float> PeakCoefficients(const TensorfModel& model, const RateConfig& config);
+std::vector<float> PeakCoefficients(const SceneDescription& scene, const RateConfig& config);
 
 // Name of tensor index t (0..11) as in checkpoints: "density.plane.0" ... "appearance.line.2".
 const char* RateTensorName(int t);
 
-}  // namespace trainer
+}  // namespace encoder
 }  // namespace ecrf
 
 #endif  // ECRF_ENCODER_CODED_TENSORS_H_

@@ -12,7 +12,7 @@
 #include <cmath>
 
 namespace ecrf {
-namespace trainer {
+namespace encoder {
 
 inline constexpr float kRoundToNearest = 0.5f;
 
@@ -23,7 +23,7 @@ inline double QuantizeLevel(double coefficient, double step, double offset) {
   return coefficient < 0.0 ? -magnitude : magnitude;
 }
 
-}  // namespace trainer
+}  // namespace encoder
 }  // namespace ecrf
 
 #endif  // ECRF_ENCODER_COEF_QUANTIZER_H_

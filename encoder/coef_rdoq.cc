@@ -10,7 +10,7 @@
 #include "format/entropy/range_coder.h"
 
 namespace ecrf {
-namespace trainer {
+namespace encoder {
 namespace {
 
 // -log2(p / 32768) for p in [1, 32768]: the cost of a symbol in bits.
@@ -300,5 +300,5 @@ size_t RdoqLevels(const float* coeffs, const GridBlockLayout& layout, double ste
   return clipped;
 }
 
-}  // namespace trainer
+}  // namespace encoder
 }  // namespace ecrf

@@ -26,7 +26,7 @@
 #include "format/coefficients/coef_contexts.h"
 
 namespace ecrf {
-namespace trainer {
+namespace encoder {
 
 // Beyond this a level costs more in distortion than any bit count it could save is worth.
 inline constexpr float kMaxRdoqLambda = 10.f;
@@ -44,7 +44,7 @@ struct RdoqOptions {
 size_t RdoqLevels(const float* coeffs, const GridBlockLayout& layout, double step,
                   const RdoqOptions& options, int32_t* levels);
 
-}  // namespace trainer
+}  // namespace encoder
 }  // namespace ecrf
 
 #endif  // ECRF_ENCODER_COEF_RDOQ_H_

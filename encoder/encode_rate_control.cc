@@ -9,7 +9,7 @@
 #include "encoder/coded_tensors.h"
 
 namespace ecrf {
-namespace trainer {
+namespace encoder {
 namespace {
 
 struct Encoded {
@@ -17,21 +17,21 @@ struct Encoded {
   EncodeReport report;
 };
 
-Encoded EncodeWithScale(const TensorfModel& model, EncodeOptions o, const std::vector<float>& base,
-                        double scale, int* encodes) {
+Encoded EncodeWithScale(const SceneDescription& scene, EncodeOptions o,
+                        const std::vector<float>& base, double scale, int* encodes) {
   for (size_t t = 0; t < base.size(); ++t) o.steps[t] = float(double(base[t]) * scale);
   Encoded e;
-  e.bytes = EncodeScene(model, o, &e.report);
+  e.bytes = EncodeScene(scene, o, &e.report);
   ++*encodes;
   return e;
 }
 
 }  // namespace
 
-double FinestStepScale(const TensorfModel& model, const EncodeOptions& options,
+double FinestStepScale(const SceneDescription& scene, const EncodeOptions& options,
                        const std::vector<float>& base) {
   const double max_level = options.coef_bits == 16 ? 32767.0 : 127.0;
-  const std::vector<float> peaks = PeakCoefficients(model, options.blocks);
+  const std::vector<float> peaks = PeakCoefficients(scene, options.blocks);
   double finest = 0.0;
   for (size_t t = 0; t < base.size() && t < peaks.size(); ++t) {
     if (peaks[t] > 0.f && base[t] > 0.f)
@@ -40,11 +40,11 @@ double FinestStepScale(const TensorfModel& model, const EncodeOptions& options,
   return std::min(1.0, finest > 0.0 ? finest : 1.0);
 }
 
-TargetSizeResult EncodeToTargetSize(const TensorfModel& model, const EncodeOptions& options,
+TargetSizeResult EncodeToTargetSize(const SceneDescription& scene, const EncodeOptions& options,
                                     size_t target_bytes) {
   EncodeOptions o = options;
   const std::vector<float> base =
-      o.steps.empty() ? ChooseQuantSteps(model, o.blocks, o.coef_bits) : o.steps;
+      o.steps.empty() ? ChooseQuantSteps(scene, o.blocks, o.coef_bits) : o.steps;
   o.steps = base;
   TargetSizeResult r;
   auto close_enough = [&](const Encoded& e) {
@@ -56,7 +56,7 @@ TargetSizeResult EncodeToTargetSize(const TensorfModel& model, const EncodeOptio
     r.step_scale = scale;
     return std::move(r);
   };
-  Encoded fit = EncodeWithScale(model, o, base, 1.0, &r.encodes);
+  Encoded fit = EncodeWithScale(scene, o, base, 1.0, &r.encodes);
   // Invariant of both searches: lo's file is too large, hi's fits. Sizes fall (almost)
   // monotonically with the scale; bisection in log space stops once the fitting file is within
   // 1% of the budget.
@@ -65,13 +65,13 @@ TargetSizeResult EncodeToTargetSize(const TensorfModel& model, const EncodeOptio
     if (close_enough(fit)) return done(std::move(fit), 1.0);
     // Steps coarser than the 8-bit peak step (trained with --quant-step-scale) may be refined
     // down to it; nothing finer, or the largest coefficients would clip.
-    const double finest = FinestStepScale(model, o, base);
+    const double finest = FinestStepScale(scene, o, base);
     if (!(finest < 1.0)) return done(std::move(fit), 1.0);
-    Encoded fine = EncodeWithScale(model, o, base, finest, &r.encodes);
+    Encoded fine = EncodeWithScale(scene, o, base, finest, &r.encodes);
     if (fine.bytes.size() <= target_bytes) return done(std::move(fine), finest);
     lo = finest;
   } else {
-    Encoded coarsest = EncodeWithScale(model, o, base, kMaxStepScale, &r.encodes);
+    Encoded coarsest = EncodeWithScale(scene, o, base, kMaxStepScale, &r.encodes);
     if (coarsest.bytes.size() > target_bytes) {
       char msg[256];
       std::snprintf(msg, sizeof(msg),
@@ -87,7 +87,7 @@ TargetSizeResult EncodeToTargetSize(const TensorfModel& model, const EncodeOptio
   }
   for (int it = 0; it < 24 && !close_enough(fit); ++it) {
     const double mid = std::sqrt(lo * hi);
-    Encoded e = EncodeWithScale(model, o, base, mid, &r.encodes);
+    Encoded e = EncodeWithScale(scene, o, base, mid, &r.encodes);
     if (e.bytes.size() <= target_bytes) {
       hi = mid;
       fit = std::move(e);
@@ -119,5 +119,5 @@ size_t ParseByteSize(const std::string& text) {
   return size_t(std::llround(v * mult));
 }
 
-}  // namespace trainer
+}  // namespace encoder
 }  // namespace ecrf

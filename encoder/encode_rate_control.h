@@ -1,4 +1,4 @@
-// Rate control at encode time: the file for a size budget, from a trained model alone.
+// Rate control at encode time: the file for a size budget, from a trained scene alone.
 //
 // Every quantization step is scaled by one factor s (s > 1: coarser coefficients, fewer bytes;
 // the relative step sizes the training chose are kept), and s is searched by bisection in log
@@ -15,7 +15,7 @@
 #include "encoder/scene_encoder.h"
 
 namespace ecrf {
-namespace trainer {
+namespace encoder {
 
 inline constexpr double kMaxStepScale = 64.0;
 
@@ -32,19 +32,19 @@ struct TargetSizeResult {
 // --quant-step-scale), never finer than FinestStepScale; at that limit the finest file is
 // returned. Throws std::runtime_error naming the smallest reachable size when even
 // s = kMaxStepScale does not fit.
-TargetSizeResult EncodeToTargetSize(const TensorfModel& model, const EncodeOptions& options,
+TargetSizeResult EncodeToTargetSize(const SceneDescription& scene, const EncodeOptions& options,
                                     size_t target_bytes);
 
 // The smallest factor s <= 1 that keeps every tensor's step at or above its 8-bit (or 16-bit)
 // peak step, so that no coefficient clips: 1 when the steps are already the peak steps.
-double FinestStepScale(const TensorfModel& model, const EncodeOptions& options,
+double FinestStepScale(const SceneDescription& scene, const EncodeOptions& options,
                        const std::vector<float>& base);
 
 // "500KB", "1.2MB", "300000" (bytes; KB = 1000 bytes, MB = 10^6, also KiB / MiB). Throws
 // std::invalid_argument naming the text.
 size_t ParseByteSize(const std::string& text);
 
-}  // namespace trainer
+}  // namespace encoder
 }  // namespace ecrf
 
 #endif  // ECRF_ENCODER_ENCODE_RATE_CONTROL_H_

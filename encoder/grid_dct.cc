@@ -7,9 +7,10 @@
 #include "decoder/multiversion.h"
 #include "format/coefficients/block_shape.h"
 #include "format/coefficients/float_dct.h"
+#include "format/vm_modes.h"
 
 namespace ecrf {
-namespace trainer {
+namespace encoder {
 namespace {
 
 int Log2(int n) {
@@ -284,5 +285,5 @@ void BackwardBlockList(const float* dl_dcoeffs, const GridBlockLayout& layout, c
   RunBlocks<Op::kBackward>(dl_dcoeffs, layout, block_ids, count, dl_dtensor);
 }
 
-}  // namespace trainer
+}  // namespace encoder
 }  // namespace ecrf

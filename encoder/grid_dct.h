@@ -1,4 +1,5 @@
-// Block DCT of the VM feature grids (planes and lines of a VmGrid), with its adjoint for training.
+// Block DCT of the VM feature tensors (the planes and lines of a grid), with its adjoint for
+// training.
 //
 // A tensor is viewed through three "block axes" (a0, a1, a2), each with a logical extent and a
 // memory stride; a block is an n0 x n1 x n2 tile over them, transformed by the orthonormal DCT of
@@ -24,12 +25,11 @@
 #ifndef ECRF_ENCODER_GRID_DCT_H_
 #define ECRF_ENCODER_GRID_DCT_H_
 
+#include <array>
 #include <cstddef>
 
-#include "trainer/model/vm_grid.h"
-
 namespace ecrf {
-namespace trainer {
+namespace encoder {
 
 struct GridBlockLayout {
   int block[3] = {1, 1, 1};    // n0, n1, n2 (IsValidBlockShape)
@@ -51,12 +51,6 @@ GridBlockLayout PlaneBlockLayout(const std::array<int, 3>& res, int rank, int m,
                                  const int block[3]);
 // Line m: extent {1, rank, res[w]}; block[0] must be 1.
 GridBlockLayout LineBlockLayout(const std::array<int, 3>& res, int rank, int m, const int block[3]);
-inline GridBlockLayout PlaneBlockLayout(const VmGrid& g, int m, const int block[3]) {
-  return PlaneBlockLayout(g.res(), g.ranks()[m], m, block);
-}
-inline GridBlockLayout LineBlockLayout(const VmGrid& g, int m, const int block[3]) {
-  return LineBlockLayout(g.res(), g.ranks()[m], m, block);
-}
 
 // coeffs[num_coeffs()] = DCT of every (edge-padded) block.
 void ForwardBlocks(const float* tensor, const GridBlockLayout& layout, float* coeffs);
@@ -73,7 +67,7 @@ void ForwardBlockList(const float* tensor, const GridBlockLayout& layout, const 
 void BackwardBlockList(const float* dl_dcoeffs, const GridBlockLayout& layout, const int* block_ids,
                        int count, float* dl_dtensor);
 
-}  // namespace trainer
+}  // namespace encoder
 }  // namespace ecrf
 
 #endif  // ECRF_ENCODER_GRID_DCT_H_

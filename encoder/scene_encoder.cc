@@ -21,60 +21,44 @@
 #include "format/scene_header.h"
 
 namespace ecrf {
-namespace trainer {
+namespace encoder {
 namespace {
 
-// The model as the stream sees it: explicit ranks (possibly 0), channels-last tensors.
-struct SceneTensors {
-  SceneHeader header;
-  NdcFrame ndc;                      // forward-facing scenes only
-  std::vector<float> tensors[2][6];  // planes [res[v]][res[u]][rank], lines [res[w]][rank]
-  std::vector<float> head_params;    // trainer layout, P = appearance total rank
-  const AlphaMask* mask = nullptr;
-};
-
-SceneTensors FromModel(const TensorfModel& model) {
-  SceneTensors s;
-  SceneHeader& h = s.header;
-  const TensorfConfig& c = model.config();
-  // Unbounded: HEAD carries the region of interest; the grids span the contracted cube.
-  const Aabb& box = model.unbounded() ? c.roi : model.aabb();
-  h.scene_model = static_cast<uint8_t>(c.scene_model);
-  s.ndc = c.ndc;
-  for (int a = 0; a < 3; ++a) {
-    h.aabb_min[a] = box.min[a];
-    h.aabb_max[a] = box.max[a];
-    h.res[a] = static_cast<uint16_t>(model.res()[a]);
-  }
-  const VmGrid* grids[2] = {&model.density(), &model.appearance()};
+// Throws std::invalid_argument unless every array has the size the header gives it.
+void CheckDescription(const SceneDescription& s) {
+  const SceneHeader& h = s.header;
   for (int g = 0; g < 2; ++g) {
-    for (int m = 0; m < 3; ++m) {
-      h.ranks[g][m] = static_cast<uint16_t>(grids[g]->ranks()[m]);
-      s.tensors[g][m].assign(grids[g]->plane(m), grids[g]->plane(m) + grids[g]->plane_size(m));
-      s.tensors[g][3 + m].assign(grids[g]->line(m), grids[g]->line(m) + grids[g]->line_size(m));
+    for (int t = 0; t < 6; ++t) {
+      int extent[3];
+      SceneTensorExtent(h, g, t, extent);
+      const size_t expected = size_t(extent[0]) * extent[1] * extent[2];
+      if (s.tensors[g][t].size() != expected) {
+        throw std::invalid_argument("EncodeScene: tensor " +
+                                    std::string(RateTensorName(g * 6 + t)) + " holds " +
+                                    std::to_string(s.tensors[g][t].size()) +
+                                    " values, its header shape " + std::to_string(expected));
+      }
     }
   }
-  h.density_shift = c.density_shift;
-  h.distance_scale = c.distance_scale;
-  h.step_size = model.step_size();
-  h.num_samples = static_cast<uint32_t>(std::max(1, model.n_samples()));
-  h.weight_threshold = c.weight_threshold;
-  h.near_far[0] = c.near;
-  h.near_far[1] = c.far;
-  for (float& b : h.background) b = c.white_background ? 1.f : 0.f;
-  const AppearanceHeadConfig& hc = model.head().config();
-  h.feature_dim = static_cast<uint16_t>(hc.feature_dim);
-  h.feature_pe_freqs = static_cast<uint8_t>(hc.feature_pe_freqs);
-  h.viewdir_pe_freqs = static_cast<uint8_t>(hc.viewdir_pe_freqs);
-  h.hidden = static_cast<uint16_t>(hc.hidden);
-  s.head_params = model.head().params();
-  s.mask = model.alpha_mask();
-  return s;
+  const MlpLayout mlp = MakeMlpLayout(h.feature_dim, h.total_rank(1), h.hidden, h.feature_pe_freqs,
+                                      h.viewdir_pe_freqs);
+  if (s.head_params.size() != MlpParamCount(mlp)) {
+    throw std::invalid_argument("EncodeScene: " + std::to_string(s.head_params.size()) +
+                                " head parameters, the header's head has " +
+                                std::to_string(MlpParamCount(mlp)));
+  }
+  if (s.mask) {
+    const std::array<int, 3>& r = s.mask->res;
+    if (r[0] < 2 || r[1] < 2 || r[2] < 2 ||
+        s.mask->occupancy.size() != size_t(r[0]) * r[1] * r[2]) {
+      throw std::invalid_argument("EncodeScene: the occupancy mask does not match its resolution");
+    }
+  }
 }
 
 // Keeps the components with keep[g][m][r] != 0 (and, for appearance, their basis columns).
-SceneTensors DropComponents(const SceneTensors& in, const std::vector<uint8_t> keep[2][3]) {
-  SceneTensors out = in;
+SceneDescription DropComponents(const SceneDescription& in, const std::vector<uint8_t> keep[2][3]) {
+  SceneDescription out = in;
   const SceneHeader& h = in.header;
   for (int g = 0; g < 2; ++g) {
     for (int m = 0; m < 3; ++m) {
@@ -159,16 +143,9 @@ std::vector<uint8_t> CodeLevels(const std::vector<int32_t>& levels, const GridBl
   return enc.Finish();
 }
 
-GridBlockLayout LayoutOf(const SceneHeader& h, int g, int t, const RateConfig& blocks) {
-  const std::array<int, 3> res = {h.res[0], h.res[1], h.res[2]};
-  const int rank = h.ranks[g][t % 3];
-  return t < 3 ? PlaneBlockLayout(res, rank, t, blocks.plane_block)
-               : LineBlockLayout(res, rank, t - 3, blocks.line_block);
-}
-
-std::vector<uint8_t> EncodeCoefficients(const SceneTensors& s, int g, int t, float step,
+std::vector<uint8_t> EncodeCoefficients(const SceneDescription& s, int g, int t, float step,
                                         const EncodeOptions& o, EncodeReport* report) {
-  const GridBlockLayout layout = LayoutOf(s.header, g, t, o.blocks);
+  const GridBlockLayout layout = CodedTensorLayout(s.header, g, t, o.blocks);
   std::vector<float> coeffs(layout.num_coeffs());
   ForwardBlocks(s.tensors[g][t].data(), layout, coeffs.data());
   const int32_t max_abs = o.coef_bits == 16 ? 32767 : 127;
@@ -212,9 +189,9 @@ std::vector<uint8_t> EncodeCoefficients(const SceneTensors& s, int g, int t, flo
 }
 
 // The shorter of the narrow and (where the asked version allows it) the wide code.
-std::vector<uint8_t> EncodeOccupancyChunk(const AlphaMask& mask, int max_version_minor,
+std::vector<uint8_t> EncodeOccupancyChunk(const OccupancyDescription& mask, int max_version_minor,
                                           OccupancyContextSet* set_out) {
-  const int res[3] = {mask.res()[0], mask.res()[1], mask.res()[2]};
+  const int res[3] = {mask.res[0], mask.res[1], mask.res[2]};
   OccupancyContextSet set = OccupancyContextSet::kNarrow;
   const std::vector<uint8_t> code = ShortestCode(
       {OccupancyContextSet::kNarrow, OccupancyContextSet::kWide}, max_version_minor,
@@ -222,13 +199,13 @@ std::vector<uint8_t> EncodeOccupancyChunk(const AlphaMask& mask, int max_version
         return candidate == OccupancyContextSet::kWide ? kWideOccupancyContextsMinVersionMinor : 0;
       },
       [&](OccupancyContextSet candidate) {
-        return EncodeOccupancy(mask.occupancy().data(), res, candidate);
+        return EncodeOccupancy(mask.occupancy.data(), res, candidate);
       },
       &set);
   ByteWriter w;
-  for (float v : mask.aabb().min) w.F32(v);
-  for (float v : mask.aabb().max) w.F32(v);
-  for (int r : mask.res()) w.U16(uint16_t(r));
+  for (float v : mask.aabb_min) w.F32(v);
+  for (float v : mask.aabb_max) w.F32(v);
+  for (int r : mask.res) w.U16(uint16_t(r));
   w.U16(static_cast<uint16_t>(set));
   w.Bytes(code);
   *set_out = set;
@@ -260,7 +237,7 @@ std::vector<uint8_t> EncodeMlpChunk(const SceneHeader& h, const std::vector<floa
   return std::move(w.bytes());
 }
 
-std::vector<uint8_t> Assemble(const SceneTensors& s, const std::vector<float>& steps,
+std::vector<uint8_t> Assemble(const SceneDescription& s, const std::vector<float>& steps,
                               const EncodeOptions& o, EncodeReport* report) {
   *report = EncodeReport{};
   SceneHeader h = s.header;
@@ -283,7 +260,7 @@ std::vector<uint8_t> Assemble(const SceneTensors& s, const std::vector<float>& s
           CoefContextSetMinVersionMinor(static_cast<CoefContextSet>(coef_chunks[g][t][3])));
     }
   }
-  h.has_occupancy = (o.include_occupancy && s.mask) ? 1 : 0;
+  h.has_occupancy = (o.include_occupancy && s.mask.has_value()) ? 1 : 0;
   std::vector<uint8_t> occupancy_chunk;
   if (h.has_occupancy) {
     OccupancyContextSet set = OccupancyContextSet::kNarrow;
@@ -360,8 +337,9 @@ bool DecodedSliceIsZero(const float* data, size_t cells, int rank, int r) {
 
 }  // namespace
 
-std::vector<uint8_t> EncodeScene(const TensorfModel& model, const EncodeOptions& o,
+std::vector<uint8_t> EncodeScene(const SceneDescription& scene, const EncodeOptions& o,
                                  EncodeReport* report_out) {
+  CheckDescription(scene);
   if (o.coef_bits != 8 && o.coef_bits != 16) {
     throw std::invalid_argument("coefficient bits must be 8 or 16, not " +
                                 std::to_string(o.coef_bits));
@@ -379,7 +357,7 @@ std::vector<uint8_t> EncodeScene(const TensorfModel& model, const EncodeOptions&
                                 std::to_string(o.steps.size()));
   }
   std::vector<float> steps =
-      o.steps.empty() ? ChooseQuantSteps(model, o.blocks, o.coef_bits) : o.steps;
+      o.steps.empty() ? ChooseQuantSteps(scene, o.blocks, o.coef_bits) : o.steps;
   for (float& s : steps) {
     if (!(s > 0.f && s <= 0x1p64f)) {
       throw std::invalid_argument("quantization step " + std::to_string(s) + " outside (0, 2^64]");
@@ -388,8 +366,7 @@ std::vector<uint8_t> EncodeScene(const TensorfModel& model, const EncodeOptions&
     s = std::max(s, 0x1p-64f);
   }
   EncodeReport report;
-  const SceneTensors full = FromModel(model);
-  std::vector<uint8_t> bytes = Assemble(full, steps, o, &report);
+  std::vector<uint8_t> bytes = Assemble(scene, steps, o, &report);
   dec::SceneField decoded;
   Decode(bytes, &decoded);
 
@@ -425,17 +402,17 @@ std::vector<uint8_t> EncodeScene(const TensorfModel& model, const EncodeOptions&
           app_left = true;
         }
       }
-      const SceneTensors reduced = DropComponents(full, keep);
+      const SceneDescription reduced = DropComponents(scene, keep);
       bytes = Assemble(reduced, steps, o, &report);
       Decode(bytes, &decoded);
     }
   }
   for (int g = 0; g < 2; ++g) {
-    for (int m = 0; m < 3; ++m) report.ranks_in[g][m] = full.header.ranks[g][m];
+    for (int m = 0; m < 3; ++m) report.ranks_in[g][m] = scene.header.ranks[g][m];
   }
   if (report_out) *report_out = report;
   return bytes;
 }
 
-}  // namespace trainer
+}  // namespace encoder
 }  // namespace ecrf

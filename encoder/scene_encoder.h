@@ -1,4 +1,5 @@
-// The encoder: a trained TensorfModel -> an .ecrf stream (SPEC.md section 6).
+// The encoder: a scene description (encoder/scene_description.h) -> an .ecrf stream (SPEC.md
+// section 6).
 //
 // Per feature tensor: block DCT (the blocks and edge padding of training, encoder/grid_dct.h) ->
 // uniform quantization with the tensor's step -> the context-modelled coefficient coder ->
@@ -19,11 +20,11 @@
 #include <vector>
 
 #include "encoder/coded_tensors.h"
+#include "encoder/scene_description.h"
 #include "format/container.h"
-#include "trainer/model/tensorf_model.h"
 
 namespace ecrf {
-namespace trainer {
+namespace encoder {
 
 struct EncodeOptions {
   int coef_bits = 8;         // 8 or 16
@@ -32,7 +33,7 @@ struct EncodeOptions {
   // level of a row being this (MLPW precision 2, bitstream 1.1); overrides mlp_float32.
   int mlp_max_level = 0;
   bool drop_zero_components = true;
-  bool include_occupancy = true;  // the alpha mask, when the model has one
+  bool include_occupancy = true;  // the occupancy mask, when the scene has one
   RateConfig blocks;              // plane and line block shapes
   // One step per tensor (density planes 0..2, lines 0..2, then appearance), e.g. the steps the
   // rate objective froze in training; empty: ChooseQuantSteps (largest coefficient -> max level).
@@ -70,12 +71,12 @@ struct EncodeReport {
   }
 };
 
-// Throws std::invalid_argument for impossible options and std::runtime_error if the encoder's
-// own decode check fails.
-std::vector<uint8_t> EncodeScene(const TensorfModel& model, const EncodeOptions& options,
+// Throws std::invalid_argument for impossible options or a description whose arrays do not have
+// the sizes its header gives them, and std::runtime_error if the encoder's own decode check fails.
+std::vector<uint8_t> EncodeScene(const SceneDescription& scene, const EncodeOptions& options,
                                  EncodeReport* report = nullptr);
 
-}  // namespace trainer
+}  // namespace encoder
 }  // namespace ecrf
 
 #endif  // ECRF_ENCODER_SCENE_ENCODER_H_

@@ -1,6 +1,6 @@
 /* What the C programs beside the library share: reading a whole file, decoding a stream file
  * into a scene, and SPEC.md 7.1's orbit camera. Used by examples/decode_render.c and
- * tools/bench/decoder_speed.c (static inline, so a program that needs one of them builds without
+ * benchmarks/decoder_speed.c (static inline, so a program that needs one of them builds without
  * warnings about the other). Plain C99. */
 #ifndef ECRF_EXAMPLES_EXAMPLE_UTIL_H_
 #define ECRF_EXAMPLES_EXAMPLE_UTIL_H_

@@ -60,7 +60,7 @@ int main(int argc, char** argv) {
     std::printf("trained %d iterations in %.1f s: test PSNR %.2f dB (float model)\n", r.iterations,
                 r.train_seconds, r.test.psnr);
 
-    tr::EncodeReport report;
+    ecrf::encoder::EncodeReport report;
     const std::vector<uint8_t> bytes =
         tr::EncodeScene(model, tr::RunEncodeOptions(o, rate), &report);
 

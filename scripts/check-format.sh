@@ -7,7 +7,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 command -v clang-format >/dev/null || { echo "clang-format not found: apt-get install -y clang-format" >&2; exit 1; }
-mapfile -t files < <(git ls-files '*.cc' '*.h' 2>/dev/null || find format decoder encoder trainer tools python tests examples -name '*.cc' -o -name '*.h')
+mapfile -t files < <(git ls-files '*.cc' '*.h' 2>/dev/null || find format decoder encoder conformance trainer tools benchmarks python tests examples -name '*.cc' -o -name '*.h')
 if [ "${1:-}" = "--fix" ]; then
   clang-format -i "${files[@]}"
   exit 0

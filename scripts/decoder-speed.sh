@@ -2,11 +2,11 @@
 # The embeddable decoder's render speed at two commits, measured in one run: the decoder sources
 # of each (cmake/decoder_sources.txt) built as a distribution builds the library (portable:
 # `g++ -O3`, no -march; the MLP kernel is picked at run time) and as scripts/build.sh builds it
-# (native: -march=native), each linked to tools/bench/decoder_speed.c (C API only, so it builds
+# (native: -march=native), each linked to benchmarks/decoder_speed.c (C API only, so it builds
 # against either). For every scene and build it prints both commits' milliseconds per view (best
 # of the repetitions, the two binaries run alternately), their ratio, and whether every pixel of
 # every view is the same (a hash of the RGBA bytes). --builds wasm adds WebAssembly builds (em++
-# with scripts/build-wasm.sh's flags, one thread, timed in node by tools/bench/decoder_speed.mjs).
+# with scripts/build-wasm.sh's flags, one thread, timed in node by benchmarks/decoder_speed.mjs).
 #
 #   bash scripts/decoder-speed.sh [--base COMMIT] [--head COMMIT] [--views N] [--size N]
 #                                 [--threads N] [--reps N] [--builds portable,native,wasm] SCENE...
@@ -58,7 +58,7 @@ build() {  # build TREE FLAVOUR -> TREE/decoder_speed_FLAVOUR
   mkdir -p "$obj"
   (cd "$tree" && grep -v '^#' cmake/decoder_sources.txt | sed '/^$/d' |
      xargs -P "$jobs" -I{} sh -c 'g++ -std=c++17 -O3 "$@" -fno-exceptions -fno-rtti -ffp-contract=off -I. -Iinclude -c {} -o "'"$obj"'/$(echo {} | tr / _).o"' _ "${march[@]}")
-  gcc -std=c99 -O2 -I"$tree/include" -I. -c tools/bench/decoder_speed.c -o "$obj/decoder_speed.o"
+  gcc -std=c99 -O2 -I"$tree/include" -I. -c benchmarks/decoder_speed.c -o "$obj/decoder_speed.o"
   g++ "$obj"/*.o -o "$tree/decoder_speed_$flavour" -pthread -lm
 }
 
@@ -90,7 +90,7 @@ done
 
 run() {  # run TREE FLAVOUR SCENE
   if [ "$2" = wasm ]; then
-    node tools/bench/decoder_speed.mjs "$1/wasm/ecrf_speed.js" "$3" "$views" "$size" "$reps"
+    node benchmarks/decoder_speed.mjs "$1/wasm/ecrf_speed.js" "$3" "$views" "$size" "$reps"
   else
     "$1/decoder_speed_$2" "$3" "$views" "$size" "$threads" "$reps"
   fi

@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # Frame times and image check of the web viewer's WebGL2 renderer on a GPU machine without a
 # browser: replays the traces of .devbench/ (scripts/make-devbench.sh) with .devbench/ecrf_gl_replay
-# (compiled here from tools/bench/gl_replay.cc, gl_replay_context.cc and gl_trace.cc when that
-# binary does not start) on a headless EGL + OpenGL ES 3 context, and compares each image with its
-# native reference (tools/bench/gl_replay_compare.py, PSNR >= 40 dB). Run from the repository root
-# with .gl/*.deb (glvnd's libEGL / libGLESv2) and .devbench/ beside it:
+# (compiled here from benchmarks/gl_replay.cc, gl_player.cc, gl_replay_context.cc and gl_trace.cc
+# when that binary does not start) on a headless EGL + OpenGL ES 3 context, and compares each image
+# with its native reference (benchmarks/gl_replay_compare.py, PSNR >= 40 dB). Run from the
+# repository root with .gl/*.deb (glvnd's libEGL / libGLESv2) and .devbench/ beside it:
 #
 #   bash scripts/device-gl-bench.sh
 #
@@ -55,9 +55,9 @@ main() {
     zstd=()
     if echo '#include <zstd.h>' | c++ -E -x c++ - >/dev/null 2>&1; then zstd=(-DECRF_GL_REPLAY_ZSTD -lzstd); fi
     lib=$(dirname "$(ldconfig -p | grep -m1 'libEGL\.so\.1 ' | sed 's/.*=> //')")
-    c++ -O2 -std=c++17 -I. -I"$DEV/include" tools/bench/gl_replay.cc tools/bench/gl_replay_context.cc \
-      tools/bench/gl_trace.cc -o "$tmp/ecrf_gl_replay" "$lib/libEGL.so.1" "$lib/libGLESv2.so.2" \
-      "${zstd[@]}" && REPLAY="$tmp/ecrf_gl_replay"
+    c++ -O2 -std=c++17 -I. -I"$DEV/include" benchmarks/gl_replay.cc benchmarks/gl_player.cc \
+      benchmarks/gl_replay_context.cc benchmarks/gl_trace.cc -o "$tmp/ecrf_gl_replay" \
+      "$lib/libEGL.so.1" "$lib/libGLESv2.so.2" "${zstd[@]}" && REPLAY="$tmp/ecrf_gl_replay"
   fi
   if [ ! -f "$DEV/runs.tsv" ]; then echo "no $DEV/runs.tsv: run scripts/make-devbench.sh first"; return 1; fi
 
@@ -79,7 +79,7 @@ main() {
     pngarg=()
     [ "$back" = 1 ] && pngarg=(--png "$OUT/$stem.png")
     if [ -f "$tmp/$stem.ppm" ]; then
-      "$PY" tools/bench/gl_replay_compare.py "$tmp/$stem.ppm" "$DEV/$ref" --min-psnr "$minpsnr" \
+      "$PY" benchmarks/gl_replay_compare.py "$tmp/$stem.ppm" "$DEV/$ref" --min-psnr "$minpsnr" \
         --merge "$tmp/line.json" "${pngarg[@]}" > "$tmp/full.json"
     else
       "$PY" -c 'import json,sys; d=json.loads(open(sys.argv[1]).read().strip().splitlines()[-1]); d["pass"]=False; print(json.dumps(d))' \

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Fills .devbench/ for scripts/device-gl-bench.sh (a GPU machine without a browser): builds
-# ecrf_gl_replay (tools/bench/gl_replay.cc), records GL traces of the web viewer's WebGL2 renderer
+# ecrf_gl_replay (benchmarks/gl_replay.cc), records GL traces of the web viewer's WebGL2 renderer
 # (web/test/gl_record.mjs: web/gpu_renderer.js + web/gpu_shaders.js on a mock context) and renders
 # the native reference images (build/tools/ecrf render, same cameras).
 #
@@ -29,14 +29,14 @@ done
 grep -qx '/.devbench/' .git/info/exclude 2>/dev/null || echo '/.devbench/' >> .git/info/exclude
 
 if [ ! -d build ]; then cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null; fi
-# EXCLUDE_FROM_ALL (tools/bench/CMakeLists.txt): a plain build does not make it.
+# EXCLUDE_FROM_ALL (benchmarks/CMakeLists.txt): a plain build does not make it.
 cmake --build build --target ecrf_gl_replay -j"$JOBS"
 [ -x build/tools/ecrf ] || cmake --build build --target ecrf -j"$JOBS"
 [ -f build-wasm/ecrf_decoder.js ] || bash scripts/build-wasm.sh
 
 rm -rf "$DEV"
 mkdir -p "$DEV/traces" "$DEV/refs" "$DEV/include"
-cp build/tools/bench/ecrf_gl_replay "$DEV/"
+cp build/benchmarks/ecrf_gl_replay "$DEV/"
 # Khronos headers, for device-gl-bench.sh to compile the replay there if this binary does not start
 # (a glibc older than this machine's).
 for h in EGL GLES3 KHR; do cp -r "/usr/include/$h" "$DEV/include/"; done

@@ -115,7 +115,7 @@ int UsageError(const CLI::App& app, const std::string& message) {
 }
 
 size_t ParseSizeWithUnit(const std::string& flag, const std::string& text) {
-  // The number and units are trainer::ParseByteSize's; the command line adds one rule: a bare
+  // The number and units are encoder::ParseByteSize's; the command line adds one rule: a bare
   // number is ambiguous to a reader (bytes or kilobytes?), so it needs a unit.
   char* end = nullptr;
   std::strtod(text.c_str(), &end);
@@ -125,7 +125,7 @@ size_t ParseSizeWithUnit(const std::string& flag, const std::string& text) {
                                 "KB for kilobytes (units: B, KB, MB, KiB, MiB)");
   }
   try {
-    return trainer::ParseByteSize(text);
+    return encoder::ParseByteSize(text);
   } catch (const std::invalid_argument&) {
     throw std::invalid_argument(flag + ": '" + text +
                                 "': unknown unit or not a size (e.g. 500KB, 1.2MB, 300000B; "

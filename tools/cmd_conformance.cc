@@ -17,13 +17,13 @@
 #include <sstream>
 #include <string>
 
+#include "conformance/coef_vectors.h"
+#include "conformance/conformance_camera.h"
+#include "conformance/reject_check.h"
+#include "conformance/reject_vectors.h"
+#include "conformance/scene_vectors.h"
 #include "decoder/ray_marcher.h"
 #include "encoder/scene_encoder.h"
-#include "tests/common/coef_vectors.h"
-#include "tests/common/conformance_camera.h"
-#include "tests/common/reject_check.h"
-#include "tests/common/reject_vectors.h"
-#include "tests/common/scene_vectors.h"
 #include "tools/cli.h"
 #include "tools/cli_args.h"
 #include "tools/commands.h"
@@ -83,7 +83,7 @@ std::vector<uint8_t> TrainBuiltinStream() {
   trainer::TensorfModel model(trainer::ConfigFor(o, train));
   trainer::RateState rate;
   trainer::Train(o, train, test, &model, &rate);
-  trainer::EncodeOptions eo;
+  encoder::EncodeOptions eo;
   eo.blocks = rate.config;
   eo.steps = rate.steps;
   eo.metadata_json = "{\"vector\":\"scene_builtin\",\"iterations\":300}";
@@ -191,7 +191,7 @@ int CheckOrWriteScenes(const std::string& dir, bool write, bool retrain, json* m
 
 }  // namespace
 
-// The must-reject streams of tests/common/reject_vectors.h in DIR/reject/: written, or checked
+// The must-reject streams of conformance/reject_vectors.h in DIR/reject/: written, or checked
 // byte for byte against this encoder's and refused with their category by this decoder.
 int CheckOrWriteRejects(const std::string& dir, bool write, json* manifest_rejects) {
   const std::vector<conformance::RejectVector> vectors = conformance::RejectVectors();

@@ -29,7 +29,7 @@ int RunEncode(int argc, char** argv) {
       "trained with; the flags below change them.\n"
       "usage: ecrf encode RUN_DIR|CHECKPOINT -o SCENE.ecrf [options]");
   std::string input, output, target_size, dct_block, line_block, max_version;
-  trainer::EncodeOptions defaults;
+  encoder::EncodeOptions defaults;
   int coef_bits = defaults.coef_bits, mlp_levels = 0;
   float rounding_offset = defaults.rounding_offset, rdoq_lambda = defaults.rdoq_lambda;
   bool mlp_f32 = false, no_drop = false, no_occupancy = false;
@@ -63,7 +63,7 @@ int RunEncode(int argc, char** argv) {
                   "rate-distortion optimised quantization with lambda L (squared steps per bit; 0 "
                   "= off); default: the one the run trained through")
       ->type_name("L")
-      ->check(CLI::Range(0.f, trainer::kMaxRdoqLambda));
+      ->check(CLI::Range(0.f, encoder::kMaxRdoqLambda));
   app->add_option("--max-version", max_version,
                   "write a stream decoders of 1.N read (default 1." +
                       std::to_string(kVersionMinor) +
@@ -94,7 +94,7 @@ int RunEncode(int argc, char** argv) {
   trainer::RateState rate;
   const trainer::TensorfModel model = trainer::LoadModelFromCheckpoint(ckpt, &rate);
 
-  trainer::EncodeOptions o;
+  encoder::EncodeOptions o;
   size_t target_bytes = 0;
   if (info.has_config) {
     // The run's own settings; flags change them, and the user is told which.

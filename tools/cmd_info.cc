@@ -3,7 +3,7 @@
 #include <cstdio>
 #include <string>
 
-#include "tests/common/grid_md5.h"
+#include "conformance/grid_md5.h"
 #include "tools/cli.h"
 #include "tools/commands.h"
 #include "tools/decoded_scene.h"
@@ -98,13 +98,13 @@ int RunInfo(int argc, char** argv) {
     for (int t = 0; t < 6; ++t) {
       const dec::TensorChunkInfo& ti = in.tensors[g][t];
       if (!ti.present) {
-        std::printf("%-20s %10s\n", trainer::RateTensorName(g * 6 + t), "rank 0");
+        std::printf("%-20s %10s\n", encoder::RateTensorName(g * 6 + t), "rank 0");
         continue;
       }
       char block[32], coded[32];
       std::snprintf(block, sizeof(block), "%dx%dx%d", ti.block[0], ti.block[1], ti.block[2]);
       std::snprintf(coded, sizeof(coded), "%u/%u", ti.coded_blocks, ti.blocks);
-      std::printf("%-20s %10u %8d %10s %10.4g %12s %8s", trainer::RateTensorName(g * 6 + t),
+      std::printf("%-20s %10u %8d %10s %10.4g %12s %8s", encoder::RateTensorName(g * 6 + t),
                   ti.payload_bytes, ti.coef_bits, block, double(ti.step), coded,
                   ti.contexts == 2   ? "neighbour"
                   : ti.contexts == 1 ? "wide"

@@ -7,7 +7,7 @@
 #include <cstdlib>
 #include <stdexcept>
 
-#include "tests/common/grid_md5.h"
+#include "conformance/grid_md5.h"
 
 namespace ecrf {
 namespace tools {

@@ -7,7 +7,7 @@
 namespace ecrf {
 namespace tools {
 
-void PrintEncodeReport(FILE* out, const trainer::EncodeReport& r) {
+void PrintEncodeReport(FILE* out, const encoder::EncodeReport& r) {
   std::fprintf(out, "%-20s %10s %9s %12s %8s %10s\n", "chunk", "bytes", "bits/coef", "zero blocks",
                "rank", "step");
   std::fprintf(out, "%-20s %10zu\n", "HEAD", r.head_bytes);
@@ -17,13 +17,13 @@ void PrintEncodeReport(FILE* out, const trainer::EncodeReport& r) {
     char rank[32];
     std::snprintf(rank, sizeof(rank), "%d/%d", r.ranks_out[g][m], r.ranks_in[g][m]);
     if (r.tensor_bytes[t] == 0) {
-      std::fprintf(out, "%-20s %10s %9s %12s %8s\n", trainer::RateTensorName(t), "dropped", "", "",
+      std::fprintf(out, "%-20s %10s %9s %12s %8s\n", encoder::RateTensorName(t), "dropped", "", "",
                    rank);
       continue;
     }
     char zero[32];
     std::snprintf(zero, sizeof(zero), "%zu/%zu", r.tensor_zero_blocks[t], r.tensor_blocks[t]);
-    std::fprintf(out, "%-20s %10zu %9.4f %12s %8s %10.3g\n", trainer::RateTensorName(t),
+    std::fprintf(out, "%-20s %10zu %9.4f %12s %8s %10.3g\n", encoder::RateTensorName(t),
                  r.tensor_bytes[t],
                  8.0 * r.tensor_bytes[t] / std::max<size_t>(1, r.tensor_coeffs[t]), zero, rank,
                  double(r.steps[t]));
@@ -39,7 +39,7 @@ void PrintEncodeReport(FILE* out, const trainer::EncodeReport& r) {
   }
 }
 
-nlohmann::json EncodeReportJson(const trainer::EncodeReport& r) {
+nlohmann::json EncodeReportJson(const encoder::EncodeReport& r) {
   nlohmann::json j;
   j["total_bytes"] = r.total_bytes;
   j["coefficient_bytes"] = r.coefficient_bytes();
@@ -51,7 +51,7 @@ nlohmann::json EncodeReportJson(const trainer::EncodeReport& r) {
   j["clipped_coefficients"] = r.clipped_coefficients;
   nlohmann::json tensors = nlohmann::json::object();
   for (int t = 0; t < 12; ++t) {
-    tensors[trainer::RateTensorName(t)] = {{"bytes", r.tensor_bytes[t]},
+    tensors[encoder::RateTensorName(t)] = {{"bytes", r.tensor_bytes[t]},
                                            {"coefficients", r.tensor_coeffs[t]},
                                            {"blocks", r.tensor_blocks[t]},
                                            {"zero_blocks", r.tensor_zero_blocks[t]},

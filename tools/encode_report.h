@@ -10,8 +10,8 @@
 namespace ecrf {
 namespace tools {
 
-void PrintEncodeReport(FILE* out, const trainer::EncodeReport& report);
-nlohmann::json EncodeReportJson(const trainer::EncodeReport& report);
+void PrintEncodeReport(FILE* out, const encoder::EncodeReport& report);
+nlohmann::json EncodeReportJson(const encoder::EncodeReport& report);
 
 }  // namespace tools
 }  // namespace ecrf

@@ -8,10 +8,10 @@
 namespace ecrf {
 namespace tools {
 
-trainer::EncodeOptions TrainedRunEncodeOptions(const trainer::TrainOptions& o,
+encoder::EncodeOptions TrainedRunEncodeOptions(const trainer::TrainOptions& o,
                                                const trainer::RateState& rate, int iterations,
                                                float final_lambda_e) {
-  trainer::EncodeOptions eo = trainer::RunEncodeOptions(o, rate);
+  encoder::EncodeOptions eo = trainer::RunEncodeOptions(o, rate);
   eo.metadata_json = nlohmann::json{
       {"encoder", "ecrf"},
       {"data", trainer::DataSource(o)},
@@ -22,11 +22,11 @@ trainer::EncodeOptions TrainedRunEncodeOptions(const trainer::TrainOptions& o,
   return eo;
 }
 
-EncodedRun EncodeRun(const trainer::TensorfModel& model, const trainer::EncodeOptions& options,
+EncodedRun EncodeRun(const trainer::TensorfModel& model, const encoder::EncodeOptions& options,
                      size_t target_bytes) {
   EncodedRun e;
   if (target_bytes > 0) {
-    trainer::TargetSizeResult t = trainer::EncodeToTargetSize(model, options, target_bytes);
+    encoder::TargetSizeResult t = trainer::EncodeToTargetSize(model, options, target_bytes);
     e.bytes = std::move(t.bytes);
     e.report = t.report;
     e.step_scale = t.step_scale;

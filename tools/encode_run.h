@@ -19,20 +19,20 @@ namespace tools {
 
 // The encoder settings of a run: its block shapes and frozen steps, coefficient depth, MLP levels
 // and rounding offset, and the metadata chunk (data, preset, iterations, final lambda_e, alpha).
-trainer::EncodeOptions TrainedRunEncodeOptions(const trainer::TrainOptions& config,
+encoder::EncodeOptions TrainedRunEncodeOptions(const trainer::TrainOptions& config,
                                                const trainer::RateState& rate, int iterations,
                                                float final_lambda_e);
 
 struct EncodedRun {
   std::vector<uint8_t> bytes;
-  trainer::EncodeReport report;
+  encoder::EncodeReport report;
   double step_scale = 1.0;  // encode-time factor on every step (1 without a target)
   int encodes = 1;
 };
 
 // Encodes once, or with target_bytes > 0 searches the step scale for the largest file of at
 // most that size (trainer::EncodeToTargetSize).
-EncodedRun EncodeRun(const trainer::TensorfModel& model, const trainer::EncodeOptions& options,
+EncodedRun EncodeRun(const trainer::TensorfModel& model, const encoder::EncodeOptions& options,
                      size_t target_bytes);
 
 }  // namespace tools

@@ -67,8 +67,9 @@ trainer::FieldInfo TrainFieldInfo(const std::string& key) {
 trainer::TrainOptions BaseTrainOptions(const std::vector<std::string>& args) {
   const LayerFlags f = ReadLayerFlags(args);
   // Every procedural scene is CI-sized.
-  trainer::TrainOptions o =
-      trainer::PresetOptions(!f.preset.empty() ? f.preset : !f.scene.empty() ? "tiny" : "fast");
+  trainer::TrainOptions o = trainer::PresetOptions(!f.preset.empty()  ? f.preset
+                                                   : !f.scene.empty() ? "tiny"
+                                                                      : "fast");
   if (!f.rate.empty()) {
     trainer::ApplyRatePoint(f.rate, &o);
   } else if (!f.lambda_e.empty() && std::strtod(f.lambda_e.c_str(), nullptr) == 0.0) {

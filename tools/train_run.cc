@@ -168,7 +168,7 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
   EncodedRun encoded = EncodeRun(
       model, TrainedRunEncodeOptions(o, rate, r.iterations, r.final_lambda_e), o.target_bytes);
   std::vector<uint8_t> bytes = std::move(encoded.bytes);
-  const trainer::EncodeReport& report = encoded.report;
+  const encoder::EncodeReport& report = encoded.report;
   const double step_scale = encoded.step_scale;
   if (o.target_bytes > 0) {
     std::printf(
@@ -271,7 +271,7 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
   m["estimated_grid_bytes"] = r.rate.total_bits / 8.0;
   nlohmann::json per_tensor = nlohmann::json::object();
   for (size_t t = 0; t < r.rate.bits.size(); ++t) {
-    per_tensor[trainer::RateTensorName(int(t))] = {{"bits", r.rate.bits[t]},
+    per_tensor[encoder::RateTensorName(int(t))] = {{"bits", r.rate.bits[t]},
                                                    {"coefficients", r.rate.coeffs[t]}};
   }
   m["estimated_bits_per_tensor"] = per_tensor;

@@ -14,6 +14,21 @@
 namespace ecrf {
 namespace testing_models {
 
+// Ranks 2,2,2 (density) and 3,3,3 (appearance), the default 27 features, 16 hidden units, the box
+// [-1, 1]^3, near 0, far 10.
+inline trainer::TensorfConfig TinyTensorfConfig() {
+  trainer::TensorfConfig c;
+  c.density_ranks = {2, 2, 2};
+  c.app_ranks = {3, 3, 3};
+  c.head.num_products = 9;
+  c.head.hidden = 16;
+  c.aabb.min = {-1.f, -1.f, -1.f};
+  c.aabb.max = {1.f, 1.f, 1.f};
+  c.near = 0.f;
+  c.far = 10.f;
+  return c;
+}
+
 // Ranks 3,4,2 (density) and 5,3,4 (appearance), 6 features, 16 hidden units, the box [-1, 1]^3,
 // near 0, far 10, density shift -1, grids initialised at 0.4 N(0, 1).
 inline trainer::TensorfConfig SmallTensorfConfig() {
@@ -51,8 +66,8 @@ inline trainer::TensorfModel DenseSmallModel() {
 }
 
 // Plane blocks 4 x 8 x 4 (channel x H x W), line blocks 1 x 2 x 8.
-inline trainer::RateConfig SmallRateBlocks() {
-  trainer::RateConfig b;
+inline encoder::RateConfig SmallRateBlocks() {
+  encoder::RateConfig b;
   b.plane_block[0] = 4;
   b.plane_block[1] = 8;
   b.plane_block[2] = 4;

@@ -1,5 +1,5 @@
 // The work budget of a render (decoder/render_work.h) and the decode budget of a stream
-// (SPEC.md 8) against the small streams that cost the most: tests/common/costly_streams.h.
+// (SPEC.md 8) against the small streams that cost the most: conformance/costly_streams.h.
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -7,12 +7,12 @@
 #include <string>
 #include <vector>
 
+#include "conformance/costly_streams.h"
 #include "decoder/camera.h"
 #include "decoder/ray_marcher.h"
 #include "decoder/render_work.h"
 #include "decoder/scene_decoder.h"
 #include "ecrf/decoder.h"
-#include "tests/common/costly_streams.h"
 
 namespace ecrf {
 namespace dec {

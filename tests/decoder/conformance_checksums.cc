@@ -10,12 +10,12 @@
 #include <string>
 #include <vector>
 
+#include "conformance/coef_vectors.h"
+#include "conformance/conformance_camera.h"
+#include "conformance/grid_md5.h"
+#include "conformance/reject_check.h"
 #include "decoder/ray_marcher.h"
 #include "decoder/scene_decoder.h"
-#include "tests/common/coef_vectors.h"
-#include "tests/common/conformance_camera.h"
-#include "tests/common/grid_md5.h"
-#include "tests/common/reject_check.h"
 
 namespace {
 
@@ -50,7 +50,7 @@ std::string RenderMd5(const ecrf::dec::SceneField& field, const std::string& nam
     *error = s.message();
     return "";
   }
-  ecrf::testing_md5::Md5 md5;
+  ecrf::conformance::Md5 md5;
   for (size_t p = 0; p < rgba.size(); p += 4) md5.Update(&rgba[p], 3);  // RGB, as the PNG holds
   return md5.HexDigest();
 }

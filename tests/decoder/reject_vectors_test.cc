@@ -1,5 +1,5 @@
 // The must-reject conformance streams (tests/conformance/reject/, SPEC.md 7.7): each checked-in
-// file is what tests/common/reject_vectors.h builds, byte for byte, and the decoder refuses it at
+// file is what conformance/reject_vectors.h builds, byte for byte, and the decoder refuses it at
 // its stage with its category, through the C++ API and the C API alike.
 #include <gtest/gtest.h>
 
@@ -8,10 +8,10 @@
 #include <string>
 #include <vector>
 
+#include "conformance/reject_vectors.h"
 #include "decoder/ray_marcher.h"
 #include "decoder/scene_decoder.h"
 #include "ecrf/decoder.h"
-#include "tests/common/reject_vectors.h"
 
 namespace ecrf {
 namespace dec {

@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "conformance/grid_md5.h"
+#include "conformance/scene_vectors.h"
 #include "decoder/camera.h"
 #include "decoder/ray_marcher.h"
 #include "decoder/scene_decoder.h"
@@ -18,8 +20,6 @@
 #include "format/container.h"
 #include "format/crc32.h"
 #include "format/scene_header.h"
-#include "tests/common/grid_md5.h"
-#include "tests/common/scene_vectors.h"
 
 namespace ecrf {
 namespace dec {

@@ -20,7 +20,7 @@ namespace {
 // A plane-like tensor's coefficients: 8 x 8 x 8 blocks, 3 x 2 x 2 of them, Laplacian magnitudes
 // decaying with frequency as a smooth feature grid's do.
 struct Tensor {
-  GridBlockLayout layout;
+  encoder::GridBlockLayout layout;
   std::vector<float> coeffs;
 };
 
@@ -29,7 +29,7 @@ Tensor MakeTensor(uint32_t seed) {
   const int extent[3] = {24, 16, 16};
   const long stride[3] = {1, 24 * 16, 24};
   const int block[3] = {8, 8, 8};
-  t.layout = MakeBlockLayout(extent, stride, block);
+  t.layout = encoder::MakeBlockLayout(extent, stride, block);
   t.coeffs.resize(t.layout.num_coeffs());
   std::mt19937 rng(seed);
   std::exponential_distribution<double> magnitude(1.0);
@@ -43,7 +43,8 @@ Tensor MakeTensor(uint32_t seed) {
 }
 
 // The real coder's bytes for the levels (neighbour contexts, as the encoder's newest set).
-std::vector<uint8_t> Code(const std::vector<int32_t>& levels, const GridBlockLayout& layout) {
+std::vector<uint8_t> Code(const std::vector<int32_t>& levels,
+                          const encoder::GridBlockLayout& layout) {
   CoefContexts contexts;
   EXPECT_TRUE(contexts
                   .Init(BlockShape{layout.block[0], layout.block[1], layout.block[2]},
@@ -66,11 +67,11 @@ double Distortion(const Tensor& t, const std::vector<int32_t>& levels, double st
 }
 
 std::vector<int32_t> Levels(const Tensor& t, double step, double lambda, int32_t max_abs = 127) {
-  RdoqOptions o;
+  encoder::RdoqOptions o;
   o.lambda = lambda;
   o.max_abs = max_abs;
   std::vector<int32_t> levels(t.coeffs.size());
-  RdoqLevels(t.coeffs.data(), t.layout, step, o, levels.data());
+  encoder::RdoqLevels(t.coeffs.data(), t.layout, step, o, levels.data());
   return levels;
 }
 
@@ -80,14 +81,15 @@ TEST(CoefRdoq, LambdaZeroIsTheRoundingQuantizer) {
   const std::vector<int32_t> levels = Levels(t, step, 0.0);
   int clipped = 0;
   for (size_t i = 0; i < levels.size(); ++i) {
-    const double plain = QuantizeLevel(double(t.coeffs[i]), step, 0.5);
+    const double plain = encoder::QuantizeLevel(double(t.coeffs[i]), step, 0.5);
     clipped += std::fabs(plain) > 127;
     ASSERT_EQ(levels[i], int32_t(std::max(-127.0, std::min(127.0, plain)))) << i;
   }
   EXPECT_GT(clipped, 0);
   std::vector<int32_t> again(levels.size());
-  EXPECT_EQ(RdoqLevels(t.coeffs.data(), t.layout, step, RdoqOptions(), again.data()),
-            size_t(clipped));
+  EXPECT_EQ(
+      encoder::RdoqLevels(t.coeffs.data(), t.layout, step, encoder::RdoqOptions(), again.data()),
+      size_t(clipped));
 }
 
 TEST(CoefRdoq, LevelsOnlyShrinkTowardZero) {
@@ -142,7 +144,7 @@ TEST(CoefRdoq, CodedLevelsDecodeExactly) {
   const Tensor t = MakeTensor(5);
   const std::vector<int32_t> rd = Levels(t, 0.5, 0.3);
   const std::vector<uint8_t> bytes = Code(rd, t.layout);
-  const GridBlockLayout& layout = t.layout;
+  const encoder::GridBlockLayout& layout = t.layout;
   CoefContexts contexts;
   ASSERT_TRUE(contexts
                   .Init(BlockShape{layout.block[0], layout.block[1], layout.block[2]},

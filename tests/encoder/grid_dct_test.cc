@@ -53,14 +53,14 @@ std::vector<LayoutCase> Cases() {
   };
 }
 
-GridBlockLayout MakeCaseLayout(const LayoutCase& c) {
-  return c.plane ? PlaneBlockLayout(c.res, c.rank, c.m, c.block)
-                 : LineBlockLayout(c.res, c.rank, c.m, c.block);
+encoder::GridBlockLayout MakeCaseLayout(const LayoutCase& c) {
+  return c.plane ? encoder::PlaneBlockLayout(c.res, c.rank, c.m, c.block)
+                 : encoder::LineBlockLayout(c.res, c.rank, c.m, c.block);
 }
 
 TEST(GridDctTest, LayoutCountsAndPaddedExtent) {
   const int block[3] = {16, 16, 16};
-  const GridBlockLayout L = PlaneBlockLayout({300, 300, 300}, 48, 0, block);
+  const encoder::GridBlockLayout L = encoder::PlaneBlockLayout({300, 300, 300}, 48, 0, block);
   EXPECT_EQ(L.extent[0], 48);
   EXPECT_EQ(L.blocks[0], 3);
   EXPECT_EQ(L.blocks[1], 19);
@@ -69,24 +69,25 @@ TEST(GridDctTest, LayoutCountsAndPaddedExtent) {
   EXPECT_EQ(L.num_blocks(), 3 * 19 * 19);
   EXPECT_EQ(L.tensor_size(), 300u * 300u * 48u);
   const int lb[3] = {1, 8, 8};
-  const GridBlockLayout LL = LineBlockLayout({300, 200, 100}, 48, 0, lb);  // w = axis 2
+  const encoder::GridBlockLayout LL =
+      encoder::LineBlockLayout({300, 200, 100}, 48, 0, lb);  // w = axis 2
   EXPECT_EQ(LL.extent[2], 100);
   EXPECT_EQ(LL.blocks[1], 6);
   EXPECT_EQ(LL.blocks[2], 13);
   const int bad[3] = {3, 8, 8};
-  EXPECT_THROW(PlaneBlockLayout({8, 8, 8}, 4, 0, bad), std::invalid_argument);
+  EXPECT_THROW(encoder::PlaneBlockLayout({8, 8, 8}, 4, 0, bad), std::invalid_argument);
   const int big[3] = {32, 32, 32};
-  EXPECT_THROW(PlaneBlockLayout({8, 8, 8}, 4, 0, big), std::invalid_argument);
-  EXPECT_THROW(LineBlockLayout({8, 8, 8}, 4, 0, block), std::invalid_argument);
+  EXPECT_THROW(encoder::PlaneBlockLayout({8, 8, 8}, 4, 0, big), std::invalid_argument);
+  EXPECT_THROW(encoder::LineBlockLayout({8, 8, 8}, 4, 0, block), std::invalid_argument);
 }
 
 // ForwardBlocks equals format/float_dct's double DCT of the edge-replicated block.
 TEST(GridDctTest, MatchesReferenceDctOfEdgePaddedBlocks) {
   for (const LayoutCase& c : Cases()) {
-    const GridBlockLayout L = MakeCaseLayout(c);
+    const encoder::GridBlockLayout L = MakeCaseLayout(c);
     const std::vector<float> t = RandomVector(L.tensor_size(), 7);
     std::vector<float> coeffs(L.num_coeffs());
-    ForwardBlocks(t.data(), L, coeffs.data());
+    encoder::ForwardBlocks(t.data(), L, coeffs.data());
     const int V = L.block_volume();
     double max_err = 0.0;
     for (int id = 0; id < L.num_blocks(); ++id) {
@@ -117,13 +118,13 @@ TEST(GridDctTest, MatchesReferenceDctOfEdgePaddedBlocks) {
 // <F(pad(x)), y> == <x, pad^T(F^T(y))> for random x, y.
 TEST(GridDctTest, BackwardIsAdjointOfForwardWithPadding) {
   for (const LayoutCase& c : Cases()) {
-    const GridBlockLayout L = MakeCaseLayout(c);
+    const encoder::GridBlockLayout L = MakeCaseLayout(c);
     const std::vector<float> x = RandomVector(L.tensor_size(), 11);
     const std::vector<float> y = RandomVector(L.num_coeffs(), 12);
     std::vector<float> fx(L.num_coeffs());
-    ForwardBlocks(x.data(), L, fx.data());
+    encoder::ForwardBlocks(x.data(), L, fx.data());
     std::vector<float> fty(L.tensor_size(), 0.5f);  // accumulates onto existing values
-    BackwardBlocks(y.data(), L, fty.data());
+    encoder::BackwardBlocks(y.data(), L, fty.data());
     for (float& v : fty) v -= 0.5f;
     const double lhs = Dot(fx, y), rhs = Dot(x, fty);
     EXPECT_NEAR(lhs, rhs, 1e-5 * (std::abs(lhs) + std::sqrt(double(L.num_coeffs()))));
@@ -132,12 +133,12 @@ TEST(GridDctTest, BackwardIsAdjointOfForwardWithPadding) {
 
 TEST(GridDctTest, PaddedTensorRoundTripsAfterCropping) {
   for (const LayoutCase& c : Cases()) {
-    const GridBlockLayout L = MakeCaseLayout(c);
+    const encoder::GridBlockLayout L = MakeCaseLayout(c);
     const std::vector<float> x = RandomVector(L.tensor_size(), 13, 3.f);
     std::vector<float> coeffs(L.num_coeffs());
-    ForwardBlocks(x.data(), L, coeffs.data());
+    encoder::ForwardBlocks(x.data(), L, coeffs.data());
     std::vector<float> back(L.tensor_size(), 1e9f);
-    InverseBlocks(coeffs.data(), L, back.data());
+    encoder::InverseBlocks(coeffs.data(), L, back.data());
     for (size_t i = 0; i < x.size(); ++i) ASSERT_NEAR(back[i], x[i], 1e-5f) << i;
   }
 }
@@ -145,10 +146,10 @@ TEST(GridDctTest, PaddedTensorRoundTripsAfterCropping) {
 TEST(GridDctTest, EdgeReplicationKeepsConstantTensorsDcOnly) {
   // A constant tensor padded by replication stays constant: every block has only a DC term.
   const int block[3] = {16, 16, 16};
-  const GridBlockLayout L = PlaneBlockLayout({21, 10, 4}, 7, 0, block);
+  const encoder::GridBlockLayout L = encoder::PlaneBlockLayout({21, 10, 4}, 7, 0, block);
   std::vector<float> x(L.tensor_size(), 2.f);
   std::vector<float> coeffs(L.num_coeffs());
-  ForwardBlocks(x.data(), L, coeffs.data());
+  encoder::ForwardBlocks(x.data(), L, coeffs.data());
   for (int id = 0; id < L.num_blocks(); ++id) {
     EXPECT_NEAR(coeffs[static_cast<size_t>(id) * 4096], 2.f * 64.f, 1e-3f);
     for (int p = 1; p < 4096; ++p)
@@ -158,14 +159,14 @@ TEST(GridDctTest, EdgeReplicationKeepsConstantTensorsDcOnly) {
 
 TEST(GridDctTest, BlockListMatchesFullTransform) {
   const int block[3] = {4, 8, 8};
-  const GridBlockLayout L = PlaneBlockLayout({19, 13, 7}, 9, 0, block);
+  const encoder::GridBlockLayout L = encoder::PlaneBlockLayout({19, 13, 7}, 9, 0, block);
   const int V = L.block_volume();
   const std::vector<float> x = RandomVector(L.tensor_size(), 17);
   std::vector<float> full(L.num_coeffs());
-  ForwardBlocks(x.data(), L, full.data());
+  encoder::ForwardBlocks(x.data(), L, full.data());
   const std::vector<int> ids = {L.num_blocks() - 1, 0, 3, 5};
   std::vector<float> sub(ids.size() * V);
-  ForwardBlockList(x.data(), L, ids.data(), static_cast<int>(ids.size()), sub.data());
+  encoder::ForwardBlockList(x.data(), L, ids.data(), static_cast<int>(ids.size()), sub.data());
   for (size_t j = 0; j < ids.size(); ++j) {
     for (int p = 0; p < V; ++p)
       ASSERT_EQ(sub[j * V + p], full[static_cast<size_t>(ids[j]) * V + p]);
@@ -178,11 +179,11 @@ TEST(GridDctTest, BlockListMatchesFullTransform) {
               gfull.begin() + static_cast<size_t>(ids[j]) * V);
   }
   std::vector<float> a(L.tensor_size(), 0.f), b(L.tensor_size(), 0.f);
-  BackwardBlockList(g.data(), L, ids.data(), static_cast<int>(ids.size()), a.data());
-  BackwardBlocks(gfull.data(), L, b.data());
+  encoder::BackwardBlockList(g.data(), L, ids.data(), static_cast<int>(ids.size()), a.data());
+  encoder::BackwardBlocks(gfull.data(), L, b.data());
   for (size_t i = 0; i < a.size(); ++i) ASSERT_NEAR(a[i], b[i], 1e-6f);
   const int bad = L.num_blocks();
-  EXPECT_THROW(ForwardBlockList(x.data(), L, &bad, 1, sub.data()), std::invalid_argument);
+  EXPECT_THROW(encoder::ForwardBlockList(x.data(), L, &bad, 1, sub.data()), std::invalid_argument);
 }
 
 // Full appearance grid at 300^3 (3 planes 300x300x48 + 3 lines 300x48): forward + backward.
@@ -190,8 +191,8 @@ TEST(GridDctTest, SpeedFullAppearanceGrid300) {
   VmGrid grid;
   grid.Allocate({300, 300, 300}, {48, 48, 48});
   grid.InitNormal(0.1f, 1);
-  const RateConfig config;
-  std::vector<GridBlockLayout> layouts;
+  const encoder::RateConfig config;
+  std::vector<encoder::GridBlockLayout> layouts;
   size_t total = 0;
   for (int t = 0; t < 6; ++t) {
     layouts.push_back(RateTensorLayout(grid, t, config));
@@ -204,13 +205,13 @@ TEST(GridDctTest, SpeedFullAppearanceGrid300) {
     auto t0 = std::chrono::steady_clock::now();
     size_t off = 0;
     for (int t = 0; t < 6; ++t) {
-      ForwardBlocks(RateTensorData(grid, t), layouts[t], coeffs.data() + off);
+      encoder::ForwardBlocks(RateTensorData(grid, t), layouts[t], coeffs.data() + off);
       off += layouts[t].num_coeffs();
     }
     auto t1 = std::chrono::steady_clock::now();
     off = 0;
     for (int t = 0; t < 6; ++t) {
-      BackwardBlocks(coeffs.data() + off, layouts[t], RateTensorGrad(grid, t));
+      encoder::BackwardBlocks(coeffs.data() + off, layouts[t], RateTensorGrad(grid, t));
       off += layouts[t].num_coeffs();
     }
     auto t2 = std::chrono::steady_clock::now();
@@ -231,7 +232,7 @@ TEST(GridDctTest, SpeedFullAppearanceGrid300) {
 
 struct SmallSetup {
   VmGrid density, app;
-  RateConfig config;
+  encoder::RateConfig config;
   std::vector<float> steps;
   FactorizedEntropyModel model;
   SmallSetup() {
@@ -283,9 +284,9 @@ TEST(RateObjectiveTest, RegularizerValueAndGradient) {
   double reg = 0.0;
   for (VmGrid* g : s.grids()) {
     for (int t = 0; t < 6; ++t) {
-      const GridBlockLayout L = RateTensorLayout(*g, t, s.config);
+      const encoder::GridBlockLayout L = RateTensorLayout(*g, t, s.config);
       std::vector<float> c(L.num_coeffs());
-      ForwardBlocks(RateTensorData(*g, t), L, c.data());
+      encoder::ForwardBlocks(RateTensorData(*g, t), L, c.data());
       reg += Dot(c, c);
     }
   }
@@ -384,9 +385,9 @@ TEST(RateObjectiveTest, EvaluateRateMatchesPerCoefficientModel) {
   double total = 0.0;
   for (int ti : {0, 4, 9}) {
     const VmGrid& g = ti < 6 ? s.density : s.app;
-    const GridBlockLayout L = RateTensorLayout(g, ti % 6, s.config);
+    const encoder::GridBlockLayout L = RateTensorLayout(g, ti % 6, s.config);
     std::vector<float> c(L.num_coeffs());
-    ForwardBlocks(RateTensorData(g, ti % 6), L, c.data());
+    encoder::ForwardBlocks(RateTensorData(g, ti % 6), L, c.data());
     double bits = 0.0;
     for (size_t i = 0; i < c.size(); ++i) {
       const int p = static_cast<int>(i % L.block_volume());
@@ -409,7 +410,7 @@ TEST(RateObjectiveTest, SpeedAt300) {
   density.InitNormal(0.1f, 1);
   app.Allocate({300, 300, 300}, {48, 48, 48});
   app.InitNormal(0.1f, 2);
-  const RateConfig config;
+  const encoder::RateConfig config;
   std::vector<float> steps(12, 0.02f);
   FactorizedEntropyModel model;
   model.Init(NumRateModels(2), 3);

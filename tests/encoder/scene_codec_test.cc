@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "conformance/grid_md5.h"
 #include "decoder/camera.h"
 #include "decoder/ray_marcher.h"
 #include "decoder/scene_decoder.h"
@@ -16,9 +17,9 @@
 #include "encoder/scene_encoder.h"
 #include "format/coefficients/int_idct.h"
 #include "tests/common/decode_or_die.h"
-#include "tests/common/grid_md5.h"
 #include "trainer/data/image_io.h"
 #include "trainer/data/image_metrics.h"
+#include "trainer/rate/coded_model.h"
 #include "trainer/train/rate_state.h"
 
 namespace ecrf {
@@ -47,14 +48,14 @@ const float* DecodedTensor(const dec::SceneField& f, int g, int t) {
 TEST(SceneCodec, DecodedGridsAreTheQuantizedModel) {
   for (int coef_bits : {8, 16}) {
     const TensorfModel model = SmallModel(7);
-    EncodeOptions o;
+    encoder::EncodeOptions o;
     o.coef_bits = coef_bits;
     o.blocks.plane_block[0] = 4;
     o.blocks.plane_block[1] = 8;
     o.blocks.plane_block[2] = 4;
     o.blocks.line_block[1] = 2;
     o.blocks.line_block[2] = 8;
-    EncodeReport report;
+    encoder::EncodeReport report;
     const std::vector<uint8_t> bytes = EncodeScene(model, o, &report);
     const dec::SceneField field = DecodeOrDie(bytes);
     EXPECT_EQ(report.total_bytes, bytes.size());
@@ -64,16 +65,16 @@ TEST(SceneCodec, DecodedGridsAreTheQuantizedModel) {
     double worst_units = 0.0, worst_quant = 0.0;
     for (int g = 0; g < 2; ++g) {
       for (int t = 0; t < 6; ++t) {
-        const GridBlockLayout layout = RateTensorLayout(*grids[g], t, o.blocks);
+        const encoder::GridBlockLayout layout = RateTensorLayout(*grids[g], t, o.blocks);
         std::vector<float> coeffs(layout.num_coeffs());
-        ForwardBlocks(RateTensorData(*grids[g], t), layout, coeffs.data());
+        encoder::ForwardBlocks(RateTensorData(*grids[g], t), layout, coeffs.data());
         const float step = steps[g * 6 + t];
         EXPECT_EQ(report.steps[g * 6 + t], step);
         for (float& c : coeffs) c = float(std::round(double(c) / step)) * step;
         std::vector<float> expected(layout.tensor_size());
         // InverseBlocks writes through the layout's strides into a tensor of the same storage.
         std::vector<float> storage(t < 3 ? grids[g]->plane_size(t) : grids[g]->line_size(t - 3));
-        InverseBlocks(coeffs.data(), layout, storage.data());
+        encoder::InverseBlocks(coeffs.data(), layout, storage.data());
         const float* decoded = DecodedTensor(field, g, t);
         const float* original = RateTensorData(*grids[g], t);
         const double unit = std::ldexp(double(step), -IdctOutputFracBits(coef_bits));
@@ -94,7 +95,7 @@ TEST(SceneCodec, DecodedGridsAreTheQuantizedModel) {
 
 TEST(SceneCodec, EncodingIsDeterministicAndMlpPrecisionsAgree) {
   const TensorfModel model = SmallModel(8);
-  EncodeOptions o;
+  encoder::EncodeOptions o;
   const std::vector<uint8_t> a = EncodeScene(model, o);
   EXPECT_EQ(a, EncodeScene(model, o));
   o.mlp_float32 = true;
@@ -176,12 +177,12 @@ TensorfModel BumpyModel(int scale = 1, bool textured = false) {
 TEST(SceneCodec, Version15And14And13StreamsDecodeToTheSameScene) {
   TensorfModel model = BumpyModel(2, /*textured=*/true);
   model.UpdateAlphaMask({9, 8, 6});
-  EncodeOptions o;
+  encoder::EncodeOptions o;
   o.mlp_max_level = 31;
   o.blocks.plane_block[0] = 4;
   o.blocks.plane_block[1] = 8;
   o.blocks.plane_block[2] = 8;
-  EncodeReport r15, r14, r13;
+  encoder::EncodeReport r15, r14, r13;
   const std::vector<uint8_t> v15 = EncodeScene(model, o, &r15);
   o.max_version_minor = 4;
   const std::vector<uint8_t> v14 = EncodeScene(model, o, &r14);
@@ -209,7 +210,7 @@ TEST(SceneCodec, Version15And14And13StreamsDecodeToTheSameScene) {
 
 TEST(SceneCodec, QuantizedMlpIsVersion11SmallerAndRendersAlike) {
   const TensorfModel model = SmallModel(8);
-  EncodeOptions o;
+  encoder::EncodeOptions o;
   o.max_version_minor = 3;  // streams for 1.3 decoders carry the lowest version of their features
   const std::vector<uint8_t> f16 = EncodeScene(model, o);
   o.mlp_max_level = 127;
@@ -231,10 +232,10 @@ TEST(SceneCodec, DeadComponentsAreDroppedWithoutChangingTheField) {
   VmGrid& a = model.appearance();
   for (size_t i = 0; i < a.line_size(1) / 3; ++i) a.line(1)[i * 3 + 2] = 0.f;
   for (size_t i = 0; i < a.line_size(2); ++i) a.line(2)[i] = 0.f;
-  EncodeOptions o;
+  encoder::EncodeOptions o;
   o.blocks.plane_block[0] = 1;  // per-component blocks: zero slices quantize to zero exactly
   o.blocks.line_block[1] = 1;
-  EncodeReport report;
+  encoder::EncodeReport report;
   const std::vector<uint8_t> dropped = EncodeScene(model, o, &report);
   EXPECT_EQ(report.ranks_out[0][0], 2);
   EXPECT_EQ(report.ranks_out[1][1], 2);
@@ -251,7 +252,7 @@ TEST(SceneCodec, DeadComponentsAreDroppedWithoutChangingTheField) {
 
 TEST(SceneCodec, RejectsImpossibleOptions) {
   const TensorfModel model = SmallModel(10);
-  EncodeOptions o;
+  encoder::EncodeOptions o;
   o.coef_bits = 12;
   EXPECT_THROW(EncodeScene(model, o), std::invalid_argument);
   o.coef_bits = 8;

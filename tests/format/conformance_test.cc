@@ -8,7 +8,7 @@
 #include <sstream>
 #include <string>
 
-#include "tests/common/coef_vectors.h"
+#include "conformance/coef_vectors.h"
 
 namespace ecrf {
 namespace {
@@ -30,11 +30,11 @@ std::map<std::string, std::string> Manifest() {
 }
 
 TEST(Conformance, Md5ImplementationMatchesRfc1321) {
-  EXPECT_EQ(testing_md5::Md5Hex("", 0), "d41d8cd98f00b204e9800998ecf8427e");
-  EXPECT_EQ(testing_md5::Md5Hex("abc", 3), "900150983cd24fb0d6963f7d28e17f72");
+  EXPECT_EQ(conformance::Md5Hex("", 0), "d41d8cd98f00b204e9800998ecf8427e");
+  EXPECT_EQ(conformance::Md5Hex("abc", 3), "900150983cd24fb0d6963f7d28e17f72");
   const std::string s =
       "12345678901234567890123456789012345678901234567890123456789012345678901234567890";
-  EXPECT_EQ(testing_md5::Md5Hex(s.data(), s.size()), "57edf4a22be3c955ac49da2e2107b67a");
+  EXPECT_EQ(conformance::Md5Hex(s.data(), s.size()), "57edf4a22be3c955ac49da2e2107b67a");
 }
 
 TEST(Conformance, CheckedInVectorsDecodeToTheirMd5) {

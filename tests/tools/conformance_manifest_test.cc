@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "tests/common/conformance_camera.h"
-#include "tests/common/scene_vectors.h"
+#include "conformance/conformance_camera.h"
+#include "conformance/scene_vectors.h"
 #include "tools/conformance_manifest.h"
 #include "tools/decoded_scene.h"
 #include "trainer/data/file_io.h"

@@ -1,4 +1,4 @@
-// `ecrf bench budgets`: the costliest small streams of each class (tests/common/costly_streams.h)
+// `ecrf bench budgets`: the costliest small streams of each class (conformance/costly_streams.h)
 // against the default budgets of SPEC.md 8: their size, what decoding them costs (seconds, the
 // memory the decoder's budget granted) and what a 64x64 view costs (seconds), with the outcome.
 // The budgets' goal: no stream of at most 64 KB takes more than 2 s to decode or 1 s to render
@@ -9,11 +9,11 @@
 #include <string>
 #include <vector>
 
+#include "conformance/costly_streams.h"
 #include "decoder/camera.h"
 #include "decoder/ray_marcher.h"
 #include "decoder/render_work.h"
 #include "decoder/scene_decoder.h"
-#include "tests/common/costly_streams.h"
 #include "tools/bench/bench_json.h"
 #include "tools/bench/benches.h"
 #include "trainer/data/seconds_since.h"

@@ -50,10 +50,10 @@ void ZeroComponent(trainer::TensorfModel* model, int grid, int mode, int compone
 }
 
 ComponentReport MeasureComponentCosts(const trainer::TensorfModel& trained,
-                                      const trainer::EncodeOptions& options, double lambda_e, int n,
+                                      const encoder::EncodeOptions& options, double lambda_e, int n,
                                       const float* origins, const float* dirs, const float* rgb) {
   if (options.steps.size() != 12) throw std::invalid_argument("components: 12 steps expected");
-  trainer::EncodeOptions o = options;
+  encoder::EncodeOptions o = options;
   o.drop_zero_components = true;  // a zeroed component leaves the stream
   ComponentReport report;
   report.lambda_e = lambda_e;

@@ -48,7 +48,7 @@ void ZeroComponent(trainer::TensorfModel* model, int grid, int mode, int compone
 
 // The drop test of every component of `model` coded with `options` (steps given), on n rays.
 ComponentReport MeasureComponentCosts(const trainer::TensorfModel& model,
-                                      const trainer::EncodeOptions& options, double lambda_e, int n,
+                                      const encoder::EncodeOptions& options, double lambda_e, int n,
                                       const float* origins, const float* dirs, const float* rgb);
 
 int RunReportComponents(int argc, char** argv);

@@ -21,7 +21,7 @@ namespace ecrf {
 namespace tools {
 trainer::TensorfModel DecodedModel(const trainer::TensorfModel& trained,
                                    const std::vector<float>& steps,
-                                   const trainer::RateConfig& blocks, int mlp_max_level) {
+                                   const encoder::RateConfig& blocks, int mlp_max_level) {
   trainer::TensorfModel model = trained;
   trainer::VmGrid* grids[2] = {&model.density(), &model.appearance()};
   for (int g = 0; g < 2; ++g) {
@@ -57,7 +57,7 @@ TrainedRun LoadTrainedRun(const std::string& run, int rays, uint64_t seed) {
 
 SensitivityReport MeasureQuantSensitivity(const trainer::TensorfModel& trained,
                                           const std::vector<float>& steps,
-                                          const trainer::RateConfig& blocks, int mlp_max_level,
+                                          const encoder::RateConfig& blocks, int mlp_max_level,
                                           int n, const float* origins, const float* dirs,
                                           const float* rgb, uint64_t seed, double noise_scale) {
   if (steps.size() != 12) throw std::invalid_argument("sensitivity: 12 steps expected");
@@ -71,13 +71,13 @@ SensitivityReport MeasureQuantSensitivity(const trainer::TensorfModel& trained,
   std::uniform_real_distribution<float> unit(-0.5f, 0.5f);
   for (int t = 0; t < 12; ++t) {
     trainer::VmGrid& grid = *grids[t / 6];
-    const trainer::GridBlockLayout layout = trainer::RateTensorLayout(grid, t % 6, blocks);
+    const encoder::GridBlockLayout layout = trainer::RateTensorLayout(grid, t % 6, blocks);
     float* data = t % 6 < 3 ? grid.plane(t % 6) : grid.line(t % 6 - 3);
     const std::vector<float> kept(data, data + layout.tensor_size());
     std::vector<float> coeffs(layout.num_coeffs()), noise(layout.num_coeffs(), 0.f);
-    trainer::ForwardBlocks(data, layout, coeffs.data());
+    encoder::ForwardBlocks(data, layout, coeffs.data());
     TensorSensitivity s;
-    s.name = trainer::RateTensorName(t);
+    s.name = encoder::RateTensorName(t);
     s.step = steps[t];
     double levels = 0.0;
     for (size_t i = 0; i < coeffs.size(); ++i) {
@@ -93,7 +93,7 @@ SensitivityReport MeasureQuantSensitivity(const trainer::TensorfModel& trained,
       std::vector<float> moved(coeffs.size());
       for (const float sign : {1.f, -1.f}) {
         for (size_t i = 0; i < coeffs.size(); ++i) moved[i] = coeffs[i] + sign * noise[i];
-        trainer::InverseBlocks(moved.data(), layout, data);
+        encoder::InverseBlocks(moved.data(), layout, data);
         added += trainer::RenderMse(model, n, origins, dirs, rgb) - report.mse;
       }
       std::copy(kept.begin(), kept.end(), data);
@@ -152,7 +152,7 @@ int RunReportSensitivity(int argc, char** argv) {
   if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
 
   const TrainedRun t = LoadTrainedRun(run, rays, seed);
-  const trainer::EncodeOptions& o = t.options;
+  const encoder::EncodeOptions& o = t.options;
   const SensitivityReport r =
       MeasureQuantSensitivity(t.model, o.steps, o.blocks, o.mlp_max_level, rays, t.origins.data(),
                               t.dirs.data(), t.rgb.data(), seed);

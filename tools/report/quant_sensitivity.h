@@ -34,14 +34,14 @@ namespace tools {
 // as is): every tensor reconstructed from its quantized block-DCT coefficients.
 trainer::TensorfModel DecodedModel(const trainer::TensorfModel& trained,
                                    const std::vector<float>& steps,
-                                   const trainer::RateConfig& blocks, int mlp_max_level);
+                                   const encoder::RateConfig& blocks, int mlp_max_level);
 
 // A trained run as the report commands probe it: its model, the options that encode it (the
 // run's own steps, blocks and head levels) and a batch of its training rays.
 struct TrainedRun {
   trainer::CheckpointRunInfo info;
   trainer::TensorfModel model;
-  trainer::EncodeOptions options;
+  encoder::EncodeOptions options;
   int rays = 0;
   std::vector<float> origins, dirs, rgb;  // rays x 3 each
 };
@@ -73,7 +73,7 @@ struct SensitivityReport {
 // noise (1: the step's own quantization noise). Deterministic for a seed.
 SensitivityReport MeasureQuantSensitivity(const trainer::TensorfModel& model,
                                           const std::vector<float>& steps,
-                                          const trainer::RateConfig& blocks, int mlp_max_level,
+                                          const encoder::RateConfig& blocks, int mlp_max_level,
                                           int n, const float* origins, const float* dirs,
                                           const float* rgb, uint64_t seed,
                                           double noise_scale = 1.0);

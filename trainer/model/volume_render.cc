@@ -9,51 +9,26 @@
 #include <stdexcept>
 #include <vector>
 
-#include "decoder/contraction.h"
-#include "decoder/ndc.h"
+#include "trainer/model/ray_samples.h"
 
 namespace ecrf {
 namespace trainer {
 namespace {
 
+using march::Candidate;
+using march::kPrefetchDistance;
+using march::MakeMarchParams;
+using march::MarchParams;
+using march::MarchRay;
+using march::SampleRec;
+using march::SplitMix64;
+
 constexpr int kMinParallelRays = 64;  // smaller batches run on one thread (no fork/join cost)
 
-uint64_t SplitMix64(uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
-
-// One evaluated sample of a ray (inside the aabb and the alpha mask).
-struct SampleRec {
-  GridPoint gp;  // kept so the gather and scatter passes need not locate the sample again
-  float t;
-  float s;  // distance along the ray in sampling units (steps of `step`), for the distortion loss
-  float dscale;  // dist * distance_scale of this sample's interval
-  float feat;    // density feature + shift; after the composite pass: dL/d(feature)
-  float alpha;
-  float trans;  // transmittance before this sample
-  int app;      // row in the batch's appearance matrix, or -1
-};
-
-// A sample inside the aabb and the mask, before its density is known.
-struct Candidate {
-  float t;
-  float s;  // as SampleRec::s
-  float dscale;
-  GridPoint gp;
-};
-
-constexpr int kPrefetchDistance = 4;  // samples ahead
-constexpr int kScatterTile = 32;      // plane vertices per side of a scatter tile
+constexpr int kScatterTile = 32;  // plane vertices per side of a scatter tile
 
 // Scatter tiles along a plane axis of `res` vertices.
 inline int TilesAlong(int res) { return (res + kScatterTile - 1) / kScatterTile; }
-
-inline bool SameCell(const GridPoint& a, const GridPoint& b) {
-  return a.i0[0] == b.i0[0] && a.i0[1] == b.i0[1] && a.i0[2] == b.i0[2];
-}
 
 // Grows v to at least n elements and never shrinks it: a shrink followed by a regrow would
 // zero-fill the regrown part again (the chunks of one batch have different sizes).
@@ -112,172 +87,6 @@ struct Workspace {
   SampleRec* SamplesOf(const RayRec& rr) { return per_thread[rr.tid].samples.data() + rr.offset; }
 };
 
-struct MarchParams {
-  Aabb box;
-  std::array<float, 3> inv_size;
-  std::array<int, 3> res;
-  float near, far, step, dscale, shift, weight_threshold, early_stop;
-  int n_samples;
-  const AlphaMask* mask;
-  const VmGrid* density;
-  // Unbounded scene model (SPEC.md 7.2.1): box is the contracted cube, these normalise world
-  // points by the region of interest.
-  bool unbounded;
-  float distance_scale;
-  float roi_min[3], roi_scale[3];
-  // Forward-facing scene model (SPEC.md 7.2.2): box is in the NDC of this frame.
-  bool forward;
-  NdcFrame ndc;
-};
-
-MarchParams MakeMarchParams(const TensorfModel& model) {
-  MarchParams p;
-  const TensorfConfig& c = model.config();
-  p.box = model.aabb();
-  for (int a = 0; a < 3; ++a) p.inv_size[a] = 2.0f / (p.box.max[a] - p.box.min[a]);
-  p.res = model.res();
-  p.near = c.near;
-  p.far = c.far;
-  p.step = model.step_size();
-  p.dscale = model.step_size() * c.distance_scale;
-  p.shift = c.density_shift;
-  p.weight_threshold = c.weight_threshold;
-  p.early_stop = c.early_stop_transmittance;
-  p.n_samples = model.n_samples();
-  p.mask = model.alpha_mask();
-  p.density = &model.density();
-  p.unbounded = c.scene_model == SceneModel::kUnbounded;
-  p.forward = c.scene_model == SceneModel::kForward;
-  p.ndc = c.ndc;
-  p.distance_scale = c.distance_scale;
-  for (int a = 0; a < 3; ++a) {
-    p.roi_min[a] = c.roi.min[a];
-    p.roi_scale[a] = 1.0f / (c.roi.max[a] - c.roi.min[a]) * 2.f;
-  }
-  if (p.n_samples < 1) throw std::runtime_error("volume render: model has no samples per ray");
-  if (model.res()[0] < 2) throw std::runtime_error("volume render: model is not initialized");
-  return p;
-}
-
-inline void PointAt(const float* o, const float* d, float t, float x[3]) {
-  x[0] = o[0] + d[0] * t;
-  x[1] = o[1] + d[1] * t;
-  x[2] = o[2] + d[2] * t;
-}
-
-inline void ToGridPoint(const MarchParams& p, const float x[3], GridPoint* gp) {
-  float c[3];
-  for (int a = 0; a < 3; ++a) c[a] = (x[a] - p.box.min[a]) * p.inv_size[a] - 1.f;
-  LocateGridPoint(c, p.res, gp);
-}
-
-// Candidates of an unbounded scene (SPEC.md 7.2.1, the decoder's MarchRayUnbounded): from near
-// on (shifted by jitter times the first interval in training), spaced `step` in contracted
-// distance. The last sample (dist 0) never contributes and is left out.
-void UnboundedCandidates(const MarchParams& p, const float* o, const float* d, float jitter,
-                         std::vector<Candidate>& cand) {
-  const ContractedRay ray(o, d, p.roi_min, p.roi_scale, p.step);
-  float q[3], x[3];
-  float t = p.near;
-  if (jitter > 0.f) {
-    ray.At(t, q, x);
-    const float first = ray.Increment(q);
-    if (std::isfinite(first)) t = t + jitter * first;
-  }
-  for (int i = 0; i + 1 < p.n_samples; ++i) {
-    ray.At(t, q, x);
-    const float next = t + ray.Increment(q);
-    if (!std::isfinite(next)) break;
-    if (!p.mask || p.mask->Occupied(x)) {
-      Candidate c;
-      c.t = t;
-      c.s = static_cast<float>(i) + jitter;
-      c.dscale = (next - t) * p.distance_scale;
-      ToGridPoint(p, x, &c.gp);
-      cand.push_back(c);
-    }
-    t = next;
-  }
-}
-
-// Samples inside the aabb and the alpha mask (no feature lookups) of an object scene.
-void ObjectCandidates(const MarchParams& p, const float* o, const float* d, float jitter,
-                      std::vector<Candidate>& cand) {
-  float t_enter, t_exit;
-  RayAabb(p.box, o, d, &t_enter, &t_exit);
-  const float t_min = std::min(std::max(t_enter, p.near), p.far);
-  // Index range that can be inside the box (with a margin; the exact test follows). The last
-  // sample (dist 0, alpha 0) never contributes and is skipped.
-  const double a = (static_cast<double>(t_enter) - t_min) / p.step - jitter;
-  const double b = (static_cast<double>(t_exit) - t_min) / p.step - jitter;
-  if (!(b >= -2.0)) return;
-  const int last = p.n_samples - 1;
-  const int i_lo = a > 0 ? static_cast<int>(std::min<double>(std::floor(a) - 1, last)) : 0;
-  const int i_hi = static_cast<int>(std::min<double>(std::ceil(b) + 2, last));
-  for (int i = std::max(i_lo, 0); i < i_hi; ++i) {
-    const float ri = static_cast<float>(i) + jitter;
-    const float t = t_min + p.step * ri;
-    float x[3];
-    PointAt(o, d, t, x);
-    if (x[0] < p.box.min[0] || x[0] > p.box.max[0] || x[1] < p.box.min[1] || x[1] > p.box.max[1] ||
-        x[2] < p.box.min[2] || x[2] > p.box.max[2])
-      continue;
-    if (p.mask && !p.mask->Occupied(x)) continue;
-    Candidate c;
-    c.t = t;
-    c.s = ri;
-    c.dscale = p.dscale;
-    ToGridPoint(p, x, &c.gp);
-    cand.push_back(c);
-  }
-}
-
-// Marches one ray: appends its evaluated samples to buf, returns the number of appearance
-// samples (their `app` field holds the local index 0..k-1 until offset by the caller).
-int MarchRay(const MarchParams& p, const float* o, const float* d, float jitter,
-             std::vector<Candidate>& cand, std::vector<SampleRec>& buf, int* count) {
-  *count = 0;
-  // Pass 1: the samples to evaluate (no feature lookups).
-  cand.clear();
-  if (p.unbounded) {
-    UnboundedCandidates(p, o, d, jitter, cand);
-  } else if (p.forward) {
-    float ndc_o[3], ndc_d[3];
-    if (NdcRay(p.ndc, o, d, ndc_o, ndc_d)) ObjectCandidates(p, ndc_o, ndc_d, jitter, cand);
-  } else {
-    ObjectCandidates(p, o, d, jitter, cand);
-  }
-  // Pass 2: density, alpha, transmittance (prefetching the grid a few samples ahead).
-  float trans = 1.f;
-  int n_app = 0;
-  const size_t start = buf.size();
-  const int nc = static_cast<int>(cand.size());
-  for (int k = 0; k < std::min(nc, kPrefetchDistance); ++k) p.density->Prefetch(cand[k].gp);
-  for (int k = 0; k < nc; ++k) {
-    if (k + kPrefetchDistance < nc &&
-        !SameCell(cand[k + kPrefetchDistance].gp, cand[k + kPrefetchDistance - 1].gp))
-      p.density->Prefetch(cand[k + kPrefetchDistance].gp);
-    const float feat = p.density->Density(cand[k].gp) + p.shift;
-    const float sigma = Softplus(feat);
-    const float alpha = 1.f - std::exp(-sigma * cand[k].dscale);
-    const float w = alpha * trans;
-    SampleRec rec;
-    rec.gp = cand[k].gp;
-    rec.t = cand[k].t;
-    rec.s = cand[k].s;
-    rec.dscale = cand[k].dscale;
-    rec.feat = feat;
-    rec.alpha = alpha;
-    rec.trans = trans;
-    rec.app = w > p.weight_threshold ? n_app++ : -1;
-    buf.push_back(rec);
-    trans *= (1.f - alpha) + 1e-10f;
-    if (trans < p.early_stop) break;
-  }
-  *count = static_cast<int>(buf.size() - start);
-  return n_app;
-}
-
 // Phase 1: march all rays, assign appearance rows; returns the number of appearance samples.
 int64_t MarchBatch(const MarchParams& p, Workspace& ws, int n_rays, const float* origins,
                    const float* dirs, bool train, uint64_t seed) {
@@ -327,34 +136,6 @@ void GatherAppearance(const VmGrid& app, Workspace& ws, int r0, int r1, const fl
     }
   }
 }
-
-}  // namespace
-
-float RayJitter(uint64_t seed, int64_t ray) {
-  const uint64_t h =
-      SplitMix64(SplitMix64(seed) ^ (static_cast<uint64_t>(ray) * 0xD1B54A32D192ED03ull));
-  return static_cast<float>(h >> 40) * (1.0f / 16777216.0f);
-}
-
-std::vector<RaySampleInfo> TraceRay(const TensorfModel& model, const float o[3], const float d[3],
-                                    float jitter) {
-  const MarchParams p = MakeMarchParams(model);
-  std::vector<SampleRec> buf;
-  std::vector<Candidate> cand;
-  int count = 0;
-  MarchRay(p, o, d, jitter, cand, buf, &count);
-  std::vector<RaySampleInfo> out(buf.size());
-  for (size_t k = 0; k < buf.size(); ++k) {
-    out[k].t = buf[k].t;
-    out[k].sigma = Softplus(buf[k].feat);
-    out[k].alpha = buf[k].alpha;
-    out[k].weight = buf[k].alpha * buf[k].trans;
-    out[k].colour = buf[k].app >= 0;
-  }
-  return out;
-}
-
-namespace {
 
 // Scatters the gradients of rays [r0, r1) into the grids. Each (grid, mode) plane is cut into
 // fixed kScatterTile^2-vertex tiles; the samples are bucketed by the tiles their corners touch

@@ -17,35 +17,36 @@ namespace {
 
 // The RDOQ version: the six tensors' coefficients first (each transform runs in parallel), then
 // their levels side by side (each tensor's coder state is sequential), then the inverses.
-void ReconstructRdoqGrid(const VmGrid& grid, const float* steps, const RateConfig& config,
+void ReconstructRdoqGrid(const VmGrid& grid, const float* steps, const encoder::RateConfig& config,
                          std::vector<float>* out, float rounding_offset, float rdoq_lambda) {
-  GridBlockLayout layouts[kTensorsPerGrid];
-  std::vector<float> coeffs[kTensorsPerGrid];
-  for (int t = 0; t < kTensorsPerGrid; ++t) {
+  encoder::GridBlockLayout layouts[encoder::kTensorsPerGrid];
+  std::vector<float> coeffs[encoder::kTensorsPerGrid];
+  for (int t = 0; t < encoder::kTensorsPerGrid; ++t) {
     layouts[t] = RateTensorLayout(grid, t, config);
     coeffs[t].resize(layouts[t].num_coeffs());
-    ForwardBlocks(RateTensorData(grid, t), layouts[t], coeffs[t].data());
+    encoder::ForwardBlocks(RateTensorData(grid, t), layouts[t], coeffs[t].data());
   }
-  RdoqOptions rdoq;
+  encoder::RdoqOptions rdoq;
   rdoq.lambda = rdoq_lambda;
   rdoq.rounding_offset = rounding_offset;
   rdoq.max_abs = std::numeric_limits<int32_t>::max();  // as the rounding path: unclipped
 #pragma omp parallel for schedule(dynamic, 1)
-  for (int t = 0; t < kTensorsPerGrid; ++t) {
+  for (int t = 0; t < encoder::kTensorsPerGrid; ++t) {
     std::vector<int32_t> levels(coeffs[t].size());
-    RdoqLevels(coeffs[t].data(), layouts[t], steps[t], rdoq, levels.data());
+    encoder::RdoqLevels(coeffs[t].data(), layouts[t], steps[t], rdoq, levels.data());
     for (size_t i = 0; i < levels.size(); ++i) coeffs[t][i] = float(double(levels[i]) * steps[t]);
   }
-  for (int t = 0; t < kTensorsPerGrid; ++t) {
+  for (int t = 0; t < encoder::kTensorsPerGrid; ++t) {
     const size_t offset = static_cast<size_t>(RateTensorData(grid, t) - grid.params().data());
-    InverseBlocks(coeffs[t].data(), layouts[t], out->data() + offset);
+    encoder::InverseBlocks(coeffs[t].data(), layouts[t], out->data() + offset);
   }
 }
 
 }  // namespace
 
-void ReconstructQuantizedGrid(const VmGrid& grid, const float* steps, const RateConfig& config,
-                              std::vector<float>* out, float rounding_offset, float rdoq_lambda) {
+void ReconstructQuantizedGrid(const VmGrid& grid, const float* steps,
+                              const encoder::RateConfig& config, std::vector<float>* out,
+                              float rounding_offset, float rdoq_lambda) {
   // The six tensors tile params() and InverseBlocks writes every element of each: no copy.
   out->resize(grid.params().size());
   if (rdoq_lambda > 0.f) {
@@ -53,20 +54,20 @@ void ReconstructQuantizedGrid(const VmGrid& grid, const float* steps, const Rate
     return;
   }
   std::vector<float> coeffs;
-  for (int t = 0; t < kTensorsPerGrid; ++t) {
-    const GridBlockLayout layout = RateTensorLayout(grid, t, config);
+  for (int t = 0; t < encoder::kTensorsPerGrid; ++t) {
+    const encoder::GridBlockLayout layout = RateTensorLayout(grid, t, config);
     coeffs.resize(layout.num_coeffs());
-    ForwardBlocks(RateTensorData(grid, t), layout, coeffs.data());
+    encoder::ForwardBlocks(RateTensorData(grid, t), layout, coeffs.data());
     const float step = steps[t];
     const long n = static_cast<long>(coeffs.size());
 #pragma omp parallel for schedule(static) if (n > 65536)
     for (long i = 0; i < n; ++i) {
       // The encoder's quantizer, on the double quotient.
       coeffs[i] = static_cast<float>(
-          QuantizeLevel(static_cast<double>(coeffs[i]), step, rounding_offset) * step);
+          encoder::QuantizeLevel(static_cast<double>(coeffs[i]), step, rounding_offset) * step);
     }
     const size_t offset = static_cast<size_t>(RateTensorData(grid, t) - grid.params().data());
-    InverseBlocks(coeffs.data(), layout, out->data() + offset);
+    encoder::InverseBlocks(coeffs.data(), layout, out->data() + offset);
   }
 }
 
@@ -92,16 +93,16 @@ std::vector<float>& QuantAwareModel::Params(TensorfModel* model, int k) {
 }
 
 void QuantAwareModel::Refresh(const TensorfModel& model, const std::vector<float>& steps,
-                              const RateConfig& config, int mlp_levels, float rounding_offset,
-                              float rdoq_lambda) {
+                              const encoder::RateConfig& config, int mlp_levels,
+                              float rounding_offset, float rdoq_lambda) {
   if (applied_) throw std::logic_error("QuantAwareModel::Refresh while applied");
-  if (steps.size() != 2 * kTensorsPerGrid) {
+  if (steps.size() != 2 * encoder::kTensorsPerGrid) {
     throw std::invalid_argument("QuantAwareModel: need 12 quantization steps");
   }
   ReconstructQuantizedGrid(model.density(), steps.data(), config, &error_[0], rounding_offset,
                            rdoq_lambda);
-  ReconstructQuantizedGrid(model.appearance(), steps.data() + kTensorsPerGrid, config, &error_[1],
-                           rounding_offset, rdoq_lambda);
+  ReconstructQuantizedGrid(model.appearance(), steps.data() + encoder::kTensorsPerGrid, config,
+                           &error_[1], rounding_offset, rdoq_lambda);
   error_[2].clear();
   if (mlp_levels > 0) ReconstructQuantizedHead(model, mlp_levels, &error_[2]);
   const std::vector<float>* params[3] = {&model.density().params(), &model.appearance().params(),

@@ -29,9 +29,9 @@ namespace trainer {
 // the encoder's rounding offset (encoder/coef_quantizer.h) or, with rdoq_lambda > 0, its RDOQ
 // (encoder/coef_rdoq.h: the levels of the newest context set, unclipped); out has
 // grid.params().size() values.
-void ReconstructQuantizedGrid(const VmGrid& grid, const float* steps, const RateConfig& config,
-                              std::vector<float>* out, float rounding_offset = 0.5f,
-                              float rdoq_lambda = 0.f);
+void ReconstructQuantizedGrid(const VmGrid& grid, const float* steps,
+                              const encoder::RateConfig& config, std::vector<float>* out,
+                              float rounding_offset = 0.5f, float rdoq_lambda = 0.f);
 
 // The MLPW layout (format/mlp_coder.h) of a head: the trainer's flat parameter order is the
 // stream's.
@@ -44,8 +44,9 @@ class QuantAwareModel {
  public:
   // Recomputes the quantization error of both grids; steps: 12 (density then appearance).
   // mlp_levels > 0: the head's too.
-  void Refresh(const TensorfModel& model, const std::vector<float>& steps, const RateConfig& config,
-               int mlp_levels = 0, float rounding_offset = 0.5f, float rdoq_lambda = 0.f);
+  void Refresh(const TensorfModel& model, const std::vector<float>& steps,
+               const encoder::RateConfig& config, int mlp_levels = 0, float rounding_offset = 0.5f,
+               float rdoq_lambda = 0.f);
   bool fresh_for(const TensorfModel& model) const;
   // Puts G + E into the model's grids (the float grids are kept aside); Restore() puts them back.
   // Between the two the model must not change shape.

@@ -23,7 +23,7 @@ struct BandMap {
   int begin[kNumFrequencyBands + 1];
 };
 
-BandMap MakeBandMap(const GridBlockLayout& L, bool line) {
+BandMap MakeBandMap(const encoder::GridBlockLayout& L, bool line) {
   BandMap bm;
   std::vector<int> band(L.block_volume());
   int count[kNumFrequencyBands] = {0};
@@ -52,16 +52,16 @@ struct TensorResult {
 };
 
 // Processes the listed blocks of one tensor. grad == nullptr: no gradients.
-TensorResult ProcessTensor(const float* tensor, float* grad, const GridBlockLayout& L,
+TensorResult ProcessTensor(const float* tensor, float* grad, const encoder::GridBlockLayout& L,
                            const std::vector<int>& ids, float step, int tensor_index,
                            FactorizedEntropyModel* model, Mode mode, float scale, float lambda_e,
                            float lambda_r, uint64_t seed) {
   const int k = static_cast<int>(ids.size());
   const int V = L.block_volume();
   const size_t total = static_cast<size_t>(k) * V;
-  const BandMap bm = MakeBandMap(L, tensor_index % kTensorsPerGrid >= 3);
+  const BandMap bm = MakeBandMap(L, tensor_index % encoder::kTensorsPerGrid >= 3);
   std::vector<float> c(total), x(total);
-  ForwardBlockList(tensor, L, ids.data(), k, c.data());
+  encoder::ForwardBlockList(tensor, L, ids.data(), k, c.data());
   const float inv_step = 1.f / step;
   const uint64_t stream = SplitMix64(seed * 0x2545F4914F6CDD1Dull + tensor_index);
   double reg = 0.0;
@@ -121,13 +121,13 @@ TensorResult ProcessTensor(const float* tensor, float* grad, const GridBlockLayo
       for (int q = 0; q < cnt; ++q) cj[pb[q]] += ge * db[q];
     }
   }
-  BackwardBlockList(c.data(), L, ids.data(), k, grad);
+  encoder::BackwardBlockList(c.data(), L, ids.data(), k, grad);
   return res;
 }
 
 void CheckArgs(size_t num_grids, const std::vector<float>& steps,
                const FactorizedEntropyModel& model) {
-  if (steps.size() != num_grids * kTensorsPerGrid) {
+  if (steps.size() != num_grids * encoder::kTensorsPerGrid) {
     throw std::invalid_argument("rate_objective: need one step per tensor (6 per grid)");
   }
   for (float s : steps) {
@@ -153,16 +153,16 @@ int FrequencyBand(bool line, int k0, int k1, int k2) {
 }
 
 RateEstimate AddRateGradients(const std::vector<VmGrid*>& grids, const std::vector<float>& steps,
-                              const RateConfig& config, FactorizedEntropyModel* model,
+                              const encoder::RateConfig& config, FactorizedEntropyModel* model,
                               float lambda_e, float lambda_r, float fraction, uint64_t seed) {
   CheckArgs(grids.size(), steps, *model);
   if (!(fraction > 0.f)) throw std::invalid_argument("AddRateGradients: fraction must be > 0");
   RateEstimate est;
   for (size_t g = 0; g < grids.size(); ++g) {
     VmGrid& grid = *grids[g];
-    for (int t = 0; t < kTensorsPerGrid; ++t) {
-      const int ti = static_cast<int>(g) * kTensorsPerGrid + t;
-      const GridBlockLayout L = RateTensorLayout(grid, t, config);
+    for (int t = 0; t < encoder::kTensorsPerGrid; ++t) {
+      const int ti = static_cast<int>(g) * encoder::kTensorsPerGrid + t;
+      const encoder::GridBlockLayout L = RateTensorLayout(grid, t, config);
       const int n = L.num_blocks();
       int k =
           fraction >= 1.f ? n : static_cast<int>(std::lround(fraction * static_cast<double>(n)));
@@ -190,14 +190,14 @@ RateEstimate AddRateGradients(const std::vector<VmGrid*>& grids, const std::vect
 }
 
 double EvaluateTensorBits(const VmGrid& grid, int t, float step, int tensor_index,
-                          const RateConfig& config, const FactorizedEntropyModel& model) {
-  if (t < 0 || t >= kTensorsPerGrid || !(step > 0.f) || tensor_index < 0 ||
+                          const encoder::RateConfig& config, const FactorizedEntropyModel& model) {
+  if (t < 0 || t >= encoder::kTensorsPerGrid || !(step > 0.f) || tensor_index < 0 ||
       RateModelIndex(tensor_index, kNumFrequencyBands - 1) >= model.num_models()) {
     throw std::invalid_argument("EvaluateTensorBits: bad tensor, step or model count");
   }
   // Bits() without gradients does not modify the model.
   FactorizedEntropyModel* m = const_cast<FactorizedEntropyModel*>(&model);
-  const GridBlockLayout L = RateTensorLayout(grid, t, config);
+  const encoder::GridBlockLayout L = RateTensorLayout(grid, t, config);
   std::vector<int> ids(L.num_blocks());
   std::iota(ids.begin(), ids.end(), 0);
   return ProcessTensor(RateTensorData(grid, t), nullptr, L, ids, step, tensor_index, m,
@@ -206,12 +206,12 @@ double EvaluateTensorBits(const VmGrid& grid, int t, float step, int tensor_inde
 }
 
 RateReport EvaluateRate(const std::vector<const VmGrid*>& grids, const std::vector<float>& steps,
-                        const RateConfig& config, const FactorizedEntropyModel& model) {
+                        const encoder::RateConfig& config, const FactorizedEntropyModel& model) {
   CheckArgs(grids.size(), steps, model);
   RateReport rep;
   for (size_t g = 0; g < grids.size(); ++g) {
-    for (int t = 0; t < kTensorsPerGrid; ++t) {
-      const int ti = static_cast<int>(g) * kTensorsPerGrid + t;
+    for (int t = 0; t < encoder::kTensorsPerGrid; ++t) {
+      const int ti = static_cast<int>(g) * encoder::kTensorsPerGrid + t;
       const double bits = EvaluateTensorBits(*grids[g], t, steps[ti], ti, config, model);
       rep.bits.push_back(bits);
       rep.coeffs.push_back(RateTensorLayout(*grids[g], t, config).num_coeffs());

@@ -21,9 +21,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "encoder/coded_tensors.h"
 #include "encoder/grid_dct.h"
 #include "trainer/model/vm_grid.h"
+#include "trainer/rate/coded_model.h"
 #include "trainer/rate/entropy_model.h"
 
 namespace ecrf {
@@ -39,7 +39,9 @@ int FrequencyBand(bool line, int k0, int k1, int k2);
 inline int RateModelIndex(int tensor_index, int band) {
   return tensor_index * kNumFrequencyBands + band;
 }
-inline int NumRateModels(int num_grids) { return num_grids * kTensorsPerGrid * kNumFrequencyBands; }
+inline int NumRateModels(int num_grids) {
+  return num_grids * encoder::kTensorsPerGrid * kNumFrequencyBands;
+}
 
 struct RateEstimate {
   double bits = 0.0;         // unbiased estimate of the total noisy-proxy bits (all tensors)
@@ -56,7 +58,7 @@ struct RateEstimate {
 // returns the unweighted estimates. steps: num_grids * 6 quantization steps (> 0).
 // model->num_models() must be >= NumRateModels(grids.size()).
 RateEstimate AddRateGradients(const std::vector<VmGrid*>& grids, const std::vector<float>& steps,
-                              const RateConfig& config, FactorizedEntropyModel* model,
+                              const encoder::RateConfig& config, FactorizedEntropyModel* model,
                               float lambda_e, float lambda_r, float fraction, uint64_t seed);
 
 // Full deterministic evaluation: all blocks, x = round(coeff / step) (std::round, half away
@@ -70,9 +72,9 @@ struct RateReport {
 // The RateReport bits of one tensor: tensor t (0..5) of grid, coded with step under the band
 // models of tensor_index.
 double EvaluateTensorBits(const VmGrid& grid, int t, float step, int tensor_index,
-                          const RateConfig& config, const FactorizedEntropyModel& model);
+                          const encoder::RateConfig& config, const FactorizedEntropyModel& model);
 RateReport EvaluateRate(const std::vector<const VmGrid*>& grids, const std::vector<float>& steps,
-                        const RateConfig& config, const FactorizedEntropyModel& model);
+                        const encoder::RateConfig& config, const FactorizedEntropyModel& model);
 
 }  // namespace trainer
 }  // namespace ecrf

@@ -24,7 +24,7 @@ VmGrid& GridOf(TensorfModel& model, int g) { return g == 0 ? model.density() : m
 double ModeBits(const VmGrid& grid, int g, int m, const RateState& rate) {
   double bits = 0.0;
   for (const int t : {m, 3 + m}) {
-    const int ti = g * kTensorsPerGrid + t;
+    const int ti = g * encoder::kTensorsPerGrid + t;
     bits += EvaluateTensorBits(grid, t, rate.steps[ti], ti, rate.config, rate.entropy);
   }
   return bits;
@@ -144,7 +144,7 @@ void PruneHidden(const HiddenDecision& decision, TensorfModel* model, Optimizers
 PruneDecision TestComponents(const TensorfModel& model, const RateState& rate, double lambda_e,
                              int n, const float* origins, const float* dirs, const float* rgb,
                              double max_share, const float* ray_gain) {
-  if (!rate.active || rate.steps.size() != 2 * kTensorsPerGrid) {
+  if (!rate.active || rate.steps.size() != 2 * encoder::kTensorsPerGrid) {
     throw std::invalid_argument("TestComponents: the rate objective is not active");
   }
   if (!(max_share > 0.0 && max_share <= 1.0) || n < 1 || !(lambda_e >= 0.0)) {

@@ -208,10 +208,10 @@ int LoadModelCheckpointOrThrow(const std::string& path, TensorfModel* model, Rat
                                std::to_string(rate->rounding_offset) + " (expected (0, 0.5])");
     }
     rate->rdoq_lambda = j.value("rdoq_lambda", 0.0f);
-    if (!(rate->rdoq_lambda >= 0.f && rate->rdoq_lambda <= kMaxRdoqLambda)) {
+    if (!(rate->rdoq_lambda >= 0.f && rate->rdoq_lambda <= encoder::kMaxRdoqLambda)) {
       throw std::runtime_error(path + ": checkpoint holds an RDOQ lambda of " +
                                std::to_string(rate->rdoq_lambda) + " (expected [0, " +
-                               std::to_string(kMaxRdoqLambda) + "])");
+                               std::to_string(encoder::kMaxRdoqLambda) + "])");
     }
   }
   const int iteration = j.at("iteration").get<int>();

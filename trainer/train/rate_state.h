@@ -18,7 +18,7 @@ namespace trainer {
 
 struct RateState {
   bool active = false;
-  RateConfig config;
+  encoder::RateConfig config;
   std::vector<float> steps;  // one per tensor: density planes 0..2, lines 0..2, then appearance
   FactorizedEntropyModel entropy;
   Adam adam;

@@ -74,8 +74,8 @@ TensorfConfig ConfigFor(const TrainOptions& o, const Dataset& data, const SceneF
   return c;
 }
 
-EncodeOptions RunEncodeOptions(const TrainOptions& o, const RateState& rate) {
-  EncodeOptions eo;
+encoder::EncodeOptions RunEncodeOptions(const TrainOptions& o, const RateState& rate) {
+  encoder::EncodeOptions eo;
   eo.blocks = rate.config;
   eo.steps = rate.steps;
   eo.coef_bits = o.coef_bits;

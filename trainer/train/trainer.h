@@ -9,11 +9,11 @@
 #include <string>
 #include <vector>
 
-#include "encoder/scene_encoder.h"
 #include "trainer/data/dataset.h"
 #include "trainer/data/image_io.h"
 #include "trainer/data/scene_fit.h"
 #include "trainer/model/tensorf_model.h"
+#include "trainer/rate/coded_model.h"
 #include "trainer/train/camera_refine.h"
 #include "trainer/train/checkpoint.h"
 #include "trainer/train/evaluate.h"
@@ -42,7 +42,7 @@ struct TrainResult {
 
 // How a trained run is encoded: its block shapes and frozen steps, coefficient depth and MLP
 // precision (metadata left empty).
-EncodeOptions RunEncodeOptions(const TrainOptions& options, const RateState& rate);
+encoder::EncodeOptions RunEncodeOptions(const TrainOptions& options, const RateState& rate);
 
 // The datasets a run uses: the built-in procedural scene or a directory on disk.
 Dataset LoadTrainingViews(const TrainOptions& options, const std::string& split);

@@ -1,5 +1,5 @@
 // Records the GL calls of the viewer's WebGL2 renderer (web/gpu_renderer.js + web/gpu_shaders.js,
-// unchanged) into binary traces that tools/bench/gl_replay.cc replays on a GPU without a browser.
+// unchanged) into binary traces that benchmarks/gl_replay.cc replays on a GPU without a browser.
 // The renderer gets a mock WebGL2 context that answers its queries (typical desktop limits, every
 // shader compiles) and writes down every call: shader sources, programs, textures with their
 // data, uniforms, UBOs, draws, viewports, framebuffer binds, readPixels.
@@ -33,7 +33,7 @@ const require = createRequire(import.meta.url);
 const root = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
 const f32 = Math.fround;
 
-// ---- trace format (little-endian; must match tools/bench/gl_replay.cc) ----
+// ---- trace format (little-endian; must match benchmarks/gl_replay.cc) ----
 export const MAGIC = 'ECRFGLT1';
 export const KIND = {setup: 1, frame: 2};
 export const OP = {

@@ -19,8 +19,8 @@ namespace {
 
 trainer::TensorfModel SmallModel() { return testing_models::DenseSmallModel(); }
 
-trainer::EncodeOptions Options() {
-  trainer::EncodeOptions o;
+encoder::EncodeOptions Options() {
+  encoder::EncodeOptions o;
   o.blocks = testing_models::SmallRateBlocks();
   o.steps = trainer::ChooseQuantSteps(SmallModel(), o.blocks, 8);
   for (float& s : o.steps) s *= 2.f;
@@ -39,7 +39,7 @@ const Rays& TheRays() {
     Rays r;
     testing_models::RaysFromSphere(r.n, 11, &r.origins, &r.dirs);
     r.rgb.resize(static_cast<size_t>(r.n) * 3);
-    const trainer::EncodeOptions o = Options();
+    const encoder::EncodeOptions o = Options();
     trainer::RenderRays(DecodedModel(SmallModel(), o.steps, o.blocks, o.mlp_max_level), r.n,
                         r.origins.data(), r.dirs.data(), r.rgb.data(), nullptr);
     return r;

@@ -19,7 +19,7 @@ namespace {
 
 trainer::TensorfModel SmallModel() { return testing_models::DenseSmallModel(); }
 
-trainer::RateConfig SmallBlocks() { return testing_models::SmallRateBlocks(); }
+encoder::RateConfig SmallBlocks() { return testing_models::SmallRateBlocks(); }
 
 // The steps of the float model, kept for its decoded copy (whose peaks differ), as training
 // freezes them.

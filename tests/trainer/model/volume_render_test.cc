@@ -15,19 +15,6 @@ namespace ecrf {
 namespace trainer {
 namespace {
 
-TensorfConfig TinyConfig() {
-  TensorfConfig c;
-  c.density_ranks = {2, 2, 2};
-  c.app_ranks = {3, 3, 3};
-  c.head.num_products = 9;
-  c.head.hidden = 16;
-  c.aabb.min = {-1.f, -1.f, -1.f};
-  c.aabb.max = {1.f, 1.f, 1.f};
-  c.near = 0.f;
-  c.far = 10.f;
-  return c;
-}
-
 TEST(VolumeRenderTest, CompositeBackwardMatchesFiniteDifferences) {
   std::mt19937 rng(1);
   std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -63,73 +50,8 @@ TEST(VolumeRenderTest, CompositeBackwardMatchesFiniteDifferences) {
   }
 }
 
-void ExpectSamples(const TensorfModel& model, const float o[3], const float d[3], float jitter) {
-  const auto samples = TraceRay(model, o, d, jitter);
-  // Brute force over all samples as in TensoRF sample_ray.
-  const Aabb& box = model.aabb();
-  float te, tx;
-  RayAabb(box, o, d, &te, &tx);
-  const float t_min = std::min(std::max(te, model.config().near), model.config().far);
-  std::vector<float> expect;
-  for (int i = 0; i + 1 < model.n_samples(); ++i) {
-    const float t = t_min + model.step_size() * (static_cast<float>(i) + jitter);
-    bool inside = true;
-    for (int a = 0; a < 3; ++a) {
-      const float x = o[a] + d[a] * t;
-      inside &= x >= box.min[a] && x <= box.max[a];
-    }
-    if (inside) expect.push_back(t);
-  }
-  ASSERT_EQ(samples.size(), expect.size());
-  double T = 1;
-  for (size_t k = 0; k < expect.size(); ++k) {
-    EXPECT_FLOAT_EQ(samples[k].t, expect[k]);
-    const float x[3] = {o[0] + d[0] * expect[k], o[1] + d[1] * expect[k], o[2] + d[2] * expect[k]};
-    const double sigma = model.Sigma(x);
-    EXPECT_NEAR(samples[k].sigma, sigma, 1e-6 * (1 + sigma));
-    const double alpha = 1 - std::exp(-sigma * model.step_size() * model.config().distance_scale);
-    EXPECT_NEAR(samples[k].alpha, alpha, 1e-6);
-    EXPECT_NEAR(samples[k].weight, alpha * T, 1e-6);
-    EXPECT_EQ(samples[k].colour, samples[k].weight > model.config().weight_threshold);
-    T *= (1 - alpha) + 1e-10;
-  }
-}
-
-TEST(VolumeRenderTest, RaySamplingAxisParallelAndInside) {
-  TensorfConfig c = TinyConfig();
-  c.density_shift = 0.f;
-  TensorfModel model(c);
-  model.Initialize({11, 11, 11}, 4);
-  ASSERT_FLOAT_EQ(model.step_size(), 0.1f);
-  {
-    const float o[3] = {-3.f, 0.05f, 0.05f}, d[3] = {1.f, 0.f, 0.f};
-    EXPECT_EQ(TraceRay(model, o, d, 0.3f).size(), 20u);  // x = -1 + 0.1 (i + 0.3) <= 1
-    ExpectSamples(model, o, d, 0.3f);
-    ExpectSamples(model, o, d, 0.f);
-  }
-  {
-    const float o[3] = {0.1f, 0.2f, 0.f}, d[3] = {0.f, 0.f, -1.f};  // starts inside, t_min = near
-    EXPECT_EQ(TraceRay(model, o, d, 0.5f).size(), 10u);             // z = -0.1 (i + 0.5) >= -1
-    ExpectSamples(model, o, d, 0.5f);
-  }
-  {
-    const float o[3] = {0.3f, -2.f, 3.f}, d[3] = {0.f, 0.6f, -0.8f};  // oblique
-    ExpectSamples(model, o, d, 0.77f);
-  }
-  {
-    const float o[3] = {-3.f, 1.5f, 0.f}, d[3] = {1.f, 0.f, 0.f};  // misses the box
-    EXPECT_TRUE(TraceRay(model, o, d, 0.2f).empty());
-  }
-  TensorfConfig far_near = c;
-  far_near.near = 2.f;  // starts inside but near clips past the exit
-  TensorfModel m2(far_near);
-  m2.Initialize({11, 11, 11}, 4);
-  const float o[3] = {0.f, 0.f, 0.f}, d[3] = {0.f, 1.f, 0.f};
-  EXPECT_TRUE(TraceRay(m2, o, d, 0.2f).empty());
-}
-
 TEST(VolumeRenderTest, EmptyFieldRendersWhite) {
-  TensorfModel model(TinyConfig());
+  TensorfModel model(testing_models::TinyTensorfConfig());
   model.Initialize({8, 8, 8}, 1);
   std::fill(model.density().params().begin(), model.density().params().end(), 0.f);
   std::vector<float> o, d;
@@ -145,7 +67,7 @@ TEST(VolumeRenderTest, EmptyFieldRendersWhite) {
 }
 
 TEST(VolumeRenderTest, RenderMatchesTrainStepForward) {
-  TensorfConfig c = TinyConfig();
+  TensorfConfig c = testing_models::TinyTensorfConfig();
   c.density_shift = -1.f;
   TensorfModel model(c);
   model.Initialize({8, 8, 8}, 3);
@@ -170,7 +92,7 @@ struct FdSetup {
 };
 
 FdSetup MakeFdSetup() {
-  TensorfConfig c = TinyConfig();
+  TensorfConfig c = testing_models::TinyTensorfConfig();
   c.density_shift = -1.f;
   c.distance_scale = 1.f;
   c.init_scale = 0.4f;
@@ -374,7 +296,7 @@ TEST(VolumeRenderTest, TrainStepExposureGainGradientsMatchFiniteDifferences) {
 
 TEST(VolumeRenderTest, TrainStepSameGradientsForAnyThreadCount) {
   // Ranks of the trainer's size; more threads than the scatter's six tasks, and more than cores.
-  TensorfConfig c = TinyConfig();
+  TensorfConfig c = testing_models::TinyTensorfConfig();
   c.density_ranks = {16, 16, 16};
   c.app_ranks = {20, 20, 20};
   c.head.num_products = 60;
@@ -408,7 +330,7 @@ TEST(VolumeRenderTest, TrainStepSameGradientsForAnyThreadCount) {
 }
 
 TEST(VolumeRenderTest, HeadChunkingAndMaskKeepResults) {
-  TensorfConfig c = TinyConfig();
+  TensorfConfig c = testing_models::TinyTensorfConfig();
   c.density_shift = -2.f;
   TensorfConfig cc = c;
   cc.head_chunk_rows = 7;  // many chunks, some rays larger than a chunk
@@ -456,7 +378,7 @@ TEST(VolumeRenderTest, HeadChunkingAndMaskKeepResults) {
 }
 
 TEST(VolumeRenderTest, StatsCountTracedSamples) {
-  TensorfConfig c = TinyConfig();
+  TensorfConfig c = testing_models::TinyTensorfConfig();
   c.density_shift = 0.f;
   TensorfModel model(c);
   model.Initialize({10, 10, 10}, 6);
@@ -491,7 +413,7 @@ double RelDiff(const std::vector<float>& a, const std::vector<float>& b) {
 TEST(VolumeRenderTest, EarlyStopChangesGradientsNegligibly) {
   // An opaque blob in empty space (the default density shift): rays through the blob saturate,
   // the others see almost nothing.
-  TensorfConfig c = TinyConfig();
+  TensorfConfig c = testing_models::TinyTensorfConfig();
   TensorfConfig ce = c;
   ce.early_stop_transmittance = 1e-4f;
   TensorfModel exact(c), early(ce);
@@ -530,7 +452,7 @@ TEST(VolumeRenderTest, EarlyStopChangesGradientsNegligibly) {
 }
 
 TEST(VolumeRenderTest, AdamStepsReduceLoss) {
-  TensorfConfig c = TinyConfig();
+  TensorfConfig c = testing_models::TinyTensorfConfig();
   c.head.hidden = 32;
   TensorfModel model(c);
   model.Initialize({12, 12, 12}, 21);
@@ -565,7 +487,7 @@ TEST(VolumeRenderTest, AdamStepsReduceLoss) {
 // Trained with the distortion loss, the same fit ends with its rays' weight in shorter stretches
 // (a smaller distortion) than trained without it, at a colour error of the same order.
 TEST(VolumeRenderTest, DistortionLossConcentratesTheWeights) {
-  TensorfConfig c = TinyConfig();
+  TensorfConfig c = testing_models::TinyTensorfConfig();
   c.head.hidden = 32;
   c.init_scale = 0.3f;
   c.density_shift = -2.f;  // a foggy start: weight spread along every ray

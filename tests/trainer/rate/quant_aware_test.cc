@@ -18,6 +18,7 @@
 #include "format/mlp_coder.h"
 #include "tests/common/small_model.h"
 #include "trainer/model/volume_render.h"
+#include "trainer/rate/coded_model.h"
 #include "trainer/train/rate_state.h"
 
 namespace ecrf {
@@ -30,7 +31,7 @@ TensorfModel SmallModel(uint64_t seed) {
   return model;
 }
 
-RateConfig SmallBlocks() { return testing_models::SmallRateBlocks(); }
+encoder::RateConfig SmallBlocks() { return testing_models::SmallRateBlocks(); }
 
 // With rounding to nearest, with a dead zone (rounding offset 0.3) and with RDOQ
 // (encoder/coef_rdoq.h): training sees the file.
@@ -39,11 +40,11 @@ class QuantAwareOffset : public ::testing::TestWithParam<std::pair<float, float>
 TEST_P(QuantAwareOffset, ReconstructionIsWhatTheDecoderDecodes) {
   const float offset = GetParam().first, rdoq = GetParam().second;
   const TensorfModel model = SmallModel(3);
-  const RateConfig blocks = SmallBlocks();
+  const encoder::RateConfig blocks = SmallBlocks();
   // Coarser than the 8-bit peak step, as --quant-step-scale 3 trains.
   std::vector<float> steps = ChooseQuantSteps(model, blocks, 8);
   for (float& s : steps) s *= 3.f;
-  EncodeOptions o;
+  encoder::EncodeOptions o;
   o.blocks = blocks;
   o.steps = steps;
   o.rounding_offset = offset;
@@ -90,7 +91,7 @@ INSTANTIATE_TEST_SUITE_P(Offsets, QuantAwareOffset,
 // lambda is checked.
 TEST(CoefRdoq, EncodedSceneShrinksWithLambda) {
   const TensorfModel model = SmallModel(4);
-  EncodeOptions o;
+  encoder::EncodeOptions o;
   o.blocks = SmallBlocks();
   o.steps = ChooseQuantSteps(model, o.blocks, 8);
   for (float& s : o.steps) s *= 3.f;
@@ -110,18 +111,18 @@ TEST(CoefRdoq, EncodedSceneShrinksWithLambda) {
 // The dead zone: levels move toward zero by 0.5 - offset, so the file shrinks.
 TEST(CoefQuantizer, OffsetWidensTheDeadZone) {
   for (double v : {-2.5, -1.7, -0.5, -0.49, 0.0, 0.3, 0.5, 0.69, 0.71, 1.5, 126.6}) {
-    EXPECT_EQ(QuantizeLevel(v, 1.0, 0.5), std::round(v)) << v;
+    EXPECT_EQ(encoder::QuantizeLevel(v, 1.0, 0.5), std::round(v)) << v;
   }
-  EXPECT_EQ(QuantizeLevel(0.69, 1.0, 0.3), 0.0);
-  EXPECT_EQ(QuantizeLevel(0.71, 1.0, 0.3), 1.0);
-  EXPECT_EQ(QuantizeLevel(-0.71, 1.0, 0.3), -1.0);
-  EXPECT_EQ(QuantizeLevel(-1.69, 1.0, 0.3), -1.0);
-  EXPECT_EQ(QuantizeLevel(3.4, 2.0, 0.3), 2.0);  // 1.7 + 0.3
-  EXPECT_EQ(QuantizeLevel(0.49999999999999994, 1.0, 0.5),
+  EXPECT_EQ(encoder::QuantizeLevel(0.69, 1.0, 0.3), 0.0);
+  EXPECT_EQ(encoder::QuantizeLevel(0.71, 1.0, 0.3), 1.0);
+  EXPECT_EQ(encoder::QuantizeLevel(-0.71, 1.0, 0.3), -1.0);
+  EXPECT_EQ(encoder::QuantizeLevel(-1.69, 1.0, 0.3), -1.0);
+  EXPECT_EQ(encoder::QuantizeLevel(3.4, 2.0, 0.3), 2.0);  // 1.7 + 0.3
+  EXPECT_EQ(encoder::QuantizeLevel(0.49999999999999994, 1.0, 0.5),
             0.0);  // as std::round, not floor(x + 0.5)
 
   const TensorfModel model = SmallModel(4);
-  EncodeOptions o;
+  encoder::EncodeOptions o;
   o.blocks = SmallBlocks();
   const size_t nearest = EncodeScene(model, o).size();
   o.rounding_offset = 0.25f;
@@ -156,7 +157,7 @@ Batch MakeBatch() {
 TEST(QuantAware, StraightThroughStepIsTheStepOnTheDecodedModel) {
   const int mlp_levels = 7;
   TensorfModel model = SmallModel(5);
-  const RateConfig blocks = SmallBlocks();
+  const encoder::RateConfig blocks = SmallBlocks();
   std::vector<float> steps = ChooseQuantSteps(model, blocks, 8);
   for (float& s : steps) s *= 30.f;  // coarse: about 4 levels per tensor
   const Batch b = MakeBatch();
@@ -214,7 +215,7 @@ TEST(QuantAware, HeadReconstructionIsWhatTheDecoderDecodes) {
   ReconstructQuantizedHead(model, 15, &q);
   ASSERT_EQ(q.size(), model.head().params().size());
   // The MLPW chunk the encoder writes, decoded by the format's decoder with the stream's layout.
-  EncodeOptions o;
+  encoder::EncodeOptions o;
   o.mlp_max_level = 15;
   o.drop_zero_components = false;
   const std::vector<uint8_t> bytes = EncodeScene(model, o);
@@ -245,7 +246,7 @@ TEST(QuantAware, ApplyNeedsAFreshRefresh) {
   QuantAwareModel qat;
   EXPECT_FALSE(qat.fresh_for(model));
   EXPECT_THROW(qat.Apply(&model), std::logic_error);
-  const RateConfig blocks = SmallBlocks();
+  const encoder::RateConfig blocks = SmallBlocks();
   qat.Refresh(model, ChooseQuantSteps(model, blocks, 8), blocks);
   EXPECT_TRUE(qat.fresh_for(model));
   model.UpsampleTo({25, 20, 15});  // a new shape makes the stored error stale

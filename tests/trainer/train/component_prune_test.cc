@@ -43,7 +43,7 @@ void ZeroLineChannel(TensorfModel* model, int g, int m, int r) {
 
 RateState ActiveRate(const TensorfModel& model) {
   TrainOptions o;
-  const RateConfig b = SmallRateBlocks();
+  const encoder::RateConfig b = SmallRateBlocks();
   for (int a = 0; a < 3; ++a) {
     o.plane_block[a] = b.plane_block[a];
     o.line_block[a] = b.line_block[a];

@@ -22,6 +22,7 @@
 #include "trainer/data/camera.h"
 #include "trainer/data/scene_fit.h"
 #include "trainer/model/volume_render.h"
+#include "trainer/rate/coded_model.h"
 
 namespace ecrf {
 namespace trainer {
@@ -193,7 +194,7 @@ TensorfModel SmallForwardModel(uint64_t seed) {
 
 std::vector<uint8_t> EncodeForward(const TensorfModel& model,
                                    int max_version_minor = kVersionMinor) {
-  EncodeOptions o;
+  encoder::EncodeOptions o;
   o.max_version_minor = max_version_minor;
   o.mlp_float32 = true;
   o.mlp_max_level = 0;

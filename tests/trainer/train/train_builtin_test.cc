@@ -16,6 +16,7 @@
 #include "tests/common/scoped_temp_dir.h"
 #include "trainer/data/camera.h"
 #include "trainer/data/image_metrics.h"
+#include "trainer/rate/coded_model.h"
 #include "trainer/train/trainer.h"
 
 namespace ecrf {
@@ -93,10 +94,10 @@ TEST(TrainBuiltin, ReachesHeldOutPsnrAndCheckpointsRestore) {
 
   // The encoded file, decoded by the embeddable decoder, renders the held-out views almost as
   // well as the float model: 8-bit quantization of the DCT coefficients costs little.
-  EncodeOptions eo;
+  encoder::EncodeOptions eo;
   eo.blocks = rate.config;
   eo.steps = rate.steps;
-  EncodeReport report;
+  encoder::EncodeReport report;
   const std::vector<uint8_t> bytes = EncodeScene(model, eo, &report);
   const double decoded_psnr = DecodedPsnr(bytes, test);
   size_t float_bytes = 0;
@@ -188,7 +189,8 @@ TEST(TrainBuiltin, TargetSizeLands) {
   RateState rate;
   const TrainResult r = Train(t, train, test, &model, &rate);
   const std::vector<uint8_t> trained = EncodeScene(model, RunEncodeOptions(t, rate));
-  const TargetSizeResult fit = EncodeToTargetSize(model, RunEncodeOptions(t, rate), t.target_bytes);
+  const encoder::TargetSizeResult fit =
+      EncodeToTargetSize(model, RunEncodeOptions(t, rate), t.target_bytes);
   const double trained_psnr = DecodedPsnr(trained, test);
   const double fit_psnr = DecodedPsnr(fit.bytes, test);
   std::printf(

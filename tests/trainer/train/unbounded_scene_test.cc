@@ -18,6 +18,7 @@
 #include "tests/common/renderer_agreement.h"
 #include "trainer/data/scene_fit.h"
 #include "trainer/model/volume_render.h"
+#include "trainer/rate/coded_model.h"
 #include "trainer/scenes/builtin_scene.h"
 #include "trainer/scenes/capture_scene.h"
 #include "trainer/scenes/still_life.h"
@@ -141,7 +142,7 @@ TEST(SceneFit, AutoWeightThresholdIsCoarserForUnboundedScenesOnly) {
   EXPECT_EQ(ConfigFor(o, object).weight_threshold, 0.f);
   TensorfModel model(ConfigFor(PresetOptions("tiny"), capture));
   model.Initialize({16, 16, 16}, 3);
-  const dec::SceneField field = DecodeOrDie(EncodeScene(model, EncodeOptions()));
+  const dec::SceneField field = DecodeOrDie(EncodeScene(model, encoder::EncodeOptions()));
   EXPECT_EQ(field.weight_threshold, kUnboundedWeightThreshold);
 }
 
@@ -180,7 +181,7 @@ TensorfModel SmallUnboundedModel(uint64_t seed) {
 TEST(UnboundedScene, StreamIsVersion12AndTheDecoderRendersWhatTheTrainerRenders) {
   TensorfModel model = SmallUnboundedModel(5);
   model.UpdateAlphaMask({9, 8, 9});  // a mask over the contracted cube
-  EncodeOptions o;
+  encoder::EncodeOptions o;
   o.mlp_float32 = true;
   o.mlp_max_level = 0;
   o.drop_zero_components = false;

@@ -2,8 +2,8 @@
 // reference decoder at its default budgets: a "decode"-stage stream fails to decode, a
 // "render"-stage one decodes and its renderer refuses it when prepared. format/ and decoder/ only,
 // so the portable checksum program (tests/decoder/conformance_checksums.cc) uses it too.
-#ifndef ECRF_TESTS_COMMON_REJECT_CHECK_H_
-#define ECRF_TESTS_COMMON_REJECT_CHECK_H_
+#ifndef ECRF_CONFORMANCE_REJECT_CHECK_H_
+#define ECRF_CONFORMANCE_REJECT_CHECK_H_
 
 #include <cstddef>
 #include <cstdint>
@@ -38,4 +38,4 @@ inline RejectOutcome CheckReject(const uint8_t* bytes, size_t size, const std::s
 }  // namespace conformance
 }  // namespace ecrf
 
-#endif  // ECRF_TESTS_COMMON_REJECT_CHECK_H_
+#endif  // ECRF_CONFORMANCE_REJECT_CHECK_H_

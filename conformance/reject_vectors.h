@@ -1,15 +1,15 @@
 // Must-reject conformance streams (SPEC.md 7.7): each is refused with the error category named,
 // as AV1's conformance suites carry invalid streams. Built with format/ only from a valid vector
 // (scene_2d_blocks and its relatives) with one thing broken, or from the costly streams of
-// tests/common/costly_streams.h. Two kinds:
+// conformance/costly_streams.h. Two kinds:
 //   normative: every conforming decoder refuses the stream with this category (SPEC.md 1.3, 2, 6,
 //   8); budget:    the reference decoder refuses it at its default budgets (SPEC.md 8,
 //   informative);
 //              a decoder with other budgets may accept it, and then must decode it exactly.
 // Stage "decode" is ecrf_scene_decode; stage "render" is ecrf_scene_render (or check_render) of a
 // stream that decodes.
-#ifndef ECRF_TESTS_COMMON_REJECT_VECTORS_H_
-#define ECRF_TESTS_COMMON_REJECT_VECTORS_H_
+#ifndef ECRF_CONFORMANCE_REJECT_VECTORS_H_
+#define ECRF_CONFORMANCE_REJECT_VECTORS_H_
 
 #include <cstdint>
 #include <cstring>
@@ -17,11 +17,11 @@
 #include <utility>
 #include <vector>
 
+#include "conformance/costly_streams.h"
+#include "conformance/scene_vectors.h"
 #include "format/container.h"
 #include "format/crc32.h"
 #include "format/status.h"
-#include "tests/common/costly_streams.h"
-#include "tests/common/scene_vectors.h"
 
 namespace ecrf {
 namespace conformance {
@@ -232,4 +232,4 @@ inline std::string RejectExpectedText(const std::vector<RejectVector>& vectors) 
 }  // namespace conformance
 }  // namespace ecrf
 
-#endif  // ECRF_TESTS_COMMON_REJECT_VECTORS_H_
+#endif  // ECRF_CONFORMANCE_REJECT_VECTORS_H_

@@ -2,8 +2,8 @@
 // web/test/gl_record.mjs (keep the two in sync), read into memory and checked before any GL call.
 // No GL or EGL headers here: the few GL enum values the checks need are spelled out in gl_enum
 // (gl_replay.cc asserts they match GLES3/gl3.h), so the format can be read where no GL exists.
-#ifndef ECRF_TOOLS_BENCH_GL_TRACE_H_
-#define ECRF_TOOLS_BENCH_GL_TRACE_H_
+#ifndef ECRF_BENCHMARKS_GL_TRACE_H_
+#define ECRF_BENCHMARKS_GL_TRACE_H_
 
 #include <cstddef>
 #include <cstdint>
@@ -153,4 +153,4 @@ bool Validate(const Trace& setup, const Trace& frame, size_t* begin, size_t* end
 }  // namespace gl_replay
 }  // namespace ecrf
 
-#endif  // ECRF_TOOLS_BENCH_GL_TRACE_H_
+#endif  // ECRF_BENCHMARKS_GL_TRACE_H_

@@ -1,6 +1,6 @@
 // MD5 (RFC 1321), header-only, for the checksums of conformance outputs. Not for security.
-#ifndef ECRF_TESTS_COMMON_MD5_H_
-#define ECRF_TESTS_COMMON_MD5_H_
+#ifndef ECRF_CONFORMANCE_MD5_H_
+#define ECRF_CONFORMANCE_MD5_H_
 
 #include <cstddef>
 #include <cstdint>
@@ -8,7 +8,7 @@
 #include <string>
 
 namespace ecrf {
-namespace testing_md5 {
+namespace conformance {
 
 class Md5 {
  public:
@@ -120,7 +120,7 @@ inline std::string Md5Hex(const void* data, size_t size) {
   return m.HexDigest();
 }
 
-}  // namespace testing_md5
+}  // namespace conformance
 }  // namespace ecrf
 
-#endif  // ECRF_TESTS_COMMON_MD5_H_
+#endif  // ECRF_CONFORMANCE_MD5_H_

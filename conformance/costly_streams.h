@@ -7,8 +7,8 @@
 //                      coloured or (hidden = 0 in the options) none (density work).
 //   EmptyRowsOccupancyStream: an OCCU chunk that flags every row and sets no voxel (decode).
 //   FullLengthBlocksStream: COEF blocks whose end of block is the last position (decode).
-#ifndef ECRF_TESTS_COMMON_COSTLY_STREAMS_H_
-#define ECRF_TESTS_COMMON_COSTLY_STREAMS_H_
+#ifndef ECRF_CONFORMANCE_COSTLY_STREAMS_H_
+#define ECRF_CONFORMANCE_COSTLY_STREAMS_H_
 
 #include <cstdint>
 #include <vector>
@@ -175,4 +175,4 @@ inline std::vector<uint8_t> BuildCostlyStream(const CostlyScene& cs) {
 }  // namespace costly
 }  // namespace ecrf
 
-#endif  // ECRF_TESTS_COMMON_COSTLY_STREAMS_H_
+#endif  // ECRF_CONFORMANCE_COSTLY_STREAMS_H_

@@ -1,8 +1,8 @@
 // The headless EGL + OpenGL ES 3 context ecrf_gl_replay renders on: no window, no X11 or Wayland.
 // Displays are tried in the order that finds a GPU first on a server: EGL_EXT_platform_device (a
 // GPU without a display server), EGL_MESA_platform_surfaceless (Mesa), EGL_DEFAULT_DISPLAY.
-#ifndef ECRF_TOOLS_BENCH_GL_REPLAY_CONTEXT_H_
-#define ECRF_TOOLS_BENCH_GL_REPLAY_CONTEXT_H_
+#ifndef ECRF_BENCHMARKS_GL_REPLAY_CONTEXT_H_
+#define ECRF_BENCHMARKS_GL_REPLAY_CONTEXT_H_
 
 // No X11 types in the EGL headers (nothing here uses them; the GPU machine may lack X11 headers).
 #define EGL_NO_X11
@@ -47,4 +47,4 @@ void DestroyContext(const HeadlessDisplay& display, HeadlessContext* context);
 }  // namespace gl_replay
 }  // namespace ecrf
 
-#endif  // ECRF_TOOLS_BENCH_GL_REPLAY_CONTEXT_H_
+#endif  // ECRF_BENCHMARKS_GL_REPLAY_CONTEXT_H_

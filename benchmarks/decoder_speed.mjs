@@ -1,9 +1,9 @@
-// The WebAssembly counterpart of tools/bench/decoder_speed.c, for scripts/decoder-speed.sh --wasm:
+// The WebAssembly counterpart of benchmarks/decoder_speed.c, for scripts/decoder-speed.sh --wasm:
 // loads an emscripten build of the decoder's C API (nothing of web/, so it runs against the
 // decoder of any commit), decodes a stream, renders VIEWS orbit views REPS times on one thread
 // (as the viewer's workers do) and prints the same line as the C program (with a 32-bit hash).
 //
-//   node tools/bench/decoder_speed.mjs MODULE.js SCENE.ecrf [VIEWS [SIZE [REPS]]]
+//   node benchmarks/decoder_speed.mjs MODULE.js SCENE.ecrf [VIEWS [SIZE [REPS]]]
 import {createRequire} from 'node:module';
 import {readFileSync} from 'node:fs';
 

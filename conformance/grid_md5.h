@@ -1,20 +1,20 @@
 // The checksums of a decoded scene (SPEC.md 6.5): the grids (MD5 over each tensor's float32 values,
 // little endian, in storage order; the scene checksum covers all twelve tensors in chunk order),
 // the occupancy mask (its packed bits) and the MLP parameters (float32, the MLPW order).
-#ifndef ECRF_TESTS_COMMON_GRID_MD5_H_
-#define ECRF_TESTS_COMMON_GRID_MD5_H_
+#ifndef ECRF_CONFORMANCE_GRID_MD5_H_
+#define ECRF_CONFORMANCE_GRID_MD5_H_
 
 #include <cstring>
 #include <string>
 #include <vector>
 
+#include "conformance/md5.h"
 #include "decoder/field.h"
-#include "tests/common/md5.h"
 
 namespace ecrf {
 namespace conformance {
 
-inline void AddTensorToMd5(const dec::VmGrid& grid, int tensor, testing_md5::Md5* md5) {
+inline void AddTensorToMd5(const dec::VmGrid& grid, int tensor, conformance::Md5* md5) {
   const int m = tensor % 3;
   const float* data = tensor < 3 ? grid.plane_f32[m].data() : grid.line_f32[m].data();
   const size_t count = tensor < 3 ? grid.plane_count(m) : grid.line_count(m);
@@ -33,13 +33,13 @@ inline void AddTensorToMd5(const dec::VmGrid& grid, int tensor, testing_md5::Md5
 }
 
 inline std::string TensorMd5(const dec::VmGrid& grid, int tensor) {
-  testing_md5::Md5 md5;
+  conformance::Md5 md5;
   AddTensorToMd5(grid, tensor, &md5);
   return md5.HexDigest();
 }
 
 inline std::string SceneGridMd5(const dec::SceneField& scene) {
-  testing_md5::Md5 md5;
+  conformance::Md5 md5;
   for (const dec::VmGrid* g : {&scene.density, &scene.appearance}) {
     for (int t = 0; t < 6; ++t) AddTensorToMd5(*g, t, &md5);
   }
@@ -49,7 +49,7 @@ inline std::string SceneGridMd5(const dec::SceneField& scene) {
 // MD5 of the packed mask bits (x fastest, LSB first, unused high bits 0); of no bytes without a
 // mask.
 inline std::string OccupancyMd5(const dec::SceneField& scene) {
-  testing_md5::Md5 md5;
+  conformance::Md5 md5;
   if (scene.has_mask) {
     const size_t bytes = (scene.mask.voxel_count() + 7) / 8;
     std::vector<uint8_t> packed(scene.mask.bits(), scene.mask.bits() + bytes);
@@ -71,7 +71,7 @@ inline std::string MlpMd5(const dec::SceneField& scene) {
     std::memcpy(&u, &params[i], 4);
     for (int b = 0; b < 4; ++b) bytes[i * 4 + b] = uint8_t(u >> (8 * b));
   }
-  testing_md5::Md5 md5;
+  conformance::Md5 md5;
   md5.Update(bytes.data(), bytes.size());
   return md5.HexDigest();
 }
@@ -79,4 +79,4 @@ inline std::string MlpMd5(const dec::SceneField& scene) {
 }  // namespace conformance
 }  // namespace ecrf
 
-#endif  // ECRF_TESTS_COMMON_GRID_MD5_H_
+#endif  // ECRF_CONFORMANCE_GRID_MD5_H_

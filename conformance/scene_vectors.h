@@ -14,8 +14,8 @@
 // class escape with extra values up to 2^23), an unbounded scene whose rays end at their sample
 // limit inside the contracted cube, and a forward-facing scene seen from the side, so that a
 // quarter of the rays never reach the reference camera's far side and miss the NDC mapping.
-#ifndef ECRF_TESTS_COMMON_SCENE_VECTORS_H_
-#define ECRF_TESTS_COMMON_SCENE_VECTORS_H_
+#ifndef ECRF_CONFORMANCE_SCENE_VECTORS_H_
+#define ECRF_CONFORMANCE_SCENE_VECTORS_H_
 
 #include <algorithm>
 #include <cmath>
@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "conformance/coef_vectors.h"
 #include "format/byte_io.h"
 #include "format/coefficients/coef_coder.h"
 #include "format/container.h"
@@ -31,7 +32,6 @@
 #include "format/ndc_frame.h"
 #include "format/occupancy_coder.h"
 #include "format/scene_header.h"
-#include "tests/common/coef_vectors.h"
 
 namespace ecrf {
 namespace conformance {
@@ -436,4 +436,4 @@ inline std::vector<uint8_t> BuildSceneVector(const SceneVector& v) {
 }  // namespace conformance
 }  // namespace ecrf
 
-#endif  // ECRF_TESTS_COMMON_SCENE_VECTORS_H_
+#endif  // ECRF_CONFORMANCE_SCENE_VECTORS_H_

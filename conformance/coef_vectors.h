@@ -6,17 +6,17 @@
 // (8-bit) or 32767 (16-bit). The normative output is the
 // concatenation of every block's InverseDctInt samples as int32 little endian; its MD5 is listed
 // in tests/conformance/coefficients.md5. Shared by the conformance test and `ecrf conformance`.
-#ifndef ECRF_TESTS_COMMON_COEF_VECTORS_H_
-#define ECRF_TESTS_COMMON_COEF_VECTORS_H_
+#ifndef ECRF_CONFORMANCE_COEF_VECTORS_H_
+#define ECRF_CONFORMANCE_COEF_VECTORS_H_
 
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "conformance/md5.h"
 #include "format/coefficients/coef_coder.h"
 #include "format/coefficients/int_idct.h"
 #include "format/entropy/range_coder.h"
-#include "tests/common/md5.h"
 
 namespace ecrf {
 namespace conformance {
@@ -168,7 +168,7 @@ inline std::string DecodeVectorMd5(const CoefVector& v, const std::vector<uint8_
   const int volume = v.shape.Volume();
   const int dims[3] = {v.shape.n0, v.shape.n1, v.shape.n2};
   std::vector<int32_t> coeffs(volume), samples(volume);
-  testing_md5::Md5 md5;
+  conformance::Md5 md5;
   for (int b = 0; b < v.blocks; ++b) {
     s = DecodeCoefBlock(dec, ctx, v.coef_bits == 16 ? 32767 : 127, coeffs.data());
     if (!s.ok()) return std::string("error: ") + s.message();
@@ -187,4 +187,4 @@ inline std::string DecodeVectorMd5(const CoefVector& v, const std::vector<uint8_
 }  // namespace conformance
 }  // namespace ecrf
 
-#endif  // ECRF_TESTS_COMMON_COEF_VECTORS_H_
+#endif  // ECRF_CONFORMANCE_COEF_VECTORS_H_

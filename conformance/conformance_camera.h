@@ -1,7 +1,7 @@
 // The camera of each scene vector's reference render (SPEC.md 7.7). tests/conformance/manifest.json
 // stores the resulting binary32 values exactly; this is how `ecrf conformance --write` made them.
-#ifndef ECRF_TESTS_COMMON_CONFORMANCE_CAMERA_H_
-#define ECRF_TESTS_COMMON_CONFORMANCE_CAMERA_H_
+#ifndef ECRF_CONFORMANCE_CONFORMANCE_CAMERA_H_
+#define ECRF_CONFORMANCE_CONFORMANCE_CAMERA_H_
 
 #include <string>
 
@@ -26,4 +26,4 @@ inline dec::Camera ReferenceCamera(const std::string& vector_name) {
 }  // namespace conformance
 }  // namespace ecrf
 
-#endif  // ECRF_TESTS_COMMON_CONFORMANCE_CAMERA_H_
+#endif  // ECRF_CONFORMANCE_CONFORMANCE_CAMERA_H_

@@ -1,11 +1,11 @@
 // Headless EGL display and context creation (gl_replay_context.h).
-#include "tools/bench/gl_replay_context.h"
+#include "benchmarks/gl_replay_context.h"
 
 #include <EGL/eglext.h>
 
 #include <cstring>
 
-#include "tools/bench/gl_trace.h"  // Fmt, Fail
+#include "benchmarks/gl_trace.h"  // Fmt, Fail
 
 namespace ecrf {
 namespace gl_replay {

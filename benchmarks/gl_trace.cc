@@ -1,5 +1,5 @@
 // Reading and checking GL traces (gl_trace.h); no GL calls.
-#include "tools/bench/gl_trace.h"
+#include "benchmarks/gl_trace.h"
 
 #include <algorithm>
 #include <cerrno>

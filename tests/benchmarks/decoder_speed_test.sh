@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# tools/bench/decoder_speed.c, the timing program of scripts/decoder-speed.sh: it decodes and
+# benchmarks/decoder_speed.c, the timing program of scripts/decoder-speed.sh: it decodes and
 # renders through the C API and prints its line; its pixel hash covers the image (another size
 # gives another hash) and not the thread count (the renderer's output does not depend on it); a
 # truncated stream is an error, not a timing.
