@@ -32,15 +32,16 @@ struct DecodeOptions {
   // occupancy mask with its acceleration levels, and MLP. Each chunk's need is checked against
   // what is left before anything is allocated (kErrLimit). Within the format's own limits a few
   // hundred bytes of stream can describe 1 GiB of all-zero grids and 2.5 KB of OCCU a 256 MiB
-  // mask, so the default (256 MiB, 10x a 400x400 Synthetic-NeRF scene) keeps hostile files cheap;
-  // applications that decode larger scenes raise it, small devices lower it.
+  // mask, so the default (ECRF_DEFAULT_MEMORY_BUDGET, 10x a 400x400 Synthetic-NeRF scene) keeps
+  // hostile files cheap; applications that decode larger scenes raise it, small devices lower it.
   uint64_t max_memory_bytes = kDefaultDecodeMemoryBudget;
   // Decode work budget: kDecodeWorkBase + work_per_byte x the stream's size, in symbols (a coded
   // block's inverse DCT counts what it costs in symbols' time); 0: no limit. Within the format's
   // limits 30 KB of OCCU can flag 2^31 voxels for decoding and 8 KB of COEF can code 65,536
   // blocks to their last position; trained streams cost 14-110 per byte (docs/
-  // benchmarks-and-fuzzing.md), so the default (1024) leaves them unchanged and keeps any stream
-  // of 64 KB under a second. Checked as the work comes, before it is spent (kErrLimit).
+  // benchmarks-and-fuzzing.md), so the default (ECRF_DEFAULT_DECODE_BUDGET) leaves them unchanged
+  // and keeps any stream of 64 KB under a second. Checked as the work comes, before it is spent
+  // (kErrLimit).
   uint64_t work_per_byte = kDefaultDecodeWorkPerByte;
   // The units every stream may spend whatever its size (with work_per_byte > 0).
   uint64_t work_base = kDecodeWorkBase;

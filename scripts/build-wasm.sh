@@ -45,11 +45,11 @@ for src in "${sources[@]}"; do
   objs+=("$obj")
 done
 
-EXPORTS='["_ecrf_version","_ecrf_version_string","_ecrf_bitstream_version","_ecrf_error_name",'
-EXPORTS+='"_ecrf_scene_create","_ecrf_scene_destroy","_ecrf_scene_message","_ecrf_scene_decode",'
-EXPORTS+='"_ecrf_scene_get_info","_ecrf_scene_render","_ecrf_render_options_default",'
-EXPORTS+='"_ecrf_scene_set_memory_budget","_ecrf_scene_set_decode_budget","_ecrf_scene_check_render","_ecrf_scene_tensor","_ecrf_scene_get_field","_ecrf_scene_model","_ecrf_scene_ndc_frame","_ecrf_scene_occupancy",'
-EXPORTS+='"_ecrf_scene_mlp_params","_malloc","_free"]'
+# The exports are the C API as include/ecrf/decoder.h declares it (every ECRF_API function), plus
+# the allocator the viewer passes buffers through: the header is their one list.
+mapfile -t api < <(sed -n 's/^ECRF_API .*[ *]\(ecrf_[a-z0-9_]*\)(.*/\1/p' include/ecrf/decoder.h)
+[ ${#api[@]} -gt 0 ] || { echo "no ECRF_API functions found in include/ecrf/decoder.h" >&2; exit 1; }
+EXPORTS="[$(printf '"_%s",' "${api[@]}")\"_malloc\",\"_free\"]"
 RUNTIME='["cwrap","ccall","UTF8ToString","HEAPU8","HEAP32","HEAPU32","HEAPF32"]'
 
 echo "link $OUT/ecrf_decoder.js"
