@@ -162,12 +162,12 @@ TEST(TrainHelp, ShowsTheResolvedDefaultsOfEachRatePoint) {
     EXPECT_EQ(Invoke(RunReportSweep, {"sweep", "--rate", rate, "--help"}), 0);
     help += testing::internal::GetCapturedStdout();
     for (const std::string& shown :
-         {"--lambda-e X:NONNEGATIVE=" + Shown(o.lambda_e),
-          "--quant-step-scale S=" + Shown(o.quant_step_scale),
-          "--mlp-levels L:INT in [0 - 32767]=" + Shown(o.mlp_levels),
-          "--rate-start F=" + Shown(o.rate_start),
-          "--iters N:INT in [1 - 100000000]=" + Shown(o.iters),
-          "--rate TEXT:{low,medium,high,none}=" + std::string(trainer::NameOf(o.rate_point))}) {
+         {"--lambda-e X:>= 0=" + Shown(o.lambda_e),
+          "--quant-step-scale S:> 0=" + Shown(o.quant_step_scale),
+          "--mlp-levels L:in [0, 32767]=" + Shown(o.mlp_levels),
+          "--rate-start F:in [0, 1)=" + Shown(o.rate_start),
+          "--iters N:in [1, 100000000]=" + Shown(o.iters),
+          "--rate TEXT:{none,low,medium,high}=" + std::string(trainer::NameOf(o.rate_point))}) {
       const size_t first = help.find(shown);
       EXPECT_NE(first, std::string::npos) << rate << ": help lacks '" << shown << "'";
       EXPECT_NE(help.find(shown, first + 1), std::string::npos)
