@@ -289,8 +289,8 @@ void SpeedSection(std::ostringstream& o, const std::string& dir, nlohmann::json&
   o << "<p>Decoding (entropy decoding + integer IDCT + grid layout, one thread, fastest of 3): "
     << Num(d["float32_seconds"], "%.3f") << " s to float32 grids ("
     << Num(d["float32_ms_per_mb"], "%.0f") << " ms per MB of stream, "
-    << Num(nlohmann::json(d["float32_grid_bytes"].get<double>() / 1e6), "%.1f")
-    << " MB of grids), " << Num(d["int16_seconds"], "%.3f") << " s to int16 grids ("
+    << Num(nlohmann::json(d["float32_grid_bytes"].get<double>() / 1e6), "%.1f") << " MB of grids), "
+    << Num(d["int16_seconds"], "%.3f") << " s to int16 grids ("
     << Num(nlohmann::json(d["int16_grid_bytes"].get<double>() / 1e6), "%.1f") << " MB)";
   if (d["peak_rss_growth_bytes"].is_number()) {
     o << "; peak RSS grew by "

@@ -105,34 +105,34 @@ std::string TaskScript(const SweepPlan& plan, size_t k, const std::vector<std::s
   const size_t n = plan.tasks.size();
   const std::string ecrf = ShellQuote(plan.ecrf), work = ShellQuote(plan.work_dir);
   return "#!/bin/sh\n"
-                "# ecrf sweep task " +
-                    std::to_string(k) + " of " + std::to_string(n) + ": point " + t.name +
-                    ". Written by `ecrf report sweep --plan`; run by sweep.sbatch (Slurm array "
-                    "task " +
-                    std::to_string(k) +
-                    "), run_local.sh or by hand.\n"
-                    "# A finished point is left as it is; an unfinished one is trained from the "
-                    "start.\n"
-                    "# Threads: the Slurm task's CPUs, else $ECRF_THREADS, else all cores (the "
-                    "model is the same bits for any count).\n"
-                    "set -e\n"
-                    "cd " +
-                    work +
-                    "\n"
-                    "if [ -f " +
-                    ShellQuote(t.run_dir + "/metrics.json") +
-                    " ]; then\n"
-                    "  echo \"task " +
-                    std::to_string(k) + " (" + t.name + "): finished already in " + t.run_dir +
-                    "\"\n"
-                    "  exit 0\n"
-                    "fi\n"
-                    "ecrf=${ECRF:-" +
-                    ecrf +
-                    "}\n"
-                    "threads=${SLURM_CPUS_PER_TASK:-${ECRF_THREADS:-0}}\n"
-                    "exec \"$ecrf\" " +
-                    Join(args) + " --threads \"$threads\"\n";
+         "# ecrf sweep task " +
+         std::to_string(k) + " of " + std::to_string(n) + ": point " + t.name +
+         ". Written by `ecrf report sweep --plan`; run by sweep.sbatch (Slurm array "
+         "task " +
+         std::to_string(k) +
+         "), run_local.sh or by hand.\n"
+         "# A finished point is left as it is; an unfinished one is trained from the "
+         "start.\n"
+         "# Threads: the Slurm task's CPUs, else $ECRF_THREADS, else all cores (the "
+         "model is the same bits for any count).\n"
+         "set -e\n"
+         "cd " +
+         work +
+         "\n"
+         "if [ -f " +
+         ShellQuote(t.run_dir + "/metrics.json") +
+         " ]; then\n"
+         "  echo \"task " +
+         std::to_string(k) + " (" + t.name + "): finished already in " + t.run_dir +
+         "\"\n"
+         "  exit 0\n"
+         "fi\n"
+         "ecrf=${ECRF:-" +
+         ecrf +
+         "}\n"
+         "threads=${SLURM_CPUS_PER_TASK:-${ECRF_THREADS:-0}}\n"
+         "exec \"$ecrf\" " +
+         Join(args) + " --threads \"$threads\"\n";
 }
 
 // Writes task_K.sh for every task and tasks.txt, one shell line per task (each task's script with
@@ -166,12 +166,12 @@ std::string CollectScript(const SweepPlan& plan) {
   const std::string collect = "ecrf=${ECRF:-" + ecrf + "}\ncd " + work + "\nexec \"$ecrf\" " +
                               Join(plan.collect_args) + "\n";
   return "#!/bin/sh\n"
-              "# Collects the report of this plan: the sweep's command line with --collect. "
-              "Finished runs are\n"
-              "# reported as a local sweep reports them; a task that did not finish is named "
-              "with its log\n"
-              "# (exit status 1), and resubmitting the plan reruns only such tasks.\n" +
-                  collect;
+         "# Collects the report of this plan: the sweep's command line with --collect. "
+         "Finished runs are\n"
+         "# reported as a local sweep reports them; a task that did not finish is named "
+         "with its log\n"
+         "# (exit status 1), and resubmitting the plan reruns only such tasks.\n" +
+         collect;
 }
 
 // sweep.sbatch: a Slurm job array of the tasks.
@@ -180,73 +180,73 @@ std::string SbatchScript(const SweepPlan& plan) {
   const size_t n = plan.tasks.size();
   const std::string last = std::to_string(n == 0 ? 0 : n - 1);
   return "#!/bin/bash\n"
-              "#SBATCH --job-name=" +
-                  plan.job_name +
-                  "\n"
-                  "#SBATCH --array=0-" +
-                  last +
-                  "\n"
-                  "#SBATCH --cpus-per-task=" +
-                  std::to_string(plan.task_cpus) +
-                  "\n"
-                  "#SBATCH --mem=" +
-                  plan.task_mem +
-                  "\n"
-                  "#SBATCH --output=" +
-                  dir +
-                  "/logs/task_%a.log\n"
-                  "# One sweep point per array task (task_K.sh). Options given to sbatch override "
-                  "these lines:\n"
-                  "#   sbatch --partition=P --time=12:00:00 " +
-                  dir +
-                  "/sweep.sbatch\n"
-                  "# Afterwards: bash " +
-                  dir +
-                  "/collect.sh, or chained:\n"
-                  "#   jid=$(sbatch --parsable " +
-                  dir +
-                  "/sweep.sbatch)\n"
-                  "#   sbatch --dependency=afterany:$jid --wrap 'bash " +
-                  dir +
-                  "/collect.sh'\n"
-                  "# Finished points are skipped, so resubmitting reruns only the tasks that "
-                  "failed.\n"
-                  "exec bash " +
-                  dir + "/task_${SLURM_ARRAY_TASK_ID}.sh\n";
+         "#SBATCH --job-name=" +
+         plan.job_name +
+         "\n"
+         "#SBATCH --array=0-" +
+         last +
+         "\n"
+         "#SBATCH --cpus-per-task=" +
+         std::to_string(plan.task_cpus) +
+         "\n"
+         "#SBATCH --mem=" +
+         plan.task_mem +
+         "\n"
+         "#SBATCH --output=" +
+         dir +
+         "/logs/task_%a.log\n"
+         "# One sweep point per array task (task_K.sh). Options given to sbatch override "
+         "these lines:\n"
+         "#   sbatch --partition=P --time=12:00:00 " +
+         dir +
+         "/sweep.sbatch\n"
+         "# Afterwards: bash " +
+         dir +
+         "/collect.sh, or chained:\n"
+         "#   jid=$(sbatch --parsable " +
+         dir +
+         "/sweep.sbatch)\n"
+         "#   sbatch --dependency=afterany:$jid --wrap 'bash " +
+         dir +
+         "/collect.sh'\n"
+         "# Finished points are skipped, so resubmitting reruns only the tasks that "
+         "failed.\n"
+         "exec bash " +
+         dir + "/task_${SLURM_ARRAY_TASK_ID}.sh\n";
 }
 
 // run_local.sh: the tasks on this machine, one after another or with GNU parallel.
 std::string RunLocalScript(const std::string& dir) {
   return "#!/bin/bash\n"
-      "# Runs this plan on this machine: the tasks one after another, or JOBS at a "
-      "time with GNU\n"
-      "# parallel (bash run_local.sh [JOBS]; each task then trains on cores/JOBS "
-      "threads), then\n"
-      "# collects the report. Logs: " +
-          dir +
-          "/logs/task_K.log.\n"
-          "set -u\n"
-          "jobs=${1:-1}\n"
-          "if [ \"$jobs\" -gt 1 ]; then\n"
-          "  if ! command -v parallel >/dev/null 2>&1; then\n"
-          "    echo \"run_local.sh: GNU parallel is not installed (apt-get install parallel);"
-          " without JOBS the tasks run one after another\" >&2\n"
-          "    exit 2\n"
-          "  fi\n"
-          "  export ECRF_THREADS=${ECRF_THREADS:-$(( $(nproc) / jobs > 0 ? $(nproc) / jobs : "
-          "1 ))}\n"
-          "  parallel --will-cite -j \"$jobs\" < " +
-          ShellQuote(dir + "/tasks.txt") +
-          "\n"
-          "else\n"
-          "  while IFS= read -r task; do\n"
-          "    bash -c \"$task\" || echo \"run_local.sh: failed: $task\" >&2\n"
-          "  done < " +
-          ShellQuote(dir + "/tasks.txt") +
-          "\n"
-          "fi\n"
-          "exec bash " +
-          ShellQuote(dir + "/collect.sh") + "\n";
+         "# Runs this plan on this machine: the tasks one after another, or JOBS at a "
+         "time with GNU\n"
+         "# parallel (bash run_local.sh [JOBS]; each task then trains on cores/JOBS "
+         "threads), then\n"
+         "# collects the report. Logs: " +
+         dir +
+         "/logs/task_K.log.\n"
+         "set -u\n"
+         "jobs=${1:-1}\n"
+         "if [ \"$jobs\" -gt 1 ]; then\n"
+         "  if ! command -v parallel >/dev/null 2>&1; then\n"
+         "    echo \"run_local.sh: GNU parallel is not installed (apt-get install parallel);"
+         " without JOBS the tasks run one after another\" >&2\n"
+         "    exit 2\n"
+         "  fi\n"
+         "  export ECRF_THREADS=${ECRF_THREADS:-$(( $(nproc) / jobs > 0 ? $(nproc) / jobs : "
+         "1 ))}\n"
+         "  parallel --will-cite -j \"$jobs\" < " +
+         ShellQuote(dir + "/tasks.txt") +
+         "\n"
+         "else\n"
+         "  while IFS= read -r task; do\n"
+         "    bash -c \"$task\" || echo \"run_local.sh: failed: $task\" >&2\n"
+         "  done < " +
+         ShellQuote(dir + "/tasks.txt") +
+         "\n"
+         "fi\n"
+         "exec bash " +
+         ShellQuote(dir + "/collect.sh") + "\n";
 }
 
 // plan.json: the plan as data (the tasks, how to submit, run and collect them).
