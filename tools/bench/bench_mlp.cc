@@ -145,15 +145,14 @@ struct MlpTimes {
 
 // Eigen's GEMM (its own threading) on the shape of the first MLP layer.
 double EigenGemmGflops(int reps) {
-  RowMat a = RowMat::Random(kGemmM, kGemmK), b = RowMat::Random(kGemmK, kGemmN),
-         c(kGemmM, kGemmN);
+  RowMat a = RowMat::Random(kGemmM, kGemmK), b = RowMat::Random(kGemmK, kGemmN), c(kGemmM, kGemmN);
   const double gemm_s = MedianSeconds(std::max(reps, 20), [&] { c.noalias() = a * b; });
   return 2.0 * kGemmM * kGemmK * kGemmN / gemm_s * 1e-9;
 }
 
 // The decoder's MLP, each thread on its share of the rows.
-double DecoderInferSeconds(const dec::AppearanceMlp& mlp, MlpRows* rows, int n, int P,
-                           int threads, int reps) {
+double DecoderInferSeconds(const dec::AppearanceMlp& mlp, MlpRows* rows, int n, int P, int threads,
+                           int reps) {
   std::vector<std::vector<float>> scratch(threads, std::vector<float>(mlp.ScratchFloats()));
   return MedianSeconds(reps, [&] {
 #pragma omp parallel num_threads(threads)
@@ -181,13 +180,15 @@ MlpTimes TimeMlps(trainer::AppearanceHead& head, const dec::AppearanceMlp& decod
   omp_set_num_threads(threads);
   t.gemm_gflops = EigenGemmGflops(f.reps);
   const int n = f.n;
-  t.forward_s = MedianSeconds(
-      f.reps, [&] { head.Forward(n, rows->products.data(), rows->viewdirs.data(), rows->rgb.data()); });
+  t.forward_s = MedianSeconds(f.reps, [&] {
+    head.Forward(n, rows->products.data(), rows->viewdirs.data(), rows->rgb.data());
+  });
   head.Forward(n, rows->products.data(), rows->viewdirs.data(), rows->rgb.data());
   t.backward_s = MedianSeconds(
       f.reps, [&] { head.Backward(n, rows->dl_drgb.data(), rows->dl_dproducts.data()); });
-  t.infer_s = MedianSeconds(
-      f.reps, [&] { head.Infer(n, rows->products.data(), rows->viewdirs.data(), rows->rgb.data()); });
+  t.infer_s = MedianSeconds(f.reps, [&] {
+    head.Infer(n, rows->products.data(), rows->viewdirs.data(), rows->rgb.data());
+  });
   t.decoder_s =
       DecoderInferSeconds(decoder_mlp, rows, n, head.config().num_products, threads, f.reps);
   if (f.adam_size > 0) t.adam_s = AdamSeconds(f.adam_size, f.reps);
@@ -202,7 +203,8 @@ void PrintMlpTimes(int threads, const MlpTimes& t, const MlpFlops& flops, long a
   std::printf("threads=%d  FMA peak %.1f GFLOP/s; Eigen GEMM %dx%dx%d %.1f GFLOP/s (%.0f%%)\n",
               threads, peak, kGemmM, kGemmK, kGemmN, t.gemm_gflops, 100.0 * t.gemm_gflops / peak);
   std::printf("  forward  %8.2f ms  %6.1f GFLOP/s (%.0f%% of peak)\n", t.forward_s * 1e3,
-              flops.forward / t.forward_s * 1e-9, 100.0 * flops.forward / t.forward_s * 1e-9 / peak);
+              flops.forward / t.forward_s * 1e-9,
+              100.0 * flops.forward / t.forward_s * 1e-9 / peak);
   std::printf("  backward %8.2f ms  %6.1f GFLOP/s (%.0f%% of peak)\n", t.backward_s * 1e3,
               flops.backward / t.backward_s * 1e-9,
               100.0 * flops.backward / t.backward_s * 1e-9 / peak);

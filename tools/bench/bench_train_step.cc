@@ -155,7 +155,8 @@ void AddTrainStepBenchFlags(CLI::App* app, TrainStepBenchFlags* f) {
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
   AddThreadListFlag(app, &f->threads);
-  app->add_option("--mask", f->mask, "update the alpha mask (and shrink) before timing (0: no mask)")
+  app->add_option("--mask", f->mask,
+                  "update the alpha mask (and shrink) before timing (0: no mask)")
       ->type_name("0|1")
       ->check(CLI::Range(0, 1))
       ->capture_default_str();
@@ -426,8 +427,7 @@ int RunTrainStepBench(int argc, char** argv) {
   BenchReport report;
   for (int nthreads : thread_counts)
     results.push_back(TimeThreadCount(bench, f, nthreads, &report));
-  PrintScalingTable(thread_counts, results, phase_bytes, trainer::ScatterTaskCount(model),
-                    &report);
+  PrintScalingTable(thread_counts, results, phase_bytes, trainer::ScatterTaskCount(model), &report);
   if (!f.json_path.empty() && !report.WriteJson(f.json_path)) {
     std::fprintf(stderr, "bench train: cannot write %s\n", f.json_path.c_str());
     return 1;
