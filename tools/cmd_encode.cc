@@ -51,7 +51,8 @@ void AddEncodeFlags(CLI::App* app, EncodeFlags* f) {
                   "default: the run's")
       ->type_name("L")
       ->check(CLI::Range(0, 32767));
-  app->add_flag("--mlp-f32", f->mlp_f32, "store the basis and MLP as float32 (with --mlp-levels 0)");
+  app->add_flag("--mlp-f32", f->mlp_f32,
+                "store the basis and MLP as float32 (with --mlp-levels 0)");
   app->add_option("--coef-bits", f->coef_bits,
                   "coefficient depth (16: the 16-bit peak steps, not the trained ones)")
       ->check(CLI::IsMember({8, 16}))
@@ -111,8 +112,8 @@ EncodeJob JobFromRunConfig(const trainer::CheckpointRunInfo& info, const trainer
 }
 
 // A checkpoint of an ecrf older than stored configurations: the flags and defaults alone.
-EncodeJob JobFromFlags(const std::string& ckpt, const trainer::RateState& rate,
-                       const CLI::App& app, const EncodeFlags& f, size_t target_flag) {
+EncodeJob JobFromFlags(const std::string& ckpt, const trainer::RateState& rate, const CLI::App& app,
+                       const EncodeFlags& f, size_t target_flag) {
   std::fprintf(stderr,
                "note: %s stores no configuration (an older ecrf wrote it): encoding with the "
                "flags' settings, which may differ from what that run's `ecrf train` wrote\n",
@@ -195,7 +196,8 @@ int RunEncode(int argc, char** argv) {
   if (parsed >= 0) return parsed;
   size_t target_flag = 0;
   try {
-    if (Given(*app, "--target-size")) target_flag = ParseSizeWithUnit("--target-size", f.target_size);
+    if (Given(*app, "--target-size"))
+      target_flag = ParseSizeWithUnit("--target-size", f.target_size);
   } catch (const std::invalid_argument& e) {
     std::fprintf(stderr, "ecrf encode: error: %s\n", e.what());
     return 2;

@@ -204,9 +204,10 @@ void PrintRunSummary(const trainer::TrainOptions& o, const trainer::TrainResult&
       "dB%s, "
       "SSIM %.4f over %d views; decode %.0f ms, render %.0f ms/view (%.1f samples, %.1f MLP "
       "samples per ray)\n",
-      o.out_dir.c_str(), coded.decoded.bytes.size(), double(float_bytes) / coded.decoded.bytes.size(),
-      d.psnr, versus.c_str(), d.ssim, d.views, 1e3 * coded.decoded.decode_seconds,
-      1e3 * d.seconds_per_view, d.samples_per_ray, d.color_samples_per_ray);
+      o.out_dir.c_str(), coded.decoded.bytes.size(),
+      double(float_bytes) / coded.decoded.bytes.size(), d.psnr, versus.c_str(), d.ssim, d.views,
+      1e3 * coded.decoded.decode_seconds, 1e3 * d.seconds_per_view, d.samples_per_ray,
+      d.color_samples_per_ray);
 }
 
 // What a run trained: its settings, the model it ended with, the scene fit, the float model's
