@@ -12,10 +12,11 @@ if [ "${1:-}" = "--test" ]; then
   # chromium runs the viewer's browser tests; pybind11, python3-dev and numpy the Python module;
   # ffmpeg (with ffprobe) the `ecrf render --video` tests; Slurm's daemons and client with munge
   # a one-node cluster for the job-array test of `ecrf report sweep --plan`, parallel its local run;
-  # colmap poses a rendered capture for the `ecrf prepare` test.
+  # colmap poses a rendered capture for the `ecrf prepare` test; universal-ctags finds where each
+  # function begins and ends for the function size check (tests/check_function_size.py).
   packages+=(clang clang-format clang-tidy emscripten chromium pybind11-dev python3-dev python3-numpy
              g++-aarch64-linux-gnu g++-arm-linux-gnueabihf qemu-user ffmpeg slurmctld slurmd
-             slurm-client munge parallel colmap)
+             slurm-client munge parallel colmap universal-ctags)
   # npm installs the browser tests' driver (playwright-core); a machine may have its own node.
   command -v npm >/dev/null 2>&1 || packages+=(npm)
 fi

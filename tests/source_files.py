@@ -1,7 +1,7 @@
-"""The source files of a tree, for the checks run over it (check_layers.py, check_file_sizes.py):
-every file with one of the given suffixes, build outputs aside (the folders .gitignore names at
-the root: build*, run*, out*; any folder holding a CMakeCache.txt), and hidden folders and
-node_modules too."""
+"""The source files of a tree, for the checks run over it (check_layers.py, check_file_sizes.py,
+check_function_size.py): every file with one of the given suffixes, build outputs aside (the
+folders .gitignore names at the root: build*, run*, out*; any folder holding a CMakeCache.txt),
+and hidden folders and node_modules too."""
 import os
 
 BUILD_OUTPUTS = ('build', 'run', 'out')

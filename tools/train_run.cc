@@ -102,9 +102,9 @@ void PrintSceneFit(const trainer::SceneFit& fit) {
   }
 }
 
-}  // namespace
-
-nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
+// Refuses a run that cannot start before anything is loaded: no -o or data, --resume without a
+// checkpoint or with changed settings, or another run already in -o.
+void CheckRunCanStart(const trainer::TrainOptions& options) {
   if (options.out_dir.empty()) throw std::invalid_argument("no output directory (-o RUN_DIR)");
   if (trainer::DataSource(options).empty()) {
     throw std::invalid_argument("no data: --data DIR or --scene " +
@@ -117,15 +117,12 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
   }
   if (options.resume) CheckResumedSettings(options);
   if (!options.resume && !options.overwrite) RefuseExistingRun(options.out_dir);
-  const OutputDirectory out_dir(options.out_dir);  // before the data: a bad -o fails now
-  std::printf("settings: %s\n", DescribeSettings(options).c_str());
-  std::fflush(stdout);
+}
 
-  trainer::Dataset train = trainer::LoadTrainingViews(options, "train");
-  trainer::Dataset test =
-      trainer::DownscaleViews(trainer::LoadTrainingViews(options, "test"), options.eval_downscale);
-  trainer::TrainOptions o = options;
-  o.test_view_stride = trainer::ScoredTestViewStride(options, test.views.size());
+// The views loaded and which test views are scored (o.test_view_stride is the one in effect,
+// options the one asked for), for the log.
+void PrintViews(const trainer::TrainOptions& options, const trainer::TrainOptions& o,
+                const trainer::Dataset& train, const trainer::Dataset& test) {
   const int scored_views =
       trainer::EvalViewCount(test.views.size(), o.test_view_stride, o.max_test_views);
   std::fprintf(stderr, "data: %zu train views, %zu test views (%dx%d, scored at %dx%d)\n",
@@ -141,52 +138,56 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
                scored_views, test.views.size(), o.test_view_stride,
                o.test_view_stride == 1 ? "st" : "th", rule.c_str(),
                o.score_float ? "; the float model too (--score-float)" : "; the decoded file only");
-  // Written once the data has loaded: a run that fails before that leaves no directory behind.
+}
+
+// Written once the data has loaded: a run that fails before that leaves no directory behind.
+void WriteRunConfig(const trainer::TrainOptions& options) {
   const std::string config = trainer::TrainConfigToJson(options) + "\n";
   trainer::WriteFileAtomically(options.out_dir + "/config.json", config.data(), config.size());
   std::fprintf(stderr,
                "configuration: %s/config.json (--print-config prints it without training)\n",
                options.out_dir.c_str());
-  trainer::SceneFit fit = trainer::FitScene(o.scene_type, train);
-  PrintSceneFit(fit);
-  const bool warmed_up = trainer::WarmUpCameras(o, fit, &train, &test);
-  if (warmed_up) {
-    fit = trainer::FitScene(o.scene_type, train);  // on the refined cameras
-    PrintSceneFit(fit);
-  }
-  // A run killed in its warm-up has no checkpoint of its own yet: it starts afresh from the
-  // warm-up's cameras, as the uninterrupted run did.
-  o.resume = options.resume && FileExists(options.out_dir + "/checkpoint.ckpt");
-  trainer::TensorfModel model(trainer::ConfigFor(o, train, fit));
-  trainer::RateState rate;
-  const trainer::TrainResult r = trainer::Train(o, train, test, &model, &rate);
+}
 
-  size_t float_bytes = 0;
-  for (const auto& a : model.NamedParameters()) float_bytes += a.size * sizeof(float);
-  // Close the loop: encode, decode with the embeddable decoder, and score the decoded stream.
+// The trained model closed into a loop: encoded, decoded with the embeddable decoder, and the
+// decoded stream scored.
+struct CodedRun {
+  encoder::EncodeReport report;
+  double step_scale = 1.0;  // encode-time factor on every step (1 without a target)
+  double encode_seconds = 0.0;
+  LoadedScene decoded;
+  trainer::EvalResult eval;  // the decoded file's scores on the test views
+};
+
+void EncodeDecodeEvaluate(const trainer::TrainOptions& o, const trainer::TensorfModel& model,
+                          const trainer::RateState& rate, const trainer::TrainResult& r,
+                          const trainer::Dataset& test, CodedRun* coded) {
   const auto encode_start = std::chrono::steady_clock::now();
   EncodedRun encoded = EncodeRun(
       model, TrainedRunEncodeOptions(o, rate, r.iterations, r.final_lambda_e), o.target_bytes);
   std::vector<uint8_t> bytes = std::move(encoded.bytes);
-  const encoder::EncodeReport& report = encoded.report;
-  const double step_scale = encoded.step_scale;
+  coded->report = encoded.report;
+  coded->step_scale = encoded.step_scale;
   if (o.target_bytes > 0) {
     std::printf(
         "target %zu bytes: lambda_e ended at %g, steps x%.4g at encode time, %zu bytes (%+.2f%%)\n",
-        o.target_bytes, r.final_lambda_e, step_scale, bytes.size(),
+        o.target_bytes, r.final_lambda_e, coded->step_scale, bytes.size(),
         100.0 * (double(bytes.size()) / double(o.target_bytes) - 1.0));
   }
-  const double encode_seconds = trainer::SecondsSince(encode_start);
+  coded->encode_seconds = trainer::SecondsSince(encode_start);
   trainer::WriteFileAtomically(o.out_dir + "/scene.ecrf", bytes.data(), bytes.size());
-  const LoadedScene decoded = DecodeSceneBytes(std::move(bytes), o.out_dir + "/scene.ecrf",
-                                               dec::GridStorage::kFloat32, kUnlimitedMemory);
+  coded->decoded = DecodeSceneBytes(std::move(bytes), o.out_dir + "/scene.ecrf",
+                                    dec::GridStorage::kFloat32, kUnlimitedMemory);
   dec::RenderOptions ro;
   ro.num_threads = 0;
   // With refined cameras the held-out views are scored from their cameras aligned to the field.
-  const trainer::EvalResult d =
-      EvaluateDecoded(*decoded.field, trainer::WithCameras(test, r.test_cameras),
-                      o.test_view_stride, o.max_test_views, ro, o.save_renders);
+  coded->eval = EvaluateDecoded(*coded->decoded.field, trainer::WithCameras(test, r.test_cameras),
+                                o.test_view_stride, o.max_test_views, ro, o.save_renders);
+}
 
+void PrintRunSummary(const trainer::TrainOptions& o, const trainer::TrainResult& r,
+                     size_t float_bytes, const CodedRun& coded) {
+  const trainer::EvalResult& d = coded.eval;
   std::printf(
       "trained %d iterations in %.1f s (%.3f s/it); float32 model %.2f MB; estimated coded grids "
       "%.3f MB\n",
@@ -203,10 +204,17 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
       "dB%s, "
       "SSIM %.4f over %d views; decode %.0f ms, render %.0f ms/view (%.1f samples, %.1f MLP "
       "samples per ray)\n",
-      o.out_dir.c_str(), decoded.bytes.size(), double(float_bytes) / decoded.bytes.size(), d.psnr,
-      versus.c_str(), d.ssim, d.views, 1e3 * decoded.decode_seconds, 1e3 * d.seconds_per_view,
-      d.samples_per_ray, d.color_samples_per_ray);
+      o.out_dir.c_str(), coded.decoded.bytes.size(),
+      double(float_bytes) / coded.decoded.bytes.size(), d.psnr, versus.c_str(), d.ssim, d.views,
+      1e3 * coded.decoded.decode_seconds, 1e3 * d.seconds_per_view, d.samples_per_ray,
+      d.color_samples_per_ray);
+}
 
+// What a run trained: its settings, the model it ended with, the scene fit, the float model's
+// scores and the rate estimate of its grids.
+nlohmann::json TrainingMetrics(const trainer::TrainOptions& o, const trainer::TrainResult& r,
+                               const trainer::TensorfModel& model, const trainer::SceneFit& fit,
+                               const trainer::Dataset& train, bool warmed_up) {
   nlohmann::json m;
   m["preset"] = trainer::NameOf(o.preset);
   m["data"] = trainer::DataSource(o);
@@ -221,7 +229,6 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
   // The float model's scores when --score-float asked for them (null otherwise).
   m["test_psnr"] = o.score_float ? nlohmann::json(r.test.psnr) : nlohmann::json();
   m["test_ssim"] = o.score_float ? nlohmann::json(r.test.ssim) : nlohmann::json();
-  m["test_views"] = d.views;
   m["render_seconds_per_view"] =
       o.score_float ? nlohmann::json(r.test.seconds_per_view) : nlohmann::json();
   m["rate_point"] = trainer::NameOf(o.rate_point);
@@ -241,11 +248,9 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
   m["fitted_roi_max"] = fit.roi.max;
   m["fitted_roi_volume_share"] = fit.roi_share;
   m["samples_per_ray"] = model.n_samples();  // the cap; decoded_samples_per_ray: evaluated ones
-  m["float32_model_bytes"] = float_bytes;
   m["lambda_e"] = o.lambda_e;
   m["final_lambda_e"] = r.final_lambda_e;
   m["target_bytes"] = o.target_bytes;
-  m["encode_step_scale"] = step_scale;
   m["alpha"] = o.alpha;
   m["quant_step_scale"] = o.quant_step_scale;
   m["rate_start"] = o.rate_start;
@@ -256,17 +261,6 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
   m["mlp_levels"] = o.mlp_levels;
   m["plane_block"] = o.plane_block;
   m["line_block"] = o.line_block;
-  m["file_bytes"] = decoded.bytes.size();
-  m["decoded_test_psnr"] = d.psnr;
-  m["decoded_test_ssim"] = d.ssim;
-  m["decode_seconds"] = decoded.decode_seconds;
-  m["decoded_render_seconds_per_view"] = d.seconds_per_view;
-  m["decoded_samples_per_ray"] = d.samples_per_ray;
-  m["decoded_mlp_samples_per_ray"] = d.color_samples_per_ray;
-  m["encode_seconds"] = encode_seconds;
-  m["encode"] = EncodeReportJson(report);
-  m["coded_to_estimated_grid_bytes"] =
-      r.rate.total_bits > 0 ? report.coefficient_bytes() * 8.0 / r.rate.total_bits : 0.0;
   m["estimated_grid_bits"] = r.rate.total_bits;
   m["estimated_grid_bytes"] = r.rate.total_bits / 8.0;
   nlohmann::json per_tensor = nlohmann::json::object();
@@ -275,61 +269,135 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
                                                    {"coefficients", r.rate.coeffs[t]}};
   }
   m["estimated_bits_per_tensor"] = per_tensor;
-  if (!r.exposure_log_gain.empty() && r.exposure_log_gain.size() == 3 * train.views.size()) {
-    // What the exposure codes learnt: each training image's gain against the file's exposure.
-    nlohmann::json gains = nlohmann::json::array();
-    for (size_t v = 0; v < train.views.size(); ++v) {
-      gains.push_back(
-          {{"view", train.views[v].name},
-           {"gain",
-            {std::exp(r.exposure_log_gain[3 * v]), std::exp(r.exposure_log_gain[3 * v + 1]),
-             std::exp(r.exposure_log_gain[3 * v + 2])}}});
-    }
-    m["exposure_gains"] = gains;
-  }
-  if (!r.train_cameras.empty()) {
-    // The refined training cameras and the aligned held-out ones, as a camera path that
-    // `ecrf render --path` takes (views named as in the dataset).
-    std::vector<PathCamera> cameras;
-    for (size_t v = 0; v < r.train_cameras.size(); ++v)
-      cameras.push_back({train.views[v].name, r.train_cameras[v]});
-    for (size_t v = 0; v < r.test_cameras.size(); ++v)
-      cameras.push_back({test.views[v].name, r.test_cameras[v]});
-    WriteCameraPath(o.out_dir + "/cameras_refined.json", cameras);
-  }
-  if (!r.camera_refinement.empty()) {
-    // Each refinement round's pixel error before and after, and how far the cameras moved; the
-    // last entry is the held-out views' alignment.
-    nlohmann::json rounds = nlohmann::json::array();
-    for (const trainer::CameraRefineStats& s : r.camera_refinement) {
-      rounds.push_back({{"mse_before", s.mse_before},
-                        {"mse_after", s.mse_after},
-                        {"steps", s.steps_taken},
-                        {"max_rotation_deg", s.max_rotation_deg},
-                        {"max_shift_px", s.max_shift_px}});
-    }
-    m["camera_refinement"] = rounds;
-    const trainer::Camera& c = r.train_cameras.front();
-    m["refined_intrinsics"] = {{"fl_x", c.fx}, {"fl_y", c.fy}, {"cx", c.cx}, {"cy", c.cy},
-                               {"k1", c.k1},   {"k2", c.k2},   {"p1", c.p1}, {"p2", c.p2},
-                               {"w", c.width}, {"h", c.height}};
-  }
   if (!r.psnr_curve.empty()) {
     nlohmann::json curve = nlohmann::json::array();
     for (const auto& p : r.psnr_curve)
       curve.push_back({{"minutes", p.first}, {"test_psnr", p.second}});
     m["psnr_curve"] = curve;
   }
+  return m;
+}
+
+// What the file came out as: its size, how it decodes and scores, and the encoder's report.
+void AddCodedMetrics(const CodedRun& coded, const trainer::TrainResult& r, size_t float_bytes,
+                     nlohmann::json* m) {
+  const trainer::EvalResult& d = coded.eval;
+  (*m)["test_views"] = d.views;
+  (*m)["float32_model_bytes"] = float_bytes;
+  (*m)["encode_step_scale"] = coded.step_scale;
+  (*m)["file_bytes"] = coded.decoded.bytes.size();
+  (*m)["decoded_test_psnr"] = d.psnr;
+  (*m)["decoded_test_ssim"] = d.ssim;
+  (*m)["decode_seconds"] = coded.decoded.decode_seconds;
+  (*m)["decoded_render_seconds_per_view"] = d.seconds_per_view;
+  (*m)["decoded_samples_per_ray"] = d.samples_per_ray;
+  (*m)["decoded_mlp_samples_per_ray"] = d.color_samples_per_ray;
+  (*m)["encode_seconds"] = coded.encode_seconds;
+  (*m)["encode"] = EncodeReportJson(coded.report);
+  (*m)["coded_to_estimated_grid_bytes"] =
+      r.rate.total_bits > 0 ? coded.report.coefficient_bytes() * 8.0 / r.rate.total_bits : 0.0;
+}
+
+// What the exposure codes learnt: each training image's gain against the file's exposure.
+void AddExposureGains(const trainer::TrainResult& r, const trainer::Dataset& train,
+                      nlohmann::json* m) {
+  if (r.exposure_log_gain.empty() || r.exposure_log_gain.size() != 3 * train.views.size()) return;
+  nlohmann::json gains = nlohmann::json::array();
+  for (size_t v = 0; v < train.views.size(); ++v) {
+    gains.push_back(
+        {{"view", train.views[v].name},
+         {"gain",
+          {std::exp(r.exposure_log_gain[3 * v]), std::exp(r.exposure_log_gain[3 * v + 1]),
+           std::exp(r.exposure_log_gain[3 * v + 2])}}});
+  }
+  (*m)["exposure_gains"] = gains;
+}
+
+// The refined training cameras and the aligned held-out ones, as a camera path that
+// `ecrf render --path` takes (views named as in the dataset).
+void WriteRefinedCameras(const trainer::TrainResult& r, const trainer::Dataset& train,
+                         const trainer::Dataset& test, const std::string& out_dir) {
+  if (r.train_cameras.empty()) return;
+  std::vector<PathCamera> cameras;
+  for (size_t v = 0; v < r.train_cameras.size(); ++v)
+    cameras.push_back({train.views[v].name, r.train_cameras[v]});
+  for (size_t v = 0; v < r.test_cameras.size(); ++v)
+    cameras.push_back({test.views[v].name, r.test_cameras[v]});
+  WriteCameraPath(out_dir + "/cameras_refined.json", cameras);
+}
+
+// Each camera refinement round's pixel error before and after, and how far the cameras moved
+// (the last entry is the held-out views' alignment); the refined intrinsics.
+void AddCameraRefinement(const trainer::TrainResult& r, nlohmann::json* m) {
+  if (r.camera_refinement.empty()) return;
+  nlohmann::json rounds = nlohmann::json::array();
+  for (const trainer::CameraRefineStats& s : r.camera_refinement) {
+    rounds.push_back({{"mse_before", s.mse_before},
+                      {"mse_after", s.mse_after},
+                      {"steps", s.steps_taken},
+                      {"max_rotation_deg", s.max_rotation_deg},
+                      {"max_shift_px", s.max_shift_px}});
+  }
+  (*m)["camera_refinement"] = rounds;
+  const trainer::Camera& c = r.train_cameras.front();
+  (*m)["refined_intrinsics"] = {{"fl_x", c.fx}, {"fl_y", c.fy}, {"cx", c.cx}, {"cy", c.cy},
+                                {"k1", c.k1},   {"k2", c.k2},   {"p1", c.p1}, {"p2", c.p2},
+                                {"w", c.width}, {"h", c.height}};
+}
+
+// --save-renders: the decoded file's renders of the scored test views, named by view index.
+void SaveRenders(const trainer::TrainOptions& o, const trainer::EvalResult& d) {
+  MakeDirectory(o.out_dir + "/renders");
+  for (size_t i = 0; i < d.renders.size(); ++i) {
+    char name[64];
+    std::snprintf(name, sizeof(name), "/renders/test_%03zu.png", i * size_t(o.test_view_stride));
+    trainer::SavePng(o.out_dir + name, d.renders[i]);
+  }
+}
+
+}  // namespace
+
+nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
+  CheckRunCanStart(options);
+  const OutputDirectory out_dir(options.out_dir);  // before the data: a bad -o fails now
+  std::printf("settings: %s\n", DescribeSettings(options).c_str());
+  std::fflush(stdout);
+
+  trainer::Dataset train = trainer::LoadTrainingViews(options, "train");
+  trainer::Dataset test =
+      trainer::DownscaleViews(trainer::LoadTrainingViews(options, "test"), options.eval_downscale);
+  trainer::TrainOptions o = options;
+  o.test_view_stride = trainer::ScoredTestViewStride(options, test.views.size());
+  PrintViews(options, o, train, test);
+  WriteRunConfig(options);
+  trainer::SceneFit fit = trainer::FitScene(o.scene_type, train);
+  PrintSceneFit(fit);
+  const bool warmed_up = trainer::WarmUpCameras(o, fit, &train, &test);
+  if (warmed_up) {
+    fit = trainer::FitScene(o.scene_type, train);  // on the refined cameras
+    PrintSceneFit(fit);
+  }
+  // A run killed in its warm-up has no checkpoint of its own yet: it starts afresh from the
+  // warm-up's cameras, as the uninterrupted run did.
+  o.resume = options.resume && FileExists(options.out_dir + "/checkpoint.ckpt");
+  trainer::TensorfModel model(trainer::ConfigFor(o, train, fit));
+  trainer::RateState rate;
+  const trainer::TrainResult r = trainer::Train(o, train, test, &model, &rate);
+
+  size_t float_bytes = 0;
+  for (const auto& a : model.NamedParameters()) float_bytes += a.size * sizeof(float);
+  CodedRun coded;
+  EncodeDecodeEvaluate(o, model, rate, r, test, &coded);
+  PrintRunSummary(o, r, float_bytes, coded);
+
+  nlohmann::json m = TrainingMetrics(o, r, model, fit, train, warmed_up);
+  AddCodedMetrics(coded, r, float_bytes, &m);
+  AddExposureGains(r, train, &m);
+  WriteRefinedCameras(r, train, test, o.out_dir);
+  AddCameraRefinement(r, &m);
   const std::string text = m.dump(2) + "\n";
   trainer::WriteFileAtomically(o.out_dir + "/metrics.json", text.data(), text.size());
-  if (o.save_renders) {
-    MakeDirectory(o.out_dir + "/renders");
-    for (size_t i = 0; i < d.renders.size(); ++i) {
-      char name[64];
-      std::snprintf(name, sizeof(name), "/renders/test_%03zu.png", i * size_t(o.test_view_stride));
-      trainer::SavePng(o.out_dir + name, d.renders[i]);
-    }
-  }
+  if (o.save_renders) SaveRenders(o, coded.eval);
   return m;
 }
 

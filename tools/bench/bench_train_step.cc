@@ -134,192 +134,227 @@ const char* const kPhaseKeys[kNumPhases] = {"zero", "qat_refresh", "qat_apply", 
                                             "head", "composite",   "scatter",   "l1",
                                             "rate", "adam"};
 
-}  // namespace
-
-int RunTrainStepBench(int argc, char** argv) {
+// The settings of `ecrf bench train`, as its command line gives them.
+struct TrainStepBenchFlags {
   int res = 128, rays = 4096, reps = 5, mask = 0, rate_phase = 1;
   float early = 0.f, blob_peak = 14.f, rdoq = 0.f;
   std::string threads = "1,2", json_path;
-  auto app = MakeCommand(
-      "bench train",
-      "times one training iteration as the trainer runs it in its rate phase, phase by phase "
-      "(zero the gradients, quantization-aware refresh and apply, march, head, composite, "
-      "scatter, density L1, rate term, Adam) on a synthetic Blender-like scene (an opaque soft "
-      "blob in a randomly initialised VM-192 field) at each thread count, then the scaling "
-      "table: serial fraction and predicted times at 8-64 threads per phase");
-  app->add_option("--res", res, "grid resolution per axis")
+};
+
+void AddTrainStepBenchFlags(CLI::App* app, TrainStepBenchFlags* f) {
+  app->add_option("--res", f->res, "grid resolution per axis")
       ->type_name("N")
       ->check(CLI::Range(2, 1024))
       ->capture_default_str();
-  app->add_option("--rays", rays, "rays per batch")
+  app->add_option("--rays", f->rays, "rays per batch")
       ->type_name("N")
       ->check(CLI::Range(1, 1 << 24))
       ->capture_default_str();
-  app->add_option("--reps", reps, "timed steps per thread count (after one warm-up step)")
+  app->add_option("--reps", f->reps, "timed steps per thread count (after one warm-up step)")
       ->type_name("N")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
-  AddThreadListFlag(app.get(), &threads);
-  app->add_option("--mask", mask, "update the alpha mask (and shrink) before timing (0: no mask)")
+  AddThreadListFlag(app, &f->threads);
+  app->add_option("--mask", f->mask,
+                  "update the alpha mask (and shrink) before timing (0: no mask)")
       ->type_name("0|1")
       ->check(CLI::Range(0, 1))
       ->capture_default_str();
-  app->add_option("--rate", rate_phase,
+  app->add_option("--rate", f->rate_phase,
                   "1: the rate phase's iteration (rate term at the medium point's lambda_e, "
                   "quantization-aware training); 0: plain TensoRF's")
       ->type_name("0|1")
       ->check(CLI::Range(0, 1))
       ->capture_default_str();
-  app->add_option("--rdoq", rdoq,
+  app->add_option("--rdoq", f->rdoq,
                   "the rate phase's quantizer: RDOQ with this lambda (0: rounding), as ecrf train "
                   "--rdoq")
       ->type_name("L")
       ->check(CLI::Range(0.0f, 10.0f))
       ->capture_default_str();
-  app->add_option("--early-stop", early, "early_stop_transmittance of the ray marching")
+  app->add_option("--early-stop", f->early, "early_stop_transmittance of the ray marching")
       ->type_name("T")
       ->check(CLI::Range(0.0f, 1.0f))
       ->capture_default_str();
   app->add_option(
-         "--blob-peak", blob_peak,
+         "--blob-peak", f->blob_peak,
          "peak density feature of the blob; larger -> more opaque -> fewer appearance samples per "
          "ray "
          "(e.g. 40 gives about the 0.14 M of the reference PyTorch run's iterations 150-320)")
       ->type_name("F")
       ->check(CLI::Range(0.0f, 1000.0f))
       ->capture_default_str();
-  app->add_option("--json", json_path,
+  app->add_option("--json", f->json_path,
                   "also write the figures (per phase and thread count, and the predictions) as "
                   "JSON")
       ->type_name("FILE");
-  if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
-  const std::vector<int> thread_counts = ThreadCounts(threads);
+}
 
-  TensorfConfig config;
-  config.early_stop_transmittance = early;
-  TensorfModel model(config);
-  model.Initialize({res, res, res}, 1);
-  AddBlob(model, blob_peak);  // feature up to blob_peak: sigma up to softplus(peak - 10)
-  if (mask) {
-    const trainer::Aabb box = model.UpdateAlphaMask({res, res, res});
-    model.Shrink(box);
-  }
+// What one timed iteration works on: the synthetic scene's model, the rays, and the optimizer and
+// rate state the trainer holds in its rate phase; and the field every step starts from.
+struct StepBench {
+  explicit StepBench(const TrainStepBenchFlags& f);
+
+  TensorfModel model;
   std::vector<float> o, d, rgb;
-  MakeRays(rays, 7, &o, &d, &rgb);
-  std::printf(
-      "train-step bench: res %d^3 (after shrink %dx%dx%d), %d rays, %d samples/ray, mask %d, "
-      "early stop %g, blob peak %g, %s, rdoq %g\n",
-      res, model.res()[0], model.res()[1], model.res()[2], rays, model.n_samples(), mask, early,
-      blob_peak, rate_phase ? "rate phase (lambda_e 3e-11, quantization-aware)" : "plain TensoRF",
-      rdoq);
-  // The trainer's optimizers (trainer.cc): grids at lr 0.02, head at 1e-3.
-  trainer::Adam adam_density(model.density().params().size(), trainer::AdamConfig{});
-  trainer::Adam adam_app(model.appearance().params().size(), trainer::AdamConfig{});
-  trainer::Adam adam_head(model.head().params().size(), trainer::AdamConfig{});
+  trainer::Adam adam_density, adam_app, adam_head;
   trainer::TrainOptions options;
-  options.lambda_e = 3e-11f;  // the medium rate point's
-  options.rdoq_lambda = rdoq;
   trainer::RateState rate;
   trainer::QuantAwareModel qat;
-  if (rate_phase) rate.Activate(model, options);
-  const std::vector<float> density0 = model.density().params(), app0 = model.appearance().params(),
-                           head0 = model.head().params();
+  std::vector<float> density0, app0, head0;
+};
+
+TensorfConfig BenchModelConfig(const TrainStepBenchFlags& f) {
+  TensorfConfig config;
+  config.early_stop_transmittance = f.early;
+  return config;
+}
+
+StepBench::StepBench(const TrainStepBenchFlags& f) : model(BenchModelConfig(f)) {
+  model.Initialize({f.res, f.res, f.res}, 1);
+  AddBlob(model, f.blob_peak);  // feature up to blob_peak: sigma up to softplus(peak - 10)
+  if (f.mask) {
+    const trainer::Aabb box = model.UpdateAlphaMask({f.res, f.res, f.res});
+    model.Shrink(box);
+  }
+  MakeRays(f.rays, 7, &o, &d, &rgb);
+  // The trainer's optimizers (trainer.cc): grids at lr 0.02, head at 1e-3.
+  adam_density = trainer::Adam(model.density().params().size(), trainer::AdamConfig{});
+  adam_app = trainer::Adam(model.appearance().params().size(), trainer::AdamConfig{});
+  adam_head = trainer::Adam(model.head().params().size(), trainer::AdamConfig{});
+  options.lambda_e = 3e-11f;  // the medium rate point's
+  options.rdoq_lambda = f.rdoq;
+  if (f.rate_phase) rate.Activate(model, options);
+  density0 = model.density().params();
+  app0 = model.appearance().params();
+  head0 = model.head().params();
+}
+
+// Bytes each streaming phase reads and writes per step (the memory-bandwidth floor).
+std::array<double, kNumPhases> PhaseBytes(const TensorfModel& model, bool rate_phase) {
   const double grid_params =
       static_cast<double>(model.density().params().size() + model.appearance().params().size());
   const double all_params = grid_params + static_cast<double>(model.head().params().size());
-  // Bytes each streaming phase reads and writes per step (the memory-bandwidth floor).
-  double phase_bytes[kNumPhases] = {};
-  phase_bytes[kZero] = 4.0 * all_params;
-  phase_bytes[kQatApply] = rate_phase ? 12.0 * all_params : 0.0;
-  phase_bytes[kL1] = 12.0 * static_cast<double>(model.density().params().size());
-  phase_bytes[kAdam] = 28.0 * all_params;  // p, g, m, v read; p, m, v written
+  std::array<double, kNumPhases> bytes{};
+  bytes[kZero] = 4.0 * all_params;
+  bytes[kQatApply] = rate_phase ? 12.0 * all_params : 0.0;
+  bytes[kL1] = 12.0 * static_cast<double>(model.density().params().size());
+  bytes[kAdam] = 28.0 * all_params;  // p, g, m, v read; p, m, v written
+  return bytes;
+}
 
-  std::vector<std::array<double, kNumPhases>> medians;
-  std::vector<double> step_medians, bandwidths;
-  BenchReport report;
-  for (int nthreads : thread_counts) {
-    omp_set_num_threads(nthreads);
-    std::vector<double> times, phase_times[kNumPhases];
-    TrainStepStats last;
-    double cpu = 0.0, wall = 0.0;
-    for (int rep = 0; rep <= reps; ++rep) {
-      // Every step starts from the same field (Adam would otherwise train it between steps and
-      // change the sample counts); copied into the existing buffers, outside the timing.
-      std::copy(density0.begin(), density0.end(), model.density().params().begin());
-      std::copy(app0.begin(), app0.end(), model.appearance().params().begin());
-      std::copy(head0.begin(), head0.end(), model.head().params().begin());
-      double t[kNumPhases] = {};
-      const double t0 = omp_get_wtime(), c0 = CpuSeconds();
-      double clock = t0;
-      auto lap = [&clock]() {
-        const double now = omp_get_wtime(), dt = now - clock;
-        clock = now;
-        return dt;
-      };
-      model.ZeroGrads();
-      t[kZero] = lap();
-      if (rate_phase) {
-        qat.Refresh(model, rate.steps, rate.config, options.mlp_levels, options.rounding_offset,
-                    options.rdoq_lambda);
-        t[kQatRefresh] = lap();
-        qat.Apply(&model);
-        t[kQatApply] = lap();
-      }
-      last = trainer::TrainStep(model, rays, o.data(), d.data(), rgb.data(), 100 + rep);
-      lap();
-      if (rate_phase) {
-        qat.Restore(&model);
-        t[kQatApply] += lap();
-      }
-      t[kMarch] = last.t_march;
-      t[kHead] = last.t_head;
-      t[kComposite] = last.t_composite;
-      t[kScatter] = last.t_scatter;
-      model.DensityL1(8e-5f);
-      t[kL1] = lap();
-      if (rate_phase) {
-        rate.Step(model, options, 1000 + rep);
-        t[kRate] = lap();
-      }
-      adam_density.Step(model.density().params().data(), model.density().grads().data(),
-                        model.density().params().size(), 0.02f);
-      adam_app.Step(model.appearance().params().data(), model.appearance().grads().data(),
-                    model.appearance().params().size(), 0.02f);
-      adam_head.Step(model.head().params().data(), model.head().grads().data(),
-                     model.head().params().size(), 1e-3f);
-      t[kAdam] = lap();
-      const double dt = omp_get_wtime() - t0;
-      if (rep > 0) {
-        times.push_back(dt);
-        for (int k = 0; k < kNumPhases; ++k) phase_times[k].push_back(t[k]);
-        cpu += CpuSeconds() - c0;
-        wall += dt;
-      }
-    }
-    std::array<double, kNumPhases> med{};
-    for (int k = 0; k < kNumPhases; ++k) med[k] = Median(phase_times[k]);
-    medians.push_back(med);
-    step_medians.push_back(Median(times));
-    bandwidths.push_back(MeasureTriadBandwidth(nthreads));
-    std::sort(times.begin(), times.end());
-    // cpu / (threads * wall) < 1 means other processes competed for the cores.
-    std::printf(
-        "threads %d: median %.3f s (min %.3f), cpu/(threads*wall) %.2f | density samples %ld, "
-        "appearance samples %ld | scatter tasks %d | triad bandwidth %.1f GB/s | peak RSS %.0f "
-        "MB\n",
-        nthreads, step_medians.back(), times[0], cpu / (nthreads * wall), last.density_samples,
-        last.appearance_samples, trainer::ScatterTaskCount(model), bandwidths.back() / 1e9,
-        PeakRssMb());
-    report.Record("threads_" + std::to_string(nthreads) + "_step_median", step_medians.back());
-    for (int k = 0; k < kNumPhases; ++k)
-      report.Record("threads_" + std::to_string(nthreads) + "_" + kPhaseKeys[k], med[k]);
-    report.Record("threads_" + std::to_string(nthreads) + "_triad_gb_per_s",
-                  bandwidths.back() / 1e9);
+// Every step starts from the same field (Adam would otherwise train it between steps and change
+// the sample counts); copied into the existing buffers, outside the timing.
+void RestoreStartingField(StepBench& b) {
+  std::copy(b.density0.begin(), b.density0.end(), b.model.density().params().begin());
+  std::copy(b.app0.begin(), b.app0.end(), b.model.appearance().params().begin());
+  std::copy(b.head0.begin(), b.head0.end(), b.model.head().params().begin());
+}
+
+// One training iteration as the trainer runs it, started at time t0: each phase's seconds in t.
+TrainStepStats TimeOneStep(StepBench& b, bool rate_phase, int rays, int rep, double t0,
+                           double t[kNumPhases]) {
+  TensorfModel& model = b.model;
+  double clock = t0;
+  auto lap = [&clock]() {
+    const double now = omp_get_wtime(), dt = now - clock;
+    clock = now;
+    return dt;
+  };
+  model.ZeroGrads();
+  t[kZero] = lap();
+  if (rate_phase) {
+    b.qat.Refresh(model, b.rate.steps, b.rate.config, b.options.mlp_levels,
+                  b.options.rounding_offset, b.options.rdoq_lambda);
+    t[kQatRefresh] = lap();
+    b.qat.Apply(&model);
+    t[kQatApply] = lap();
   }
+  const TrainStepStats stats =
+      trainer::TrainStep(model, rays, b.o.data(), b.d.data(), b.rgb.data(), 100 + rep);
+  lap();
+  if (rate_phase) {
+    b.qat.Restore(&model);
+    t[kQatApply] += lap();
+  }
+  t[kMarch] = stats.t_march;
+  t[kHead] = stats.t_head;
+  t[kComposite] = stats.t_composite;
+  t[kScatter] = stats.t_scatter;
+  model.DensityL1(8e-5f);
+  t[kL1] = lap();
+  if (rate_phase) {
+    b.rate.Step(model, b.options, 1000 + rep);
+    t[kRate] = lap();
+  }
+  b.adam_density.Step(model.density().params().data(), model.density().grads().data(),
+                      model.density().params().size(), 0.02f);
+  b.adam_app.Step(model.appearance().params().data(), model.appearance().grads().data(),
+                  model.appearance().params().size(), 0.02f);
+  b.adam_head.Step(model.head().params().data(), model.head().grads().data(),
+                   model.head().params().size(), 1e-3f);
+  t[kAdam] = lap();
+  return stats;
+}
 
-  // The scaling table: measured medians, the fitted serial fraction, predictions.
-  const std::vector<int> predicted = {8, 16, 32, 64};
-  const double bandwidth = *std::max_element(bandwidths.begin(), bandwidths.end());
+// What one thread count measured: the median seconds of each phase and of the whole step, and
+// the triad bandwidth.
+struct ThreadCountResult {
+  std::array<double, kNumPhases> phase_medians{};
+  double step_median = 0.0;
+  double bandwidth = 0.0;
+};
+
+// Times a warm-up step and `reps` steps on `nthreads` threads, prints the thread count's line
+// and records its figures.
+ThreadCountResult TimeThreadCount(StepBench& b, const TrainStepBenchFlags& f, int nthreads,
+                                  BenchReport* report) {
+  omp_set_num_threads(nthreads);
+  std::vector<double> times, phase_times[kNumPhases];
+  TrainStepStats last;
+  double cpu = 0.0, wall = 0.0;
+  for (int rep = 0; rep <= f.reps; ++rep) {
+    RestoreStartingField(b);
+    double t[kNumPhases] = {};
+    const double t0 = omp_get_wtime(), c0 = CpuSeconds();
+    last = TimeOneStep(b, f.rate_phase, f.rays, rep, t0, t);
+    const double dt = omp_get_wtime() - t0;
+    if (rep > 0) {
+      times.push_back(dt);
+      for (int k = 0; k < kNumPhases; ++k) phase_times[k].push_back(t[k]);
+      cpu += CpuSeconds() - c0;
+      wall += dt;
+    }
+  }
+  ThreadCountResult r;
+  for (int k = 0; k < kNumPhases; ++k) r.phase_medians[k] = Median(phase_times[k]);
+  r.step_median = Median(times);
+  r.bandwidth = MeasureTriadBandwidth(nthreads);
+  std::sort(times.begin(), times.end());
+  // cpu / (threads * wall) < 1 means other processes competed for the cores.
+  std::printf(
+      "threads %d: median %.3f s (min %.3f), cpu/(threads*wall) %.2f | density samples %ld, "
+      "appearance samples %ld | scatter tasks %d | triad bandwidth %.1f GB/s | peak RSS %.0f "
+      "MB\n",
+      nthreads, r.step_median, times[0], cpu / (nthreads * wall), last.density_samples,
+      last.appearance_samples, trainer::ScatterTaskCount(b.model), r.bandwidth / 1e9, PeakRssMb());
+  const std::string prefix = "threads_" + std::to_string(nthreads) + "_";
+  report->Record(prefix + "step_median", r.step_median);
+  for (int k = 0; k < kNumPhases; ++k) report->Record(prefix + kPhaseKeys[k], r.phase_medians[k]);
+  report->Record(prefix + "triad_gb_per_s", r.bandwidth / 1e9);
+  return r;
+}
+
+// The thread counts the scaling table predicts.
+constexpr std::array<int, 4> kPredictedThreads = {8, 16, 32, 64};
+
+// The scaling table: measured medians, the fitted serial fraction, predictions (each recorded).
+void PrintScalingTable(const std::vector<int>& thread_counts,
+                       const std::vector<ThreadCountResult>& results,
+                       const std::array<double, kNumPhases>& phase_bytes, int scatter_tasks,
+                       BenchReport* report) {
+  double bandwidth = 0.0;
+  for (const ThreadCountResult& r : results) bandwidth = std::max(bandwidth, r.bandwidth);
   std::printf(
       "\nscaling table (median seconds per step; prediction = Amdahl fit over the measured "
       "counts, capped by the phase's tasks, floored by its bytes over %.1f GB/s, the best "
@@ -327,12 +362,12 @@ int RunTrainStepBench(int argc, char** argv) {
       bandwidth / 1e9, "phase");
   for (int n : thread_counts) std::printf(" %8s", (std::to_string(n) + " thr").c_str());
   std::printf(" %7s %6s", "serial", "MB");
-  for (int n : predicted) std::printf(" %16s", ("pred " + std::to_string(n)).c_str());
+  for (int n : kPredictedThreads) std::printf(" %16s", ("pred " + std::to_string(n)).c_str());
   std::printf("\n");
-  double total_pred[4] = {};
+  std::array<double, kPredictedThreads.size()> total_pred{};
   for (int k = 0; k < kNumPhases; ++k) {
     std::vector<double> col;
-    for (const auto& med : medians) col.push_back(med[k]);
+    for (const ThreadCountResult& r : results) col.push_back(r.phase_medians[k]);
     if (col[0] == 0.0 && col.back() == 0.0) continue;  // a phase this run skips
     std::printf("%-12s", kPhaseNames[k]);
     for (double v : col) std::printf(" %8.4f", v);
@@ -346,24 +381,55 @@ int RunTrainStepBench(int argc, char** argv) {
       continue;
     }
     std::printf(" %7.3f %6.0f", pm.serial, pm.bytes / 1e6);
-    const int tasks = k == kScatter ? trainer::ScatterTaskCount(model) : 0;
-    for (int j = 0; j < 4; ++j) {
-      const Prediction p = PredictPhase(pm, predicted[j], tasks, bandwidth);
+    const int tasks = k == kScatter ? scatter_tasks : 0;
+    for (size_t j = 0; j < kPredictedThreads.size(); ++j) {
+      const Prediction p = PredictPhase(pm, kPredictedThreads[j], tasks, bandwidth);
       total_pred[j] += p.seconds;
       std::printf(" %7.4f %-8s", p.seconds, p.bound.c_str());
-      report.Record("predicted_" + std::to_string(predicted[j]) + "_" + kPhaseKeys[k], p.seconds);
+      report->Record("predicted_" + std::to_string(kPredictedThreads[j]) + "_" + kPhaseKeys[k],
+                     p.seconds);
     }
     std::printf("\n");
   }
   std::printf("%-12s", "step");
-  for (double v : step_medians) std::printf(" %8.4f", v);
+  for (const ThreadCountResult& r : results) std::printf(" %8.4f", r.step_median);
   std::printf(" %7s %6s", "", "");
-  for (int j = 0; j < 4; ++j) std::printf(" %16.4f", total_pred[j]);
+  for (double seconds : total_pred) std::printf(" %16.4f", seconds);
   std::printf("\n");
-  for (int j = 0; j < 4; ++j)
-    report.Record("predicted_" + std::to_string(predicted[j]) + "_step", total_pred[j]);
-  if (!json_path.empty() && !report.WriteJson(json_path)) {
-    std::fprintf(stderr, "bench train: cannot write %s\n", json_path.c_str());
+  for (size_t j = 0; j < kPredictedThreads.size(); ++j)
+    report->Record("predicted_" + std::to_string(kPredictedThreads[j]) + "_step", total_pred[j]);
+}
+
+}  // namespace
+
+int RunTrainStepBench(int argc, char** argv) {
+  TrainStepBenchFlags f;
+  auto app = MakeCommand(
+      "bench train",
+      "times one training iteration as the trainer runs it in its rate phase, phase by phase "
+      "(zero the gradients, quantization-aware refresh and apply, march, head, composite, "
+      "scatter, density L1, rate term, Adam) on a synthetic Blender-like scene (an opaque soft "
+      "blob in a randomly initialised VM-192 field) at each thread count, then the scaling "
+      "table: serial fraction and predicted times at 8-64 threads per phase");
+  AddTrainStepBenchFlags(app.get(), &f);
+  if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
+  const std::vector<int> thread_counts = ThreadCounts(f.threads);
+  StepBench bench(f);
+  const TensorfModel& model = bench.model;
+  std::printf(
+      "train-step bench: res %d^3 (after shrink %dx%dx%d), %d rays, %d samples/ray, mask %d, "
+      "early stop %g, blob peak %g, %s, rdoq %g\n",
+      f.res, model.res()[0], model.res()[1], model.res()[2], f.rays, model.n_samples(), f.mask,
+      f.early, f.blob_peak,
+      f.rate_phase ? "rate phase (lambda_e 3e-11, quantization-aware)" : "plain TensoRF", f.rdoq);
+  const std::array<double, kNumPhases> phase_bytes = PhaseBytes(model, f.rate_phase);
+  std::vector<ThreadCountResult> results;
+  BenchReport report;
+  for (int nthreads : thread_counts)
+    results.push_back(TimeThreadCount(bench, f, nthreads, &report));
+  PrintScalingTable(thread_counts, results, phase_bytes, trainer::ScatterTaskCount(model), &report);
+  if (!f.json_path.empty() && !report.WriteJson(f.json_path)) {
+    std::fprintf(stderr, "bench train: cannot write %s\n", f.json_path.c_str());
     return 1;
   }
   return 0;

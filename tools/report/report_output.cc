@@ -186,8 +186,8 @@ void Figure(std::ostringstream& o, const std::string& dir, const std::string& pn
   }
 }
 
-std::string IndexHtml(const std::string& dir, nlohmann::json& r) {
-  std::ostringstream o;
+// The page's head and style, the scene, and what the sweep trained, where and with which ecrf.
+void HtmlHead(std::ostringstream& o, nlohmann::json& r) {
   const std::string scene = Html(Str(r, "scene"));
   o << "<!doctype html>\n<html lang=en><head><meta charset=utf-8>"
        "<meta name=viewport content=\"width=device-width, initial-scale=1\">\n<title>ecrf report: "
@@ -208,7 +208,10 @@ std::string IndexHtml(const std::string& dir, nlohmann::json& r) {
     << Html(Str(r["machine"], "cpu")) << ", "
     << "training threads: " << Num(s["threads"])
     << ". All numbers in <a href=\"report.json\">report.json</a>.</p>\n";
+}
 
+// The rate–distortion plots, one table row per point, and the anchors drawn beside them.
+void RateDistortionSection(std::ostringstream& o, const std::string& dir, nlohmann::json& r) {
   o << "<h2>Rate–distortion</h2>\n<p>Each point is one training run at rate weight lambda_e, "
        "encoded to a "
        ".ecrf file and scored after decoding it with the embeddable decoder. Ratio and loss are "
@@ -245,7 +248,11 @@ std::string IndexHtml(const std::string& dir, nlohmann::json& r) {
     }
     o << "</table>\n";
   }
+}
 
+// The bytes of each point's file by chunk: density and appearance coefficients, MLP, occupancy,
+// the rest.
+void ChunkSection(std::ostringstream& o, const std::string& dir, nlohmann::json& r) {
   o << "<h2>Where the bytes go</h2>\n";
   Figure(o, dir, "chunks.png", "chunks.csv", "bytes per chunk");
   o << "<table>\n";
@@ -267,53 +274,61 @@ std::string IndexHtml(const std::string& dir, nlohmann::json& r) {
             Num(p["chunks"]["OCCU"], "%.0f"), Num(nlohmann::json(other), "%.0f")});
   }
   o << "</table>\n";
+}
 
+// The speed–error sweep of `ecrf report render` (when the report has one): decoding time and
+// each renderer knob's time and error.
+void SpeedSection(std::ostringstream& o, const std::string& dir, nlohmann::json& sp) {
+  nlohmann::json& d = sp["decode"];
+  o << "<h2>Speed against error</h2>\n<p>Renderer knobs of SPEC.md 7.8, one at a time from the "
+       "defaults, on "
+    << Html(Str(sp, "file")) << " (" << Html(Str(sp, "point")) << ", "
+    << Num(sp["file_bytes"], "%.0f") << " bytes), " << Num(sp["views"]) << " test views (stride "
+    << Num(sp["test_view_stride"])
+    << "). Image scale 1/k renders at 1/k of the size and scores the bilinear upsampling.</p>\n";
+  o << "<p>Decoding (entropy decoding + integer IDCT + grid layout, one thread, fastest of 3): "
+    << Num(d["float32_seconds"], "%.3f") << " s to float32 grids ("
+    << Num(d["float32_ms_per_mb"], "%.0f") << " ms per MB of stream, "
+    << Num(nlohmann::json(d["float32_grid_bytes"].get<double>() / 1e6), "%.1f") << " MB of grids), "
+    << Num(d["int16_seconds"], "%.3f") << " s to int16 grids ("
+    << Num(nlohmann::json(d["int16_grid_bytes"].get<double>() / 1e6), "%.1f") << " MB)";
+  if (d["peak_rss_growth_bytes"].is_number()) {
+    o << "; peak RSS grew by "
+      << Num(nlohmann::json(d["peak_rss_growth_bytes"].get<double>() / 1e6), "%.1f")
+      << " MB while decoding to float32 (stream and grids)";
+  }
+  o << ".</p>\n";
+  Figure(o, dir, "speed.png", "speed.csv", "render time per view vs PSNR");
+  o << "<table>\n";
+  Row(o,
+      {"knob", "setting", "ms/view", "PSNR", "SSIM", "threads", "size", "samples/ray",
+       "MLP samples/ray"},
+      "th");
+  for (nlohmann::json& row : sp["rows"]) {
+    if (row.value("is_default", false)) o << "<tr class=default>";
+    std::ostringstream line;
+    Row(line, {Html(Str(row, "knob")), Html(Str(row, "setting")),
+               Num(nlohmann::json(1e3 * row["seconds_per_view"].get<double>()), "%.1f"),
+               Num(row["psnr"], "%.2f dB"), Num(row["ssim"], "%.4f"), Num(row["threads"]),
+               Num(row["width"]) + "x" + Num(row["height"]), Num(row["samples_per_ray"], "%.1f"),
+               Num(row["mlp_samples_per_ray"], "%.2f")});
+    std::string text = line.str();
+    if (row.value("is_default", false)) text = text.substr(4);
+    o << text;
+  }
+  o << "</table>\n";
+}
+
+std::string IndexHtml(const std::string& dir, nlohmann::json& r) {
+  std::ostringstream o;
+  HtmlHead(o, r);
+  RateDistortionSection(o, dir, r);
+  ChunkSection(o, dir, r);
   o << "<h2>Training curve</h2>\n<p>Test PSNR of the float model against wall-clock training "
        "minutes "
        "(evaluation time excluded).</p>\n";
   Figure(o, dir, "curve.png", "curve.csv", "test PSNR vs training minutes");
-
-  if (r.contains("speed")) {
-    nlohmann::json& sp = r["speed"];
-    nlohmann::json& d = sp["decode"];
-    o << "<h2>Speed against error</h2>\n<p>Renderer knobs of SPEC.md 7.8, one at a time from the "
-         "defaults, on "
-      << Html(Str(sp, "file")) << " (" << Html(Str(sp, "point")) << ", "
-      << Num(sp["file_bytes"], "%.0f") << " bytes), " << Num(sp["views"]) << " test views (stride "
-      << Num(sp["test_view_stride"])
-      << "). Image scale 1/k renders at 1/k of the size and scores the bilinear upsampling.</p>\n";
-    o << "<p>Decoding (entropy decoding + integer IDCT + grid layout, one thread, fastest of 3): "
-      << Num(d["float32_seconds"], "%.3f") << " s to float32 grids ("
-      << Num(d["float32_ms_per_mb"], "%.0f") << " ms per MB of stream, "
-      << Num(nlohmann::json(d["float32_grid_bytes"].get<double>() / 1e6), "%.1f")
-      << " MB of grids), " << Num(d["int16_seconds"], "%.3f") << " s to int16 grids ("
-      << Num(nlohmann::json(d["int16_grid_bytes"].get<double>() / 1e6), "%.1f") << " MB)";
-    if (d["peak_rss_growth_bytes"].is_number()) {
-      o << "; peak RSS grew by "
-        << Num(nlohmann::json(d["peak_rss_growth_bytes"].get<double>() / 1e6), "%.1f")
-        << " MB while decoding to float32 (stream and grids)";
-    }
-    o << ".</p>\n";
-    Figure(o, dir, "speed.png", "speed.csv", "render time per view vs PSNR");
-    o << "<table>\n";
-    Row(o,
-        {"knob", "setting", "ms/view", "PSNR", "SSIM", "threads", "size", "samples/ray",
-         "MLP samples/ray"},
-        "th");
-    for (nlohmann::json& row : sp["rows"]) {
-      if (row.value("is_default", false)) o << "<tr class=default>";
-      std::ostringstream line;
-      Row(line, {Html(Str(row, "knob")), Html(Str(row, "setting")),
-                 Num(nlohmann::json(1e3 * row["seconds_per_view"].get<double>()), "%.1f"),
-                 Num(row["psnr"], "%.2f dB"), Num(row["ssim"], "%.4f"), Num(row["threads"]),
-                 Num(row["width"]) + "x" + Num(row["height"]), Num(row["samples_per_ray"], "%.1f"),
-                 Num(row["mlp_samples_per_ray"], "%.2f")});
-      std::string text = line.str();
-      if (row.value("is_default", false)) text = text.substr(4);
-      o << text;
-    }
-    o << "</table>\n";
-  }
+  if (r.contains("speed")) SpeedSection(o, dir, r["speed"]);
   o << "<p class=note>Rebuild: <code>ecrf report sweep ... -o DIR</code> (finished runs are "
        "reused), "
        "<code>ecrf report render DIR</code>, <code>ecrf report plot DIR</code>; compare two "
