@@ -105,6 +105,152 @@ double Ms(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::ti
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
 
+// Parses the frame trace at path and the setup trace it names, and checks them together: the
+// frame's timed calls are [*begin, *end).
+bool ParseFrameAndSetup(const std::string& path, Trace* frame, Trace* setup,
+                        std::string* setup_path, size_t* begin, size_t* end, std::string* err) {
+  if (!ParseTrace(path, frame, err)) return false;
+  if (frame->kind != kKindFrame)
+    return Fail(err,
+                path + ": not a frame trace (a setup trace is replayed through its frame traces)");
+  *setup_path = Dirname(path) + "/" + frame->setup_file;
+  if (!ParseTrace(*setup_path, setup, err)) return false;
+  if (setup->kind != kKindSetup || setup->setup_id != frame->setup_id) {
+    return Fail(err, Fmt("%s is not the setup %s was recorded with (id %s, expected %s)",
+                         setup_path->c_str(), path.c_str(), setup->setup_id.c_str(),
+                         frame->setup_id.c_str()));
+  }
+  return Validate(*setup, *frame, begin, end, err);
+}
+
+// The limits the mock told the renderer it has that this GPU falls short of ("" when none): the
+// GPU must allow what the trace assumes.
+std::string ShortLimits(const Trace& setup) {
+  std::string short_limits;
+  for (const auto& l : setup.limits) {
+    GLint v[2] = {0, 0};
+    glGetIntegerv(l.first, v);
+    if (glGetError() != GL_NO_ERROR) continue;
+    GLint have = l.first == GL_MAX_VIEWPORT_DIMS ? std::min(v[0], v[1]) : v[0];
+    if (have < l.second)
+      short_limits += Fmt("%s0x%x: GPU %d < trace %d", short_limits.empty() ? "" : ", ", l.first,
+                          have, l.second);
+  }
+  return short_limits;
+}
+
+struct FrameTimes {
+  double setup_ms = 0, first_frame_ms = 0;
+  std::vector<double> ms;  // the timed frames
+};
+
+// Plays the setup, the warm-up render (creates the render target, first draw: lazy compiles), the
+// frame once more untimed, then the timed frames (at least 3 unless --frames says fewer, at most
+// --max-seconds), and the trace's rest (its final readPixels).
+bool PlayAndTime(const Options& o, Player& player, const Trace& setup, const Trace& frame,
+                 size_t begin, size_t end, FrameTimes* times, std::string* err) {
+  glFinish();
+  auto t0 = std::chrono::steady_clock::now();
+  if (!player.Run(setup, 0, setup.calls.size(), true, err)) return false;
+  glFinish();
+  auto t1 = std::chrono::steady_clock::now();
+  if (!player.Run(frame, 0, begin, true, err)) return false;
+  glFinish();
+  auto t2 = std::chrono::steady_clock::now();
+  if (!player.Run(frame, begin, end, true, err)) return false;
+  glFinish();
+  times->setup_ms = Ms(t0, t1);
+  times->first_frame_ms = Ms(t1, t2);
+  auto start = std::chrono::steady_clock::now();
+  for (int k = 0; k < o.frames; ++k) {
+    glFinish();
+    auto a = std::chrono::steady_clock::now();
+    player.Run(frame, begin, end, false, err);
+    glFinish();
+    auto b = std::chrono::steady_clock::now();
+    times->ms.push_back(Ms(a, b));
+    if (Ms(start, b) > 1000 * o.max_seconds && k >= 2) break;
+  }
+  GLenum e = glGetError();
+  if (e != GL_NO_ERROR) return Fail(err, Fmt("GL error 0x%x during the timed frames", e));
+  return player.Run(frame, end, frame.calls.size(), true, err);
+}
+
+// Writes the frame's final readPixels as OUT_DIR/NAME_WxH.ppm when --out-dir asks for it; *image
+// is its JSON path, or null.
+bool WriteImage(const Options& o, const std::string& path, const Trace& frame, const Player& player,
+                std::string* image, std::string* err) {
+  *image = "null";
+  if (o.out_dir.empty()) return true;
+  if (player.pixels_w() != frame.width || player.pixels_h() != frame.height) {
+    return Fail(err, Fmt("the trace's last readPixels is %ux%u, not the image's %ux%u",
+                         player.pixels_w(), player.pixels_h(), frame.width, frame.height));
+  }
+  std::string out = o.out_dir + "/" + Stem(path) + ".ppm";
+  if (!WritePpm(out, player.pixels(), frame.width, frame.height, err)) return false;
+  *image = JsonStr(out);
+  return true;
+}
+
+// The JSON line of a replayed trace: the context, the times and the image.
+std::string ResultLine(const std::string& path, const Trace& frame, const HeadlessDisplay& egl,
+                       const HeadlessContext& ctx, const std::string& version,
+                       const FrameTimes& times, const std::string& image,
+                       const std::string& short_limits) {
+  const std::vector<double>& ms = times.ms;
+  std::vector<double> sorted = ms;
+  std::sort(sorted.begin(), sorted.end());
+  double median =
+      sorted.empty()
+          ? 0
+          : (sorted.size() % 2 ? sorted[sorted.size() / 2]
+                               : 0.5 * (sorted[sorted.size() / 2 - 1] + sorted[sorted.size() / 2]));
+  double mean = 0;
+  for (double v : ms) mean += v / ms.size();
+  std::string line;
+  auto add = [&line](const char* key, const std::string& value) {
+    line += (line.empty() ? "{" : ", ") + JsonStr(key) + ": " + value;
+  };
+  auto num = [](double v) { return Fmt("%.4f", v); };
+  add("trace", JsonStr(path));
+  add("width", Fmt("%u", frame.width));
+  add("height", Fmt("%u", frame.height));
+  add("egl", JsonStr(egl.platform));
+  add("robust", ctx.robust ? "true" : "false");
+  add("gl_vendor", JsonStr(GlStr(GL_VENDOR)));
+  add("gl_renderer", JsonStr(GlStr(GL_RENDERER)));
+  add("gl_version", JsonStr(version));
+  add("setup_ms", num(times.setup_ms));
+  add("first_frame_ms", num(times.first_frame_ms));
+  add("ms_min", num(sorted.empty() ? 0 : sorted.front()));
+  add("ms_median", num(median));
+  add("ms_mean", num(mean));
+  add("ms_max", num(sorted.empty() ? 0 : sorted.back()));
+  add("frames", Fmt("%zu", ms.size()));
+  add("image", image);
+  add("limits_short", short_limits.empty() ? "null" : JsonStr(short_limits));
+  add("ok", "true");
+  return line + "}";
+}
+
+// Replays a checked frame trace and its setup on the current context ctx and prints its JSON line.
+bool ReplayOnContext(const Options& o, const HeadlessDisplay& egl, const HeadlessContext& ctx,
+                     const std::string& path, const Trace& setup, const Trace& frame, size_t begin,
+                     size_t end, std::string* err) {
+  std::string version = GlStr(GL_VERSION);
+  if (version.compare(0, 12, "OpenGL ES 3.") != 0)
+    return Fail(err, "the context is not OpenGL ES 3.x: " + version);
+  const std::string short_limits = ShortLimits(setup);
+  Player player(frame.canvas_w, frame.canvas_h);
+  FrameTimes times;
+  if (!PlayAndTime(o, player, setup, frame, begin, end, &times, err)) return false;
+  std::string image;
+  if (!WriteImage(o, path, frame, player, &image, err)) return false;
+  printf("%s\n", ResultLine(path, frame, egl, ctx, version, times, image, short_limits).c_str());
+  fflush(stdout);
+  return true;
+}
+
 // One frame trace: a JSON line on stdout. Returns false after printing the error.
 bool ReplayOne(const Options& o, HeadlessDisplay* egl, const std::string& path) {
   std::string err;
@@ -116,18 +262,9 @@ bool ReplayOne(const Options& o, HeadlessDisplay* egl, const std::string& path) 
     return false;
   };
   Trace frame, setup;
-  if (!ParseTrace(path, &frame, &err)) return fail(err);
-  if (frame.kind != kKindFrame)
-    return fail(path + ": not a frame trace (a setup trace is replayed through its frame traces)");
-  std::string setup_path = Dirname(path) + "/" + frame.setup_file;
-  if (!ParseTrace(setup_path, &setup, &err)) return fail(err);
-  if (setup.kind != kKindSetup || setup.setup_id != frame.setup_id) {
-    return fail(Fmt("%s is not the setup %s was recorded with (id %s, expected %s)",
-                    setup_path.c_str(), path.c_str(), setup.setup_id.c_str(),
-                    frame.setup_id.c_str()));
-  }
+  std::string setup_path;
   size_t begin = 0, end = 0;
-  if (!Validate(setup, frame, &begin, &end, &err)) return fail(err);
+  if (!ParseFrameAndSetup(path, &frame, &setup, &setup_path, &begin, &end, &err)) return fail(err);
   if (o.check_only) {
     printf(
         "{\"trace\": %s, \"setup\": %s, \"width\": %u, \"height\": %u, \"calls\": %zu, "
@@ -141,101 +278,7 @@ bool ReplayOne(const Options& o, HeadlessDisplay* egl, const std::string& path) 
     DestroyContext(*egl, &ctx);
     return fail(err);
   }
-  bool ok = false;
-  do {
-    std::string version = GlStr(GL_VERSION);
-    if (version.compare(0, 12, "OpenGL ES 3.") != 0) {
-      err = "the context is not OpenGL ES 3.x: " + version;
-      break;
-    }
-    // The GPU must allow what the mock told the renderer it allows.
-    std::string short_limits;
-    for (const auto& l : setup.limits) {
-      GLint v[2] = {0, 0};
-      glGetIntegerv(l.first, v);
-      if (glGetError() != GL_NO_ERROR) continue;
-      GLint have = l.first == GL_MAX_VIEWPORT_DIMS ? std::min(v[0], v[1]) : v[0];
-      if (have < l.second)
-        short_limits += Fmt("%s0x%x: GPU %d < trace %d", short_limits.empty() ? "" : ", ", l.first,
-                            have, l.second);
-    }
-    Player player(frame.canvas_w, frame.canvas_h);
-    glFinish();
-    auto t0 = std::chrono::steady_clock::now();
-    if (!player.Run(setup, 0, setup.calls.size(), true, &err)) break;
-    glFinish();
-    auto t1 = std::chrono::steady_clock::now();
-    // The warm-up render (creates the render target, first draw: lazy compiles), then the
-    // frame once more untimed.
-    if (!player.Run(frame, 0, begin, true, &err)) break;
-    glFinish();
-    auto t2 = std::chrono::steady_clock::now();
-    if (!player.Run(frame, begin, end, true, &err)) break;
-    glFinish();
-    std::vector<double> ms;
-    auto start = std::chrono::steady_clock::now();
-    for (int k = 0; k < o.frames; ++k) {
-      glFinish();
-      auto a = std::chrono::steady_clock::now();
-      player.Run(frame, begin, end, false, &err);
-      glFinish();
-      auto b = std::chrono::steady_clock::now();
-      ms.push_back(Ms(a, b));
-      if (Ms(start, b) > 1000 * o.max_seconds && k >= 2) break;
-    }
-    GLenum e = glGetError();
-    if (e != GL_NO_ERROR) {
-      err = Fmt("GL error 0x%x during the timed frames", e);
-      break;
-    }
-    if (!player.Run(frame, end, frame.calls.size(), true, &err)) break;
-    std::string image = "null";
-    if (!o.out_dir.empty()) {
-      if (player.pixels_w() != frame.width || player.pixels_h() != frame.height) {
-        err = Fmt("the trace's last readPixels is %ux%u, not the image's %ux%u", player.pixels_w(),
-                  player.pixels_h(), frame.width, frame.height);
-        break;
-      }
-      std::string out = o.out_dir + "/" + Stem(path) + ".ppm";
-      if (!WritePpm(out, player.pixels(), frame.width, frame.height, &err)) break;
-      image = JsonStr(out);
-    }
-    std::vector<double> sorted = ms;
-    std::sort(sorted.begin(), sorted.end());
-    double median = sorted.empty()
-                        ? 0
-                        : (sorted.size() % 2
-                               ? sorted[sorted.size() / 2]
-                               : 0.5 * (sorted[sorted.size() / 2 - 1] + sorted[sorted.size() / 2]));
-    double mean = 0;
-    for (double v : ms) mean += v / ms.size();
-    std::string line;
-    auto add = [&line](const char* key, const std::string& value) {
-      line += (line.empty() ? "{" : ", ") + JsonStr(key) + ": " + value;
-    };
-    auto num = [](double v) { return Fmt("%.4f", v); };
-    add("trace", JsonStr(path));
-    add("width", Fmt("%u", frame.width));
-    add("height", Fmt("%u", frame.height));
-    add("egl", JsonStr(egl->platform));
-    add("robust", ctx.robust ? "true" : "false");
-    add("gl_vendor", JsonStr(GlStr(GL_VENDOR)));
-    add("gl_renderer", JsonStr(GlStr(GL_RENDERER)));
-    add("gl_version", JsonStr(version));
-    add("setup_ms", num(Ms(t0, t1)));
-    add("first_frame_ms", num(Ms(t1, t2)));
-    add("ms_min", num(sorted.empty() ? 0 : sorted.front()));
-    add("ms_median", num(median));
-    add("ms_mean", num(mean));
-    add("ms_max", num(sorted.empty() ? 0 : sorted.back()));
-    add("frames", Fmt("%zu", ms.size()));
-    add("image", image);
-    add("limits_short", short_limits.empty() ? "null" : JsonStr(short_limits));
-    add("ok", "true");
-    printf("%s}\n", line.c_str());
-    fflush(stdout);
-    ok = true;
-  } while (false);
+  const bool ok = ReplayOnContext(o, *egl, ctx, path, setup, frame, begin, end, &err);
   DestroyContext(*egl, &ctx);
   return ok || fail(err);
 }

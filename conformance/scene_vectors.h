@@ -299,95 +299,93 @@ inline void MakeSceneBlock(Lcg& rng, const int dims[3], int32_t max_abs, bool de
       }
 }
 
-inline std::vector<uint8_t> BuildSceneVector(const SceneVector& v) {
-  const SceneHeader h = SceneVectorHeader(v);
-  Lcg rng(v.seed);
-  // 1.1: quantized MLP; 1.2: unbounded scene model; 1.3: forward-facing scene model; 1.4: wide
-  // coefficient contexts; 1.5: neighbour coefficient contexts.
-  const uint8_t version_minor = std::max<uint8_t>(
+// The lowest minor version that has every feature the vector uses. 1.1: quantized MLP; 1.2:
+// unbounded scene model; 1.3: forward-facing scene model; 1.4: wide coefficient contexts; 1.5:
+// neighbour coefficient contexts.
+inline uint8_t SceneVectorVersionMinor(const SceneVector& v) {
+  return std::max<uint8_t>(
       {v.neighbour_contexts ? kNeighbourContextsMinVersionMinor
        : v.wide_contexts    ? kWideContextsMinVersionMinor
                             : uint8_t{0},
        kSceneModelMinVersionMinor[static_cast<int>(v.scene_model)],
        v.mlp_precision == kMlpPrecisionQuantized ? kQuantizedMlpMinVersionMinor : uint8_t{0}});
-  ContainerWriter writer(version_minor);
-  ByteWriter head;
-  WriteSceneHeader(h, &head);
-  writer.AddChunk(kChunkHead, head.bytes());
-  if (v.scene_model == SceneModel::kForward) {
-    ByteWriter ndc;
-    WriteNdcFrame(SceneVectorNdcFrame(), &ndc);
-    writer.AddChunk(kChunkNdcFrame, ndc.bytes());
+}
+
+// The occupancy chunk: a 7x6x5 mask over the grid box, empty or a sphere.
+inline std::vector<uint8_t> SceneVectorOccupancyChunk(const SceneVector& v, const SceneHeader& h) {
+  ByteWriter occ;
+  const int mres[3] = {7, 6, 5};
+  float lo[3], hi[3];
+  SceneVectorGridBox(v, h, lo, hi);
+  for (float x : lo) occ.F32(x);
+  for (float x : hi) occ.F32(x);
+  for (int r : mres) occ.U16(uint16_t(r));
+  // The 1.5 vector codes its mask with the wide occupancy contexts.
+  const OccupancyContextSet occupancy_set =
+      v.neighbour_contexts ? OccupancyContextSet::kWide : OccupancyContextSet::kNarrow;
+  occ.U16(static_cast<uint16_t>(occupancy_set));
+  std::vector<uint8_t> voxels(size_t(mres[0]) * mres[1] * mres[2], 0);
+  if (v.occupancy == OccupancyKind::kSphere) {
+    for (int z = 0; z < mres[2]; ++z)
+      for (int y = 0; y < mres[1]; ++y)
+        for (int x = 0; x < mres[0]; ++x) {
+          const double dx = x / 3.0 - 1, dy = y / 2.5 - 1, dz = z / 2.0 - 1;
+          voxels[(size_t(z) * mres[1] + y) * mres[0] + x] = dx * dx + dy * dy + dz * dz < 0.8;
+        }
   }
-  if (h.has_occupancy) {
-    ByteWriter occ;
-    const int mres[3] = {7, 6, 5};
-    float lo[3], hi[3];
-    SceneVectorGridBox(v, h, lo, hi);
-    for (float x : lo) occ.F32(x);
-    for (float x : hi) occ.F32(x);
-    for (int r : mres) occ.U16(uint16_t(r));
-    // The 1.5 vector codes its mask with the wide occupancy contexts.
-    const OccupancyContextSet occupancy_set =
-        v.neighbour_contexts ? OccupancyContextSet::kWide : OccupancyContextSet::kNarrow;
-    occ.U16(static_cast<uint16_t>(occupancy_set));
-    std::vector<uint8_t> voxels(size_t(mres[0]) * mres[1] * mres[2], 0);
-    if (v.occupancy == OccupancyKind::kSphere) {
-      for (int z = 0; z < mres[2]; ++z)
-        for (int y = 0; y < mres[1]; ++y)
-          for (int x = 0; x < mres[0]; ++x) {
-            const double dx = x / 3.0 - 1, dy = y / 2.5 - 1, dz = z / 2.0 - 1;
-            voxels[(size_t(z) * mres[1] + y) * mres[0] + x] = dx * dx + dy * dy + dz * dz < 0.8;
-          }
-    }
-    occ.Bytes(EncodeOccupancy(voxels.data(), mres, occupancy_set));
-    writer.AddChunk(kChunkOccupancy, occ.bytes());
-  }
+  occ.Bytes(EncodeOccupancy(voxels.data(), mres, occupancy_set));
+  return occ.bytes();
+}
+
+// Adds the coefficient chunk of tensor t (planes 0-2, lines 3-5) of grid g (0 density, 1
+// appearance), its blocks drawn from rng. False when its contexts cannot be set up.
+inline bool AddSceneVectorCoefficientChunk(const SceneVector& v, const SceneHeader& h, int g, int t,
+                                           Lcg& rng, ContainerWriter& writer) {
   const int32_t max_abs = v.coef_bits == 16 ? 32767 : 127;
-  for (int g = 0; g < 2; ++g) {
-    for (int t = 0; t < 6; ++t) {
-      if (h.ranks[g][t % 3] == 0) continue;
-      const int* dims = t < 3 ? v.plane_block : v.line_block;
-      int extent[3];
-      SceneTensorExtent(h, g, t, extent);
-      int blocks = 1, grid[3];
-      for (int a = 0; a < 3; ++a) {
-        grid[a] = (extent[a] + dims[a] - 1) / dims[a];
-        blocks *= grid[a];
-      }
-      CoefContexts ctx;
-      // The 1.4 vectors code planes with the wide set and lines with the narrow one, the 1.5
-      // vector planes with the neighbour set and lines with the wide one: the set is chosen per
-      // chunk.
-      const CoefContextSet set = v.neighbour_contexts
-                                     ? (t < 3 ? CoefContextSet::kNeighbour : CoefContextSet::kWide)
-                                 : v.wide_contexts && t < 3 ? CoefContextSet::kWide
-                                                            : CoefContextSet::kNarrow;
-      if (!ctx.Init(BlockShape{dims[0], dims[1], dims[2]}, set, grid, static_cast<size_t>(-1))
-               .ok()) {
-        return {};
-      }
-      RangeEncoder enc;
-      std::vector<int32_t> q(size_t(dims[0]) * dims[1] * dims[2]);
-      for (int b = 0; b < blocks; ++b) {
-        MakeSceneBlock(rng, dims, max_abs, g == 0, q.data());
-        EncodeCoefBlock(enc, ctx, q.data());
-      }
-      ByteWriter c;
-      c.U8(uint8_t(g));
-      c.U8(uint8_t(t));
-      c.U8(uint8_t(v.coef_bits));
-      c.U8(static_cast<uint8_t>(set));
-      for (int a = 0; a < 3; ++a) c.U8(uint8_t(dims[a]));
-      c.U8(0);
-      // The unbounded vector's density is translucent: samples far along its rays count too.
-      const float density_step = v.scene_model == SceneModel::kUnbounded ? 0.00390625f : 0.125f;
-      c.F32(v.coef_bits == 16 ? 0.0005f : (g == 0 ? density_step : 0.03125f));
-      c.Bytes(enc.Finish());
-      writer.AddChunk(kChunkCoefficients, c.bytes());
-    }
+  const int* dims = t < 3 ? v.plane_block : v.line_block;
+  int extent[3];
+  SceneTensorExtent(h, g, t, extent);
+  int blocks = 1, grid[3];
+  for (int a = 0; a < 3; ++a) {
+    grid[a] = (extent[a] + dims[a] - 1) / dims[a];
+    blocks *= grid[a];
   }
-  // MLP weights in the layout of decoder/mlp.h: small values on a 1/256 lattice.
+  CoefContexts ctx;
+  // The 1.4 vectors code planes with the wide set and lines with the narrow one, the 1.5
+  // vector planes with the neighbour set and lines with the wide one: the set is chosen per
+  // chunk.
+  const CoefContextSet set = v.neighbour_contexts
+                                 ? (t < 3 ? CoefContextSet::kNeighbour : CoefContextSet::kWide)
+                             : v.wide_contexts && t < 3 ? CoefContextSet::kWide
+                                                        : CoefContextSet::kNarrow;
+  if (!ctx.Init(BlockShape{dims[0], dims[1], dims[2]}, set, grid, static_cast<size_t>(-1)).ok()) {
+    return false;
+  }
+  RangeEncoder enc;
+  std::vector<int32_t> q(size_t(dims[0]) * dims[1] * dims[2]);
+  for (int b = 0; b < blocks; ++b) {
+    MakeSceneBlock(rng, dims, max_abs, g == 0, q.data());
+    EncodeCoefBlock(enc, ctx, q.data());
+  }
+  ByteWriter c;
+  c.U8(uint8_t(g));
+  c.U8(uint8_t(t));
+  c.U8(uint8_t(v.coef_bits));
+  c.U8(static_cast<uint8_t>(set));
+  for (int a = 0; a < 3; ++a) c.U8(uint8_t(dims[a]));
+  c.U8(0);
+  // The unbounded vector's density is translucent: samples far along its rays count too.
+  const float density_step = v.scene_model == SceneModel::kUnbounded ? 0.00390625f : 0.125f;
+  c.F32(v.coef_bits == 16 ? 0.0005f : (g == 0 ? density_step : 0.03125f));
+  c.Bytes(enc.Finish());
+  writer.AddChunk(kChunkCoefficients, c.bytes());
+  return true;
+}
+
+// The MLP weights chunk, in the layout of decoder/mlp.h: small values on a 1/256 lattice, drawn
+// from rng.
+inline std::vector<uint8_t> SceneVectorMlpChunk(const SceneVector& v, const SceneHeader& h,
+                                                Lcg& rng) {
   const int F = h.feature_dim, H = h.hidden, P = h.total_rank(1);
   const int in = F + 3 + 2 * F * h.feature_pe_freqs + 2 * 3 * h.viewdir_pe_freqs;
   const size_t count = size_t(F) * P + size_t(H) * in + H + size_t(H) * H + H + 3 * size_t(H) + 3;
@@ -427,7 +425,32 @@ inline std::vector<uint8_t> BuildSceneVector(const SceneVector& v) {
       mlp.U16(FloatToHalf(w));
     }
   }
-  writer.AddChunk(kChunkMlpWeights, mlp.bytes());
+  return mlp.bytes();
+}
+
+// The vector's file: the chunks in file order, every random draw from one generator seeded by
+// the vector (blocks of the coefficient chunks, then the MLP weights). Empty when a coefficient
+// chunk cannot be built.
+inline std::vector<uint8_t> BuildSceneVector(const SceneVector& v) {
+  const SceneHeader h = SceneVectorHeader(v);
+  Lcg rng(v.seed);
+  ContainerWriter writer(SceneVectorVersionMinor(v));
+  ByteWriter head;
+  WriteSceneHeader(h, &head);
+  writer.AddChunk(kChunkHead, head.bytes());
+  if (v.scene_model == SceneModel::kForward) {
+    ByteWriter ndc;
+    WriteNdcFrame(SceneVectorNdcFrame(), &ndc);
+    writer.AddChunk(kChunkNdcFrame, ndc.bytes());
+  }
+  if (h.has_occupancy) writer.AddChunk(kChunkOccupancy, SceneVectorOccupancyChunk(v, h));
+  for (int g = 0; g < 2; ++g) {
+    for (int t = 0; t < 6; ++t) {
+      if (h.ranks[g][t % 3] == 0) continue;
+      if (!AddSceneVectorCoefficientChunk(v, h, g, t, rng, writer)) return {};
+    }
+  }
+  writer.AddChunk(kChunkMlpWeights, SceneVectorMlpChunk(v, h, rng));
   const std::string meta = std::string("{\"vector\":\"") + v.name + "\"}";
   writer.AddChunk(kChunkMetadata, reinterpret_cast<const uint8_t*>(meta.data()), meta.size());
   return writer.Finish();

@@ -374,21 +374,30 @@ void ApplyHeader(const SceneHeader& h, SceneField* scene) {
 // The critical chunks in the only order a stream may have them (SPEC.md 6.1).
 enum class Expect { kHead, kNdcFrame, kOccupancy, kCoefficients, kMlp, kDone };
 
-}  // namespace
+const char* ExpectedChunkName(Expect expect) {
+  return expect == Expect::kHead           ? "HEAD"
+         : expect == Expect::kNdcFrame     ? "NDCP"
+         : expect == Expect::kOccupancy    ? "OCCU"
+         : expect == Expect::kCoefficients ? "COEF"
+                                           : "MLPW";
+}
 
-namespace {
-
-Status DecodeChunks(const uint8_t* data, size_t size, const DecodeOptions& options,
-                    MemoryBudget& budget, WorkBudget& work, SceneField* scene, SceneInfo& info) {
-  ContainerReader reader;
-  ECRF_RETURN_IF_ERROR(reader.Open(data, size));
-  info.version_major = reader.version_major();
-  info.version_minor = reader.version_minor();
-
-  SceneHeader& h = info.header;
+// Where a stream is in the order of its critical chunks.
+struct ChunkOrder {
   Expect expect = Expect::kHead;
   int next_tensor = 0;  // g * 6 + t of the next COEF chunk
-  auto advance_tensor = [&]() {
+
+  // What follows HEAD (but a forward-facing scene's NDCP) and NDCP: OCCU when the scene has an
+  // occupancy mask, else the first tensor.
+  void ExpectOccupancyOrTensor(const SceneHeader& h) {
+    if (h.has_occupancy) {
+      expect = Expect::kOccupancy;
+    } else {
+      AdvanceTensor(h);
+    }
+  }
+  // Skips the tensors of rank 0 (they have no COEF chunk); after the last tensor, MLPW.
+  void AdvanceTensor(const SceneHeader& h) {
     while (next_tensor < kNumSceneGrids * kTensorsPerSceneGrid &&
            SceneTensorRank(h, next_tensor / kTensorsPerSceneGrid,
                            next_tensor % kTensorsPerSceneGrid) == 0) {
@@ -396,105 +405,134 @@ Status DecodeChunks(const uint8_t* data, size_t size, const DecodeOptions& optio
     }
     expect =
         next_tensor < kNumSceneGrids * kTensorsPerSceneGrid ? Expect::kCoefficients : Expect::kMlp;
-  };
+  }
+};
+
+// The ancillary chunks are skipped; the metadata is kept (pointing into the stream).
+void RecordAncillaryChunk(const ChunkView& chunk, SceneInfo& info) {
+  if (chunk.type == kChunkMetadata) {
+    info.metadata = chunk.data;
+    info.metadata_size = chunk.size;
+    info.metadata_bytes += chunk.size;
+  } else {
+    info.other_ancillary_bytes += chunk.size;
+  }
+}
+
+// HEAD: the header, checked against the stream's version, and the grids it describes allocated.
+Status DecodeHeadChunk(const ChunkView& chunk, const DecodeOptions& options, MemoryBudget& budget,
+                       SceneField* scene, SceneInfo& info) {
+  SceneHeader& h = info.header;
+  ECRF_RETURN_IF_ERROR(ParseSceneHeader(chunk.data, chunk.size, &h));
+  // The version rule (SPEC.md 2.1): a feature of a later minor version than the stream's.
+  // (ParseSceneHeader has refused unknown scene models.)
+  const int model_minor = kSceneModelMinVersionMinor[h.scene_model];
+  ECRF_CHECK_OR_RETURN(info.version_minor >= model_minor, kErrCorrupt,
+                       "HEAD: scene_model %u needs version_minor >= %d, the stream says %u "
+                       "(SPEC.md 2.1)",
+                       h.scene_model, model_minor, info.version_minor);
+  // The 16-bit conversion holds both copies for a moment.
+  const uint64_t grid_bytes = SceneGridValues(h) * (options.storage == GridStorage::kInt16 ? 6 : 4);
+  ECRF_RETURN_IF_ERROR(budget.Take(grid_bytes, "HEAD: the grids"));
+  info.head_bytes = chunk.size;
+  ApplyHeader(h, scene);
+  int res[3], ranks[kNumSceneGrids][3];
+  for (int a = 0; a < 3; ++a) {
+    res[a] = h.res[a];
+    for (int g = 0; g < kNumSceneGrids; ++g) ranks[g][a] = h.ranks[g][a];
+  }
+  ECRF_RETURN_IF_ERROR(scene->density.Allocate(res, ranks[0], GridStorage::kFloat32));
+  return scene->appearance.Allocate(res, ranks[1], GridStorage::kFloat32);
+}
+
+// A critical chunk: decoded when it is the one the order expects, else refused (out of order, or
+// unknown).
+Status DecodeCriticalChunk(const ChunkView& chunk, const DecodeOptions& options,
+                           MemoryBudget& budget, WorkBudget& work, ChunkOrder& order,
+                           SceneField* scene, SceneInfo& info) {
+  const SceneHeader& h = info.header;
+  const Expect expect = order.expect;
+  if (chunk.type == kChunkHead && expect == Expect::kHead) {
+    ECRF_RETURN_IF_ERROR(DecodeHeadChunk(chunk, options, budget, scene, info));
+    if (h.scene_model == static_cast<uint8_t>(SceneModel::kForward)) {
+      order.expect = Expect::kNdcFrame;
+    } else {
+      order.ExpectOccupancyOrTensor(h);
+    }
+  } else if (chunk.type == kChunkNdcFrame && expect == Expect::kNdcFrame) {
+    ECRF_RETURN_IF_ERROR(ParseNdcFrame(chunk.data, chunk.size, &scene->ndc));
+    info.ndc_bytes = chunk.size;
+    order.ExpectOccupancyOrTensor(h);
+  } else if (chunk.type == kChunkOccupancy && expect == Expect::kOccupancy) {
+    ECRF_RETURN_IF_ERROR(
+        DecodeOccupancyChunk(chunk, info.version_minor, &budget, &work, scene, &info));
+    order.AdvanceTensor(h);
+  } else if (chunk.type == kChunkCoefficients && expect == Expect::kCoefficients) {
+    const int g = order.next_tensor / kTensorsPerSceneGrid;
+    const int t = order.next_tensor % kTensorsPerSceneGrid;
+    VmGrid* grid = g == 0 ? &scene->density : &scene->appearance;
+    ECRF_RETURN_IF_ERROR(DecodeCoefficientChunk(chunk, h, g, t, info.version_minor, &budget, &work,
+                                                grid, &info.tensors[g][t]));
+    ++order.next_tensor;
+    order.AdvanceTensor(h);
+  } else if (chunk.type == kChunkMlpWeights && expect == Expect::kMlp) {
+    ECRF_RETURN_IF_ERROR(
+        DecodeMlpChunk(chunk, h, &budget, &work, info.version_minor, scene, &info));
+    order.expect = Expect::kDone;
+  } else {
+    char name[5];
+    ChunkTypeName(chunk.type, name);
+    const bool known = chunk.type == kChunkHead || chunk.type == kChunkNdcFrame ||
+                       chunk.type == kChunkOccupancy || chunk.type == kChunkCoefficients ||
+                       chunk.type == kChunkMlpWeights;
+    return Status::Error(known ? kErrCorrupt : kErrUnsupported,
+                         known ? "chunk '%s' at offset %zu is out of order"
+                               : "unknown critical chunk '%s' at offset %zu",
+                         name, chunk.offset);
+  }
+  return Status::Ok();
+}
+
+// DecodeOptions::storage kInt16: the decoded grids converted to 16-bit values.
+Status ConvertGridsToInt16(const SceneHeader& h, WorkBudget& work, SceneField* scene) {
+  // The conversion reads and writes every grid value: one unit per 16.
+  if (!work.Take(SceneGridValues(h) / 16)) return work.Refuse("16-bit grid storage");
+  VmGrid converted;
+  ECRF_RETURN_IF_ERROR(QuantizeGridInt16(scene->density, &converted));
+  scene->density = static_cast<VmGrid&&>(converted);
+  VmGrid converted_app;
+  ECRF_RETURN_IF_ERROR(QuantizeGridInt16(scene->appearance, &converted_app));
+  scene->appearance = static_cast<VmGrid&&>(converted_app);
+  return Status::Ok();
+}
+
+// The stream's chunks in order: the critical ones decoded, the ancillary ones recorded, until
+// DONE; then the grids in the storage asked for, and the scene validated.
+Status DecodeChunks(const uint8_t* data, size_t size, const DecodeOptions& options,
+                    MemoryBudget& budget, WorkBudget& work, SceneField* scene, SceneInfo& info) {
+  ContainerReader reader;
+  ECRF_RETURN_IF_ERROR(reader.Open(data, size));
+  info.version_major = reader.version_major();
+  info.version_minor = reader.version_minor();
+  ChunkOrder order;
   for (;;) {
     ChunkView chunk;
     bool done = false;
     ECRF_RETURN_IF_ERROR(reader.Next(&chunk, &done));
-    char name[5];
-    ChunkTypeName(chunk.type, name);
     if (done) {
-      ECRF_CHECK_OR_RETURN(expect == Expect::kDone, kErrCorrupt,
+      ECRF_CHECK_OR_RETURN(order.expect == Expect::kDone, kErrCorrupt,
                            "DONE at offset %zu before the scene is complete (%s missing)",
-                           chunk.offset,
-                           expect == Expect::kHead           ? "HEAD"
-                           : expect == Expect::kNdcFrame     ? "NDCP"
-                           : expect == Expect::kOccupancy    ? "OCCU"
-                           : expect == Expect::kCoefficients ? "COEF"
-                                                             : "MLPW");
+                           chunk.offset, ExpectedChunkName(order.expect));
       break;
     }
     if (!IsCriticalChunk(chunk.type)) {
-      if (chunk.type == kChunkMetadata) {
-        info.metadata = chunk.data;
-        info.metadata_size = chunk.size;
-        info.metadata_bytes += chunk.size;
-      } else {
-        info.other_ancillary_bytes += chunk.size;
-      }
+      RecordAncillaryChunk(chunk, info);
       continue;
     }
-    if (chunk.type == kChunkHead && expect == Expect::kHead) {
-      ECRF_RETURN_IF_ERROR(ParseSceneHeader(chunk.data, chunk.size, &h));
-      // The version rule (SPEC.md 2.1): a feature of a later minor version than the stream's.
-      // (ParseSceneHeader has refused unknown scene models.)
-      const int model_minor = kSceneModelMinVersionMinor[h.scene_model];
-      ECRF_CHECK_OR_RETURN(info.version_minor >= model_minor, kErrCorrupt,
-                           "HEAD: scene_model %u needs version_minor >= %d, the stream says %u "
-                           "(SPEC.md 2.1)",
-                           h.scene_model, model_minor, info.version_minor);
-      // The 16-bit conversion holds both copies for a moment.
-      const uint64_t grid_bytes =
-          SceneGridValues(h) * (options.storage == GridStorage::kInt16 ? 6 : 4);
-      ECRF_RETURN_IF_ERROR(budget.Take(grid_bytes, "HEAD: the grids"));
-      info.head_bytes = chunk.size;
-      ApplyHeader(h, scene);
-      int res[3], ranks[kNumSceneGrids][3];
-      for (int a = 0; a < 3; ++a) {
-        res[a] = h.res[a];
-        for (int g = 0; g < kNumSceneGrids; ++g) ranks[g][a] = h.ranks[g][a];
-      }
-      ECRF_RETURN_IF_ERROR(scene->density.Allocate(res, ranks[0], GridStorage::kFloat32));
-      ECRF_RETURN_IF_ERROR(scene->appearance.Allocate(res, ranks[1], GridStorage::kFloat32));
-      if (h.scene_model == static_cast<uint8_t>(SceneModel::kForward)) {
-        expect = Expect::kNdcFrame;
-      } else if (h.has_occupancy) {
-        expect = Expect::kOccupancy;
-      } else {
-        advance_tensor();
-      }
-    } else if (chunk.type == kChunkNdcFrame && expect == Expect::kNdcFrame) {
-      ECRF_RETURN_IF_ERROR(ParseNdcFrame(chunk.data, chunk.size, &scene->ndc));
-      info.ndc_bytes = chunk.size;
-      if (h.has_occupancy) {
-        expect = Expect::kOccupancy;
-      } else {
-        advance_tensor();
-      }
-    } else if (chunk.type == kChunkOccupancy && expect == Expect::kOccupancy) {
-      ECRF_RETURN_IF_ERROR(
-          DecodeOccupancyChunk(chunk, info.version_minor, &budget, &work, scene, &info));
-      advance_tensor();
-    } else if (chunk.type == kChunkCoefficients && expect == Expect::kCoefficients) {
-      const int g = next_tensor / kTensorsPerSceneGrid, t = next_tensor % kTensorsPerSceneGrid;
-      VmGrid* grid = g == 0 ? &scene->density : &scene->appearance;
-      ECRF_RETURN_IF_ERROR(DecodeCoefficientChunk(chunk, h, g, t, info.version_minor, &budget,
-                                                  &work, grid, &info.tensors[g][t]));
-      ++next_tensor;
-      advance_tensor();
-    } else if (chunk.type == kChunkMlpWeights && expect == Expect::kMlp) {
-      ECRF_RETURN_IF_ERROR(
-          DecodeMlpChunk(chunk, h, &budget, &work, info.version_minor, scene, &info));
-      expect = Expect::kDone;
-    } else {
-      const bool known = chunk.type == kChunkHead || chunk.type == kChunkNdcFrame ||
-                         chunk.type == kChunkOccupancy || chunk.type == kChunkCoefficients ||
-                         chunk.type == kChunkMlpWeights;
-      return Status::Error(known ? kErrCorrupt : kErrUnsupported,
-                           known ? "chunk '%s' at offset %zu is out of order"
-                                 : "unknown critical chunk '%s' at offset %zu",
-                           name, chunk.offset);
-    }
+    ECRF_RETURN_IF_ERROR(DecodeCriticalChunk(chunk, options, budget, work, order, scene, info));
   }
   if (options.storage == GridStorage::kInt16) {
-    // The conversion reads and writes every grid value: one unit per 16.
-    if (!work.Take(SceneGridValues(h) / 16)) return work.Refuse("16-bit grid storage");
-    VmGrid converted;
-    ECRF_RETURN_IF_ERROR(QuantizeGridInt16(scene->density, &converted));
-    scene->density = static_cast<VmGrid&&>(converted);
-    VmGrid converted_app;
-    ECRF_RETURN_IF_ERROR(QuantizeGridInt16(scene->appearance, &converted_app));
-    scene->appearance = static_cast<VmGrid&&>(converted_app);
+    ECRF_RETURN_IF_ERROR(ConvertGridsToInt16(info.header, work, scene));
   }
   // Every grid value is an IDCT output (|y| < 2^31) times step * 2^-Pf <= 2^60: finite by
   // construction, so the renderer need not scan (and page in) every value again.

@@ -247,6 +247,148 @@ void ScatterChunk(VmGrid& density, VmGrid& appearance, Workspace& ws, int r0, in
   }
 }
 
+// What the loss of a step needs of each ray, the same for all its rays.
+struct RayLoss {
+  const float* target_rgb;  // n_rays x 3
+  const float* ray_gain;    // n_rays x 3, or null: all 1
+  float* dl_dgain;          // n_rays x 3, or null: not wanted
+  bool white;               // the background is white (else black)
+  float grad_scale;         // d(mean squared error)/d(diff) per unit diff: 2 / (3 n_rays)
+  // The distortion loss (DistortionLoss, inlined into CompositeBackward): positions
+  // m = s / n_samples, intervals 1 / n_samples.
+  bool distortion_on;
+  double inv_n;
+  double distortion_scale;  // distortion_weight / n_rays
+};
+
+// A ray's composited colour and the sums its backward pass reads again.
+struct RayComposite {
+  float c[3] = {0.f, 0.f, 0.f};
+  float acc = 0.f;                       // accumulated opacity
+  double w_total = 0.0, wm_total = 0.0;  // distortion loss: the sums of w and w * m
+};
+
+// Compositing forward of one ray: the weights w = alpha * trans summed into colour and opacity.
+// The ray's appearance samples have rows row0 + app of rgb.
+inline RayComposite CompositeForward(const RayLoss& loss, const SampleRec* s, int count,
+                                     const float* rgb_rows, int64_t row0) {
+  RayComposite rc;
+  for (int k = 0; k < count; ++k) {
+    const float w = s[k].alpha * s[k].trans;
+    rc.acc += w;
+    if (loss.distortion_on) {
+      rc.w_total += w;
+      rc.wm_total += w * (s[k].s * loss.inv_n);
+    }
+    if (s[k].app >= 0) {
+      const float* rgb = rgb_rows + 3 * (row0 + s[k].app);
+      rc.c[0] += w * rgb[0];
+      rc.c[1] += w * rgb[1];
+      rc.c[2] += w * rgb[2];
+    }
+  }
+  return rc;
+}
+
+// The photometric loss of ray r: the background and the gain applied, the pixel clamped, its
+// squared errors added to sse (the caller's reduction variable, channel by channel), g set to
+// dL/d(composited colour) and, when asked, dL/dgain written.
+inline void PixelLoss(const RayLoss& loss, int r, RayComposite& rc, float g[3], double& sse) {
+  for (int ch = 0; ch < 3; ++ch) {
+    if (loss.white) rc.c[ch] += 1.f - rc.acc;
+    // 1 * x is exact, so rays without a gain train bit for bit as before.
+    const float gain = loss.ray_gain ? loss.ray_gain[3 * r + ch] : 1.f;
+    const float pixel = gain * rc.c[ch];
+    const bool in_range = pixel >= 0.f && pixel <= 1.f;
+    const float cc = std::min(std::max(pixel, 0.f), 1.f);
+    const float diff = cc - loss.target_rgb[3 * r + ch];
+    sse += static_cast<double>(diff) * diff;
+    const float g_pixel = in_range ? loss.grad_scale * diff : 0.f;
+    if (loss.dl_dgain) loss.dl_dgain[3 * r + ch] = g_pixel * rc.c[ch];
+    g[ch] = g_pixel * gain;
+  }
+}
+
+// Compositing backward of one ray, from its last sample to its first (the suffix sums of the
+// weights' gradients): each sample's feat becomes dL/dfeature and its row of dl_drgb dL/drgb.
+// Returns the ray's distortion loss.
+inline double CompositeBackward(const RayLoss& loss, SampleRec* s, int count,
+                                const RayComposite& rc, const float g[3], const float* rgb_rows,
+                                float* dl_drgb_rows, int64_t row0) {
+  const float bg_dot = loss.white ? g[0] + g[1] + g[2] : 0.f;
+  float suffix = 0.f;
+  double w_after = 0.0, wm_after = 0.0, ray_distortion = 0.0;
+  for (int k = count - 1; k >= 0; --k) {
+    SampleRec& sk = s[k];
+    const float w = sk.alpha * sk.trans;
+    float e = -bg_dot;
+    if (loss.distortion_on) {
+      const double inv_n = loss.inv_n;
+      const double m = sk.s * inv_n, wk = w;
+      const double w_before = rc.w_total - w_after - wk;
+      const double wm_before = rc.wm_total - wm_after - wk * m;
+      const double spread = (m * w_before - wm_before) + (wm_after - m * w_after);
+      ray_distortion += wk * spread + inv_n / 3.0 * wk * wk;
+      e += static_cast<float>(loss.distortion_scale * (2.0 * spread + 2.0 * inv_n / 3.0 * wk));
+      w_after += wk;
+      wm_after += wk * m;
+    }
+    if (sk.app >= 0) {
+      const int64_t row = row0 + sk.app;
+      const float* rgb = rgb_rows + 3 * row;
+      e += g[0] * rgb[0] + g[1] * rgb[1] + g[2] * rgb[2];
+      float* dr = dl_drgb_rows + 3 * row;
+      dr[0] = w * g[0];
+      dr[1] = w * g[1];
+      dr[2] = w * g[2];
+    }
+    const float f = (1.f - sk.alpha) + 1e-10f;
+    const float dl_dalpha = e * sk.trans - suffix / f;
+    suffix += e * w;
+    const float dl_dsigma = dl_dalpha * (1.f - sk.alpha) * sk.dscale;
+    sk.feat = dl_dsigma * SoftplusGrad(sk.feat);
+  }
+  return ray_distortion;
+}
+
+// The rays [r0, r1) of a chunk and its rows of appearance samples, [base, base + rows).
+struct RayChunk {
+  int r0, r1;
+  int64_t base, rows;
+};
+
+// The chunk from ray r0: the most consecutive rays (at least one) whose appearance samples fit in
+// max_rows rows.
+inline RayChunk NextChunk(const Workspace& ws, int r0, int n_rays, int64_t max_rows) {
+  int r1 = r0 + 1;
+  while (r1 < n_rays &&
+         ws.rays[r1].app_start + ws.rays[r1].app_count - ws.rays[r0].app_start <= max_rows)
+    ++r1;
+  const int64_t base = ws.rays[r0].app_start;
+  return {r0, r1, base, ws.rays[r1 - 1].app_start + ws.rays[r1 - 1].app_count - base};
+}
+
+// Compositing forward, loss and compositing backward (dL/dfeature, dL/drgb) of a chunk's rays,
+// whose head outputs are in ws.rgb. The sums are the step's OpenMP reduction variables. Each
+// thread takes its own copy of the loss, which lets the compiler keep it in registers.
+void CompositeChunk(RayLoss loss, Workspace& ws, const RayChunk& chunk, double& sse,
+                    long& n_density, double& distortion_sum) {
+  const int64_t base = chunk.base;
+#pragma omp parallel for schedule(dynamic, 16) firstprivate(loss) \
+    reduction(+ : sse, n_density, distortion_sum) if (chunk.r1 - chunk.r0 >= kMinParallelRays)
+  for (int r = chunk.r0; r < chunk.r1; ++r) {
+    const RayRec& rr = ws.rays[r];
+    SampleRec* s = ws.SamplesOf(rr);
+    const int64_t row0 = rr.app_start - base;
+    n_density += rr.count;
+    RayComposite rc = CompositeForward(loss, s, rr.count, ws.rgb.data(), row0);
+    float g[3];
+    PixelLoss(loss, r, rc, g, sse);
+    distortion_sum +=
+        CompositeBackward(loss, s, rr.count, rc, g, ws.rgb.data(), ws.dl_drgb.data(), row0);
+  }
+}
+
 }  // namespace
 
 int ScatterTaskCount(const TensorfModel& model) {
@@ -288,32 +430,29 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
   VmGrid& density = model.density();
   VmGrid& appearance = model.appearance();
   AppearanceHead& head = model.head();
-  const float grad_scale = 2.f / (3.f * static_cast<float>(n_rays));
+  const RayLoss loss{target_rgb,
+                     ray_gain,
+                     dl_dgain,
+                     white,
+                     2.f / (3.f * static_cast<float>(n_rays)),
+                     distortion_weight > 0.f,
+                     1.0 / p.n_samples,
+                     static_cast<double>(distortion_weight) / n_rays};
   const int64_t max_rows = std::max(1, cfg.head_chunk_rows);
   // Each chunk's ws.products stays untouched until its head.Backward, so the head need not copy it.
   head.set_borrow_products(true);
   double sse = 0.0;
   long n_density = 0;
-  // The distortion loss (DistortionLoss, inlined into the compositing backward below): positions
-  // m = s / n_samples, intervals 1 / n_samples.
-  const bool distortion_on = distortion_weight > 0.f;
-  const double inv_n = 1.0 / p.n_samples;
-  const double distortion_scale = static_cast<double>(distortion_weight) / n_rays;
   double distortion_sum = 0.0;
 
   // The rest runs per chunk of consecutive rays holding at most head_chunk_rows appearance
   // samples (the loss is a sum over rays), bounding the head's activation memory.
   for (int r0 = 0; r0 < n_rays;) {
-    int r1 = r0 + 1;
-    while (r1 < n_rays &&
-           ws.rays[r1].app_start + ws.rays[r1].app_count - ws.rays[r0].app_start <= max_rows)
-      ++r1;
-    const int nr = r1 - r0;
-    const int64_t base = ws.rays[r0].app_start;
-    const int64_t rows = ws.rays[r1 - 1].app_start + ws.rays[r1 - 1].app_count - base;
+    const RayChunk chunk = NextChunk(ws, r0, n_rays, max_rows);
+    const int64_t rows = chunk.rows;
 
     // Appearance inputs + head forward.
-    GatherAppearance(appearance, ws, r0, r1, dirs, base, rows);
+    GatherAppearance(appearance, ws, chunk.r0, chunk.r1, dirs, chunk.base, rows);
     EnsureSize(ws.rgb, static_cast<size_t>(rows) * 3);
     EnsureSize(ws.dl_drgb, static_cast<size_t>(rows) * 3);
     stats.t_march += lap();
@@ -321,79 +460,7 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
       head.Forward(static_cast<int>(rows), ws.products.data(), ws.viewdirs.data(), ws.rgb.data());
     stats.t_head += lap();
 
-    // Compositing forward, loss, compositing backward (dL/dfeature, dL/drgb).
-#pragma omp parallel for schedule(dynamic, 16) reduction(+ : sse, n_density, distortion_sum) \
-    if (nr >= kMinParallelRays)
-    for (int r = r0; r < r1; ++r) {
-      const RayRec& rr = ws.rays[r];
-      SampleRec* s = ws.SamplesOf(rr);
-      const int64_t row0 = rr.app_start - base;
-      n_density += rr.count;
-      float c[3] = {0.f, 0.f, 0.f};
-      float acc = 0.f;
-      double w_total = 0.0, wm_total = 0.0;
-      for (int k = 0; k < rr.count; ++k) {
-        const float w = s[k].alpha * s[k].trans;
-        acc += w;
-        if (distortion_on) {
-          w_total += w;
-          wm_total += w * (s[k].s * inv_n);
-        }
-        if (s[k].app >= 0) {
-          const float* rgb = ws.rgb.data() + 3 * (row0 + s[k].app);
-          c[0] += w * rgb[0];
-          c[1] += w * rgb[1];
-          c[2] += w * rgb[2];
-        }
-      }
-      float g[3];
-      for (int ch = 0; ch < 3; ++ch) {
-        if (white) c[ch] += 1.f - acc;
-        // 1 * x is exact, so rays without a gain train bit for bit as before.
-        const float gain = ray_gain ? ray_gain[3 * r + ch] : 1.f;
-        const float pixel = gain * c[ch];
-        const bool in_range = pixel >= 0.f && pixel <= 1.f;
-        const float cc = std::min(std::max(pixel, 0.f), 1.f);
-        const float diff = cc - target_rgb[3 * r + ch];
-        sse += static_cast<double>(diff) * diff;
-        const float g_pixel = in_range ? grad_scale * diff : 0.f;
-        if (dl_dgain) dl_dgain[3 * r + ch] = g_pixel * c[ch];
-        g[ch] = g_pixel * gain;
-      }
-      const float bg_dot = white ? g[0] + g[1] + g[2] : 0.f;
-      float suffix = 0.f;
-      double w_after = 0.0, wm_after = 0.0, ray_distortion = 0.0;
-      for (int k = rr.count - 1; k >= 0; --k) {
-        SampleRec& sk = s[k];
-        const float w = sk.alpha * sk.trans;
-        float e = -bg_dot;
-        if (distortion_on) {
-          const double m = sk.s * inv_n, wk = w;
-          const double w_before = w_total - w_after - wk;
-          const double wm_before = wm_total - wm_after - wk * m;
-          const double spread = (m * w_before - wm_before) + (wm_after - m * w_after);
-          ray_distortion += wk * spread + inv_n / 3.0 * wk * wk;
-          e += static_cast<float>(distortion_scale * (2.0 * spread + 2.0 * inv_n / 3.0 * wk));
-          w_after += wk;
-          wm_after += wk * m;
-        }
-        if (sk.app >= 0) {
-          const int64_t row = row0 + sk.app;
-          const float* rgb = ws.rgb.data() + 3 * row;
-          e += g[0] * rgb[0] + g[1] * rgb[1] + g[2] * rgb[2];
-          float* dr = ws.dl_drgb.data() + 3 * row;
-          dr[0] = w * g[0];
-          dr[1] = w * g[1];
-          dr[2] = w * g[2];
-        }
-        const float f = (1.f - sk.alpha) + 1e-10f;
-        const float dl_dalpha = e * sk.trans - suffix / f;
-        suffix += e * w;
-        const float dl_dsigma = dl_dalpha * (1.f - sk.alpha) * sk.dscale;
-        sk.feat = dl_dsigma * SoftplusGrad(sk.feat);
-      }
-      distortion_sum += ray_distortion;
-    }
+    CompositeChunk(loss, ws, chunk, sse, n_density, distortion_sum);
     stats.t_composite += lap();
 
     // Head backward.
@@ -401,9 +468,9 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
     if (rows > 0) head.Backward(static_cast<int>(rows), ws.dl_drgb.data(), ws.dl_dproducts.data());
     stats.t_head += lap();
 
-    ScatterChunk(density, appearance, ws, r0, r1, base, P);
+    ScatterChunk(density, appearance, ws, chunk.r0, chunk.r1, chunk.base, P);
     stats.t_scatter += lap();
-    r0 = r1;
+    r0 = chunk.r1;
   }
   stats.mse = sse / (3.0 * n_rays);
   stats.distortion = distortion_sum / n_rays;

@@ -106,9 +106,8 @@ struct ModelView {
   }
 };
 
-// Per-chunk forward + backward on n <= kChunk values. Inputs 0..n-1 are x - 1/2 (lower),
-// kChunk..kChunk+n-1 are x + 1/2 (upper). Accumulates parameter gradients (w.r.t. softplus(W),
-// bias, tanh(factor)) into acc (layout of ModelGradAcc below) when acc != nullptr.
+// The parameter gradients of chunks, w.r.t. softplus(W), bias and tanh(factor) (AddParamGrads
+// converts them to gradients w.r.t. the raw parameters).
 template <typename T>
 struct ChunkGrad {
   T dsp[4][9];
@@ -132,22 +131,23 @@ struct alignas(64) ChunkState {
   T dh2[3][M];
 };
 
+// The chunk's network inputs: lanes 0..kChunk-1 are x - 1/2 (lower), kChunk.. x + 1/2 (upper);
+// lanes past n hold 0, so that every loop below runs over all lanes at a fixed length.
 template <typename T>
-__attribute__((always_inline)) inline double RunChunk(const ModelView<T>& mv,
-                                                      const EntropyModelOptions& opt,
-                                                      const float* x_f, const double* x_d, int n,
-                                                      T grad_scale, float* bits_out,
-                                                      float* dx_out_f, double* dx_out_d,
-                                                      ChunkGrad<T>* acc, ChunkState<T>& st) {
-  const bool backward = acc != nullptr || dx_out_f != nullptr || dx_out_d != nullptr;
-  constexpr int M = ChunkState<T>::M;
-  const int m = M;  // process padded lanes too (values 0), keeps loops fixed-length
+__attribute__((always_inline)) inline void LoadChunkInputs(const float* x_f, const double* x_d,
+                                                           int n, ChunkState<T>& st) {
   for (int i = 0; i < kChunk; ++i) {
     const T xi = i < n ? (x_f ? static_cast<T>(x_f[i]) : static_cast<T>(x_d[i])) : T(0);
     st.h[0][0][i] = xi - T(0.5);
     st.h[0][0][kChunk + i] = xi + T(0.5);
   }
-  // Forward.
+}
+
+// Forward through the four layers: h[l+1] = sp_l . h[l] + b_l + g_l * tanh(.), the last layer's
+// output (no tanh term) into logit.
+template <typename T>
+__attribute__((always_inline)) inline void ForwardChunk(const ModelView<T>& mv, ChunkState<T>& st) {
+  constexpr int m = ChunkState<T>::M;
   for (int l = 0; l < 4; ++l) {
     const int fin = l == 0 ? 1 : 3;
     const int fout = l == 3 ? 1 : 3;
@@ -178,11 +178,18 @@ __attribute__((always_inline)) inline double RunChunk(const ModelView<T>& mv,
       }
     }
   }
-  // Likelihood, bits and d bits / d logits.
+}
+
+// Likelihood (the difference of the sigmoids of the upper and lower logits, bounded below), the
+// bits of each value into st.bits and d (grad_scale * bits) / d logit into st.dh[0], lanes as
+// logit. Returns the bits of the n valid values.
+template <typename T>
+__attribute__((always_inline)) inline T ChunkBits(const EntropyModelOptions& opt, int n,
+                                                  T grad_scale, ChunkState<T>& st) {
   const T bound = static_cast<T>(opt.likelihood_lower_bound);
   const bool pass_inc = opt.pass_gradient_if_increasing;
   T bits_sum = 0;
-  T* dl = st.dh[0];  // d / d logit, lanes as logit
+  T* dl = st.dh[0];
   const T inv_ln2 = T(1.4426950408889634);
 #pragma omp simd reduction(+ : bits_sum)
   for (int i = 0; i < kChunk; ++i) {
@@ -204,29 +211,43 @@ __attribute__((always_inline)) inline double RunChunk(const ModelView<T>& mv,
     dl[kChunk + i] = gd * s * su * (T(1) - su);
     dl[i] = -gd * s * sl * (T(1) - sl);
   }
-  if (bits_out) {
-    for (int i = 0; i < n; ++i) bits_out[i] = static_cast<float>(st.bits[i]);
-  }
-  if (!backward) return static_cast<double>(bits_sum);
-  // Backward. Layer 3: logit = sp3 . h[3] + b3.
-  T(*dh)[M] = st.dh2;  // gradient w.r.t. h[l+1] (3 rows)
-  {
-    T sdl = 0;
+  return bits_sum;
+}
+
+// Backward through layer 3, logit = sp3 . h[3] + b3: its parameter gradients into acc (when not
+// null) and d / d h[3] into st.dh2.
+template <typename T>
+__attribute__((always_inline)) inline void BackwardOutputLayer(const ModelView<T>& mv,
+                                                               ChunkGrad<T>* acc,
+                                                               ChunkState<T>& st) {
+  constexpr int m = ChunkState<T>::M;
+  const T* dl = st.dh[0];
+  T(*dh)[m] = st.dh2;
+  T sdl = 0;
 #pragma omp simd reduction(+ : sdl)
-    for (int i = 0; i < m; ++i) sdl += dl[i];
-    if (acc) acc->db[3][0] += sdl;
-    for (int j = 0; j < 3; ++j) {
-      const T* hj = st.h[3][j];
-      T s = 0;
+  for (int i = 0; i < m; ++i) sdl += dl[i];
+  if (acc) acc->db[3][0] += sdl;
+  for (int j = 0; j < 3; ++j) {
+    const T* hj = st.h[3][j];
+    T s = 0;
 #pragma omp simd reduction(+ : s)
-      for (int i = 0; i < m; ++i) s += dl[i] * hj[i];
-      if (acc) acc->dsp[3][j] += s;
-      const T w = mv.sp[3][j];
+    for (int i = 0; i < m; ++i) s += dl[i] * hj[i];
+    if (acc) acc->dsp[3][j] += s;
+    const T w = mv.sp[3][j];
 #pragma omp simd
-      for (int i = 0; i < m; ++i) dh[j][i] = w * dl[i];
-    }
+    for (int i = 0; i < m; ++i) dh[j][i] = w * dl[i];
   }
-  T(*da)[M] = st.dh;  // reuse: pre-activation gradient of the current layer (rows 0..2)
+}
+
+// Backward through layers 2, 1, 0 from d / d h[3] in st.dh2: their parameter gradients into acc
+// (when not null), and d / d input left in st.dh2[0].
+template <typename T>
+__attribute__((always_inline)) inline void BackwardHiddenLayers(const ModelView<T>& mv,
+                                                                ChunkGrad<T>* acc,
+                                                                ChunkState<T>& st) {
+  constexpr int m = ChunkState<T>::M;
+  T(*dh)[m] = st.dh2;  // gradient w.r.t. h[l+1] (3 rows)
+  T(*da)[m] = st.dh;   // reuse: pre-activation gradient of the current layer (rows 0..2)
   for (int l = 2; l >= 0; --l) {
     const int fin = l == 0 ? 1 : 3;
     for (int k = 0; k < 3; ++k) {
@@ -262,12 +283,35 @@ __attribute__((always_inline)) inline double RunChunk(const ModelView<T>& mv,
       for (int i = 0; i < m; ++i) out[i] = w0 * da[0][i] + w1 * da[1][i] + w2 * da[2][i];
     }
   }
-  // dh[0] = d / d input; x feeds both lanes.
+}
+
+// Per-chunk forward + backward on n <= kChunk values: the bits of each value into bits_out and
+// d bits / d x into dx_out_f or dx_out_d (each when not null), the parameter gradients (w.r.t.
+// softplus(W), bias, tanh(factor)) added into acc when acc != nullptr. Returns the chunk's bits.
+template <typename T>
+__attribute__((always_inline)) inline double RunChunk(const ModelView<T>& mv,
+                                                      const EntropyModelOptions& opt,
+                                                      const float* x_f, const double* x_d, int n,
+                                                      T grad_scale, float* bits_out,
+                                                      float* dx_out_f, double* dx_out_d,
+                                                      ChunkGrad<T>* acc, ChunkState<T>& st) {
+  const bool backward = acc != nullptr || dx_out_f != nullptr || dx_out_d != nullptr;
+  LoadChunkInputs(x_f, x_d, n, st);
+  ForwardChunk(mv, st);
+  const T bits_sum = ChunkBits(opt, n, grad_scale, st);
+  if (bits_out) {
+    for (int i = 0; i < n; ++i) bits_out[i] = static_cast<float>(st.bits[i]);
+  }
+  if (!backward) return static_cast<double>(bits_sum);
+  BackwardOutputLayer(mv, acc, st);
+  BackwardHiddenLayers(mv, acc, st);
+  // st.dh2[0] = d / d input; x feeds both lanes.
+  const T* dx = st.dh2[0];
   if (dx_out_f) {
-    for (int i = 0; i < n; ++i) dx_out_f[i] = static_cast<float>(dh[0][i] + dh[0][kChunk + i]);
+    for (int i = 0; i < n; ++i) dx_out_f[i] = static_cast<float>(dx[i] + dx[kChunk + i]);
   }
   if (dx_out_d) {
-    for (int i = 0; i < n; ++i) dx_out_d[i] = static_cast<double>(dh[0][i] + dh[0][kChunk + i]);
+    for (int i = 0; i < n; ++i) dx_out_d[i] = static_cast<double>(dx[i] + dx[kChunk + i]);
   }
   return static_cast<double>(bits_sum);
 }

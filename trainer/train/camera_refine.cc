@@ -229,6 +229,131 @@ bool SharedIntrinsics(const std::vector<Camera>& cameras) {
 
 namespace {
 
+// The finite-difference steps of each view's pose: half a pixel at the image centre (rotation)
+// and at the scene's depth (translation).
+std::vector<PoseVector> PoseSteps(const TensorfModel& model, const std::vector<Camera>& cameras) {
+  std::vector<PoseVector> pose_step(cameras.size());
+  for (size_t v = 0; v < cameras.size(); ++v) {
+    const Camera& c = cameras[v];
+    const double f = 0.5 * (c.fx + c.fy);
+    const double rot = 0.5 / f, move = 0.5 * SceneDepth(model, c) / f;
+    pose_step[v] << rot, rot, rot, move, move, move;
+  }
+  return pose_step;
+}
+
+// Queues the central differences: per view 2 x kPose pose jobs, then (lens) 2 x kLens lens jobs.
+void AddDifferenceJobs(const std::vector<Camera>& cameras, const std::vector<PoseVector>& pose_step,
+                       bool lens, const LensVector& lens_step, ResidualRenderer* render) {
+  for (size_t v = 0; v < cameras.size(); ++v) {
+    for (int k = 0; k < kPose; ++k) {
+      for (double sign : {1.0, -1.0}) {
+        double d[kPose] = {0, 0, 0, 0, 0, 0};
+        d[k] = sign * pose_step[v][k];
+        render->Add(MovedCamera(cameras[v], d, d + 3), v);
+      }
+    }
+    if (!lens) continue;
+    for (int k = 0; k < kLens; ++k) {
+      for (double sign : {1.0, -1.0}) {
+        Camera c = cameras[v];
+        SetLensValue(&c, k, LensValue(c, k) + sign * lens_step[k]);
+        render->Add(c, v);
+      }
+    }
+  }
+}
+
+// The Gauss-Newton normal equations [H B; B^T C] d = -[g; gl] of the steps (in finite-difference
+// units): per view the pose blocks H, g and B, shared by all views the lens blocks C and gl.
+struct NormalEquations {
+  std::vector<PoseMatrix> h;
+  std::vector<PoseVector> g;
+  std::vector<PoseLens> b;
+  LensMatrix c = LensMatrix::Zero();
+  LensVector gl = LensVector::Zero();
+};
+
+// The normal equations from the residuals and the residuals of the central differences (in the
+// order of AddDifferenceJobs).
+NormalEquations BuildNormalEquations(const std::vector<Eigen::VectorXd>& residual,
+                                     const std::vector<Eigen::VectorXd>& moved, bool lens) {
+  const size_t n_views = residual.size();
+  const int per_view = 2 * kPose + (lens ? 2 * kLens : 0);
+  NormalEquations eq;
+  eq.h.resize(n_views);
+  eq.g.resize(n_views);
+  eq.b.resize(n_views);
+  for (size_t v = 0; v < n_views; ++v) {
+    const Eigen::Index rows = residual[v].size();
+    Eigen::MatrixXd jp(rows, kPose), jl(rows, lens ? kLens : 0);
+    const Eigen::VectorXd* r = &moved[v * size_t(per_view)];
+    for (int k = 0; k < kPose; ++k) jp.col(k) = 0.5 * (r[2 * k] - r[2 * k + 1]);
+    for (int k = 0; lens && k < kLens; ++k)
+      jl.col(k) = 0.5 * (r[2 * kPose + 2 * k] - r[2 * kPose + 2 * k + 1]);
+    eq.h[v] = jp.transpose() * jp;
+    eq.g[v] = jp.transpose() * residual[v];
+    if (lens) {
+      eq.b[v] = jp.transpose() * jl;
+      eq.c += jl.transpose() * jl;
+      eq.gl += jl.transpose() * residual[v];
+    }
+  }
+  return eq;
+}
+
+// The cameras after one Levenberg-Marquardt step with `damping`: the damped equations solved
+// through the Schur complement of the per-view blocks, each step capped at kMaxStep.
+std::vector<Camera> DampedStepCameras(const NormalEquations& eq, double damping, bool lens,
+                                      const std::vector<PoseVector>& pose_step,
+                                      const LensVector& lens_step,
+                                      const std::vector<Camera>& cameras) {
+  const size_t n_views = cameras.size();
+  std::vector<PoseMatrix> h_inv(n_views);
+  LensMatrix schur = eq.c;
+  LensVector rhs = -eq.gl;
+  for (size_t v = 0; v < n_views; ++v) {
+    PoseMatrix damped = eq.h[v];
+    damped.diagonal() += damping * eq.h[v].diagonal() + PoseVector::Constant(1e-9);
+    h_inv[v] = damped.inverse();
+    if (lens) {
+      schur -= eq.b[v].transpose() * h_inv[v] * eq.b[v];
+      rhs += eq.b[v].transpose() * h_inv[v] * eq.g[v];
+    }
+  }
+  LensVector dl = LensVector::Zero();
+  if (lens) {
+    schur.diagonal() += damping * eq.c.diagonal() + LensVector::Constant(1e-9);
+    dl = Capped<LensVector>(schur.ldlt().solve(rhs));
+    if (!dl.allFinite()) dl.setZero();
+  }
+  const LensVector lens_now = LensOf(cameras.front()) + dl.cwiseProduct(lens_step);
+  std::vector<Camera> trial(n_views);
+  for (size_t v = 0; v < n_views; ++v) {
+    PoseVector dp = h_inv[v] * (-eq.g[v] - (lens ? PoseVector(eq.b[v] * dl) : PoseVector::Zero()));
+    if (!dp.allFinite()) dp.setZero();
+    dp = Capped<PoseVector>(dp).cwiseProduct(pose_step[v]);
+    trial[v] = MovedCamera(cameras[v], dp.data(), dp.data() + 3);
+    if (lens) trial[v] = WithLens(trial[v], lens_now);
+  }
+  return trial;
+}
+
+// How far the cameras moved from start: the largest turn and the largest shift in pixels.
+void MeasureMoves(const TensorfModel& model, const std::vector<Camera>& start,
+                  const std::vector<Camera>& cameras, CameraRefineStats* stats) {
+  for (size_t v = 0; v < cameras.size(); ++v) {
+    const Camera& a = start[v];
+    const Camera& z = cameras[v];
+    const Eigen::AngleAxisd turn(Rotation(a).transpose() * Rotation(z));
+    stats->max_rotation_deg = std::max(stats->max_rotation_deg, turn.angle() * 180.0 / M_PI);
+    const double f = 0.5 * (a.fx + a.fy);
+    const double shift =
+        turn.angle() * f + (Centre(z) - Centre(a)).norm() * f / SceneDepth(model, a);
+    stats->max_shift_px = std::max(stats->max_shift_px, shift);
+  }
+}
+
 // RefineCameras on views given by pointer: the held-out alignment refines a subset of a dataset's
 // views without copying their images.
 CameraRefineStats RefineViewCameras(const TensorfModel& model,
@@ -246,16 +371,7 @@ CameraRefineStats RefineViewCameras(const TensorfModel& model,
   ResidualRenderer render(model, views, log_gain, pixels);
   const bool lens = options.intrinsics && n_views > 1 && SharedIntrinsics(*cameras);
   const std::vector<Camera> start = *cameras;
-
-  // Finite-difference steps per view: half a pixel at the image centre (rotation) and at the
-  // scene's depth (translation).
-  std::vector<PoseVector> pose_step(n_views);
-  for (size_t v = 0; v < n_views; ++v) {
-    const Camera& c = (*cameras)[v];
-    const double f = 0.5 * (c.fx + c.fy);
-    const double rot = 0.5 / f, move = 0.5 * SceneDepth(model, c) / f;
-    pose_step[v] << rot, rot, rot, move, move, move;
-  }
+  const std::vector<PoseVector> pose_step = PoseSteps(model, *cameras);
   const LensVector lens_step = LensSteps(cameras->front());
 
   for (size_t v = 0; v < n_views; ++v) render.Add((*cameras)[v], v);
@@ -263,78 +379,14 @@ CameraRefineStats RefineViewCameras(const TensorfModel& model,
   stats.mse_before = stats.mse_after = MeanSquare(residual);
   double damping = 1e-2;
   for (int step = 0; step < options.steps; ++step) {
-    // Central differences: per view 2 x kPose pose jobs, then (lens) 2 x kLens lens jobs.
-    for (size_t v = 0; v < n_views; ++v) {
-      for (int k = 0; k < kPose; ++k) {
-        for (double sign : {1.0, -1.0}) {
-          double d[kPose] = {0, 0, 0, 0, 0, 0};
-          d[k] = sign * pose_step[v][k];
-          render.Add(MovedCamera((*cameras)[v], d, d + 3), v);
-        }
-      }
-      if (!lens) continue;
-      for (int k = 0; k < kLens; ++k) {
-        for (double sign : {1.0, -1.0}) {
-          Camera c = (*cameras)[v];
-          SetLensValue(&c, k, LensValue(c, k) + sign * lens_step[k]);
-          render.Add(c, v);
-        }
-      }
-    }
-    const std::vector<Eigen::VectorXd> moved = render.Run();
-    const int per_view = 2 * kPose + (lens ? 2 * kLens : 0);
-    std::vector<PoseMatrix> h(n_views);
-    std::vector<PoseVector> g(n_views);
-    std::vector<PoseLens> b(n_views);
-    LensMatrix c = LensMatrix::Zero();
-    LensVector gl = LensVector::Zero();
-    for (size_t v = 0; v < n_views; ++v) {
-      const Eigen::Index rows = residual[v].size();
-      Eigen::MatrixXd jp(rows, kPose), jl(rows, lens ? kLens : 0);
-      const Eigen::VectorXd* r = &moved[v * size_t(per_view)];
-      for (int k = 0; k < kPose; ++k) jp.col(k) = 0.5 * (r[2 * k] - r[2 * k + 1]);
-      for (int k = 0; lens && k < kLens; ++k)
-        jl.col(k) = 0.5 * (r[2 * kPose + 2 * k] - r[2 * kPose + 2 * k + 1]);
-      h[v] = jp.transpose() * jp;
-      g[v] = jp.transpose() * residual[v];
-      if (lens) {
-        b[v] = jp.transpose() * jl;
-        c += jl.transpose() * jl;
-        gl += jl.transpose() * residual[v];
-      }
-    }
-    // Levenberg-Marquardt: damp, solve [H B; B^T C] d = -[g; gl] through the Schur complement
-    // of the per-view blocks, keep the step if the error falls, else damp more.
+    AddDifferenceJobs(*cameras, pose_step, lens, lens_step, &render);
+    const NormalEquations eq = BuildNormalEquations(residual, render.Run(), lens);
+    // Levenberg-Marquardt: keep the damped step if the error falls, else damp more.
     bool accepted = false;
     for (int attempt = 0; attempt < 4 && !accepted; ++attempt) {
-      std::vector<PoseMatrix> h_inv(n_views);
-      LensMatrix schur = c;
-      LensVector rhs = -gl;
-      for (size_t v = 0; v < n_views; ++v) {
-        PoseMatrix damped = h[v];
-        damped.diagonal() += damping * h[v].diagonal() + PoseVector::Constant(1e-9);
-        h_inv[v] = damped.inverse();
-        if (lens) {
-          schur -= b[v].transpose() * h_inv[v] * b[v];
-          rhs += b[v].transpose() * h_inv[v] * g[v];
-        }
-      }
-      LensVector dl = LensVector::Zero();
-      if (lens) {
-        schur.diagonal() += damping * c.diagonal() + LensVector::Constant(1e-9);
-        dl = Capped<LensVector>(schur.ldlt().solve(rhs));
-        if (!dl.allFinite()) dl.setZero();
-      }
-      const LensVector lens_now = LensOf(cameras->front()) + dl.cwiseProduct(lens_step);
-      std::vector<Camera> trial(n_views);
-      for (size_t v = 0; v < n_views; ++v) {
-        PoseVector dp = h_inv[v] * (-g[v] - (lens ? PoseVector(b[v] * dl) : PoseVector::Zero()));
-        if (!dp.allFinite()) dp.setZero();
-        dp = Capped<PoseVector>(dp).cwiseProduct(pose_step[v]);
-        trial[v] = MovedCamera((*cameras)[v], dp.data(), dp.data() + 3);
-        if (lens) trial[v] = WithLens(trial[v], lens_now);
-        render.Add(trial[v], v);
-      }
+      std::vector<Camera> trial =
+          DampedStepCameras(eq, damping, lens, pose_step, lens_step, *cameras);
+      for (size_t v = 0; v < n_views; ++v) render.Add(trial[v], v);
       std::vector<Eigen::VectorXd> trial_residual = render.Run();
       const double mse = MeanSquare(trial_residual);
       if (mse < stats.mse_after) {
@@ -350,16 +402,7 @@ CameraRefineStats RefineViewCameras(const TensorfModel& model,
     }
     if (!accepted) break;
   }
-  for (size_t v = 0; v < n_views; ++v) {
-    const Camera& a = start[v];
-    const Camera& z = (*cameras)[v];
-    const Eigen::AngleAxisd turn(Rotation(a).transpose() * Rotation(z));
-    stats.max_rotation_deg = std::max(stats.max_rotation_deg, turn.angle() * 180.0 / M_PI);
-    const double f = 0.5 * (a.fx + a.fy);
-    const double shift =
-        turn.angle() * f + (Centre(z) - Centre(a)).norm() * f / SceneDepth(model, a);
-    stats.max_shift_px = std::max(stats.max_shift_px, shift);
-  }
+  MeasureMoves(model, start, *cameras, &stats);
   return stats;
 }
 

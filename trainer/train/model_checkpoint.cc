@@ -94,61 +94,66 @@ namespace {
 // Far above any preset (the paper's final grid is 300^3).
 constexpr int kMaxCheckpointRes = 4096;
 
-int LoadModelCheckpointOrThrow(const std::string& path, TensorfModel* model, RateState* rate,
-                               Checkpoint* whole) {
-  Checkpoint ck = ReadCheckpoint(path);
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(ck.json);
-    Aabb box;
-    box.min = j.at("aabb_min").get<std::array<float, 3>>();
-    box.max = j.at("aabb_max").get<std::array<float, 3>>();
-    const std::array<int, 3> res = j.at("res").get<std::array<int, 3>>();
-    // Checked before the grids are allocated from them (a damaged resolution would ask for GBs).
-    for (int r : res) {
-      if (r < 1 || r > kMaxCheckpointRes) {
-        throw std::runtime_error(path + ": checkpoint grid resolution " + std::to_string(r) +
-                                 " outside [1, " + std::to_string(kMaxCheckpointRes) + "]");
-      }
+// Checks the grid's resolution and bounding box of the metadata before the grids are allocated
+// from them (a damaged resolution would ask for GBs).
+void CheckCheckpointGeometry(const std::string& path, const Checkpoint& ck, const Aabb& box,
+                             const std::array<int, 3>& res) {
+  for (int r : res) {
+    if (r < 1 || r > kMaxCheckpointRes) {
+      throw std::runtime_error(path + ": checkpoint grid resolution " + std::to_string(r) +
+                               " outside [1, " + std::to_string(kMaxCheckpointRes) + "]");
     }
-    // Every plane is stored in the file, so its values bound the resolution: a damaged field
-    // cannot make the grids larger than the data that fills them.
-    size_t stored = 0;
-    for (const CheckpointArray& a : ck.arrays) stored += a.data.size();
-    for (int a = 0; a < 3; ++a) {
-      if (size_t(res[a]) * size_t(res[(a + 1) % 3]) > stored) {
-        throw std::runtime_error(
-            path + ": checkpoint grid resolution is larger than the values it stores");
-      }
-    }
-    for (int a = 0; a < 3; ++a) {
-      if (!std::isfinite(box.min[a]) || !std::isfinite(box.max[a]) || !(box.min[a] < box.max[a])) {
-        throw std::runtime_error(path + ": checkpoint bounding box is empty or not finite");
-      }
-    }
-    // A run that pruned components or hidden units (trainer/train/component_prune.h) stored a
-    // smaller model than its options describe: the checkpoint's shape wins.
-    TensorfConfig c = model->config();
-    c.density_ranks = j.at("density_rank").get<std::array<int, 3>>();
-    c.app_ranks = j.at("appearance_rank").get<std::array<int, 3>>();
-    c.head.hidden = j.value("head", nlohmann::json::object()).value("hidden", c.head.hidden);
-    c.head.num_products = c.app_ranks[0] + c.app_ranks[1] + c.app_ranks[2];
-    if (c.density_ranks != model->config().density_ranks ||
-        c.app_ranks != model->config().app_ranks || c.head.hidden != model->config().head.hidden) {
-      for (int r : {c.density_ranks[0], c.density_ranks[1], c.density_ranks[2], c.app_ranks[0],
-                    c.app_ranks[1], c.app_ranks[2], c.head.hidden}) {
-        if (r < 1 || r > 1024) {
-          throw std::runtime_error(path + ": checkpoint rank or head width " + std::to_string(r) +
-                                   " outside [1, 1024]");
-        }
-      }
-      *model = TensorfModel(c);
-    }
-    model->SetGeometry(box, res);
-    model->set_n_samples(j.at("n_samples").get<int>());
-  } catch (const nlohmann::json::exception& e) {
-    throw std::runtime_error(path + ": checkpoint metadata: " + e.what());
   }
+  // Every plane is stored in the file, so its values bound the resolution: a damaged field
+  // cannot make the grids larger than the data that fills them.
+  size_t stored = 0;
+  for (const CheckpointArray& a : ck.arrays) stored += a.data.size();
+  for (int a = 0; a < 3; ++a) {
+    if (size_t(res[a]) * size_t(res[(a + 1) % 3]) > stored) {
+      throw std::runtime_error(path +
+                               ": checkpoint grid resolution is larger than the values it stores");
+    }
+  }
+  for (int a = 0; a < 3; ++a) {
+    if (!std::isfinite(box.min[a]) || !std::isfinite(box.max[a]) || !(box.min[a] < box.max[a])) {
+      throw std::runtime_error(path + ": checkpoint bounding box is empty or not finite");
+    }
+  }
+}
+
+// Gives the model the checkpoint's shape (ranks, head width, geometry, samples per ray). A run
+// that pruned components or hidden units (trainer/train/component_prune.h) stored a smaller model
+// than its options describe: the checkpoint's shape wins.
+void ShapeModelAsCheckpoint(const std::string& path, const Checkpoint& ck, const nlohmann::json& j,
+                            TensorfModel* model) {
+  Aabb box;
+  box.min = j.at("aabb_min").get<std::array<float, 3>>();
+  box.max = j.at("aabb_max").get<std::array<float, 3>>();
+  const std::array<int, 3> res = j.at("res").get<std::array<int, 3>>();
+  CheckCheckpointGeometry(path, ck, box, res);
+  TensorfConfig c = model->config();
+  c.density_ranks = j.at("density_rank").get<std::array<int, 3>>();
+  c.app_ranks = j.at("appearance_rank").get<std::array<int, 3>>();
+  c.head.hidden = j.value("head", nlohmann::json::object()).value("hidden", c.head.hidden);
+  c.head.num_products = c.app_ranks[0] + c.app_ranks[1] + c.app_ranks[2];
+  if (c.density_ranks != model->config().density_ranks ||
+      c.app_ranks != model->config().app_ranks || c.head.hidden != model->config().head.hidden) {
+    for (int r : {c.density_ranks[0], c.density_ranks[1], c.density_ranks[2], c.app_ranks[0],
+                  c.app_ranks[1], c.app_ranks[2], c.head.hidden}) {
+      if (r < 1 || r > 1024) {
+        throw std::runtime_error(path + ": checkpoint rank or head width " + std::to_string(r) +
+                                 " outside [1, 1024]");
+      }
+    }
+    *model = TensorfModel(c);
+  }
+  model->SetGeometry(box, res);
+  model->set_n_samples(j.at("n_samples").get<int>());
+}
+
+// Copies every parameter array of the model from the checkpoint: present, of the model's size,
+// finite.
+void LoadModelArrays(const std::string& path, const Checkpoint& ck, TensorfModel* model) {
   for (const NamedArray& a : model->NamedParameters()) {
     const CheckpointArray* src = ck.Find(a.name);
     if (!src) throw std::runtime_error(path + ": checkpoint lacks array '" + a.name + "'");
@@ -163,57 +168,83 @@ int LoadModelCheckpointOrThrow(const std::string& path, TensorfModel* model, Rat
     }
     std::copy(src->data.begin(), src->data.end(), a.data);
   }
-  if (j.contains("mask_res")) {
-    const CheckpointArray* occ = ck.Find("alpha_mask");
-    if (!occ) throw std::runtime_error(path + ": checkpoint lacks the alpha mask");
-    Aabb box;
-    box.min = j["mask_aabb_min"].get<std::array<float, 3>>();
-    box.max = j["mask_aabb_max"].get<std::array<float, 3>>();
-    const auto res = j["mask_res"].get<std::array<int, 3>>();
-    if (occ->data.size() != size_t(res[0]) * res[1] * res[2]) {
-      throw std::runtime_error(path + ": alpha mask size does not match its resolution");
-    }
-    std::vector<uint8_t> bits(occ->data.size());
-    for (size_t i = 0; i < bits.size(); ++i) bits[i] = occ->data[i] > 0.5f;
-    model->SetAlphaMask(AlphaMask(box, res, std::move(bits)));
+}
+
+// The alpha mask, when the checkpoint has one. j is not const: its operator[] makes a missing key
+// null, which get() then rejects with a json type error (const, a missing key is undefined).
+void LoadAlphaMask(const std::string& path, const Checkpoint& ck, nlohmann::json& j,
+                   TensorfModel* model) {
+  if (!j.contains("mask_res")) return;
+  const CheckpointArray* occ = ck.Find("alpha_mask");
+  if (!occ) throw std::runtime_error(path + ": checkpoint lacks the alpha mask");
+  Aabb box;
+  box.min = j["mask_aabb_min"].get<std::array<float, 3>>();
+  box.max = j["mask_aabb_max"].get<std::array<float, 3>>();
+  const auto res = j["mask_res"].get<std::array<int, 3>>();
+  if (occ->data.size() != size_t(res[0]) * res[1] * res[2]) {
+    throw std::runtime_error(path + ": alpha mask size does not match its resolution");
   }
-  if (rate && j.contains("plane_block") && j.contains("line_block")) {
+  std::vector<uint8_t> bits(occ->data.size());
+  for (size_t i = 0; i < bits.size(); ++i) bits[i] = occ->data[i] > 0.5f;
+  model->SetAlphaMask(AlphaMask(box, res, std::move(bits)));
+}
+
+// The rate state: the block shapes, and when rate training had started, the quantization steps,
+// the entropy model and the rounding and RDOQ settings, each checked. j is not const, as for
+// LoadAlphaMask.
+void LoadRateState(const std::string& path, const Checkpoint& ck, nlohmann::json& j,
+                   RateState* rate) {
+  if (j.contains("plane_block") && j.contains("line_block")) {
     for (int a = 0; a < 3; ++a) {
       rate->config.plane_block[a] = j["plane_block"][a].get<int>();
       rate->config.line_block[a] = j["line_block"][a].get<int>();
     }
   }
-  if (rate && j.value("rate_active", false)) {
-    const CheckpointArray* steps = ck.Find("rate.steps");
-    const CheckpointArray* params = ck.Find("rate.entropy_model");
-    if (!steps || !params) throw std::runtime_error(path + ": checkpoint lacks the rate state");
-    for (float step : steps->data) {
-      if (!(step > 0.f) || !std::isfinite(step)) {
-        throw std::runtime_error(path + ": checkpoint holds a quantization step of " +
-                                 std::to_string(step) + " (steps are positive and finite)");
-      }
-    }
-    rate->steps = steps->data;
-    rate->entropy.Init(NumRateModels(2), 0);
-    if (params->data.size() != rate->entropy.params().size()) {
-      throw std::runtime_error(path + ": entropy model has the wrong number of parameters");
-    }
-    rate->entropy.params() = params->data;
-    rate->adam.Reset(rate->entropy.params().size());
-    rate->active = true;
-    rate->checkpoint_lambda_e = j.value("lambda_e", 0.0f);
-    rate->rounding_offset = j.value("rounding_offset", 0.5f);
-    if (!(rate->rounding_offset > 0.f && rate->rounding_offset <= 0.5f)) {
-      throw std::runtime_error(path + ": checkpoint holds a rounding offset of " +
-                               std::to_string(rate->rounding_offset) + " (expected (0, 0.5])");
-    }
-    rate->rdoq_lambda = j.value("rdoq_lambda", 0.0f);
-    if (!(rate->rdoq_lambda >= 0.f && rate->rdoq_lambda <= encoder::kMaxRdoqLambda)) {
-      throw std::runtime_error(path + ": checkpoint holds an RDOQ lambda of " +
-                               std::to_string(rate->rdoq_lambda) + " (expected [0, " +
-                               std::to_string(encoder::kMaxRdoqLambda) + "])");
+  if (!j.value("rate_active", false)) return;
+  const CheckpointArray* steps = ck.Find("rate.steps");
+  const CheckpointArray* params = ck.Find("rate.entropy_model");
+  if (!steps || !params) throw std::runtime_error(path + ": checkpoint lacks the rate state");
+  for (float step : steps->data) {
+    if (!(step > 0.f) || !std::isfinite(step)) {
+      throw std::runtime_error(path + ": checkpoint holds a quantization step of " +
+                               std::to_string(step) + " (steps are positive and finite)");
     }
   }
+  rate->steps = steps->data;
+  rate->entropy.Init(NumRateModels(2), 0);
+  if (params->data.size() != rate->entropy.params().size()) {
+    throw std::runtime_error(path + ": entropy model has the wrong number of parameters");
+  }
+  rate->entropy.params() = params->data;
+  rate->adam.Reset(rate->entropy.params().size());
+  rate->active = true;
+  rate->checkpoint_lambda_e = j.value("lambda_e", 0.0f);
+  rate->rounding_offset = j.value("rounding_offset", 0.5f);
+  if (!(rate->rounding_offset > 0.f && rate->rounding_offset <= 0.5f)) {
+    throw std::runtime_error(path + ": checkpoint holds a rounding offset of " +
+                             std::to_string(rate->rounding_offset) + " (expected (0, 0.5])");
+  }
+  rate->rdoq_lambda = j.value("rdoq_lambda", 0.0f);
+  if (!(rate->rdoq_lambda >= 0.f && rate->rdoq_lambda <= encoder::kMaxRdoqLambda)) {
+    throw std::runtime_error(path + ": checkpoint holds an RDOQ lambda of " +
+                             std::to_string(rate->rdoq_lambda) + " (expected [0, " +
+                             std::to_string(encoder::kMaxRdoqLambda) + "])");
+  }
+}
+
+int LoadModelCheckpointOrThrow(const std::string& path, TensorfModel* model, RateState* rate,
+                               Checkpoint* whole) {
+  Checkpoint ck = ReadCheckpoint(path);
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(ck.json);
+    ShapeModelAsCheckpoint(path, ck, j, model);
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error(path + ": checkpoint metadata: " + e.what());
+  }
+  LoadModelArrays(path, ck, model);
+  LoadAlphaMask(path, ck, j, model);
+  if (rate) LoadRateState(path, ck, j, rate);
   const int iteration = j.at("iteration").get<int>();
   if (whole) *whole = std::move(ck);
   return iteration;
