@@ -91,14 +91,20 @@ struct FieldInfo {
   }
 };
 
-constexpr FieldInfo DataSetting() { return FieldInfo{FieldKind::kSetting, FlagGroup::kData}; }
-constexpr FieldInfo ScheduleSetting() {
-  return FieldInfo{FieldKind::kSetting, FlagGroup::kSchedule};
+// A field of `kind` shown under `group` in --help; the builders above add the rest. (Assigned,
+// not aggregate-initialised, so that the members left at their defaults draw no warning.)
+constexpr FieldInfo Field(FieldKind kind, FlagGroup group) {
+  FieldInfo f;
+  f.kind = kind;
+  f.group = group;
+  return f;
 }
-constexpr FieldInfo RateSetting() { return FieldInfo{FieldKind::kSetting, FlagGroup::kRate}; }
-constexpr FieldInfo Bookkeeping() { return FieldInfo{FieldKind::kBookkeeping, FlagGroup::kRun}; }
-constexpr FieldInfo Command() { return FieldInfo{FieldKind::kCommand, FlagGroup::kRun}; }
-constexpr FieldInfo Internal() { return FieldInfo{FieldKind::kInternal, FlagGroup::kRun}; }
+constexpr FieldInfo DataSetting() { return Field(FieldKind::kSetting, FlagGroup::kData); }
+constexpr FieldInfo ScheduleSetting() { return Field(FieldKind::kSetting, FlagGroup::kSchedule); }
+constexpr FieldInfo RateSetting() { return Field(FieldKind::kSetting, FlagGroup::kRate); }
+constexpr FieldInfo Bookkeeping() { return Field(FieldKind::kBookkeeping, FlagGroup::kRun); }
+constexpr FieldInfo Command() { return Field(FieldKind::kCommand, FlagGroup::kRun); }
+constexpr FieldInfo Internal() { return Field(FieldKind::kInternal, FlagGroup::kRun); }
 
 // The block shapes of the rate term: channel x H x W for planes, 1 x channel x L for lines.
 using Shape3 = std::array<int, 3>;
