@@ -10,7 +10,8 @@ if(ECRF_BUILD_TRAINER)
   install(TARGETS ecrf_trainer ${ECRF_TRAINER_LIBRARIES} ecrf_format_encoder EXPORT ecrfTargets
           ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR})
   foreach(dir trainer/data trainer/scenes trainer/model trainer/rate trainer/train encoder decoder format format/entropy format/coefficients)
-    file(GLOB headers ${PROJECT_SOURCE_DIR}/${dir}/*.h)
+    # *.def: tables the headers expand (trainer/train/train_fields.def).
+    file(GLOB headers ${PROJECT_SOURCE_DIR}/${dir}/*.h ${PROJECT_SOURCE_DIR}/${dir}/*.def)
     install(FILES ${headers} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/ecrf-trainer/${dir})
   endforeach()
 endif()
