@@ -184,6 +184,17 @@ inline std::vector<RejectVector> RejectVectors() {
         Join(Split(n), 4));
   }
   {
+    const std::vector<uint8_t> d = BuildSceneVector(Named("scene_deferred_head"));
+    add("reject_deferred_head_in_1_5", "decode", kErrCorrupt, false,
+        "the deferred head (1.6) in a stream labelled 1.5 (2.1)", Join(Split(d), 5));
+    Chunks c = Split(d);
+    for (auto& [type, payload] : c) {
+      if (type == kChunkMlpWeights) payload[1] = kNumHeadKinds;
+    }
+    add("reject_unknown_head", "decode", kErrUnsupported, false,
+        "an MLPW head of 2, unknown to this version (6.6)", Join(c, d[5]));
+  }
+  {
     const costly::CostlyScene cs = costly::EmptyFlaggedRows(512);
     add("reject_budget_occupancy_rows", "decode", kErrLimit, true,
         "OCCU 512^3 flagging every row and setting no voxel: 2^27 symbols from 3 KB, beyond the "

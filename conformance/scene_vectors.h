@@ -9,7 +9,7 @@
 // from outside its region of interest, a forward-facing scene (bitstream 1.3: NDC, 7.2.2) seen
 // from in front of its reference camera. Those carry the lowest version of their features and
 // the narrow coefficient contexts of 1.0-1.3; the `*_wide_contexts*` vectors are 1.4 streams,
-// `scene_neighbour_contexts` a 1.5 stream.
+// `scene_neighbour_contexts` a 1.5 stream, `scene_deferred_head` a 1.6 one.
 // Added with SPEC.md 1.5: a quantized MLP whose levels reach every magnitude class up to 24 (the
 // class escape with extra values up to 2^23), an unbounded scene whose rays end at their sample
 // limit inside the contracted cube, and a forward-facing scene seen from the side, so that a
@@ -55,6 +55,7 @@ struct SceneVector {
   // A 1.5 stream: neighbour coefficient contexts in the plane chunks, wide in the line chunks,
   // wide occupancy contexts.
   bool neighbour_contexts = false;
+  HeadKind head = HeadKind::kPerSample;  // kDeferred: a 1.6 stream (SPEC.md 7.6)
 };
 
 inline const std::vector<SceneVector>& SceneVectors() {
@@ -204,6 +205,23 @@ inline const std::vector<SceneVector>& SceneVectors() {
        0,
        false,
        true},
+      // Added with SPEC.md 1.7 (bitstream 1.6): the deferred head, the MLP once per ray on the
+      // weighted sum of its coloured samples' products, with a quantized MLP and a mask.
+      {"scene_deferred_head",
+       {12, 10, 11},
+       {{2, 2, 2}, {3, 2, 3}},
+       {2, 4, 4},
+       {1, 2, 8},
+       8,
+       2,
+       OccupancyKind::kSphere,
+       24,
+       SceneModel::kObject,
+       false,
+       0,
+       false,
+       false,
+       HeadKind::kDeferred},
   };
   return v;
 }
@@ -301,14 +319,15 @@ inline void MakeSceneBlock(Lcg& rng, const int dims[3], int32_t max_abs, bool de
 
 // The lowest minor version that has every feature the vector uses. 1.1: quantized MLP; 1.2:
 // unbounded scene model; 1.3: forward-facing scene model; 1.4: wide coefficient contexts; 1.5:
-// neighbour coefficient contexts.
+// neighbour coefficient contexts; 1.6: the deferred head.
 inline uint8_t SceneVectorVersionMinor(const SceneVector& v) {
   return std::max<uint8_t>(
       {v.neighbour_contexts ? kNeighbourContextsMinVersionMinor
        : v.wide_contexts    ? kWideContextsMinVersionMinor
                             : uint8_t{0},
        kSceneModelMinVersionMinor[static_cast<int>(v.scene_model)],
-       v.mlp_precision == kMlpPrecisionQuantized ? kQuantizedMlpMinVersionMinor : uint8_t{0}});
+       v.mlp_precision == kMlpPrecisionQuantized ? kQuantizedMlpMinVersionMinor : uint8_t{0},
+       kHeadKindMinVersionMinor[static_cast<int>(v.head)]});
 }
 
 // The occupancy chunk: a 7x6x5 mask over the grid box, empty or a sphere.
@@ -391,7 +410,7 @@ inline std::vector<uint8_t> SceneVectorMlpChunk(const SceneVector& v, const Scen
   const size_t count = size_t(F) * P + size_t(H) * in + H + size_t(H) * H + H + 3 * size_t(H) + 3;
   ByteWriter mlp;
   mlp.U8(uint8_t(v.mlp_precision));
-  mlp.U8(0);
+  mlp.U8(static_cast<uint8_t>(v.head));
   mlp.U8(0);
   mlp.U8(0);
   if (v.mlp_precision == kMlpPrecisionQuantized && v.mlp_escapes) {

@@ -18,6 +18,7 @@
 #include <type_traits>
 
 #include "decoder/mlp.h"
+#include "format/mlp_coder.h"
 #include "format/ndc_frame.h"
 #include "format/scene_header.h"
 #include "format/status.h"
@@ -223,6 +224,7 @@ struct SceneField {
   bool has_mask = false;
   OccupancyMask mask;
   AppearanceMlp mlp;
+  HeadKind head = HeadKind::kPerSample;  // where the MLP runs (SPEC.md 7.6)
 
   // Object: world units; unbounded: contracted units (derived from the cube [-2, 2]^3).
   float StepSize() const;

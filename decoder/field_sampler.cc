@@ -335,6 +335,8 @@ Status SceneField::Validate() const {
       kErrInvalidArgument, "scene: unknown scene model %d", static_cast<int>(scene_model));
   ECRF_CHECK_OR_RETURN(scene_model != SceneModel::kUnbounded || near_far[0] >= 0.f,
                        kErrInvalidArgument, "scene: near is negative in an unbounded scene");
+  ECRF_CHECK_OR_RETURN(head == HeadKind::kPerSample || head == HeadKind::kDeferred,
+                       kErrInvalidArgument, "scene: unknown head %d", static_cast<int>(head));
   if (scene_model == SceneModel::kForward) {
     bool finite = true;
     for (float v : ndc.world_to_ref) finite = finite && std::isfinite(v);

@@ -128,6 +128,51 @@ void Flush(const Ctx& c, RayMarcher::Workspace& ws) {
   ws.count = 0;
 }
 
+// Deferred head (SPEC.md 7.6): adds the weighted products of a coloured sample to its ray's sums.
+void AccumulateProducts(const Ctx& c, RayMarcher::Workspace& ws, int slot, const GridPoint& gp,
+                        float weight) {
+  float* prod = ws.sample_products.data();
+  AppearanceProducts(c.s->appearance, gp, prod);
+  float* sum = ws.ray_products.data() + static_cast<size_t>(slot) * ws.pstride;
+  const int P = c.s->appearance.total_rank();
+  for (int k = 0; k < P; ++k) sum[k] += weight * prod[k];
+  ws.ray_color_weight[slot] += weight;
+  ++ws.stats.color_samples;
+}
+
+// Deferred head: the MLP on the summed products of every ray with a coloured sample, its colour
+// times the ray's colour weight (SPEC.md 7.6). Rays are batched in ws.capacity rows.
+void ShadeRays(const Ctx& c, RayMarcher::Workspace& ws, int nrays) {
+  int r = 0;
+  while (r < nrays) {
+    int n = 0;
+    for (; r < nrays && n < ws.capacity; ++r) {
+      if (!(ws.ray_color_weight[r] > 0.f)) continue;
+      // A view past its budget is refused whole; its remaining rays are left uncoloured.
+      if (!Spend(ws, c.cost.ray_head)) return;
+      ws.entries[n].slot = r;
+      std::memcpy(ws.products.data() + static_cast<size_t>(n) * ws.pstride,
+                  ws.ray_products.data() + static_cast<size_t>(r) * ws.pstride,
+                  ws.pstride * sizeof(float));
+      std::memcpy(ws.viewdirs.data() + static_cast<size_t>(n) * 3,
+                  ws.ray_d.data() + static_cast<size_t>(r) * 3, 3 * sizeof(float));
+      ++n;
+    }
+    if (n == 0) break;
+    c.s->mlp.Infer(n, ws.products.data(), ws.pstride, ws.viewdirs.data(), ws.colors.data(),
+                   ws.mlp_scratch.data());
+    for (int e = 0; e < n; ++e) {
+      const int slot = ws.entries[e].slot;
+      const float w = ws.ray_color_weight[slot];
+      float* rgb = ws.ray_rgb.data() + static_cast<size_t>(slot) * 3;
+      const float* col = ws.colors.data() + static_cast<size_t>(e) * 3;
+      rgb[0] = w * col[0];
+      rgb[1] = w * col[1];
+      rgb[2] = w * col[2];
+    }
+  }
+}
+
 // Evaluates the sample at grid-box point p (world for the object model, contracted for the
 // unbounded one) with interval `dist` and composites it (7.2, 7.5). False once the ray may stop
 // early (T below the early-termination threshold).
@@ -146,6 +191,10 @@ bool CompositeSample(const Ctx& c, RayMarcher::Workspace& ws, int slot, const fl
   *acc += weight;
   if (weight > c.wthr) {
     if (!Spend(ws, c.cost.color)) return false;
+    if (c.deferred) {
+      AccumulateProducts(c, ws, slot, gp, weight);
+      return !(*T < c.early);
+    }
     BatchEntry& be = ws.entries[ws.count++];
     be.slot = slot;
     be.weight = weight;
@@ -287,6 +336,10 @@ void MarchRayUnbounded(const Ctx& c, RayMarcher::Workspace& ws, int slot) {
 
 void ProcessRays(const Ctx& c, RayMarcher::Workspace& ws, int nrays) {
   std::memset(ws.ray_rgb.data(), 0, static_cast<size_t>(nrays) * 3 * sizeof(float));
+  if (c.deferred) {
+    std::memset(ws.ray_products.data(), 0, static_cast<size_t>(nrays) * ws.pstride * sizeof(float));
+    std::memset(ws.ray_color_weight.data(), 0, static_cast<size_t>(nrays) * sizeof(float));
+  }
   ws.count = 0;
   for (int r = 0; r < nrays; ++r) {
     // A view past its work budget is refused: its remaining rays are not marched.
@@ -302,7 +355,11 @@ void ProcessRays(const Ctx& c, RayMarcher::Workspace& ws, int nrays) {
       MarchRay(c, ws, r);
     }
   }
-  Flush(c, ws);
+  if (c.deferred) {
+    ShadeRays(c, ws, nrays);
+  } else {
+    Flush(c, ws);
+  }
   const float* bg = c.s->background;
   for (int r = 0; r < nrays; ++r) {
     float* rgb = ws.ray_rgb.data() + static_cast<size_t>(r) * 3;

@@ -30,6 +30,9 @@ struct RayMarcher::Workspace {
   HeapArray<float> colors;        // batch_rows x 3
   HeapArray<float> mlp_scratch;
   HeapArray<float> ray_o, ray_d, ray_rgb, ray_acc;  // tile rays
+  // Deferred head (SPEC.md 7.6): per tile ray the weighted sum of its coloured samples' products
+  // (tile rays x pstride) and of their weights; one sample's products.
+  HeapArray<float> ray_products, ray_color_weight, sample_products;
   size_t pstride = 1;
   int capacity = 0;
   int count = 0;
@@ -69,6 +72,7 @@ struct Ctx {
   bool skip;
   bool unbounded;                  // SPEC.md 7.2.1; min/max/inv then span the contracted cube
   bool forward;                    // SPEC.md 7.2.2; min/max/inv are in NDC
+  bool deferred;                   // the deferred head: products composited, MLP once per ray
   float roi_min[3], roi_scale[3];  // unbounded: the HEAD box, (1 / (max - min)) * 2
   double mask_scale[3];            // (res - 1) / (max - min) of the mask
   int tile_size;

@@ -74,14 +74,14 @@ Status RayMarcher::Init(const SceneField* scene, const RenderOptions& options) {
   }
   const SampleCosts costs = SceneSampleCosts(*scene);
   if (options.work_budget > 0) {
-    const uint64_t sample = costs.position + costs.density + costs.color;
+    const uint64_t sample = costs.position + costs.density + costs.color + costs.ray_head;
     ECRF_CHECK_OR_RETURN(
         sample <= options.work_budget, kErrLimit,
-        "render: one coloured sample of this scene costs %llu multiply-adds (MLP of %d features, "
-        "%d hidden, %d products), more than the work budget of %llu per pixel "
+        "render: one coloured sample of this scene costs %llu multiply-adds (%s head, MLP of %d "
+        "features, %d hidden, %d products), more than the work budget of %llu per pixel "
         "(RenderOptions::work_budget; ecrf --work-budget N, 0 for no limit)",
-        static_cast<unsigned long long>(sample), scene->mlp.config().feature_dim,
-        scene->mlp.config().hidden, scene->appearance.total_rank(),
+        static_cast<unsigned long long>(sample), HeadKindName(scene->head),
+        scene->mlp.config().feature_dim, scene->mlp.config().hidden, scene->appearance.total_rank(),
         static_cast<unsigned long long>(options.work_budget));
   }
   int threads = options.num_threads;
@@ -110,6 +110,11 @@ Status RayMarcher::Init(const SceneField* scene, const RenderOptions& options) {
     ECRF_RETURN_IF_ERROR(ws.ray_d.Allocate(static_cast<size_t>(tile_rays) * 3));
     ECRF_RETURN_IF_ERROR(ws.ray_rgb.Allocate(static_cast<size_t>(tile_rays) * 3));
     ECRF_RETURN_IF_ERROR(ws.ray_acc.Allocate(static_cast<size_t>(tile_rays)));
+    if (scene->head == HeadKind::kDeferred) {
+      ECRF_RETURN_IF_ERROR(ws.ray_products.Allocate(static_cast<size_t>(tile_rays) * pstride));
+      ECRF_RETURN_IF_ERROR(ws.ray_color_weight.Allocate(static_cast<size_t>(tile_rays)));
+      ECRF_RETURN_IF_ERROR(ws.sample_products.Allocate(pstride));
+    }
     ws.pstride = pstride;
     ws.capacity = options.batch_rows;
   }
@@ -132,6 +137,7 @@ Status RayMarcher::Run(Job* job, uint64_t pixels, RenderStats* stats) {
   c.s = &s;
   c.unbounded = s.scene_model == SceneModel::kUnbounded;
   c.forward = s.scene_model == SceneModel::kForward;
+  c.deferred = s.head == HeadKind::kDeferred;
   for (int a = 0; a < 3; ++a) {
     c.roi_min[a] = s.aabb_min[a];
     c.roi_scale[a] = 1.0f / (s.aabb_max[a] - s.aabb_min[a]) * 2.f;

@@ -36,9 +36,14 @@ inline constexpr uint64_t kDefaultWorkBudget = ECRF_DEFAULT_WORK_BUDGET;
 struct SampleCosts {
   uint64_t position = 0;  // a marched sample position: box, mask and contraction tests
   uint64_t density = 0;   // its density: grid location, 7 taps per density rank, softplus, exp
-  uint64_t color = 0;     // its colour: appearance taps, the basis, positional encoding and MLP
+  // Its colour: per-sample head, the appearance taps, the basis, positional encoding and MLP;
+  // deferred head, the appearance taps and their weighted sum.
+  uint64_t color = 0;
+  uint64_t ray_head = 0;  // deferred head: the basis, encoding and MLP once per coloured ray
   // The most one ray of n samples can cost: every sample evaluated and coloured.
-  uint64_t WorstRay(int n) const { return static_cast<uint64_t>(n) * (position + density + color); }
+  uint64_t WorstRay(int n) const {
+    return static_cast<uint64_t>(n) * (position + density + color) + ray_head;
+  }
 };
 
 // Costs of the scene's samples (the weights of the work budget). Overflow-free for every scene
@@ -56,7 +61,13 @@ inline SampleCosts SceneSampleCosts(const SceneField& s) {
   const uint64_t pe = 8 * 2 *
                       (F * static_cast<uint64_t>(m.feature_pe_freqs) +
                        3 * static_cast<uint64_t>(m.viewdir_pe_freqs));
-  c.color = kRank * P + F * P + pe + in * H + H * H + 3 * H + 256;
+  const uint64_t head = F * P + pe + in * H + H * H + 3 * H + 256;
+  if (s.head == HeadKind::kDeferred) {
+    c.color = kRank * P + P;
+    c.ray_head = head;
+  } else {
+    c.color = kRank * P + head;
+  }
   return c;
 }
 

@@ -288,10 +288,11 @@ Status DecodeOccupancyChunk(const ChunkView& chunk, int version_minor, MemoryBud
 Status DecodeMlpChunk(const ChunkView& chunk, const SceneHeader& h, MemoryBudget* budget,
                       WorkBudget* work, int version_minor, SceneField* scene, SceneInfo* info) {
   ByteReader r(chunk.data, chunk.size);
-  uint8_t precision = 0, reserved[3] = {0, 0, 0};
+  uint8_t precision = 0, head = 0, reserved[2] = {0, 0};
   ECRF_RETURN_IF_ERROR(r.ReadU8(&precision, "MLPW precision"));
+  ECRF_RETURN_IF_ERROR(r.ReadU8(&head, "MLPW head"));
   for (uint8_t& b : reserved) ECRF_RETURN_IF_ERROR(r.ReadU8(&b, "MLPW reserved"));
-  ECRF_CHECK_OR_RETURN(reserved[0] == 0 && reserved[1] == 0 && reserved[2] == 0, kErrCorrupt,
+  ECRF_CHECK_OR_RETURN(reserved[0] == 0 && reserved[1] == 0, kErrCorrupt,
                        "MLPW: reserved bytes must be 0");
   ECRF_CHECK_OR_RETURN(precision <= kMlpPrecisionQuantized, kErrUnsupported,
                        "MLPW: precision %u (0 = float16, 1 = float32, 2 = quantized)", precision);
@@ -300,6 +301,17 @@ Status DecodeMlpChunk(const ChunkView& chunk, const SceneHeader& h, MemoryBudget
       kErrCorrupt,
       "MLPW: precision 2 (quantized) needs version_minor >= %d, the stream says %d (SPEC.md 2.1)",
       kQuantizedMlpMinVersionMinor, version_minor);
+  ECRF_CHECK_OR_RETURN(head < kNumHeadKinds, kErrUnsupported,
+                       "MLPW: head %u is unknown (this decoder knows 0, per-sample MLP, and 1, "
+                       "deferred; the stream needs a newer decoder)",
+                       head);
+  ECRF_CHECK_OR_RETURN(
+      version_minor >= kHeadKindMinVersionMinor[head], kErrCorrupt,
+      "MLPW: head %u (%s) needs version_minor >= %d, the stream says %d (SPEC.md 2.1; the byte "
+      "was reserved, 0, before 1.6)",
+      head, HeadKindName(static_cast<HeadKind>(head)), kHeadKindMinVersionMinor[head],
+      version_minor);
+  scene->head = static_cast<HeadKind>(head);
   MlpConfig config;
   config.num_products = h.total_rank(1);
   config.feature_dim = h.feature_dim;
@@ -347,6 +359,7 @@ Status DecodeMlpChunk(const ChunkView& chunk, const SceneHeader& h, MemoryBudget
   if (!s.ok()) return Status::Error(kErrCorrupt, "MLPW: %s", s.message());
   info->mlp_bytes = chunk.size;
   info->mlp_precision = precision;
+  info->head = static_cast<HeadKind>(head);
   info->mlp_precision_bits = precision == kMlpPrecisionFloat16   ? 16
                              : precision == kMlpPrecisionFloat32 ? 32
                                                                  : 0;
@@ -355,6 +368,7 @@ Status DecodeMlpChunk(const ChunkView& chunk, const SceneHeader& h, MemoryBudget
 
 void ApplyHeader(const SceneHeader& h, SceneField* scene) {
   scene->scene_model = static_cast<SceneModel>(h.scene_model);
+  scene->head = HeadKind::kPerSample;  // until MLPW says otherwise
   for (int a = 0; a < 3; ++a) {
     scene->aabb_min[a] = h.aabb_min[a];
     scene->aabb_max[a] = h.aabb_max[a];

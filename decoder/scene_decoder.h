@@ -65,8 +65,9 @@ struct SceneInfo {
   size_t stream_bytes = 0;
   uint32_t head_bytes = 0, ndc_bytes = 0, occupancy_bytes = 0, mlp_bytes = 0, metadata_bytes = 0;
   uint32_t other_ancillary_bytes = 0;
-  int mlp_precision = 0;       // MLPW precision field: 0 float16, 1 float32, 2 quantized
-  int mlp_precision_bits = 0;  // 16 or 32 for floating weights, 0 for quantized
+  int mlp_precision = 0;                 // MLPW precision field: 0 float16, 1 float32, 2 quantized
+  int mlp_precision_bits = 0;            // 16 or 32 for floating weights, 0 for quantized
+  HeadKind head = HeadKind::kPerSample;  // MLPW head field (1.6)
   int occupancy_res[3] = {0, 0, 0};
   size_t occupied_voxels = 0;
   uint8_t occupancy_contexts = 0;  // the OCCU contexts field: 0 narrow, 1 wide (1.5)

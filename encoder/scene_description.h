@@ -10,6 +10,7 @@
 #include <optional>
 #include <vector>
 
+#include "format/mlp_coder.h"
 #include "format/ndc_frame.h"
 #include "format/scene_header.h"
 
@@ -35,6 +36,7 @@ struct SceneDescription {
   std::array<std::array<std::vector<float>, 6>, 2> tensors;
   // The basis [feature_dim x total appearance rank], then the MLP in the MLPW order (SPEC.md 6.6).
   std::vector<float> head_params;
+  HeadKind head = HeadKind::kPerSample;  // where the MLP runs (the MLPW head byte, SPEC.md 6.6)
   std::optional<OccupancyDescription> mask;
 };
 

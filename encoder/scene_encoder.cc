@@ -105,9 +105,10 @@ SceneDescription DropComponents(const SceneDescription& in, const std::vector<ui
 
 // The lowest minor version of the features used, wide contexts aside: 1.1 for the quantized MLP,
 // 1.2 unbounded, 1.3 forward-facing.
-uint8_t FeatureVersionMinor(const SceneHeader& h, const EncodeOptions& o) {
-  return std::max<uint8_t>(o.mlp_max_level > 0 ? kQuantizedMlpMinVersionMinor : 0,
-                           kSceneModelMinVersionMinor[h.scene_model]);
+uint8_t FeatureVersionMinor(const SceneDescription& s, const EncodeOptions& o) {
+  return std::max({o.mlp_max_level > 0 ? kQuantizedMlpMinVersionMinor : uint8_t{0},
+                   kSceneModelMinVersionMinor[s.header.scene_model],
+                   kHeadKindMinVersionMinor[static_cast<int>(s.head)]});
 }
 
 // The shortest of the codes of `sets` (in order; the first wins ties) whose minimum version the
@@ -212,13 +213,13 @@ std::vector<uint8_t> EncodeOccupancyChunk(const OccupancyDescription& mask, int 
   return std::move(w.bytes());
 }
 
-std::vector<uint8_t> EncodeMlpChunk(const SceneHeader& h, const std::vector<float>& params,
-                                    bool float32, int max_level) {
+std::vector<uint8_t> EncodeMlpChunk(const SceneHeader& h, HeadKind head,
+                                    const std::vector<float>& params, bool float32, int max_level) {
   ByteWriter w;
   w.U8(max_level > 0 ? kMlpPrecisionQuantized
        : float32     ? kMlpPrecisionFloat32
                      : kMlpPrecisionFloat16);
-  w.U8(0);
+  w.U8(static_cast<uint8_t>(head));
   w.U8(0);
   w.U8(0);
   if (max_level > 0) {
@@ -241,13 +242,13 @@ std::vector<uint8_t> Assemble(const SceneDescription& s, const std::vector<float
                               const EncodeOptions& o, EncodeReport* report) {
   *report = EncodeReport{};
   SceneHeader h = s.header;
-  const uint8_t feature_minor = FeatureVersionMinor(h, o);
+  const uint8_t feature_minor = FeatureVersionMinor(s, o);
   if (feature_minor > o.max_version_minor) {
-    throw std::invalid_argument("this scene needs stream version 1." +
-                                std::to_string(feature_minor) + " (" +
-                                SceneModelName(static_cast<SceneModel>(h.scene_model)) +
-                                " model, MLP levels " + std::to_string(o.mlp_max_level) +
-                                "), above the asked 1." + std::to_string(o.max_version_minor));
+    throw std::invalid_argument(
+        "this scene needs stream version 1." + std::to_string(feature_minor) + " (" +
+        SceneModelName(static_cast<SceneModel>(h.scene_model)) + " model, " + HeadKindName(s.head) +
+        " head, MLP levels " + std::to_string(o.mlp_max_level) + "), above the asked 1." +
+        std::to_string(o.max_version_minor));
   }
   std::vector<uint8_t> coef_chunks[2][6];
   uint8_t version_minor = feature_minor;
@@ -298,7 +299,8 @@ std::vector<uint8_t> Assemble(const SceneDescription& s, const std::vector<float
       ++chunks;
     }
   }
-  const std::vector<uint8_t> mlp = EncodeMlpChunk(h, s.head_params, o.mlp_float32, o.mlp_max_level);
+  const std::vector<uint8_t> mlp =
+      EncodeMlpChunk(h, s.head, s.head_params, o.mlp_float32, o.mlp_max_level);
   writer.AddChunk(kChunkMlpWeights, mlp);
   report->mlp_bytes = mlp.size();
   ++chunks;

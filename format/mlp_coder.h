@@ -28,6 +28,25 @@ constexpr uint8_t kMlpPrecisionQuantized = 2;
 // SPEC.md 2.1; kSceneModelMinVersionMinor and kWideContextsMinVersionMinor are the others).
 constexpr uint8_t kQuantizedMlpMinVersionMinor = 1;
 
+// Where the MLP runs (the MLPW `head` byte, SPEC.md 6.6 and 7.6). The weights and their coding are
+// the same for both; the deferred head saves the per-sample MLP (most of a frame's work, and of a
+// training step's) by compositing the appearance products along the ray first, which is exact
+// for the basis (linear) and an approximation the trainer learns around for the MLP.
+enum class HeadKind : uint8_t {
+  kPerSample = 0,  // TensoRF: the MLP colours every sample whose weight passes the threshold
+  kDeferred = 1,   // the weighted products of a ray's coloured samples, then the MLP once per ray
+};
+constexpr int kNumHeadKinds = 2;
+// The container minor version a stream with this head needs at least (2.1).
+constexpr uint8_t kHeadKindMinVersionMinor[kNumHeadKinds] = {0, 6};
+// The names tools show and take (ecrf info, ecrf train --head), by head byte.
+constexpr const char* kHeadKindNames[kNumHeadKinds] = {"mlp", "deferred"};
+// Its name; "unknown" for other values.
+inline const char* HeadKindName(HeadKind k) {
+  const int i = static_cast<int>(k);
+  return i < kNumHeadKinds ? kHeadKindNames[i] : "unknown";
+}
+
 // Magnitude classes: 0 for level 0, else the bit length of |level| (1 for 1, 2 for 2..3, 3 for
 // 4..7, ...). Classes 0..14 are symbols of a 16-symbol alphabet; symbol 15 escapes to
 // 15 + an Exp-Golomb value of order 0.

@@ -14,6 +14,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "format/mlp_coder.h"  // HeadKind
+
 namespace ecrf {
 namespace trainer {
 
@@ -23,6 +25,10 @@ struct AppearanceHeadConfig {
   int feature_pe_freqs = 2;
   int viewdir_pe_freqs = 2;
   int hidden = 128;
+  // kPerSample: Forward sees one row per coloured sample; kDeferred: one row per ray, the sum of
+  // its coloured samples' products weighted by their weights (SPEC.md 7.6; volume_render.cc).
+  // The head's arithmetic is the same; only what its rows are differs.
+  HeadKind kind = HeadKind::kPerSample;
 };
 
 // All parameters in one flat float array so Adam and checkpoints treat them uniformly.

@@ -5,16 +5,31 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <memory>
 #include <stdexcept>
 #include <vector>
 
+#include "trainer/model/ray_batch.h"
 #include "trainer/model/ray_samples.h"
 
 namespace ecrf {
 namespace trainer {
 namespace {
 
+using batch::CompositeBackward;
+using batch::CompositeForward;
+using batch::DeferredChunk;
+using batch::EnsureSize;
+using batch::kMinParallelRays;
+using batch::NextChunk;
+using batch::PixelLoss;
+using batch::RayChunk;
+using batch::RayComposite;
+using batch::RayLoss;
+using batch::RayRec;
+using batch::SumRayProducts;
+using batch::Workspace;
 using march::Candidate;
 using march::kPrefetchDistance;
 using march::MakeMarchParams;
@@ -23,69 +38,10 @@ using march::MarchRay;
 using march::SampleRec;
 using march::SplitMix64;
 
-constexpr int kMinParallelRays = 64;  // smaller batches run on one thread (no fork/join cost)
-
 constexpr int kScatterTile = 32;  // plane vertices per side of a scatter tile
 
 // Scatter tiles along a plane axis of `res` vertices.
 inline int TilesAlong(int res) { return (res + kScatterTile - 1) / kScatterTile; }
-
-// Grows v to at least n elements and never shrinks it: a shrink followed by a regrow would
-// zero-fill the regrown part again (the chunks of one batch have different sizes).
-inline void EnsureSize(std::vector<float>& v, size_t n) {
-  if (v.size() < n) v.resize(n);
-}
-
-struct RayRec {
-  int tid;  // thread whose sample buffer holds the samples
-  int count;
-  size_t offset;  // into that buffer
-  int64_t app_start;
-  int app_count;
-};
-
-// One thread's sample buffers. Cache-line aligned: every push_back writes the vector's end
-// pointer, and two threads' vector headers on one line made marching scale 1.3x on 2 threads.
-struct alignas(64) ThreadSamples {
-  std::vector<SampleRec> samples;
-  std::vector<Candidate> candidates;  // one ray at a time
-};
-
-// Scratch of one batch; reused across steps so steady-state steps do not allocate.
-struct Workspace {
-  std::vector<ThreadSamples> per_thread;
-  std::vector<RayRec> rays;
-  std::vector<float> products, viewdirs, rgb, dl_drgb, dl_dproducts;
-  // The gradient scatter (ScatterChunk): per (grid, mode), density modes 0-2 then appearance
-  // modes 0-2, the chunk's samples bucketed by plane tile in ray order, and each tile's line sums.
-  struct ScatterEntry {
-    const GridPoint* gp;
-    float g;             // density: dL/d(feature)
-    const float* dprod;  // appearance: the sample's products gradient, at this mode's offset
-  };
-  struct ModeTiles {
-    int tiles_x = 0, tiles_y = 0, line_floats = 0;
-    std::vector<std::vector<ScatterEntry>> lists;  // per tile
-    std::vector<float> line_sums;                  // per tile: line length x rank
-  };
-  ModeTiles tiles[6];
-  struct TileTask {
-    int mode_task, tile;
-    size_t entries;
-  };
-  std::vector<TileTask> tile_tasks;
-  std::vector<ModeGradScatter> scatter;  // one per tile task
-
-  void Prepare(int n_rays, int threads) {
-    if (static_cast<int>(per_thread.size()) < threads) per_thread.resize(threads);
-    for (auto& t : per_thread) t.samples.clear();
-    rays.resize(n_rays);
-  }
-  const SampleRec* SamplesOf(const RayRec& rr) const {
-    return per_thread[rr.tid].samples.data() + rr.offset;
-  }
-  SampleRec* SamplesOf(const RayRec& rr) { return per_thread[rr.tid].samples.data() + rr.offset; }
-};
 
 // Phase 1: march all rays, assign appearance rows; returns the number of appearance samples.
 int64_t MarchBatch(const MarchParams& p, Workspace& ws, int n_rays, const float* origins,
@@ -247,127 +203,6 @@ void ScatterChunk(VmGrid& density, VmGrid& appearance, Workspace& ws, int r0, in
   }
 }
 
-// What the loss of a step needs of each ray, the same for all its rays.
-struct RayLoss {
-  const float* target_rgb;  // n_rays x 3
-  const float* ray_gain;    // n_rays x 3, or null: all 1
-  float* dl_dgain;          // n_rays x 3, or null: not wanted
-  bool white;               // the background is white (else black)
-  float grad_scale;         // d(mean squared error)/d(diff) per unit diff: 2 / (3 n_rays)
-  // The distortion loss (DistortionLoss, inlined into CompositeBackward): positions
-  // m = s / n_samples, intervals 1 / n_samples.
-  bool distortion_on;
-  double inv_n;
-  double distortion_scale;  // distortion_weight / n_rays
-};
-
-// A ray's composited colour and the sums its backward pass reads again.
-struct RayComposite {
-  float c[3] = {0.f, 0.f, 0.f};
-  float acc = 0.f;                       // accumulated opacity
-  double w_total = 0.0, wm_total = 0.0;  // distortion loss: the sums of w and w * m
-};
-
-// Compositing forward of one ray: the weights w = alpha * trans summed into colour and opacity.
-// The ray's appearance samples have rows row0 + app of rgb.
-inline RayComposite CompositeForward(const RayLoss& loss, const SampleRec* s, int count,
-                                     const float* rgb_rows, int64_t row0) {
-  RayComposite rc;
-  for (int k = 0; k < count; ++k) {
-    const float w = s[k].alpha * s[k].trans;
-    rc.acc += w;
-    if (loss.distortion_on) {
-      rc.w_total += w;
-      rc.wm_total += w * (s[k].s * loss.inv_n);
-    }
-    if (s[k].app >= 0) {
-      const float* rgb = rgb_rows + 3 * (row0 + s[k].app);
-      rc.c[0] += w * rgb[0];
-      rc.c[1] += w * rgb[1];
-      rc.c[2] += w * rgb[2];
-    }
-  }
-  return rc;
-}
-
-// The photometric loss of ray r: the background and the gain applied, the pixel clamped, its
-// squared errors added to sse (the caller's reduction variable, channel by channel), g set to
-// dL/d(composited colour) and, when asked, dL/dgain written.
-inline void PixelLoss(const RayLoss& loss, int r, RayComposite& rc, float g[3], double& sse) {
-  for (int ch = 0; ch < 3; ++ch) {
-    if (loss.white) rc.c[ch] += 1.f - rc.acc;
-    // 1 * x is exact, so rays without a gain train bit for bit as before.
-    const float gain = loss.ray_gain ? loss.ray_gain[3 * r + ch] : 1.f;
-    const float pixel = gain * rc.c[ch];
-    const bool in_range = pixel >= 0.f && pixel <= 1.f;
-    const float cc = std::min(std::max(pixel, 0.f), 1.f);
-    const float diff = cc - loss.target_rgb[3 * r + ch];
-    sse += static_cast<double>(diff) * diff;
-    const float g_pixel = in_range ? loss.grad_scale * diff : 0.f;
-    if (loss.dl_dgain) loss.dl_dgain[3 * r + ch] = g_pixel * rc.c[ch];
-    g[ch] = g_pixel * gain;
-  }
-}
-
-// Compositing backward of one ray, from its last sample to its first (the suffix sums of the
-// weights' gradients): each sample's feat becomes dL/dfeature and its row of dl_drgb dL/drgb.
-// Returns the ray's distortion loss.
-inline double CompositeBackward(const RayLoss& loss, SampleRec* s, int count,
-                                const RayComposite& rc, const float g[3], const float* rgb_rows,
-                                float* dl_drgb_rows, int64_t row0) {
-  const float bg_dot = loss.white ? g[0] + g[1] + g[2] : 0.f;
-  float suffix = 0.f;
-  double w_after = 0.0, wm_after = 0.0, ray_distortion = 0.0;
-  for (int k = count - 1; k >= 0; --k) {
-    SampleRec& sk = s[k];
-    const float w = sk.alpha * sk.trans;
-    float e = -bg_dot;
-    if (loss.distortion_on) {
-      const double inv_n = loss.inv_n;
-      const double m = sk.s * inv_n, wk = w;
-      const double w_before = rc.w_total - w_after - wk;
-      const double wm_before = rc.wm_total - wm_after - wk * m;
-      const double spread = (m * w_before - wm_before) + (wm_after - m * w_after);
-      ray_distortion += wk * spread + inv_n / 3.0 * wk * wk;
-      e += static_cast<float>(loss.distortion_scale * (2.0 * spread + 2.0 * inv_n / 3.0 * wk));
-      w_after += wk;
-      wm_after += wk * m;
-    }
-    if (sk.app >= 0) {
-      const int64_t row = row0 + sk.app;
-      const float* rgb = rgb_rows + 3 * row;
-      e += g[0] * rgb[0] + g[1] * rgb[1] + g[2] * rgb[2];
-      float* dr = dl_drgb_rows + 3 * row;
-      dr[0] = w * g[0];
-      dr[1] = w * g[1];
-      dr[2] = w * g[2];
-    }
-    const float f = (1.f - sk.alpha) + 1e-10f;
-    const float dl_dalpha = e * sk.trans - suffix / f;
-    suffix += e * w;
-    const float dl_dsigma = dl_dalpha * (1.f - sk.alpha) * sk.dscale;
-    sk.feat = dl_dsigma * SoftplusGrad(sk.feat);
-  }
-  return ray_distortion;
-}
-
-// The rays [r0, r1) of a chunk and its rows of appearance samples, [base, base + rows).
-struct RayChunk {
-  int r0, r1;
-  int64_t base, rows;
-};
-
-// The chunk from ray r0: the most consecutive rays (at least one) whose appearance samples fit in
-// max_rows rows.
-inline RayChunk NextChunk(const Workspace& ws, int r0, int n_rays, int64_t max_rows) {
-  int r1 = r0 + 1;
-  while (r1 < n_rays &&
-         ws.rays[r1].app_start + ws.rays[r1].app_count - ws.rays[r0].app_start <= max_rows)
-    ++r1;
-  const int64_t base = ws.rays[r0].app_start;
-  return {r0, r1, base, ws.rays[r1 - 1].app_start + ws.rays[r1 - 1].app_count - base};
-}
-
 // Compositing forward, loss and compositing backward (dL/dfeature, dL/drgb) of a chunk's rays,
 // whose head outputs are in ws.rgb. The sums are the step's OpenMP reduction variables. Each
 // thread takes its own copy of the loss, which lets the compiler keep it in registers.
@@ -384,8 +219,19 @@ void CompositeChunk(RayLoss loss, Workspace& ws, const RayChunk& chunk, double& 
     RayComposite rc = CompositeForward(loss, s, rr.count, ws.rgb.data(), row0);
     float g[3];
     PixelLoss(loss, r, rc, g, sse);
+    const float* rgb_rows = ws.rgb.data();
+    float* dl_drgb_rows = ws.dl_drgb.data();
+    // The per-sample head: the sample's colour in its pixel, and dL/drgb = w G for its row.
     distortion_sum +=
-        CompositeBackward(loss, s, rr.count, rc, g, ws.rgb.data(), ws.dl_drgb.data(), row0);
+        CompositeBackward(loss, s, rr.count, rc, g, [&](const SampleRec& sk, float w) {
+          const int64_t row = row0 + sk.app;
+          const float* rgb = rgb_rows + 3 * row;
+          float* dr = dl_drgb_rows + 3 * row;
+          dr[0] = w * g[0];
+          dr[1] = w * g[1];
+          dr[2] = w * g[2];
+          return g[0] * rgb[0] + g[1] * rgb[1] + g[2] * rgb[2];
+        });
   }
 }
 
@@ -441,6 +287,7 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
   const int64_t max_rows = std::max(1, cfg.head_chunk_rows);
   // Each chunk's ws.products stays untouched until its head.Backward, so the head need not copy it.
   head.set_borrow_products(true);
+  const bool deferred = cfg.head.kind == HeadKind::kDeferred;
   double sse = 0.0;
   long n_density = 0;
   double distortion_sum = 0.0;
@@ -453,6 +300,13 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
 
     // Appearance inputs + head forward.
     GatherAppearance(appearance, ws, chunk.r0, chunk.r1, dirs, chunk.base, rows);
+    if (deferred) {
+      DeferredChunk(loss, head, ws, chunk, P, dirs, stats, lap, sse, n_density, distortion_sum);
+      ScatterChunk(density, appearance, ws, chunk.r0, chunk.r1, chunk.base, P);
+      stats.t_scatter += lap();
+      r0 = chunk.r1;
+      continue;
+    }
     EnsureSize(ws.rgb, static_cast<size_t>(rows) * 3);
     EnsureSize(ws.dl_drgb, static_cast<size_t>(rows) * 3);
     stats.t_march += lap();
@@ -494,8 +348,15 @@ void RenderRays(const TensorfModel& model, int n_rays, const float* origins, con
     ws.Prepare(n, threads);
     const int64_t n_app = MarchBatch(p, ws, n, o, d, /*train=*/false, 0);
     GatherAppearance(model.appearance(), ws, 0, n, d, 0, n_app);
+    const bool deferred = model.config().head.kind == HeadKind::kDeferred;
+    if (deferred) {
+      const int rows = SumRayProducts(ws, 0, n, 0, model.appearance().total_rank(), d);
+      EnsureSize(ws.ray_rgb, static_cast<size_t>(rows) * 3);
+      if (rows > 0)
+        model.head().Infer(rows, ws.ray_products.data(), ws.ray_viewdirs.data(), ws.ray_rgb.data());
+    }
     EnsureSize(ws.rgb, static_cast<size_t>(n_app) * 3);
-    if (n_app > 0)
+    if (n_app > 0 && !deferred)
       model.head().Infer(static_cast<int>(n_app), ws.products.data(), ws.viewdirs.data(),
                          ws.rgb.data());
 #pragma omp parallel for schedule(dynamic, 16) if (n >= kMinParallelRays)
@@ -508,12 +369,17 @@ void RenderRays(const TensorfModel& model, int n_rays, const float* origins, con
         const float w = s[k].alpha * s[k].trans;
         acc += w;
         depth += w * s[k].t;
-        if (s[k].app >= 0) {
+        if (s[k].app >= 0 && !deferred) {
           const float* rgb = ws.rgb.data() + 3 * (rr.app_start + s[k].app);
           c[0] += w * rgb[0];
           c[1] += w * rgb[1];
           c[2] += w * rgb[2];
         }
+      }
+      if (deferred && ws.head_rays[r].row >= 0) {
+        const Workspace::HeadRay& hr = ws.head_rays[r];
+        const float* rgb = ws.ray_rgb.data() + 3 * static_cast<size_t>(hr.row);
+        for (int ch = 0; ch < 3; ++ch) c[ch] = hr.weight * rgb[ch];
       }
       float* out = rgb_out + 3 * (static_cast<size_t>(begin) + r);
       const float* gain = ray_gain ? ray_gain + 3 * (static_cast<size_t>(begin) + r) : nullptr;

@@ -40,6 +40,7 @@ encoder::SceneDescription DescribeModel(const TensorfModel& model) {
   h.viewdir_pe_freqs = static_cast<uint8_t>(hc.viewdir_pe_freqs);
   h.hidden = static_cast<uint16_t>(hc.hidden);
   s.head_params = model.head().params();
+  s.head = model.config().head.kind;
   if (const AlphaMask* mask = model.alpha_mask()) {
     encoder::OccupancyDescription& occupancy = s.mask.emplace();
     occupancy.aabb_min = mask->aabb().min;

@@ -55,7 +55,8 @@ void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int itera
   j["head"] = {{"feature_dim", c.head.feature_dim},
                {"feature_pe_freqs", c.head.feature_pe_freqs},
                {"viewdir_pe_freqs", c.head.viewdir_pe_freqs},
-               {"hidden", c.head.hidden}};
+               {"hidden", c.head.hidden},
+               {"kind", HeadKindName(c.head.kind)}};
   if (const AlphaMask* mask = model.alpha_mask()) {
     j["mask_res"] = mask->res();
     j["mask_aabb_min"] = mask->aabb().min;
@@ -313,6 +314,8 @@ TensorfModel LoadModelFromCheckpoint(const std::string& path, RateState* rate) {
     c.head.feature_pe_freqs = head.value("feature_pe_freqs", c.head.feature_pe_freqs);
     c.head.viewdir_pe_freqs = head.value("viewdir_pe_freqs", c.head.viewdir_pe_freqs);
     c.head.hidden = head.value("hidden", c.head.hidden);
+    c.head.kind = ChoiceFromName<HeadKind>(head.value("kind", std::string(kHeadKindNames[0])),
+                                           path + ": head");
     c.head.num_products = c.app_ranks[0] + c.app_ranks[1] + c.app_ranks[2];
   } catch (const nlohmann::json::exception& e) {
     throw std::runtime_error(path + ": checkpoint metadata: " + e.what());

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "encoder/coef_rdoq.h"  // kMaxRdoqLambda, the --rdoq limit
+#include "format/mlp_coder.h"   // HeadKind, the --head choice
 #include "trainer/data/named_choice.h"
 #include "trainer/data/scene_fit.h"
 #include "trainer/train/train_field_info.h"
@@ -33,6 +34,12 @@ inline constexpr float kRefineCamerasFrom = 0.2f, kRefineCamerasUntil = 0.8f;
 // a young field, first pulled them away again (1.35 degrees in the first round) and gained
 // nothing; from half-way, half the rounds give the same held-out PSNR (docs/photos-to-dataset.md).
 inline constexpr float kRefineCamerasFromWarmedUp = 0.5f;
+
+template <>
+struct ChoiceNames<HeadKind> {  // indexed by the MLPW head byte (format/mlp_coder.h)
+  static constexpr const char* what = "head";
+  static constexpr const char* const (&names)[kNumHeadKinds] = kHeadKindNames;
+};
 
 // The named presets (PresetOptions), rate points (ApplyRatePoint) and procedural scenes.
 enum class Preset { kPaper, kFast, kTiny };

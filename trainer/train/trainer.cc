@@ -44,6 +44,7 @@ TensorfConfig ConfigFor(const TrainOptions& o, const Dataset& data, const SceneF
   c.app_ranks = {o.appearance_rank, o.appearance_rank, o.appearance_rank};
   c.head.num_products = 3 * o.appearance_rank;
   c.head.hidden = o.mlp_hidden;
+  c.head.kind = o.head;
   c.near = float(data.near);
   c.far = float(data.far);
   c.white_background = data.white_background;

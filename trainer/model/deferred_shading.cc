@@ -1,0 +1,130 @@
+// The deferred head in a training step (SPEC.md 7.6): a ray's coloured samples' products summed
+// with their weights, the head once per ray, and the compositing backward through both.
+//
+// pixel = W rgb(S, d) + (1 - acc) background, S = sum_i w_i p_i and W = sum_i w_i over the
+// coloured samples i. Through W and S, a coloured sample's weight gets dL/dw_i = G . rgb +
+// dL/dS . p_i (G = dL/dpixel), and its products dL/dp_i = w_i dL/dS; every weight also gets
+// -G . background through acc, as with the per-sample head.
+#include <algorithm>
+#include <cstddef>
+#include <vector>
+
+#include "trainer/model/ray_batch.h"
+
+namespace ecrf {
+namespace trainer {
+namespace batch {
+namespace {
+
+// The deferred head's chunk, between its head's forward (ws.ray_rgb) and backward: compositing
+// forward and the loss (pixel = weight * rgb + (1 - acc) * background), dL/drgb of each head row.
+void DeferredCompositeForward(RayLoss loss, Workspace& ws, const RayChunk& chunk, double& sse,
+                              long& n_density, std::vector<RayComposite>& composites) {
+  composites.resize(static_cast<size_t>(chunk.r1 - chunk.r0));
+#pragma omp parallel for schedule(dynamic, 16) firstprivate(loss) \
+    reduction(+ : sse, n_density) if (chunk.r1 - chunk.r0 >= kMinParallelRays)
+  for (int r = chunk.r0; r < chunk.r1; ++r) {
+    const RayRec& rr = ws.rays[r];
+    Workspace::HeadRay& hr = ws.head_rays[r - chunk.r0];
+    n_density += rr.count;
+    RayComposite& rc = composites[r - chunk.r0];
+    rc = CompositeForward(loss, ws.SamplesOf(rr), rr.count, nullptr, 0);
+    const float* rgb = hr.row >= 0 ? ws.ray_rgb.data() + 3 * static_cast<size_t>(hr.row) : nullptr;
+    for (int ch = 0; ch < 3 && rgb; ++ch) rc.c[ch] = hr.weight * rgb[ch];
+    RayComposite pixel = rc;  // PixelLoss adds the background to its copy
+    PixelLoss(loss, r, pixel, hr.g, sse);
+    if (rgb == nullptr) continue;
+    float* dr = ws.ray_dl_drgb.data() + 3 * static_cast<size_t>(hr.row);
+    for (int ch = 0; ch < 3; ++ch) dr[ch] = hr.weight * hr.g[ch];
+  }
+}
+
+// After the head's backward (ws.ray_dl_dproducts = dL/d(summed products)): the compositing
+// backward, where a coloured sample's weight reaches the pixel through the ray's colour weight
+// and its share of the summed products, and each sample's products gradient is its weight times
+// the ray's.
+void DeferredCompositeBackward(RayLoss loss, Workspace& ws, const RayChunk& chunk, int P,
+                               const std::vector<RayComposite>& composites,
+                               double& distortion_sum) {
+  EnsureSize(ws.dl_dproducts, static_cast<size_t>(chunk.rows) * P);
+#pragma omp parallel for schedule(dynamic, 16) firstprivate(loss) \
+    reduction(+ : distortion_sum) if (chunk.r1 - chunk.r0 >= kMinParallelRays)
+  for (int r = chunk.r0; r < chunk.r1; ++r) {
+    const RayRec& rr = ws.rays[r];
+    const Workspace::HeadRay& hr = ws.head_rays[r - chunk.r0];
+    const float* rgb = hr.row >= 0 ? ws.ray_rgb.data() + 3 * static_cast<size_t>(hr.row) : nullptr;
+    const float* dsum =
+        hr.row >= 0 ? ws.ray_dl_dproducts.data() + static_cast<size_t>(hr.row) * P : nullptr;
+    const float* g = hr.g;
+    const int64_t row0 = rr.app_start - chunk.base;
+    distortion_sum += CompositeBackward(loss, ws.SamplesOf(rr), rr.count, composites[r - chunk.r0],
+                                        g, [&](const SampleRec& sk, float w) {
+                                          const size_t row = static_cast<size_t>(row0 + sk.app) * P;
+                                          const float* prod = ws.products.data() + row;
+                                          float* dprod = ws.dl_dproducts.data() + row;
+                                          float e = g[0] * rgb[0] + g[1] * rgb[1] + g[2] * rgb[2];
+                                          for (int p = 0; p < P; ++p) {
+                                            e += dsum[p] * prod[p];
+                                            dprod[p] = w * dsum[p];
+                                          }
+                                          return e;
+                                        });
+  }
+}
+
+}  // namespace
+
+int SumRayProducts(Workspace& ws, int r0, int r1, int64_t base, int P, const float* dirs) {
+  ws.head_rays.assign(static_cast<size_t>(r1 - r0), Workspace::HeadRay());
+  int rows = 0;
+  for (int r = r0; r < r1; ++r) {
+    if (ws.rays[r].app_count > 0) ws.head_rays[r - r0].row = rows++;
+  }
+  EnsureSize(ws.ray_products, static_cast<size_t>(rows) * P);
+  EnsureSize(ws.ray_viewdirs, static_cast<size_t>(rows) * 3);
+#pragma omp parallel for schedule(dynamic, 16) if (r1 - r0 >= kMinParallelRays)
+  for (int r = r0; r < r1; ++r) {
+    const RayRec& rr = ws.rays[r];
+    Workspace::HeadRay& hr = ws.head_rays[r - r0];
+    if (hr.row < 0) continue;
+    float* sum = ws.ray_products.data() + static_cast<size_t>(hr.row) * P;
+    std::fill(sum, sum + P, 0.f);
+    const SampleRec* s = ws.SamplesOf(rr);
+    for (int k = 0; k < rr.count; ++k) {
+      if (s[k].app < 0) continue;
+      const float w = s[k].alpha * s[k].trans;
+      const float* prod =
+          ws.products.data() + static_cast<size_t>(rr.app_start - base + s[k].app) * P;
+      for (int p = 0; p < P; ++p) sum[p] += w * prod[p];
+      hr.weight += w;
+    }
+    std::copy(dirs + 3 * r, dirs + 3 * r + 3,
+              ws.ray_viewdirs.data() + 3 * static_cast<size_t>(hr.row));
+  }
+  return rows;
+}
+
+void DeferredChunk(const RayLoss& loss, AppearanceHead& head, Workspace& ws, const RayChunk& chunk,
+                   int P, const float* dirs, TrainStepStats& stats,
+                   const std::function<double()>& lap, double& sse, long& n_density,
+                   double& distortion_sum) {
+  const int rows = SumRayProducts(ws, chunk.r0, chunk.r1, chunk.base, P, dirs);
+  EnsureSize(ws.ray_rgb, static_cast<size_t>(rows) * 3);
+  EnsureSize(ws.ray_dl_drgb, static_cast<size_t>(rows) * 3);
+  EnsureSize(ws.ray_dl_dproducts, static_cast<size_t>(rows) * P);
+  stats.t_march += lap();
+  if (rows > 0)
+    head.Forward(rows, ws.ray_products.data(), ws.ray_viewdirs.data(), ws.ray_rgb.data());
+  stats.t_head += lap();
+  std::vector<RayComposite> composites;
+  DeferredCompositeForward(loss, ws, chunk, sse, n_density, composites);
+  stats.t_composite += lap();
+  if (rows > 0) head.Backward(rows, ws.ray_dl_drgb.data(), ws.ray_dl_dproducts.data());
+  stats.t_head += lap();
+  DeferredCompositeBackward(loss, ws, chunk, P, composites, distortion_sum);
+  stats.t_composite += lap();
+}
+
+}  // namespace batch
+}  // namespace trainer
+}  // namespace ecrf
