@@ -159,6 +159,14 @@ int ecrf_scene_model(const ecrf_scene* scene) {
   return static_cast<int>(scene->field.scene_model);
 }
 
+int ecrf_scene_head(const ecrf_scene* scene) {
+  if (!scene || !scene->decoded) return ECRF_ERR_INVALID_ARGUMENT;
+  static_assert(ECRF_HEAD_MLP == static_cast<int>(ecrf::HeadKind::kPerSample) &&
+                    ECRF_HEAD_DEFERRED == static_cast<int>(ecrf::HeadKind::kDeferred),
+                "C API heads must equal the format's");
+  return static_cast<int>(scene->field.head);
+}
+
 int ecrf_scene_ndc_frame(const ecrf_scene* scene, float frame[15]) {
   if (!scene || !frame || !scene->decoded ||
       scene->field.scene_model != ecrf::SceneModel::kForward) {

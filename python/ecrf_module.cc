@@ -94,6 +94,8 @@ py::dict Info(Scene& s) {
   d["scene_model"] = model == ECRF_SCENE_UNBOUNDED ? "unbounded"
                      : model == ECRF_SCENE_FORWARD ? "forward"
                                                    : "object";
+  // "deferred": the MLP once per ray (SPEC.md 7.6); "mlp": once per coloured sample.
+  d["head"] = ecrf_scene_head(s.get()) == ECRF_HEAD_DEFERRED ? "deferred" : "mlp";
   float frame[15];
   if (ecrf_scene_ndc_frame(s.get(), frame) == ECRF_OK) {
     // A 3x4 world-to-reference matrix, the two NDC scales and the near plane (SPEC.md 6.2.1).

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "conformance/grid_md5.h"
+#include "decoder/render_work.h"
 #include "tools/cli.h"
 #include "tools/commands.h"
 #include "tools/decoded_scene.h"
@@ -81,11 +82,21 @@ int RunInfo(int argc, char** argv) {
   std::printf("render   %u samples/ray, step %g, near %g, far %g, background %g %g %g\n",
               h.num_samples, h.step_size, h.near_far[0], h.near_far[1], h.background[0],
               h.background[1], h.background[2]);
-  std::printf("mlp      features %u, PE %u/%u, hidden %u, %s\n", h.feature_dim, h.feature_pe_freqs,
-              h.viewdir_pe_freqs, h.hidden,
+  // The head: where the MLP runs (SPEC.md 7.6), mlp per coloured sample, deferred per ray.
+  std::printf("mlp      %s head, features %u, PE %u/%u, hidden %u, %s\n", HeadKindName(in.head),
+              h.feature_dim, h.feature_pe_freqs, h.viewdir_pe_freqs, h.hidden,
               in.mlp_precision_bits == 16   ? "float16"
               : in.mlp_precision_bits == 32 ? "float32"
                                             : "quantized (levels x row steps)");
+  // What a view costs, in the units of the render work budget (SPEC.md 8, decoder/render_work.h).
+  const dec::SampleCosts cost = dec::SceneSampleCosts(*s.field);
+  std::printf(
+      "cost     per sample %llu (position) + %llu (density) + %llu (colour)%s%s, in "
+      "multiply-adds of the render work budget\n",
+      static_cast<unsigned long long>(cost.position), static_cast<unsigned long long>(cost.density),
+      static_cast<unsigned long long>(cost.color),
+      in.head == HeadKind::kDeferred ? "; per coloured ray " : "",
+      in.head == HeadKind::kDeferred ? std::to_string(cost.ray_head).c_str() : "");
   std::printf("\n%-20s %10s %8s %10s %10s %12s %8s%s\n", "chunk", "bytes", "bits", "block", "step",
               "coded blocks", "contexts", md5 ? "  md5 of decoded float32 values" : "");
   std::printf("%-20s %10u\n", "HEAD", in.head_bytes);

@@ -500,11 +500,12 @@ int RunEval(int argc, char** argv) {
   std::printf(
       "%s: %zu bytes, PSNR %.2f dB, SSIM %.4f over %d %s views; decode %.1f ms, render %.1f "
       "ms/view "
-      "(%d thread%s, %s grids; %.1f samples, %.1f MLP samples per ray)\n",
+      "(%d thread%s, %s grids; %s head: %.1f samples, %.1f coloured samples per ray, %.0f k "
+      "multiply-adds per pixel)\n",
       c.scene.c_str(), s.bytes.size(), r.psnr, r.ssim, r.views, split.c_str(),
       1e3 * s.decode_seconds, 1e3 * r.seconds_per_view, RenderThreads(c),
-      RenderThreads(c) == 1 ? "" : "s", c.int16 ? "int16" : "float32", r.samples_per_ray,
-      r.color_samples_per_ray);
+      RenderThreads(c) == 1 ? "" : "s", c.int16 ? "int16" : "float32", HeadKindName(s.info.head),
+      r.samples_per_ray, r.color_samples_per_ray, r.work_per_pixel / 1e3);
   if (!json_path.empty()) {
     nlohmann::json j = {{"scene", c.scene},
                         {"bytes", s.bytes.size()},
@@ -518,7 +519,9 @@ int RunEval(int argc, char** argv) {
                         {"image_scale", image_scale},
                         {"downscale", eval_downscale},
                         {"samples_per_ray", r.samples_per_ray},
-                        {"mlp_samples_per_ray", r.color_samples_per_ray},
+                        {"mlp_samples_per_ray", r.color_samples_per_ray},  // coloured
+                        {"work_per_pixel", r.work_per_pixel},
+                        {"head", HeadKindName(s.info.head)},
                         {"render_options",
                          {{"skip_empty_space", c.render.skip_empty_space},
                           {"early_stop_transmittance", c.render.early_stop_transmittance},

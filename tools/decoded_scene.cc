@@ -135,7 +135,7 @@ trainer::EvalResult EvaluateDecoded(const dec::SceneField& scene, const trainer:
     ++r.views;
     if (keep_renders) r.renders.push_back(std::move(img));
     char extra[96];
-    std::snprintf(extra, sizeof(extra), "%.1f samples and %.1f MLP samples per ray",
+    std::snprintf(extra, sizeof(extra), "%.1f samples and %.1f coloured samples per ray",
                   double(all.samples) / double(std::max<uint64_t>(1, all.rays)),
                   double(all.color_samples) / double(std::max<uint64_t>(1, all.rays)));
     progress.ViewDone(extra);
@@ -148,6 +148,7 @@ trainer::EvalResult EvaluateDecoded(const dec::SceneField& scene, const trainer:
   if (all.rays > 0) {
     r.samples_per_ray = double(all.samples) / double(all.rays);
     r.color_samples_per_ray = double(all.color_samples) / double(all.rays);
+    r.work_per_pixel = double(all.work) / double(all.rays);
   }
   if (stats) stats->Add(all);
   return r;

@@ -202,12 +202,13 @@ void PrintRunSummary(const trainer::TrainOptions& o, const trainer::TrainResult&
   std::printf(
       "encoded %s/scene.ecrf: %zu bytes (%.1fx smaller than float32); decoded file: test PSNR %.2f "
       "dB%s, "
-      "SSIM %.4f over %d views; decode %.0f ms, render %.0f ms/view (%.1f samples, %.1f MLP "
-      "samples per ray)\n",
+      "SSIM %.4f over %d views; decode %.0f ms, render %.0f ms/view (%s head: %.1f samples, %.1f "
+      "coloured samples per ray, %.0f k multiply-adds per pixel)\n",
       o.out_dir.c_str(), coded.decoded.bytes.size(),
       double(float_bytes) / coded.decoded.bytes.size(), d.psnr, versus.c_str(), d.ssim, d.views,
-      1e3 * coded.decoded.decode_seconds, 1e3 * d.seconds_per_view, d.samples_per_ray,
-      d.color_samples_per_ray);
+      1e3 * coded.decoded.decode_seconds, 1e3 * d.seconds_per_view,
+      HeadKindName(coded.decoded.info.head), d.samples_per_ray, d.color_samples_per_ray,
+      d.work_per_pixel / 1e3);
 }
 
 // What a run trained: its settings, the model it ended with, the scene fit, the float model's
@@ -291,7 +292,9 @@ void AddCodedMetrics(const CodedRun& coded, const trainer::TrainResult& r, size_
   (*m)["decode_seconds"] = coded.decoded.decode_seconds;
   (*m)["decoded_render_seconds_per_view"] = d.seconds_per_view;
   (*m)["decoded_samples_per_ray"] = d.samples_per_ray;
-  (*m)["decoded_mlp_samples_per_ray"] = d.color_samples_per_ray;
+  (*m)["decoded_mlp_samples_per_ray"] = d.color_samples_per_ray;  // coloured samples
+  (*m)["decoded_work_per_pixel"] = d.work_per_pixel;
+  (*m)["head"] = HeadKindName(coded.decoded.info.head);
   (*m)["encode_seconds"] = coded.encode_seconds;
   (*m)["encode"] = EncodeReportJson(coded.report);
   (*m)["coded_to_estimated_grid_bytes"] =

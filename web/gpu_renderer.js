@@ -2,8 +2,9 @@
 // reference process of SPEC.md section 7 in one fragment shader per pixel, for every scene model
 // (object 7.2; unbounded 7.2.1, contracted sampling; forward-facing 7.2.2, the NDC line), with the
 // 7.8 accelerations that keep the image (empty-space skipping) and the optional knobs (early stop,
-// step scale, weight threshold; deferred: MLP once per pixel on the weight-averaged products, an
-// approximation, off by default). Shader sources: web/gpu_shaders.js (load it first).
+// step scale, weight threshold; deferred: for a per-sample head, the MLP once per pixel on the
+// weight-averaged products, an approximation, off by default). A stream with the deferred head
+// (SPEC.md 7.6) is rendered by its own process: the MLP once per pixel on the weighted sum. Shader sources: web/gpu_shaders.js (load it first).
 //
 //   const r = new ecrfGpu.GpuRenderer(canvas);   r.setScene(decoder.sceneData());
 //   r.render(ecrfWeb.orbitCamera(w, h, az, el, 4), {earlyStop: 1e-4});   r.readPixels();
@@ -205,6 +206,8 @@
       const model = info.sceneModel || 0;
       check(model >= 0 && model <= 2, `scene model ${model} is not 0 (object), 1 (unbounded) or 2 (forward-facing)`);
       check(model !== 2 || (info.ndcFrame && info.ndcFrame.length === 15), 'a forward-facing scene without its NDC frame (SPEC.md 6.2.1)');
+      const head = info.head || 0;
+      check(head === 0 || head === 1, `head ${head} is not 0 (per-sample MLP) or 1 (deferred)`);
       const MAT = [[0, 1], [0, 2], [1, 2]], VEC = [2, 1, 0];
       const ranksOf = (g) => g.planes.map((pl) => pl.shape[2]);
       const dRanks = ranksOf(density), aRanks = ranksOf(appearance);
@@ -341,7 +344,7 @@
       }
       gl.bindBuffer(gl.UNIFORM_BUFFER, null);
       s.cfg = {dGroups, aGroups, aGroupOff, dLineRow: dl.rowsOf, aLineRow: al.rowsOf, P4,
-               F4: mlp.F4, H4: mlp.H4, IN4: mlp.IN4, FF: mlp.FF, FV: mlp.FV, occupancy: !!occupancy, model,
+               F4: mlp.F4, H4: mlp.H4, IN4: mlp.IN4, FF: mlp.FF, FV: mlp.FV, occupancy: !!occupancy, model, head,
                blockLevels: BLOCK_LEVELS, weightTexture, blockSizes: mlp.blocks.map((b) => b.length / 4), layers: mlp.layers};
       s.mlp = mlp;
       s.info = info;
@@ -350,7 +353,7 @@
       this.scene = s;
       try {
         if (gl.getError() === gl.OUT_OF_MEMORY) throw new Error(`GpuRenderer.setScene: out of GPU memory for ${bytes} bytes of textures`);
-        this._sceneProgram(false);  // compile now: a failure belongs to setScene, not to the first frame
+        this._sceneProgram(head === 1);  // compile now: a failure belongs to setScene, not to the first frame
       } catch (e) {
         this.clearScene();
         throw e;
@@ -418,7 +421,8 @@
       gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
       gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA32F, len, 1, 0, gl.RGBA, gl.FLOAT, cam);
 
-      const p = this._sceneProgram(!!options.deferred, options.skipEmptySpace !== false);
+      // A deferred head is its stream's process; the option approximates a per-sample head so.
+      const p = this._sceneProgram(s.cfg.head === 1 || !!options.deferred, options.skipEmptySpace !== false);
       gl.useProgram(p.prog);
       const bind = (unit, target, tex) => { gl.activeTexture(gl.TEXTURE0 + unit); gl.bindTexture(target, tex); };
       for (let k = 0; k < 6; ++k) bind(k, gl.TEXTURE_2D_ARRAY, s.planes[k] || this.dummyArray);

@@ -83,8 +83,9 @@ void main() {
   //       (first row of each mode in the line textures), P4, F4, H4, IN4 (vec4 counts), FF, FV,
   //       occupancy, blockLevels [2] (mask cells per block edge), weightTexture, blockSizes[]
   //       (vec4s per UBO), layers: {basis, w1, w2, w3} ({runs, rows}), deferred, slots,
-  //       model (HEAD scene_model: 0 object, 1 unbounded, 2 forward-facing), skip (false: no
-  //       empty-space skipping, the samples tested one by one)}
+  //       model (HEAD scene_model: 0 object, 1 unbounded, 2 forward-facing), head (the MLPW head:
+  //       1 deferred, whose MLP sees the weighted sum itself, not the deferred option's average),
+  //       skip (false: no empty-space skipping, the samples tested one by one)}
   function fieldShader(cfg) {
     const {dGroups, aGroups, aGroupOff, dLineRow, aLineRow, P4, F4, H4, IN4, FF, FV} = cfg;
     const K = cfg.slots || 8;
@@ -434,7 +435,7 @@ ${cfg.deferred ? `  vec4 ps[${P4}];\n  for (int k = 0; k < ${P4}; ++k) ps[k] = v
   float slotW[${K}];
 ${cfg.model === 1 ? marchUnbounded : marchStraight}${cfg.deferred ? `  if (wSum > 0.0) {
     vec4 pq[${P4}];
-    for (int k = 0; k < ${P4}; ++k) pq[k] = ps[k] / wSum;
+    for (int k = 0; k < ${P4}; ++k) pq[k] = ${cfg.head === 1 ? 'ps[k]' : 'ps[k] / wSum'};
     vec3 rgb;
 ${emitMlp(cfg, 'pq').replace(/^  /gm, '    ')}    C = wSum * rgb;
   }

@@ -124,6 +124,8 @@
         // 0 object, 1 unbounded (SPEC.md 7.2.1: the box is the region of interest), 2 forward-facing
         // (7.2.2: the box is in NDC).
         sceneModel: m._ecrf_scene_model(this.scene),
+        // 0 the MLP per coloured sample, 1 deferred (SPEC.md 7.6: once per ray).
+        head: m._ecrf_scene_head(this.scene),
       };
       m._free(p);
       if (info.sceneModel === 2) {

@@ -172,6 +172,14 @@ ECRF_API int ecrf_scene_get_field(const ecrf_scene* scene, ecrf_scene_field* fie
  * before a decode. */
 ECRF_API int ecrf_scene_model(const ecrf_scene* scene);
 
+/* Where the scene's MLP runs (the MLPW head field, SPEC.md 6.6 and 7.6): ECRF_HEAD_MLP once per
+ * coloured sample; ECRF_HEAD_DEFERRED once per ray, on the sum of its coloured samples' products
+ * weighted by their weights, its colour times the sum of those weights. ECRF_ERR_INVALID_ARGUMENT
+ * before a decode. */
+#define ECRF_HEAD_MLP 0
+#define ECRF_HEAD_DEFERRED 1
+ECRF_API int ecrf_scene_head(const ecrf_scene* scene);
+
 /* The NDC frame of an ECRF_SCENE_FORWARD scene (the NDCP chunk, SPEC.md 6.2.1) as 15 floats: the
  * world-to-reference matrix [A | b] row-major (p_ref = A p + b), then 2 fx / width and
  * 2 fy / height of the reference camera, then its near plane. ECRF_ERR_INVALID_ARGUMENT for other

@@ -158,14 +158,17 @@ class DecodeTest(unittest.TestCase):
 
 class RenderTest(unittest.TestCase):
     def test_matches_the_reference_render(self):
-        # An object scene, an unbounded one (SPEC.md 7.2.1) and a forward-facing one (7.2.2).
+        # An object scene, an unbounded one (SPEC.md 7.2.1), a forward-facing one (7.2.2) and
+        # one with the deferred head (7.6).
         for name, model in (("scene_builtin", "object"), ("scene_unbounded", "unbounded"),
-                            ("scene_forward", "forward")):
+                            ("scene_forward", "forward"), ("scene_deferred_head", "object")):
             with self.subTest(name):
                 _, c2w, (fx, fy, cx, cy), width, height = manifest_camera(name + ".ecrf")
                 reference = read_png(os.path.join(CONFORMANCE, name + ".png"))[:, :, :3].astype(int)
                 scene = ecrf.decode(os.path.join(CONFORMANCE, name + ".ecrf"))
                 self.assertEqual(scene.info["scene_model"], model)
+                self.assertEqual(scene.info["head"],
+                                 "deferred" if name == "scene_deferred_head" else "mlp")
                 self.assertEqual("ndc_near_plane" in scene.info, model == "forward")
                 if model == "forward":
                     self.assertEqual(scene.info["ndc_near_plane"], 1.5)  # the vector's NDCP chunk

@@ -18,7 +18,10 @@ struct EvalResult {
   double seconds_per_view = 0.0;
   // Density and MLP evaluations per ray (what bounds render time), where the renderer counts them.
   double samples_per_ray = 0.0;
-  double color_samples_per_ray = 0.0;
+  double color_samples_per_ray = 0.0;  // coloured samples (the MLP's with the per-sample head)
+  // The decoder's work per pixel, in the units of its render work budget (decoder/render_work.h:
+  // multiply-adds of the MLP, the other steps at their measured time): the speed of the file.
+  double work_per_pixel = 0.0;
   std::vector<Image> renders;  // filled when requested
 };
 
