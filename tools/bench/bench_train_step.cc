@@ -13,6 +13,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 #include <random>
 #include <string>
 #include <vector>
@@ -139,6 +140,7 @@ struct TrainStepBenchFlags {
   int res = 128, rays = 4096, reps = 5, mask = 0, rate_phase = 1;
   float early = 0.f, blob_peak = 14.f, rdoq = 0.f;
   std::string threads = "1,2", json_path;
+  std::string head = kHeadKindNames[0];  // where the MLP runs (SPEC.md 7.6)
 };
 
 void AddTrainStepBenchFlags(CLI::App* app, TrainStepBenchFlags* f) {
@@ -171,6 +173,13 @@ void AddTrainStepBenchFlags(CLI::App* app, TrainStepBenchFlags* f) {
                   "--rdoq")
       ->type_name("L")
       ->check(CLI::Range(0.0f, 10.0f))
+      ->capture_default_str();
+  app->add_option("--head", f->head,
+                  "the appearance head: mlp (per coloured sample) or deferred (per ray), as ecrf "
+                  "train --head")
+      ->type_name("NAME")
+      ->check(CLI::IsMember(
+          std::vector<std::string>(std::begin(kHeadKindNames), std::end(kHeadKindNames))))
       ->capture_default_str();
   app->add_option("--early-stop", f->early, "early_stop_transmittance of the ray marching")
       ->type_name("T")
@@ -207,6 +216,9 @@ struct StepBench {
 TensorfConfig BenchModelConfig(const TrainStepBenchFlags& f) {
   TensorfConfig config;
   config.early_stop_transmittance = f.early;
+  for (int k = 0; k < kNumHeadKinds; ++k) {
+    if (f.head == kHeadKindNames[k]) config.head.kind = static_cast<HeadKind>(k);
+  }
   return config;
 }
 
@@ -418,9 +430,9 @@ int RunTrainStepBench(int argc, char** argv) {
   const TensorfModel& model = bench.model;
   std::printf(
       "train-step bench: res %d^3 (after shrink %dx%dx%d), %d rays, %d samples/ray, mask %d, "
-      "early stop %g, blob peak %g, %s, rdoq %g\n",
+      "early stop %g, blob peak %g, %s head, %s, rdoq %g\n",
       f.res, model.res()[0], model.res()[1], model.res()[2], f.rays, model.n_samples(), f.mask,
-      f.early, f.blob_peak,
+      f.early, f.blob_peak, f.head.c_str(),
       f.rate_phase ? "rate phase (lambda_e 3e-11, quantization-aware)" : "plain TensoRF", f.rdoq);
   const std::array<double, kNumPhases> phase_bytes = PhaseBytes(model, f.rate_phase);
   std::vector<ThreadCountResult> results;

@@ -16,6 +16,19 @@ namespace trainer {
 namespace batch {
 namespace {
 
+// a . b in eight interleaved partial sums, which vectorise (a single sum's order would not): the
+// order is fixed, so every thread count gets the same bits.
+inline float Dot(const float* a, const float* b, int n) {
+  float s[8] = {0.f, 0.f, 0.f, 0.f, 0.f, 0.f, 0.f, 0.f};
+  int p = 0;
+  for (; p + 8 <= n; p += 8) {
+    for (int l = 0; l < 8; ++l) s[l] += a[p + l] * b[p + l];
+  }
+  float tail = 0.f;
+  for (; p < n; ++p) tail += a[p] * b[p];
+  return (((s[0] + s[1]) + (s[2] + s[3])) + ((s[4] + s[5]) + (s[6] + s[7]))) + tail;
+}
+
 // The deferred head's chunk, between its head's forward (ws.ray_rgb) and backward: compositing
 // forward and the loss (pixel = weight * rgb + (1 - acc) * background), dL/drgb of each head row.
 void DeferredCompositeForward(RayLoss loss, Workspace& ws, const RayChunk& chunk, double& sse,
@@ -41,12 +54,10 @@ void DeferredCompositeForward(RayLoss loss, Workspace& ws, const RayChunk& chunk
 
 // After the head's backward (ws.ray_dl_dproducts = dL/d(summed products)): the compositing
 // backward, where a coloured sample's weight reaches the pixel through the ray's colour weight
-// and its share of the summed products, and each sample's products gradient is its weight times
-// the ray's.
+// and its share of the summed products.
 void DeferredCompositeBackward(RayLoss loss, Workspace& ws, const RayChunk& chunk, int P,
                                const std::vector<RayComposite>& composites,
                                double& distortion_sum) {
-  EnsureSize(ws.dl_dproducts, static_cast<size_t>(chunk.rows) * P);
 #pragma omp parallel for schedule(dynamic, 16) firstprivate(loss) \
     reduction(+ : distortion_sum) if (chunk.r1 - chunk.r0 >= kMinParallelRays)
   for (int r = chunk.r0; r < chunk.r1; ++r) {
@@ -57,18 +68,14 @@ void DeferredCompositeBackward(RayLoss loss, Workspace& ws, const RayChunk& chun
         hr.row >= 0 ? ws.ray_dl_dproducts.data() + static_cast<size_t>(hr.row) * P : nullptr;
     const float* g = hr.g;
     const int64_t row0 = rr.app_start - chunk.base;
+    const float colour = hr.row >= 0 ? g[0] * rgb[0] + g[1] * rgb[1] + g[2] * rgb[2] : 0.f;
+    // A coloured sample's dL/dw through W (the colour) and S. Its products' gradient, w times
+    // the ray's, is left to the scatter (ScatterChunk reads the ray's with w as the scale).
+    auto through_sum = [&](const SampleRec& sk, float) {
+      return colour + Dot(dsum, ws.products.data() + static_cast<size_t>(row0 + sk.app) * P, P);
+    };
     distortion_sum += CompositeBackward(loss, ws.SamplesOf(rr), rr.count, composites[r - chunk.r0],
-                                        g, [&](const SampleRec& sk, float w) {
-                                          const size_t row = static_cast<size_t>(row0 + sk.app) * P;
-                                          const float* prod = ws.products.data() + row;
-                                          float* dprod = ws.dl_dproducts.data() + row;
-                                          float e = g[0] * rgb[0] + g[1] * rgb[1] + g[2] * rgb[2];
-                                          for (int p = 0; p < P; ++p) {
-                                            e += dsum[p] * prod[p];
-                                            dprod[p] = w * dsum[p];
-                                          }
-                                          return e;
-                                        });
+                                        g, through_sum);
   }
 }
 

@@ -61,8 +61,10 @@ struct Workspace {
   // modes 0-2, the chunk's samples bucketed by plane tile in ray order, and each tile's line sums.
   struct ScatterEntry {
     const GridPoint* gp;
-    float g;             // density: dL/d(feature)
-    const float* dprod;  // appearance: the sample's products gradient, at this mode's offset
+    float g;  // density: dL/d(feature); appearance: the scale of dprod
+    // Appearance: the sample's products gradient at this mode's offset (times g); the deferred
+    // head's samples point at their ray's, each scaled by its weight.
+    const float* dprod;
   };
   struct ModeTiles {
     int tiles_x = 0, tiles_y = 0, line_floats = 0;
@@ -210,7 +212,8 @@ int SumRayProducts(Workspace& ws, int r0, int r1, int64_t base, int P, const flo
 
 // The deferred head's part of a step for one chunk (the per-sample head's is in TrainStep): the
 // summed products, the head forward, compositing and loss, the head backward and the compositing
-// backward. Leaves ws.dl_dproducts per sample for the gradient scatter; lap() times the phases.
+// backward. The scatter then takes each sample's products gradient from its ray's (ScatterChunk);
+// lap() times the phases.
 void DeferredChunk(const RayLoss& loss, AppearanceHead& head, Workspace& ws, const RayChunk& chunk,
                    int P, const float* dirs, TrainStepStats& stats,
                    const std::function<double()>& lap, double& sse, long& n_density,

@@ -425,7 +425,7 @@ void ModeGradScatter::Flush() {
 }
 
 template <bool kDensity, int kR>
-void ModeGradScatter::Add(const GridPoint& gp, float g_density, const float* g_mode) {
+void ModeGradScatter::Add(const GridPoint& gp, float g_scalar, const float* g_mode) {
   const int m = mode_;
   const int u = kMatMode[m][0], v = kMatMode[m][1], w = kVecMode[m];
   const int R = kR > 0 ? kR : rank_;
@@ -447,7 +447,7 @@ void ModeGradScatter::Add(const GridPoint& gp, float g_density, const float* g_m
   for (int r = 0; r < R; ++r) {
     const float p = cw[0] * c00[r] + cw[1] * c10[r] + cw[2] * c01[r] + cw[3] * c11[r];
     const float l = lw[0] * l0[r] + lw[1] * l1[r];
-    const float g = kDensity ? g_density : g_mode[r];
+    const float g = kDensity ? g_scalar : g_scalar * g_mode[r];
     dp[r] = g * l;
     dl[r] = g * p;
   }
@@ -484,23 +484,23 @@ void ModeGradScatter::Add(const GridPoint& gp, float g_density, const float* g_m
 }
 
 template <bool kDensity>
-void ModeGradScatter::Dispatch(const GridPoint& gp, float g_density, const float* g_mode) {
+void ModeGradScatter::Dispatch(const GridPoint& gp, float g_scalar, const float* g_mode) {
   switch (rank_) {
     case 16:
-      Add<kDensity, 16>(gp, g_density, g_mode);
+      Add<kDensity, 16>(gp, g_scalar, g_mode);
       break;
     case 48:
-      Add<kDensity, 48>(gp, g_density, g_mode);
+      Add<kDensity, 48>(gp, g_scalar, g_mode);
       break;
     default:
-      Add<kDensity, 0>(gp, g_density, g_mode);
+      Add<kDensity, 0>(gp, g_scalar, g_mode);
   }
 }
 
 void ModeGradScatter::AddDensity(const GridPoint& gp, float g) { Dispatch<true>(gp, g, nullptr); }
 
-void ModeGradScatter::AddProducts(const GridPoint& gp, const float* g) {
-  Dispatch<false>(gp, 0.f, g);
+void ModeGradScatter::AddProducts(const GridPoint& gp, const float* g, float scale) {
+  Dispatch<false>(gp, scale, g);
 }
 
 }  // namespace trainer

@@ -135,15 +135,18 @@ class alignas(64) ModeGradScatter {
   void BindTile(VmGrid* grid, int mode, int x0, int x1, int y0, int y1, float* line_out);
   // This mode's share of the gradient g of Density(gp).
   void AddDensity(const GridPoint& gp, float g);
-  // Gradient of this mode's products: g[r] = dL/d(Products(gp)[rank_offset(mode) + r]).
-  void AddProducts(const GridPoint& gp, const float* g);
+  // Gradient of this mode's products: scale * g[r] = dL/d(Products(gp)[rank_offset(mode) + r]).
+  // (The deferred head's samples share their ray's g, each with its weight as the scale; 1 * g is
+  // exact, so the per-sample head's sums are those of an unscaled g.)
+  void AddProducts(const GridPoint& gp, const float* g, float scale = 1.f);
   void Flush();
 
  private:
   template <bool kDensity, int kR>
-  void Add(const GridPoint& gp, float g_density, const float* g_mode);
+  // g_scalar: the density gradient, or the products' scale.
+  void Add(const GridPoint& gp, float g_scalar, const float* g_mode);
   template <bool kDensity>
-  void Dispatch(const GridPoint& gp, float g_density, const float* g_mode);
+  void Dispatch(const GridPoint& gp, float g_scalar, const float* g_mode);
   void FlushPlaneSlot(int s);
   void FlushLineSlot(int s);
 

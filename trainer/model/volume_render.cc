@@ -101,8 +101,10 @@ void GatherAppearance(const VmGrid& app, Workspace& ws, int r0, int r1, const fl
 // depends on the grid's size only, so every sum is the same for any thread count; it gives the
 // scatter as many tasks as tiles (96 at 128^3) instead of one per (grid, mode), whose longest walk
 // over every density sample was the phase's critical path beyond 4 threads.
+// With the deferred head a sample's products gradient is its weight times its ray's
+// (ws.ray_dl_dproducts), read from there instead of from a row of its own.
 void ScatterChunk(VmGrid& density, VmGrid& appearance, Workspace& ws, int r0, int r1, int64_t base,
-                  int P) {
+                  int P, bool deferred) {
   const bool parallel = r1 - r0 >= kMinParallelRays;
   // 1. Bucketing, one task per (grid, mode).
 #pragma omp parallel for schedule(dynamic, 1) if (parallel)
@@ -124,7 +126,10 @@ void ScatterChunk(VmGrid& density, VmGrid& appearance, Workspace& ws, int r0, in
       if (!is_density && rr.app_count == 0) continue;
       const SampleRec* s = ws.SamplesOf(rr);
       const float* dprod =
-          ws.dl_dproducts.data() + static_cast<size_t>(rr.app_start - base) * P + mode_offset;
+          deferred
+              ? ws.ray_dl_dproducts.data() +
+                    static_cast<size_t>(std::max(0, ws.head_rays[r - r0].row)) * P + mode_offset
+              : ws.dl_dproducts.data() + static_cast<size_t>(rr.app_start - base) * P + mode_offset;
       for (int k = 0; k < rr.count; ++k) {
         Workspace::ScatterEntry e{&s[k].gp, 0.f, nullptr};
         if (is_density) {
@@ -132,7 +137,8 @@ void ScatterChunk(VmGrid& density, VmGrid& appearance, Workspace& ws, int r0, in
           e.g = s[k].feat;
         } else {
           if (s[k].app < 0) continue;
-          e.dprod = dprod + static_cast<size_t>(s[k].app) * P;
+          e.g = deferred ? s[k].alpha * s[k].trans : 1.f;
+          e.dprod = deferred ? dprod : dprod + static_cast<size_t>(s[k].app) * P;
         }
         const int x = s[k].gp.i0[u], y = s[k].gp.i0[v];
         const int tx0 = x / kScatterTile, ty0 = y / kScatterTile;
@@ -182,7 +188,7 @@ void ScatterChunk(VmGrid& density, VmGrid& appearance, Workspace& ws, int r0, in
       if (is_density) {
         sc.AddDensity(*list[i].gp, list[i].g);
       } else {
-        sc.AddProducts(*list[i].gp, list[i].dprod);
+        sc.AddProducts(*list[i].gp, list[i].dprod, list[i].g);
       }
     }
     sc.Flush();
@@ -302,7 +308,7 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
     GatherAppearance(appearance, ws, chunk.r0, chunk.r1, dirs, chunk.base, rows);
     if (deferred) {
       DeferredChunk(loss, head, ws, chunk, P, dirs, stats, lap, sse, n_density, distortion_sum);
-      ScatterChunk(density, appearance, ws, chunk.r0, chunk.r1, chunk.base, P);
+      ScatterChunk(density, appearance, ws, chunk.r0, chunk.r1, chunk.base, P, deferred);
       stats.t_scatter += lap();
       r0 = chunk.r1;
       continue;
@@ -322,7 +328,7 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
     if (rows > 0) head.Backward(static_cast<int>(rows), ws.dl_drgb.data(), ws.dl_dproducts.data());
     stats.t_head += lap();
 
-    ScatterChunk(density, appearance, ws, chunk.r0, chunk.r1, chunk.base, P);
+    ScatterChunk(density, appearance, ws, chunk.r0, chunk.r1, chunk.base, P, deferred);
     stats.t_scatter += lap();
     r0 = chunk.r1;
   }
