@@ -13,7 +13,9 @@
 // whose mask value is provably 0, so the image is bit-identical to marching without skipping.
 // Samples before the box entry / after the exit are skipped analytically the same way.
 //
-// Appearance samples of a tile of rays are batched through the MLP. Threads (std::thread) take
+// Appearance samples of a tile of rays are batched through the MLP; with the deferred head
+// (SPEC.md 7.6.1) each ray sums its coloured samples' weighted products instead, and the tile's
+// rays with a coloured sample go through the MLP once each. Threads (std::thread) take
 // tiles from a shared counter; each ray's arithmetic is independent of the tile / batch / thread it
 // runs in, so the output does not depend on the thread count. Nothing is allocated while
 // rendering: Init allocates the per-thread workspaces.

@@ -9,6 +9,9 @@
 // T_i = prod_{j<i} (1 - alpha_j + 1e-10); w_i = alpha_i T_i; colour only where w_i > weight
 // threshold (other samples count as black, as in the reference); rgb = sum w c + (1 - sum w) * bg,
 // clamped to [0,1]. Loss = mean over rays and channels of (rgb - target)^2.
+// With the deferred head (config.head.kind, SPEC.md 7.6.1) the colour is
+// rgb = W * head(S, d) + (1 - sum w) * bg, S the coloured samples' products summed with their
+// weights and W their weights' sum: the head runs once per ray (deferred_shading.cc).
 //
 // Deviations from the reference (all below float rounding unless enabled):
 //  * dist_i is the constant step (the reference takes differences of float t values);
