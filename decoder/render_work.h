@@ -46,23 +46,23 @@ struct SampleCosts {
   }
 };
 
-// Costs of the scene's samples (the weights of the work budget). Overflow-free for every scene
-// the format allows: each cost is below 2^26.
-inline SampleCosts SceneSampleCosts(const SceneField& s) {
+// Costs of the samples of a head with these widths over grids of these total ranks (the weights
+// of the work budget). Overflow-free for every scene the format allows: each cost is below 2^26.
+inline SampleCosts HeadSampleCosts(HeadKind kind, const MlpConfig& m, int density_rank,
+                                   int appearance_rank) {
   constexpr uint64_t kRank = 16;  // the 7 taps of one rank of one mode (gathers)
-  const MlpConfig& m = s.mlp.config();
   const uint64_t F = static_cast<uint64_t>(m.feature_dim), H = static_cast<uint64_t>(m.hidden);
-  const uint64_t P = static_cast<uint64_t>(s.appearance.total_rank());
+  const uint64_t P = static_cast<uint64_t>(appearance_rank);
   const uint64_t in = static_cast<uint64_t>(m.input_dim());
   SampleCosts c;
   c.position = 768;
-  c.density = 1024 + kRank * static_cast<uint64_t>(s.density.total_rank());
+  c.density = 1024 + kRank * static_cast<uint64_t>(density_rank);
   // Sines and cosines of the positional encoding count 8 each.
   const uint64_t pe = 8 * 2 *
                       (F * static_cast<uint64_t>(m.feature_pe_freqs) +
                        3 * static_cast<uint64_t>(m.viewdir_pe_freqs));
   const uint64_t head = F * P + pe + in * H + H * H + 3 * H + 256;
-  if (s.head == HeadKind::kDeferred) {
+  if (kind == HeadKind::kDeferred) {
     c.color = kRank * P + P;
     c.ray_head = head;
   } else {
@@ -70,6 +70,37 @@ inline SampleCosts SceneSampleCosts(const SceneField& s) {
   }
   return c;
 }
+
+// The costs of a decoded scene's samples.
+inline SampleCosts SceneSampleCosts(const SceneField& s) {
+  return HeadSampleCosts(s.head, s.mlp.config(), s.density.total_rank(), s.appearance.total_rank());
+}
+
+// The work per pixel of a view from its mean counts per ray (marched positions, evaluated
+// samples, coloured samples, the share of rays with a coloured sample).
+inline double WorkPerPixel(const SampleCosts& c, double positions, double samples, double coloured,
+                           double coloured_rays) {
+  return positions * static_cast<double>(c.position) + samples * static_cast<double>(c.density) +
+         coloured * static_cast<double>(c.color) + coloured_rays * static_cast<double>(c.ray_head);
+}
+
+// Render budgets of device classes (ecrf train --device-class), in the work units of this file
+// per pixel: the multiply-adds a class performs per second, over the frame rate and pixels asked
+// of it. The units weigh the density steps by their time on a CPU (above), so on a GPU these are
+// estimates. phone: about 1 TFLOP/s (5e11 multiply-adds/s), 30 frames/s at 800x800; the same as
+// this project's 2-core Zen 4 rendering a 400x400 frame in 0.1 s (chair with the deferred head:
+// 66 k units per pixel in 0.25 s a frame, 42 G units/s; docs/results.md). laptop: an integrated
+// GPU of about 3 TFLOP/s at 30 frames/s, 800x800. desktop: about 10 TFLOP/s at 60 frames/s,
+// 800x800.
+struct DeviceClass {
+  const char* name;
+  uint64_t work_per_pixel;
+};
+inline constexpr DeviceClass kDeviceClasses[] = {
+    {"desktop", 130000},
+    {"laptop", 78000},
+    {"phone", 26000},
+};
 
 }  // namespace dec
 }  // namespace ecrf

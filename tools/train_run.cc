@@ -238,6 +238,19 @@ nlohmann::json TrainingMetrics(const trainer::TrainOptions& o, const trainer::Tr
   m["density_ranks"] = model.density().ranks();
   m["appearance_ranks"] = model.appearance().ranks();
   m["mlp_hidden"] = model.head().config().hidden;
+  if (r.head_choice.iteration >= 0) {  // --head auto: what it predicted and chose
+    const trainer::HeadChoiceReport& h = r.head_choice;
+    m["head_choice"] = {{"iteration", h.iteration},
+                        {"render_budget", h.budget},
+                        {"samples_per_ray", h.counts.samples},
+                        {"coloured_samples_per_ray", h.counts.coloured},
+                        {"coloured_ray_share", h.counts.coloured_rays},
+                        {"predicted_work_per_pixel",
+                         {{HeadKindName(HeadKind::kPerSample), h.work[int(HeadKind::kPerSample)]},
+                          {HeadKindName(HeadKind::kDeferred), h.work[int(HeadKind::kDeferred)]}}},
+                        {"chosen", HeadKindName(h.chosen)},
+                        {"reason", h.reason}};
+  }
   m["prune_at"] = o.prune_at;
   m["aabb_min"] = model.aabb().min;
   m["aabb_max"] = model.aabb().max;

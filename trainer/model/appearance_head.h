@@ -39,6 +39,8 @@ class AppearanceHead {
   explicit AppearanceHead(const AppearanceHeadConfig& config);
 
   const AppearanceHeadConfig& config() const { return config_; }
+  // Where the head runs from now on (the weights stay: --head auto, train/head_choice.h).
+  void set_kind(HeadKind kind) { config_.kind = kind; }
   int mlp_input_dim() const;  // 150 for the defaults
 
   // PyTorch default init (kaiming-uniform-like U(-1/sqrt(in), 1/sqrt(in)) for weights and biases,

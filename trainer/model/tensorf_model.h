@@ -130,6 +130,11 @@ class TensorfModel {
   // (0 density, 1 appearance; at least one per mode stays); for appearance also their basis
   // columns. The config's ranks follow. Grads are re-allocated (zero).
   void KeepComponents(int grid, const std::array<std::vector<uint8_t>, 3>& keep);
+  // The head runs per sample or deferred from the next step on, with the same weights.
+  void SetHeadKind(HeadKind kind) {
+    config_.head.kind = kind;
+    head_.set_kind(kind);
+  }
   // Removes hidden units of the head (AppearanceHead::KeepHidden); the config's width follows.
   void KeepHidden(const std::vector<uint8_t>& keep1, const std::vector<uint8_t>& keep2);
 

@@ -122,9 +122,9 @@ void CheckCheckpointGeometry(const std::string& path, const Checkpoint& ck, cons
   }
 }
 
-// Gives the model the checkpoint's shape (ranks, head width, geometry, samples per ray). A run
-// that pruned components or hidden units (trainer/train/component_prune.h) stored a smaller model
-// than its options describe: the checkpoint's shape wins.
+// Gives the model the checkpoint's shape (ranks, head width and kind, geometry, samples per ray).
+// A run that pruned components or hidden units (trainer/train/component_prune.h) stored a smaller
+// model than its options describe: the checkpoint's shape wins.
 void ShapeModelAsCheckpoint(const std::string& path, const Checkpoint& ck, const nlohmann::json& j,
                             TensorfModel* model) {
   Aabb box;
@@ -150,6 +150,10 @@ void ShapeModelAsCheckpoint(const std::string& path, const Checkpoint& ck, const
   }
   model->SetGeometry(box, res);
   model->set_n_samples(j.at("n_samples").get<int>());
+  // --head auto may have switched the head during the run: the checkpoint's head wins too.
+  const nlohmann::json head = j.value("head", nlohmann::json::object());
+  model->SetHeadKind(ChoiceFromName<HeadKind>(head.value("kind", std::string(kHeadKindNames[0])),
+                                              path + ": head"));
 }
 
 // Copies every parameter array of the model from the checkpoint: present, of the model's size,

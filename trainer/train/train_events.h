@@ -37,6 +37,8 @@ void QuantizeGrids(TrainSession& s, int it);
 // After the step.
 // --prune-at: removes the components and hidden units not worth their bits (rate_events.cc).
 void PruneByRate(TrainSession& s, int it);
+// --head auto, once the grid is final: the head by its predicted cost (head_choice.h).
+void ChooseHeadIfAuto(TrainSession& s, int it);
 // TensoRF's alpha-mask updates (grid_events.cc): the first shrinks the box to the occupied part
 // (not for an unbounded scene), switches the density L1 weight to its later value and resets
 // the optimizers; the second filters the training rays through the mask (an object scene only).

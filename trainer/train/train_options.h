@@ -4,11 +4,13 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <iterator>
 #include <string>
 #include <vector>
 
-#include "encoder/coef_rdoq.h"  // kMaxRdoqLambda, the --rdoq limit
-#include "format/mlp_coder.h"   // HeadKind, the --head choice
+#include "decoder/render_work.h"  // kDeviceClasses, the --device-class budgets
+#include "encoder/coef_rdoq.h"    // kMaxRdoqLambda, the --rdoq limit
+#include "format/mlp_coder.h"     // HeadKind, the --head choice
 #include "trainer/data/named_choice.h"
 #include "trainer/data/scene_fit.h"
 #include "trainer/train/train_field_info.h"
@@ -39,6 +41,22 @@ template <>
 struct ChoiceNames<HeadKind> {  // indexed by the MLPW head byte (format/mlp_coder.h)
   static constexpr const char* what = "head";
   static constexpr const char* const (&names)[kNumHeadKinds] = kHeadKindNames;
+};
+// --head: one of the stream's heads, or auto (trainer/train/head_choice.h).
+enum class HeadChoice { kMlp, kDeferred, kAuto };
+template <>
+struct ChoiceNames<HeadChoice> {
+  static constexpr const char* what = "head";
+  static constexpr const char* names[] = {kHeadKindNames[0], kHeadKindNames[1], "auto"};
+};
+// --device-class: a render budget of decoder/render_work.h's table, or none.
+enum class DeviceClassChoice { kNone, kDesktop, kLaptop, kPhone };
+static_assert(std::size(dec::kDeviceClasses) == 3, "one choice per device class");
+template <>
+struct ChoiceNames<DeviceClassChoice> {
+  static constexpr const char* what = "device class";
+  static constexpr const char* names[] = {"none", dec::kDeviceClasses[0].name,
+                                          dec::kDeviceClasses[1].name, dec::kDeviceClasses[2].name};
 };
 
 // The named presets (PresetOptions), rate points (ApplyRatePoint) and procedural scenes.

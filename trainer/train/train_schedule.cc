@@ -6,13 +6,17 @@
 namespace ecrf {
 namespace trainer {
 
-int RateStartIteration(const TrainOptions& o) {
-  int start = int(std::lround(double(o.rate_start) * o.iters));
+int GridFinalIteration(const TrainOptions& o) {
+  int final_it = 0;
   for (int m : o.upsample_iters)
-    start = std::max(start, ScaleMilestone(m, o.iters, o.reference_iters) + 1);
+    final_it = std::max(final_it, ScaleMilestone(m, o.iters, o.reference_iters) + 1);
   for (int m : o.alpha_mask_iters)
-    start = std::max(start, ScaleMilestone(m, o.iters, o.reference_iters) + 1);
-  return start;
+    final_it = std::max(final_it, ScaleMilestone(m, o.iters, o.reference_iters) + 1);
+  return final_it;
+}
+
+int RateStartIteration(const TrainOptions& o) {
+  return std::max(int(std::lround(double(o.rate_start) * o.iters)), GridFinalIteration(o));
 }
 
 int QatStartIteration(const TrainOptions& o) {
@@ -83,6 +87,7 @@ TrainSchedule ScheduleFor(const TrainOptions& o, const Dataset& train) {
   s.use_rate = o.lambda_e > 0.0f || o.target_bytes > 0;
   s.rate_start = RateStartIteration(o);
   s.qat_start = QatStartIteration(o);
+  s.grid_final = GridFinalIteration(o);
   for (int m : o.upsample_iters)
     s.upsample_at.push_back(ScaleMilestone(m, o.iters, o.reference_iters));
   for (int m : o.alpha_mask_iters)

@@ -16,8 +16,11 @@
 namespace ecrf {
 namespace trainer {
 
+// The first iteration after the last upsample and alpha-mask update (0 without them): from it on
+// the grid has its final shape (and --head auto chooses, head_choice.h).
+int GridFinalIteration(const TrainOptions& options);
 // The iteration at which the rate terms switch on: options.rate_start of the run, but never
-// before the grid is final (after the last upsample and alpha-mask update).
+// before the grid is final.
 int RateStartIteration(const TrainOptions& options);
 // The iteration quantization-aware training starts at (options.iters: never); never before the
 // rate phase.
@@ -31,6 +34,7 @@ struct TrainSchedule {
   bool use_rate = false;  // the rate objective is asked for (lambda_e > 0 or a target size)
   int rate_start = 0;     // RateStartIteration
   int qat_start = 0;      // QatStartIteration
+  int grid_final = 0;     // GridFinalIteration
   std::vector<int> upsample_at, mask_at;  // the milestones scaled to this run
   std::vector<long> voxel_counts;         // the grid's voxels after each upsample
   CameraRefineSchedule cameras;

@@ -44,7 +44,8 @@ TensorfConfig ConfigFor(const TrainOptions& o, const Dataset& data, const SceneF
   c.app_ranks = {o.appearance_rank, o.appearance_rank, o.appearance_rank};
   c.head.num_products = 3 * o.appearance_rank;
   c.head.hidden = o.mlp_hidden;
-  c.head.kind = o.head;
+  // auto starts with the per-sample head and may switch once the grid is final (head_choice.h).
+  c.head.kind = o.head == HeadChoice::kDeferred ? HeadKind::kDeferred : HeadKind::kPerSample;
   c.near = float(data.near);
   c.far = float(data.far);
   c.white_background = data.white_background;
@@ -88,6 +89,7 @@ encoder::EncodeOptions RunEncodeOptions(const TrainOptions& o, const RateState& 
 
 void RunIteration(TrainSession& s, int it) {
   DrawBatch(s);
+  ChooseHeadIfAuto(s, it);
   StartRatePhase(s, it);
   ControlRate(s, it);
   QuantizeGrids(s, it);

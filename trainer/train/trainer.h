@@ -17,6 +17,7 @@
 #include "trainer/train/camera_refine.h"
 #include "trainer/train/checkpoint.h"
 #include "trainer/train/evaluate.h"
+#include "trainer/train/head_choice.h"
 #include "trainer/train/rate_state.h"
 #include "trainer/train/train_options.h"
 #include "trainer/train/train_schedule.h"  // RateStartIteration, QatStartIteration
@@ -38,6 +39,7 @@ struct TrainResult {
   // cameras aligned to the trained field, the ones to score the test views with (else empty).
   std::vector<Camera> train_cameras, test_cameras;
   std::vector<CameraRefineStats> camera_refinement;  // per round, the held-out alignment last
+  HeadChoiceReport head_choice;  // --head auto: what it measured and chose (iteration -1: none)
 };
 
 // How a trained run is encoded: its block shapes and frozen steps, coefficient depth and MLP

@@ -1,7 +1,7 @@
 // The deferred head end to end (SPEC.md 7.6): the 1.6 stream that carries it, the decoder's
 // renderer against the trainer's on the same field, the work the decoder charges for it, the
-// checkpoint that keeps it. (Its gradients and training:
-// tests/trainer/model/volume_render_test.cc.)
+// checkpoint that keeps it, and --head auto's choice by the render budget. (Its gradients and
+// training: tests/trainer/model/volume_render_test.cc.)
 #include <gtest/gtest.h>
 
 #include <unistd.h>
@@ -17,8 +17,11 @@
 #include "tests/common/decode_or_die.h"
 #include "tests/common/renderer_agreement.h"
 #include "tests/common/small_model.h"
+#include "trainer/data/camera.h"
 #include "trainer/model/volume_render.h"
 #include "trainer/rate/coded_model.h"
+#include "trainer/train/head_choice.h"
+#include "trainer/train/train_schedule.h"
 #include "trainer/train/trainer.h"
 
 namespace ecrf {
@@ -135,6 +138,86 @@ TEST(DeferredHead, CheckpointKeepsTheHead) {
   EXPECT_EQ(back.config().head.kind, HeadKind::kDeferred);
   EXPECT_EQ(back.head().params(), model.head().params());
   std::filesystem::remove_all(dir);
+}
+
+// A short run of the built-in scene (the tiny preset), --head auto with this render budget.
+TrainOptions AutoOptions(float budget) {
+  TrainOptions o = PresetOptions("tiny");
+  o.procedural_scene = ProceduralScene::kBuiltin;
+  o.builtin_size = 32;
+  o.builtin_views = 12;
+  o.iters = 300;
+  o.batch_rays = 256;
+  o.progress_every = 100;
+  o.head = HeadChoice::kAuto;
+  o.render_budget = budget;
+  return o;
+}
+
+TrainResult AutoRun(float budget, TensorfModel* model) {  // one run, one model
+  const TrainOptions o = AutoOptions(budget);
+  const Dataset train = LoadTrainingViews(o, "train");
+  const Dataset test = LoadTrainingViews(o, "test");
+  *model = TensorfModel(ConfigFor(o, train));
+  const TrainResult r = Train(o, train, test, model, nullptr);
+  EXPECT_EQ(r.head_choice.iteration, GridFinalIteration(o));
+  EXPECT_GT(r.head_choice.iteration, 0);
+  return r;
+}
+
+// One short run with a budget no head meets: auto switches to the deferred head once the grid is
+// final, training goes on through the switch, and what it predicted is the decoder's own count
+// of the work on the same rays, up to the marched positions the mask rejects (which the decoder
+// charges and the prediction leaves out). Within a budget the per-sample head stays.
+TEST(HeadChoice, AutoSwitchesOverTheBudgetAndPredictsTheDecodersWork) {
+  TensorfModel model(TensorfConfig{});
+  const TrainResult r = AutoRun(1.f, &model);
+  EXPECT_EQ(r.head_choice.chosen, HeadKind::kDeferred);
+  EXPECT_EQ(model.config().head.kind, HeadKind::kDeferred);
+  EXPECT_EQ(model.head().config().kind, HeadKind::kDeferred);
+  const std::vector<double>& w = r.head_choice.work;
+  EXPECT_LT(w[int(HeadKind::kDeferred)], 0.5 * w[int(HeadKind::kPerSample)]);
+  EXPECT_GT(r.head_choice.counts.coloured, 1.0);
+  EXPECT_GT(r.final_train_psnr, 20.0);  // trained on through the switch
+  EXPECT_EQ(ChooseHead(model, r.head_choice.counts, 1e9).chosen, HeadKind::kPerSample);
+  EXPECT_EQ(ChooseHead(model, r.head_choice.counts, 0.0).chosen, HeadKind::kPerSample);
+
+  // Two whole test views (the choice itself looks at training views).
+  std::vector<float> origins, dirs;
+  const Dataset test = LoadTrainingViews(AutoOptions(1.f), "test");
+  ASSERT_GE(test.views.size(), 2u);
+  for (size_t v : {size_t(0), test.views.size() / 2}) {
+    std::vector<float> o, d;
+    GenerateRowRays(test.views[v].camera, 0, test.views[v].camera.height, &o, &d);
+    origins.insert(origins.end(), o.begin(), o.end());
+    dirs.insert(dirs.end(), d.begin(), d.end());
+  }
+  const int n = int(origins.size() / 3);
+  const std::vector<double> predicted =
+      PredictHeadWork(model, CountRayWork(model, n, origins.data(), dirs.data()));
+  const dec::SceneField field = DecodeOrDie(EncodeScene(model, FloatMlpOptions()));
+  ASSERT_EQ(field.head, HeadKind::kDeferred);
+  dec::RayMarcher marcher;
+  ASSERT_TRUE(marcher.Init(&field, dec::RenderOptions()).ok());
+  std::vector<float> rgb(origins.size());
+  dec::RenderStats stats;
+  ASSERT_TRUE(
+      marcher.RenderRays(size_t(n), origins.data(), dirs.data(), rgb.data(), nullptr, &stats).ok());
+  const double measured = double(stats.work) / n;
+  const double p = predicted[int(HeadKind::kDeferred)];
+  EXPECT_LE(p, 1.02 * measured) << p << " predicted, " << measured << " measured";
+  EXPECT_GE(p, 0.6 * measured) << p << " predicted, " << measured << " measured";
+}
+
+TEST(HeadChoice, TheBudgetComesFromTheFlagOrTheDeviceClass) {
+  TrainOptions o;
+  EXPECT_EQ(RenderBudget(o), 0.0);
+  o.device_class = DeviceClassChoice::kPhone;
+  EXPECT_EQ(RenderBudget(o), double(dec::kDeviceClasses[2].work_per_pixel));
+  o.render_budget = 5000.f;
+  EXPECT_EQ(RenderBudget(o), 5000.0);
+  EXPECT_STREQ(NameOf(DeviceClassChoice::kPhone), "phone");
+  EXPECT_STREQ(NameOf(HeadChoice::kDeferred), HeadKindName(HeadKind::kDeferred));
 }
 
 }  // namespace
