@@ -32,7 +32,8 @@ inline float Dot(const float* a, const float* b, int n) {
 // The deferred head's chunk, between its head's forward (ws.ray_rgb) and backward: compositing
 // forward and the loss (pixel = weight * rgb + (1 - acc) * background), dL/drgb of each head row.
 void DeferredCompositeForward(RayLoss loss, Workspace& ws, const RayChunk& chunk, double& sse,
-                              long& n_density, std::vector<RayComposite>& composites) {
+                              long& n_density) {
+  std::vector<RayComposite>& composites = ws.head_composites;
   composites.resize(static_cast<size_t>(chunk.r1 - chunk.r0));
 #pragma omp parallel for schedule(dynamic, 16) firstprivate(loss) \
     reduction(+ : sse, n_density) if (chunk.r1 - chunk.r0 >= kMinParallelRays)
@@ -44,8 +45,7 @@ void DeferredCompositeForward(RayLoss loss, Workspace& ws, const RayChunk& chunk
     rc = CompositeForward(loss, ws.SamplesOf(rr), rr.count, nullptr, 0);
     const float* rgb = hr.row >= 0 ? ws.ray_rgb.data() + 3 * static_cast<size_t>(hr.row) : nullptr;
     for (int ch = 0; ch < 3 && rgb; ++ch) rc.c[ch] = hr.weight * rgb[ch];
-    RayComposite pixel = rc;  // PixelLoss adds the background to its copy
-    PixelLoss(loss, r, pixel, hr.g, sse);
+    PixelLoss(loss, r, rc, hr.g, sse);  // leaves the sums the backward reads (w_total, wm_total)
     if (rgb == nullptr) continue;
     float* dr = ws.ray_dl_drgb.data() + 3 * static_cast<size_t>(hr.row);
     for (int ch = 0; ch < 3; ++ch) dr[ch] = hr.weight * hr.g[ch];
@@ -56,8 +56,8 @@ void DeferredCompositeForward(RayLoss loss, Workspace& ws, const RayChunk& chunk
 // backward, where a coloured sample's weight reaches the pixel through the ray's colour weight
 // and its share of the summed products.
 void DeferredCompositeBackward(RayLoss loss, Workspace& ws, const RayChunk& chunk, int P,
-                               const std::vector<RayComposite>& composites,
                                double& distortion_sum) {
+  const std::vector<RayComposite>& composites = ws.head_composites;
 #pragma omp parallel for schedule(dynamic, 16) firstprivate(loss) \
     reduction(+ : distortion_sum) if (chunk.r1 - chunk.r0 >= kMinParallelRays)
   for (int r = chunk.r0; r < chunk.r1; ++r) {
@@ -123,12 +123,11 @@ void DeferredChunk(const RayLoss& loss, AppearanceHead& head, Workspace& ws, con
   if (rows > 0)
     head.Forward(rows, ws.ray_products.data(), ws.ray_viewdirs.data(), ws.ray_rgb.data());
   stats.t_head += lap();
-  std::vector<RayComposite> composites;
-  DeferredCompositeForward(loss, ws, chunk, sse, n_density, composites);
+  DeferredCompositeForward(loss, ws, chunk, sse, n_density);
   stats.t_composite += lap();
   if (rows > 0) head.Backward(rows, ws.ray_dl_drgb.data(), ws.ray_dl_dproducts.data());
   stats.t_head += lap();
-  DeferredCompositeBackward(loss, ws, chunk, P, composites, distortion_sum);
+  DeferredCompositeBackward(loss, ws, chunk, P, distortion_sum);
   stats.t_composite += lap();
 }
 

@@ -29,6 +29,13 @@ inline void EnsureSize(std::vector<float>& v, size_t n) {
   if (v.size() < n) v.resize(n);
 }
 
+// A ray's composited colour and the sums its backward pass reads again.
+struct RayComposite {
+  float c[3] = {0.f, 0.f, 0.f};
+  float acc = 0.f;                       // accumulated opacity
+  double w_total = 0.0, wm_total = 0.0;  // distortion loss: the sums of w and w * m
+};
+
 struct RayRec {
   int tid;  // thread whose sample buffer holds the samples
   int count;
@@ -55,7 +62,8 @@ struct Workspace {
     float weight = 0.f;            // the sum of its coloured samples' weights
     float g[3] = {0.f, 0.f, 0.f};  // dL/d(composited colour)
   };
-  std::vector<HeadRay> head_rays;  // per ray of the chunk
+  std::vector<HeadRay> head_rays;             // per ray of the chunk
+  std::vector<RayComposite> head_composites;  // per ray of the chunk, forward to backward
   std::vector<float> ray_products, ray_viewdirs, ray_rgb, ray_dl_drgb, ray_dl_dproducts;
   // The gradient scatter (ScatterChunk): per (grid, mode), density modes 0-2 then appearance
   // modes 0-2, the chunk's samples bucketed by plane tile in ray order, and each tile's line sums.
@@ -102,13 +110,6 @@ struct RayLoss {
   bool distortion_on;
   double inv_n;
   double distortion_scale;  // distortion_weight / n_rays
-};
-
-// A ray's composited colour and the sums its backward pass reads again.
-struct RayComposite {
-  float c[3] = {0.f, 0.f, 0.f};
-  float acc = 0.f;                       // accumulated opacity
-  double w_total = 0.0, wm_total = 0.0;  // distortion loss: the sums of w and w * m
 };
 
 // Compositing forward of one ray: the weights w = alpha * trans summed into colour and opacity.

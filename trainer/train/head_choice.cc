@@ -1,10 +1,9 @@
 #include "trainer/train/head_choice.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <string>
-
-#include <algorithm>
 #include <vector>
 
 #include "decoder/ray_marcher.h"
