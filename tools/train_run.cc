@@ -240,17 +240,23 @@ nlohmann::json TrainingMetrics(const trainer::TrainOptions& o, const trainer::Tr
   m["mlp_hidden"] = model.head().config().hidden;
   if (r.head_choice.iteration >= 0) {  // --head auto: what it predicted and chose
     const trainer::HeadChoiceReport& h = r.head_choice;
+    nlohmann::json candidates = nlohmann::json::array();
+    for (const trainer::RenderCandidate& c : h.candidates) {
+      candidates.push_back({{"head", HeadKindName(c.head)},
+                            {"step_ratio", c.step_ratio},
+                            {"samples_per_ray", c.counts.samples},
+                            {"coloured_samples_per_ray", c.counts.coloured},
+                            {"coloured_ray_share", c.counts.coloured_rays},
+                            {"predicted_work_per_pixel", c.work}});
+    }
     m["head_choice"] = {{"iteration", h.iteration},
                         {"render_budget", h.budget},
-                        {"samples_per_ray", h.counts.samples},
-                        {"coloured_samples_per_ray", h.counts.coloured},
-                        {"coloured_ray_share", h.counts.coloured_rays},
-                        {"predicted_work_per_pixel",
-                         {{HeadKindName(HeadKind::kPerSample), h.work[int(HeadKind::kPerSample)]},
-                          {HeadKindName(HeadKind::kDeferred), h.work[int(HeadKind::kDeferred)]}}},
-                        {"chosen", HeadKindName(h.chosen)},
+                        {"candidates", candidates},
+                        {"chosen", HeadKindName(h.choice().head)},
+                        {"step_ratio", h.choice().step_ratio},
                         {"reason", h.reason}};
   }
+  m["step_ratio"] = model.config().step_ratio;
   m["prune_at"] = o.prune_at;
   m["aabb_min"] = model.aabb().min;
   m["aabb_max"] = model.aabb().max;

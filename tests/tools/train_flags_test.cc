@@ -80,6 +80,17 @@ TEST(TrainFlags, MlpHiddenSetsTheWidthOfTheModelsHead) {
   }
 }
 
+TEST(TrainFlags, StepRatioSetsTheModelsSampleSpacing) {
+  EXPECT_EQ(Parse({}).step_ratio, 0.5f);
+  const trainer::TrainOptions o = Parse({"--step-ratio", "1"});
+  EXPECT_EQ(o.step_ratio, 1.f);
+  const trainer::TensorfConfig c = trainer::ConfigFor(o, trainer::Dataset(), trainer::SceneFit());
+  EXPECT_EQ(c.step_ratio, 1.f);
+  for (const char* bad : {"0", "0.1", "5", "x", "-1"}) {
+    EXPECT_THROW(Parse({"--step-ratio", bad}), std::invalid_argument) << bad;
+  }
+}
+
 TEST(TrainFlags, FinalGridSetsWhereUpsamplingEnds) {
   const trainer::TrainOptions o = Parse({"--final-grid", "150"});
   EXPECT_EQ(o.voxels_final, 150L * 150 * 150);

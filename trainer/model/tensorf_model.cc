@@ -116,6 +116,15 @@ void TensorfModel::SetGeometry(const Aabb& aabb, const std::array<int, 3>& res) 
   if (n_samples_ == 0) n_samples_ = std::min(config_.max_samples, DefaultSamples());
 }
 
+void TensorfModel::SetStepRatio(float step_ratio) {
+  if (!(step_ratio > 0.f) || !std::isfinite(step_ratio))
+    throw std::invalid_argument("TensorfModel::SetStepRatio: step ratio must be positive");
+  const double n = std::ceil(double(n_samples_) * config_.step_ratio / step_ratio);
+  n_samples_ = static_cast<int>(std::max(1.0, std::min<double>(config_.max_samples, n)));
+  config_.step_ratio = step_ratio;
+  UpdateStepSize();
+}
+
 void TensorfModel::set_n_samples(int n) {
   if (n < 1) throw std::runtime_error("TensorfModel::set_n_samples: n must be >= 1");
   n_samples_ = n;

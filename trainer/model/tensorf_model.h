@@ -135,6 +135,9 @@ class TensorfModel {
     config_.head.kind = kind;
     head_.set_kind(kind);
   }
+  // Sample spacing step_ratio cells from now on; n_samples scales so that a ray covers the same
+  // length (--head auto, train/head_choice.h).
+  void SetStepRatio(float step_ratio);
   // Removes hidden units of the head (AppearanceHead::KeepHidden); the config's width follows.
   void KeepHidden(const std::vector<uint8_t>& keep1, const std::vector<uint8_t>& keep2);
 

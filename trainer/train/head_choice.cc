@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstdio>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "decoder/ray_marcher.h"
@@ -65,28 +67,59 @@ double RenderBudget(const TrainOptions& o) {
   return double(dec::kDeviceClasses[int(o.device_class) - 1].work_per_pixel);
 }
 
-HeadChoiceReport ChooseHead(const TensorfModel& model, const RayWorkCounts& counts, double budget) {
+std::vector<RenderCandidate> RenderCandidates(TensorfModel* model, int n, const float* origins,
+                                              const float* dirs) {
+  const float ratio = model->config().step_ratio;
+  const int n_samples = model->n_samples();
+  std::vector<RenderCandidate> out;
+  for (const float r : {ratio, 2.f * ratio}) {
+    if (r != ratio) model->SetStepRatio(r);
+    const RayWorkCounts counts = CountRayWork(*model, n, origins, dirs);
+    const std::vector<double> work = PredictHeadWork(*model, counts);
+    for (int k = 0; k < kNumHeadKinds; ++k) {
+      // At twice the spacing only the cheaper head: the per-sample head's spacing stays the
+      // trained one (its quality is what a budget gives up first).
+      if (r != ratio && HeadKind(k) == HeadKind::kPerSample) continue;
+      out.push_back({HeadKind(k), r, counts, work[size_t(k)]});
+    }
+  }
+  model->SetStepRatio(ratio);
+  model->set_n_samples(n_samples);
+  return out;
+}
+
+HeadChoiceReport ChooseRender(std::vector<RenderCandidate> candidates, double budget) {
   HeadChoiceReport r;
   r.budget = budget;
-  r.counts = counts;
-  r.work = PredictHeadWork(model, counts);
-  const double mlp = r.work[int(HeadKind::kPerSample)];
-  const double deferred = r.work[int(HeadKind::kDeferred)];
-  char why[160];
+  r.candidates = std::move(candidates);
+  if (r.candidates.empty()) throw std::logic_error("ChooseRender: no candidates");
   if (budget <= 0.0) {
-    r.chosen = HeadKind::kPerSample;
-    std::snprintf(why, sizeof(why), "no render budget, the per-sample head");
-  } else if (mlp <= budget) {
-    r.chosen = HeadKind::kPerSample;
-    std::snprintf(why, sizeof(why), "the per-sample head fits it");
-  } else {
-    r.chosen = HeadKind::kDeferred;
-    std::snprintf(why, sizeof(why), "the per-sample head exceeds it, the deferred head %s",
-                  deferred <= budget ? "fits it" : "is the cheaper (still over it)");
+    r.reason = "no render budget: the first";
+    return r;
   }
-  r.reason = why;
+  for (size_t k = 0; k < r.candidates.size(); ++k) {
+    if (r.candidates[k].work <= budget) {
+      r.chosen = int(k);
+      r.reason = k == 0 ? "the first fits it" : "the first that fits it";
+      return r;
+    }
+  }
+  for (size_t k = 1; k < r.candidates.size(); ++k) {
+    if (r.candidates[k].work < r.choice().work) r.chosen = int(k);
+  }
+  r.reason = "none fits it: the cheapest";
   return r;
 }
+
+namespace {
+
+std::string Describe(const RenderCandidate& c) {
+  char s[64];
+  std::snprintf(s, sizeof(s), "%s at step ratio %g", HeadKindName(c.head), double(c.step_ratio));
+  return s;
+}
+
+}  // namespace
 
 void ChooseHeadIfAuto(TrainSession& s, int it) {
   if (s.o.head != HeadChoice::kAuto || it != s.schedule.grid_final) return;
@@ -107,18 +140,26 @@ void ChooseHeadIfAuto(TrainSession& s, int it) {
     }
   }
   const int n = int(origins.size() / 3);
-  HeadChoiceReport r = ChooseHead(*s.model, CountRayWork(*s.model, n, origins.data(), dirs.data()),
-                                  RenderBudget(s.o));
+  HeadChoiceReport r =
+      ChooseRender(RenderCandidates(s.model, n, origins.data(), dirs.data()), RenderBudget(s.o));
   r.iteration = it;
-  s.model->SetHeadKind(r.chosen);
+  const RenderCandidate& c = r.choice();
+  s.model->SetHeadKind(c.head);
+  if (c.step_ratio != s.model->config().step_ratio) s.model->SetStepRatio(c.step_ratio);
+  std::string predicted;
+  for (const RenderCandidate& k : r.candidates) {
+    char line[160];
+    std::snprintf(line, sizeof(line),
+                  "\n  %s: %.0f k units per pixel (%.1f samples, %.2f coloured a ray)",
+                  Describe(k).c_str(), k.work / 1e3, k.counts.samples, k.counts.coloured);
+    predicted += line;
+  }
   std::fprintf(stderr,
-               "\nhead auto at iteration %d: predicted work per pixel %.0f k (mlp), %.0f k "
-               "(deferred) from %.1f samples and %.2f coloured samples a ray on %d rays of the "
-               "training views; render budget %s: %s -> %s\n",
-               it, r.work[int(HeadKind::kPerSample)] / 1e3, r.work[int(HeadKind::kDeferred)] / 1e3,
-               r.counts.samples, r.counts.coloured, n,
+               "\nhead auto at iteration %d, predicted on %d rays of the training views:%s\n"
+               "  render budget %s: %s -> %s\n",
+               it, n, predicted.c_str(),
                r.budget > 0 ? std::to_string(int64_t(r.budget)).c_str() : "none", r.reason.c_str(),
-               HeadKindName(r.chosen));
+               Describe(c).c_str());
   s.result.head_choice = r;
 }
 

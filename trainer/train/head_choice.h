@@ -1,12 +1,13 @@
-// --head auto: the appearance head chosen by what a view of the scene will cost. Once the grid is
-// final (after the last upsample and alpha-mask update: the samples and coloured samples per ray
-// are then the file's), the trainer traces training rays through the model, predicts each head's
-// work per pixel in the decoder's units (decoder/render_work.h) and keeps the per-sample head
-// unless it exceeds the render budget (--render-budget, --device-class); then it continues with
-// the deferred head, whose MLP starts from the per-sample one's weights (for an opaque surface
-// the weighted sum of the products is about the surface's products, the per-sample head's input).
-// Without a budget auto keeps the per-sample head: on chair it has the better rate-distortion
-// (docs/results.md).
+// --head auto: the appearance head and the sample spacing chosen by what a view of the scene
+// will cost. Once the grid is final (after the last upsample and alpha-mask update: the samples
+// and coloured samples per ray are then the file's), the trainer traces training rays through
+// the model, predicts the work per pixel of each candidate in the decoder's units
+// (decoder/render_work.h) and takes the first, in the order of expected quality, within the
+// render budget (--render-budget, --device-class): the per-sample head, the deferred head, the
+// deferred head at twice the spacing (--step-ratio); the cheapest when none is. The deferred
+// head's MLP starts from the per-sample one's weights (for an opaque surface the weighted sum of
+// the products is about the surface's products, the per-sample head's input). Without a budget
+// auto keeps the per-sample head: on chair it has the better rate-distortion (docs/results.md).
 #ifndef ECRF_TRAINER_TRAIN_HEAD_CHOICE_H_
 #define ECRF_TRAINER_TRAIN_HEAD_CHOICE_H_
 
@@ -40,17 +41,32 @@ std::vector<double> PredictHeadWork(const TensorfModel& model, const RayWorkCoun
 // The render budget the options ask for (--render-budget, else --device-class; 0: none).
 double RenderBudget(const TrainOptions& options);
 
+// One configuration auto weighs: a head at a sample spacing, with the counts traced at that
+// spacing and the predicted work per pixel.
+struct RenderCandidate {
+  HeadKind head = HeadKind::kPerSample;
+  float step_ratio = 0.5f;
+  RayWorkCounts counts;
+  double work = 0.0;
+};
+
+// The candidates for a model in the order of expected quality: each head at the model's
+// spacing, then the deferred head at twice it. Traces the n rays once per spacing (the model's
+// spacing is restored).
+std::vector<RenderCandidate> RenderCandidates(TensorfModel* model, int n, const float* origins,
+                                              const float* dirs);
+
 struct HeadChoiceReport {
   int iteration = -1;  // -1: no choice was made in this run
   double budget = 0.0;
-  RayWorkCounts counts;
-  std::vector<double> work;  // per HeadKind
-  HeadKind chosen = HeadKind::kPerSample;
+  std::vector<RenderCandidate> candidates;
+  int chosen = 0;  // index into candidates
   std::string reason;
+  const RenderCandidate& choice() const { return candidates[size_t(chosen)]; }
 };
 
-// The choice for a model: the per-sample head unless its predicted work exceeds the budget.
-HeadChoiceReport ChooseHead(const TensorfModel& model, const RayWorkCounts& counts, double budget);
+// The first candidate within the budget (the first when there is no budget), else the cheapest.
+HeadChoiceReport ChooseRender(std::vector<RenderCandidate> candidates, double budget);
 
 }  // namespace trainer
 }  // namespace ecrf

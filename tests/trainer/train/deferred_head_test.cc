@@ -59,6 +59,8 @@ TEST(DeferredHead, StreamIsVersion16AndTheDecoderRendersWhatTheTrainerRenders) {
   EXPECT_EQ(bytes[5], 6);  // version_minor: the deferred head is a 1.6 feature
   const dec::SceneField field = DecodeOrDie(bytes);
   ASSERT_EQ(field.head, HeadKind::kDeferred);
+  EXPECT_EQ(field.StepSize(), model.step_size());  // the file declares the chosen spacing
+  EXPECT_EQ(field.NumSamples(), model.n_samples());
   LoadDecodedGrids(field, &model);
 
   std::vector<float> origins, dirs;
@@ -165,22 +167,37 @@ TrainResult AutoRun(float budget, TensorfModel* model) {  // one run, one model
   return r;
 }
 
-// One short run with a budget no head meets: auto switches to the deferred head once the grid is
-// final, training goes on through the switch, and what it predicted is the decoder's own count
-// of the work on the same rays, up to the marched positions the mask rejects (which the decoder
-// charges and the prediction leaves out). Within a budget the per-sample head stays.
+// One short run with a budget nothing meets: auto switches to the cheapest candidate, the
+// deferred head at twice the spacing, once the grid is final, training goes on through the switch,
+// and what it predicted is the decoder's own count of the work on the same rays, up to the
+// marched positions the mask rejects (which the decoder charges and the prediction leaves out).
+// Within a budget the first candidate that fits is taken.
 TEST(HeadChoice, AutoSwitchesOverTheBudgetAndPredictsTheDecodersWork) {
   TensorfModel model(TensorfConfig{});
   const TrainResult r = AutoRun(1.f, &model);
-  EXPECT_EQ(r.head_choice.chosen, HeadKind::kDeferred);
+  const std::vector<RenderCandidate>& c = r.head_choice.candidates;
+  ASSERT_EQ(c.size(), 3u);
+  EXPECT_EQ(c[0].head, HeadKind::kPerSample);
+  EXPECT_EQ(c[1].head, HeadKind::kDeferred);
+  EXPECT_EQ(c[2].head, HeadKind::kDeferred);
+  EXPECT_EQ(c[0].step_ratio, 0.5f);
+  EXPECT_EQ(c[1].step_ratio, 0.5f);
+  EXPECT_EQ(c[2].step_ratio, 1.f);
+  EXPECT_EQ(r.head_choice.chosen, 2);
   EXPECT_EQ(model.config().head.kind, HeadKind::kDeferred);
   EXPECT_EQ(model.head().config().kind, HeadKind::kDeferred);
-  const std::vector<double>& w = r.head_choice.work;
-  EXPECT_LT(w[int(HeadKind::kDeferred)], 0.5 * w[int(HeadKind::kPerSample)]);
-  EXPECT_GT(r.head_choice.counts.coloured, 1.0);
+  EXPECT_EQ(model.config().step_ratio, 1.f);
+  EXPECT_LT(c[1].work, 0.5 * c[0].work);
+  EXPECT_GT(c[1].counts.coloured, 1.0);
+  // Twice the spacing: about half the samples (the same rays, the same field).
+  EXPECT_LT(c[2].counts.samples, 0.7 * c[1].counts.samples);
+  EXPECT_GT(c[2].counts.samples, 0.3 * c[1].counts.samples);
+  EXPECT_LT(c[2].work, c[1].work);
   EXPECT_GT(r.final_train_psnr, 20.0);  // trained on through the switch
-  EXPECT_EQ(ChooseHead(model, r.head_choice.counts, 1e9).chosen, HeadKind::kPerSample);
-  EXPECT_EQ(ChooseHead(model, r.head_choice.counts, 0.0).chosen, HeadKind::kPerSample);
+  EXPECT_EQ(ChooseRender(c, 1e9).chosen, 0);
+  EXPECT_EQ(ChooseRender(c, 0.0).chosen, 0);
+  EXPECT_EQ(ChooseRender(c, 0.5 * (c[0].work + c[1].work)).chosen, 1);
+  EXPECT_EQ(ChooseRender(c, 0.5 * (c[1].work + c[2].work)).chosen, 2);
 
   // Two whole test views (the choice itself looks at training views).
   std::vector<float> origins, dirs;
@@ -207,6 +224,23 @@ TEST(HeadChoice, AutoSwitchesOverTheBudgetAndPredictsTheDecodersWork) {
   const double p = predicted[int(HeadKind::kDeferred)];
   EXPECT_LE(p, 1.02 * measured) << p << " predicted, " << measured << " measured";
   EXPECT_GE(p, 0.6 * measured) << p << " predicted, " << measured << " measured";
+}
+
+// Weighing the candidates leaves the model as it was; a new spacing keeps a ray's length.
+TEST(HeadChoice, CandidatesRestoreTheSpacingAndSetStepRatioKeepsTheRayLength) {
+  TensorfModel model = SmallDeferredModel(3);
+  const float step = model.step_size();
+  const int n_samples = model.n_samples();
+  std::vector<float> origins = {0.f, -3.f, 0.2f, 0.1f, -3.f, 0.f};
+  std::vector<float> dirs = {0.f, 1.f, 0.f, 0.f, 1.f, 0.05f};
+  const std::vector<RenderCandidate> c = RenderCandidates(&model, 2, origins.data(), dirs.data());
+  ASSERT_EQ(c.size(), 3u);
+  EXPECT_EQ(model.step_size(), step);
+  EXPECT_EQ(model.n_samples(), n_samples);
+  model.SetStepRatio(2.f * model.config().step_ratio);
+  EXPECT_FLOAT_EQ(model.step_size(), 2.f * step);
+  EXPECT_EQ(model.n_samples(), (n_samples + 1) / 2);
+  EXPECT_THROW(model.SetStepRatio(0.f), std::invalid_argument);
 }
 
 TEST(HeadChoice, TheBudgetComesFromTheFlagOrTheDeviceClass) {
