@@ -97,8 +97,7 @@ int RunReportCompare(int argc, char** argv) {
     WriteTextFile(json_path, j.dump(2) + "\n");
   }
   if (!plot_path.empty()) {
-    const std::string csv = CompareCsv(
-        {{"A: " + paths[0], RateDistortionCurve(a)}, {"B: " + paths[1], RateDistortionCurve(b)}});
+    const std::string csv = CompareCsv({{"A: " + paths[0], a}, {"B: " + paths[1], b}});
     const std::string csv_path = plot_path.substr(0, plot_path.rfind('.')) + ".csv";
     WriteTextFile(csv_path, csv);
     if (!DrawComparePlot(plot_path, csv_path)) return 1;

@@ -5,8 +5,12 @@
       Reads rd.csv, anchors.csv, chunks.csv, curve.csv and speed.csv in REPORT_DIR (the scene
       name from report.json) and writes rd.png, ratio.png, chunks.png, curve.png and speed.png
       beside them: each plot whose CSV exists and has rows.
+      cost.png (speed against error: PSNR against work per pixel and render time) needs rd.csv's
+      head, work_per_pixel and seconds_per_view columns (reports from before them have none).
   plot_report.py --compare OUT.png COMPARE_CSV
-      Draws the rate-distortion curves of COMPARE_CSV (series,file_bytes,psnr,left_out) into OUT.png.
+      Draws the rate-distortion curves of COMPARE_CSV (series,file_bytes,psnr,left_out,
+      work_per_pixel,seconds_per_view) into OUT.png, and their speed against error into
+      OUT_cost.png when the points' costs are known.
 
 Prints one line per PNG written; each is written to a temporary file in its directory and renamed
 into place. Empty CSV cells mean "not available". Exit status: 0 done (a plot without data is
@@ -40,9 +44,10 @@ class CsvError(Exception):
     pass
 
 
-def read_csv(path, columns):
-    """The rows of path as dicts; [] when the file is missing or has no rows. `columns` are the
-    columns used ('#': a number, read as a float or None when empty); others are ignored."""
+def read_csv(path, columns, optional=False):
+    """The rows of path as dicts; [] when the file is missing or has no rows, or (optional) lacks
+    one of `columns`. `columns` are the columns used ('#': a number, read as a float or None when
+    empty); others are ignored."""
     try:
         with open(path, "rb") as f:
             data = f.read()
@@ -61,6 +66,8 @@ def read_csv(path, columns):
             if header is None:
                 header = fields
                 missing = [c.rstrip("#") for c in columns if c.rstrip("#") not in header]
+                if missing and optional:
+                    return []
                 if missing:
                     raise CsvError(f"{where}: the header lacks column(s) {', '.join(missing)}")
             elif len(fields) != len(header) and fields:
@@ -357,6 +364,50 @@ def plot_speed(scene, rows):
     return fig
 
 
+def cost_panels(title, series):
+    """PSNR against work per pixel and against render time, one marker style per series; series:
+    {name: [(work_per_pixel, seconds_per_view, psnr, label)]}. None when no point has a cost."""
+    if not any(positive(w) for pts in series.values() for w, _, _, _ in pts):
+        return None
+    fig, axes = plt.subplots(1, 2, figsize=(12, 5), dpi=110, layout="constrained", sharey=True)
+    fig.suptitle(title)
+    axes[0].set_ylabel("test PSNR (dB)")
+    for k, (ax, xlabel) in enumerate(zip(axes, ("work per pixel (decoder units, log scale)",
+                                                "render time per view (seconds, log scale)"))):
+        ax.set(xlabel=xlabel)
+        ax.grid(True, alpha=0.35)
+        labels = []
+        for i, (name, pts) in enumerate(series.items()):
+            pts = [(p[k], p[2], p[3]) for p in pts if positive(p[k]) and p[2] is not None]
+            if pts:
+                ax.plot([p[0] for p in pts], [p[1] for p in pts], MARKERS[i % len(MARKERS)], color=f"C{i % 10}",
+                        linestyle="none", markersize=8, label=name)
+                labels += [(x, y, text, f"C{i % 10}") for x, y, text in pts]
+        if labels:
+            log_x(ax, (lambda v, digits: f"{v / 1e3:.{digits}g} k") if k == 0 else
+                  (lambda v, digits: f"{v:.{digits}g}"))
+            ax.legend(loc="lower right", fontsize=8)
+            place_labels(ax, labels, fontsize=7)
+    return fig
+
+
+def plot_cost(scene, rows):
+    series = {}
+    for r in rows:
+        spacing = "" if r["step_ratio"] in (None, 0.5) else f", {r['step_ratio']:g}-cell spacing"
+        series.setdefault(f"{r['head'] or 'mlp'} head{spacing}", []).append(
+            (r["work_per_pixel"], r["seconds_per_view"], r["decoded_psnr"], bytes_text(r["file_bytes"] or 0)))
+    return cost_panels(f"{scene}: speed against error of the decoded files (label: file size)", series)
+
+
+def plot_compare_cost(rows):
+    series = {}
+    for r in rows:
+        series.setdefault(r["series"], []).append(
+            (r["work_per_pixel"], r["seconds_per_view"], r["psnr"], bytes_text(r["file_bytes"] or 0)))
+    return cost_panels("speed against error (label: file size)", series)
+
+
 def save(fig, path):
     """Writes fig (None: nothing to plot) through a temporary file: a reader never sees half a PNG."""
     if fig is None:
@@ -391,11 +442,14 @@ COLUMNS = {
     "chunks.csv": ["label", "chunk", "bytes#"],
     "curve.csv": ["label", "minutes#", "test_psnr#"],
     "speed.csv": ["knob", "setting", "is_default#", "seconds_per_view#", "psnr#"],
-    "compare": ["series", "file_bytes#", "psnr#", "left_out#"],
+    "compare": ["series", "file_bytes#", "psnr#", "left_out#", "work_per_pixel#", "seconds_per_view#"],
+    "cost": ["head", "step_ratio#", "file_bytes#", "decoded_psnr#", "work_per_pixel#", "seconds_per_view#"],
 }
+FILES = {"cost": "rd.csv"}  # tables read from another table's file
+OPTIONAL = {"cost"}  # tables whose columns older reports lack
 PLOTS = [("rd.png", plot_rd, ["rd.csv", "anchors.csv"]), ("ratio.png", plot_ratio, ["rd.csv", "anchors.csv"]),
          ("chunks.png", plot_chunks, ["chunks.csv"]), ("curve.png", plot_curve, ["curve.csv"]),
-         ("speed.png", plot_speed, ["speed.csv"])]
+         ("speed.png", plot_speed, ["speed.csv"]), ("cost.png", plot_cost, ["cost"])]
 
 
 def plot_report(d):
@@ -404,7 +458,8 @@ def plot_report(d):
     scene, errors = scene_name(d), []
     for png, draw, names in PLOTS:
         try:
-            tables = [read_csv(os.path.join(d, name), COLUMNS[name]) for name in names]
+            tables = [read_csv(os.path.join(d, FILES.get(name, name)), COLUMNS[name], name in OPTIONAL)
+                      for name in names]
         except CsvError as e:
             if str(e) not in errors:  # rd.csv and anchors.csv feed two plots each
                 print(f"plot_report.py: malformed CSV: {e}", file=sys.stderr)
@@ -431,10 +486,12 @@ def main(args):
                 print(f"plot_report.py: {args[0]} is not a directory", file=sys.stderr)
                 return 2
             return 0 if plot_report(args[0]) else 1
-        fig = plot_compare(read_csv(args[2], COLUMNS["compare"]))
+        rows = read_csv(args[2], COLUMNS["compare"])
+        fig = plot_compare(rows)
         if fig is None:
             print(f"plot_report.py: {args[2]} has no points; {args[1]} not drawn", file=sys.stderr)
         save(fig, args[1])
+        save(plot_compare_cost(rows), os.path.splitext(args[1])[0] + "_cost.png")
     except CsvError as e:
         print(f"plot_report.py: malformed CSV: {e}", file=sys.stderr)
         return 1

@@ -53,9 +53,10 @@ nlohmann::json ReadReport(const std::string& dir);
 // atomically. Returns false when the plots could not be drawn (and says why on stderr).
 bool WriteReport(const std::string& dir, const nlohmann::json& report);
 
-// compare.csv: series,file_bytes,psnr,left_out for each named curve (left_out 1: a point its own
-// curve beats, outside the Pareto front that BD-rate integrates).
-std::string CompareCsv(const std::vector<std::pair<std::string, std::vector<RdPoint>>>& curves);
+// compare.csv: series,file_bytes,psnr,left_out,work_per_pixel,seconds_per_view for the points of
+// each named report (left_out 1: a point its own curve beats, outside the Pareto front that
+// BD-rate integrates; the last two: what a view of the point's file costs, empty when unknown).
+std::string CompareCsv(const std::vector<std::pair<std::string, nlohmann::json>>& reports);
 
 // Draws compare.csv into png; false when it could not.
 bool DrawComparePlot(const std::string& png, const std::string& csv);

@@ -64,13 +64,15 @@ std::string RdCsv(nlohmann::json& r) {
   std::ostringstream o;
   o << "label,lambda_e,file_bytes,decoded_psnr,decoded_ssim,float_psnr,float_ssim,ratio,psnr_loss_"
        "db,"
-       "float32_bytes,train_seconds,iterations\n";
+       "float32_bytes,train_seconds,iterations,head,step_ratio,work_per_pixel,seconds_per_view\n";
   for (nlohmann::json& p : r["points"]) {
     o << Csv(Str(p, "label")) << ',' << Num(p["lambda_e"]) << ',' << Num(p["file_bytes"]) << ','
       << Num(p["decoded_psnr"]) << ',' << Num(p["decoded_ssim"]) << ',' << Num(p["float_psnr"])
       << ',' << Num(p["float_ssim"]) << ',' << Num(p["ratio"]) << ',' << Num(p["psnr_loss_db"])
       << ',' << Num(p["float32_bytes"]) << ',' << Num(p["train_seconds"]) << ','
-      << Num(p["iterations"]) << '\n';
+      << Num(p["iterations"]) << ',' << Csv(Str(p, "head")) << ',' << Num(p["step_ratio"]) << ','
+      << Num(p["decoded_work_per_pixel"]) << ',' << Num(p["decoded_render_seconds_per_view"])
+      << '\n';
   }
   return o.str();
 }
@@ -224,17 +226,25 @@ void RateDistortionSection(std::ostringstream& o, const std::string& dir, nlohma
   o << "; the quantization loss is the decoded file against its own float model.</p>\n";
   Figure(o, dir, "rd.png", "rd.csv", "file size vs PSNR of the decoded file");
   Figure(o, dir, "ratio.png", "rd.csv", "compression ratio vs PSNR loss");
+  bool costs = false;  // reports from before #57 have none
+  for (nlohmann::json& p : r["points"]) costs |= p.value("decoded_work_per_pixel", 0.0) > 0.0;
+  if (costs) Figure(o, dir, "cost.png", "rd.csv", "work per pixel and render time vs PSNR");
   o << "<table>\n";
   Row(o,
       {"point", "file bytes", "ratio", "decoded PSNR", "SSIM", "float PSNR", "quantization loss",
-       "loss vs lambda=0", "train min"},
+       "loss vs lambda=0", "train min", "head", "work/pixel", "ms/view"},
       "th");
   for (nlohmann::json& p : r["points"]) {
     Row(o, {Html(Str(p, "label")), Num(p["file_bytes"], "%.0f"), Num(p["ratio"], "%.1fx"),
             Num(p["decoded_psnr"], "%.2f dB"), Num(p["decoded_ssim"], "%.4f"),
             Num(p["float_psnr"], "%.2f dB"), Num(p["quantization_loss_db"], "%+.2f dB"),
             Num(p["psnr_loss_db"], "%+.2f dB"),
-            Num(nlohmann::json(p["train_seconds"].get<double>() / 60.0), "%.1f")});
+            Num(nlohmann::json(p["train_seconds"].get<double>() / 60.0), "%.1f"),
+            Html(Str(p, "head")), Num(p["decoded_work_per_pixel"], "%.0f"),
+            Num(p["decoded_render_seconds_per_view"].is_number()
+                    ? nlohmann::json(p["decoded_render_seconds_per_view"].get<double>() * 1e3)
+                    : nlohmann::json(),
+                "%.0f")});
   }
   o << "</table>\n";
   if (!r["anchors"].empty()) {
@@ -341,17 +351,20 @@ bool DrawPlots(const std::string& dir) { return RunPlotScript(Quote(dir), dir); 
 
 }  // namespace
 
-std::string CompareCsv(const std::vector<std::pair<std::string, std::vector<RdPoint>>>& curves) {
+std::string CompareCsv(const std::vector<std::pair<std::string, nlohmann::json>>& reports) {
   std::ostringstream o;
-  o << "series,file_bytes,psnr,left_out\n";
-  for (const auto& [name, points] : curves) {
+  o << "series,file_bytes,psnr,left_out,work_per_pixel,seconds_per_view\n";
+  for (const auto& [name, report] : reports) {
     std::vector<RdPoint> dominated;
-    ParetoFront(points, &dominated);
-    for (const RdPoint& p : points) {
+    ParetoFront(RateDistortionCurve(report), &dominated);
+    for (const nlohmann::json& p : report.at("points")) {
+      const RdPoint q{p.at("file_bytes").get<double>(), p.at("decoded_psnr").get<double>()};
       bool left_out = false;
-      for (const RdPoint& d : dominated) left_out |= d.rate == p.rate && d.psnr == p.psnr;
-      o << Csv(name) << ',' << Num(nlohmann::json(p.rate), "%.0f") << ','
-        << Num(nlohmann::json(p.psnr), "%.6f") << ',' << (left_out ? 1 : 0) << '\n';
+      for (const RdPoint& d : dominated) left_out |= d.rate == q.rate && d.psnr == q.psnr;
+      o << Csv(name) << ',' << Num(nlohmann::json(q.rate), "%.0f") << ','
+        << Num(nlohmann::json(q.psnr), "%.6f") << ',' << (left_out ? 1 : 0) << ','
+        << Num(p.value("decoded_work_per_pixel", nlohmann::json())) << ','
+        << Num(p.value("decoded_render_seconds_per_view", nlohmann::json())) << '\n';
     }
   }
   return o.str();

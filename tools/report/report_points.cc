@@ -51,6 +51,11 @@ nlohmann::json RatePointFromMetrics(const nlohmann::json& m, const std::string& 
   p["float32_bytes"] = m.at("float32_model_bytes");
   p["decode_seconds"] = m.value("decode_seconds", 0.0);
   p["decoded_render_seconds_per_view"] = m.value("decoded_render_seconds_per_view", 0.0);
+  // What a view of the file costs (#57): its head and spacing, the decoder's work per pixel.
+  p["head"] = m.value("head", "mlp");
+  p["step_ratio"] = m.value("step_ratio", 0.5);
+  p["decoded_work_per_pixel"] = m.value("decoded_work_per_pixel", 0.0);
+  p["decoded_samples_per_ray"] = m.value("decoded_samples_per_ray", 0.0);
   p["estimated_grid_bytes"] = m.value("estimated_grid_bytes", 0.0);
   p["grid_res"] = m.value("grid_res", nlohmann::json::array());
   const nlohmann::json& e = m.at("encode");

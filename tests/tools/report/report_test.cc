@@ -82,6 +82,15 @@ void RatePointsAreWhatEvalMeasuresOnTheSameFiles() {
     // The CSV row says the same as report.json.
     EXPECT_EQ(std::stod(rd[k + 1][2]), p["file_bytes"].get<double>());
     EXPECT_NEAR(std::stod(rd[k + 1][3]), p["decoded_psnr"].get<double>(), 1e-8);
+    // What a view of the file costs (#57): the decoder's count, whatever the threads.
+    EXPECT_EQ(p["head"], e["head"]);
+    EXPECT_EQ(p["head"], "mlp");
+    EXPECT_GT(p["decoded_work_per_pixel"].get<double>(), 0.0);
+    EXPECT_DOUBLE_EQ(e["work_per_pixel"].get<double>(), p["decoded_work_per_pixel"].get<double>());
+    ASSERT_EQ(rd[0][12], "head");
+    ASSERT_EQ(rd[0][14], "work_per_pixel");
+    EXPECT_EQ(rd[k + 1][12], "mlp");
+    EXPECT_NEAR(std::stod(rd[k + 1][14]), p["decoded_work_per_pixel"].get<double>(), 1e-3);
     // The chunk breakdown adds up to the file.
     double sum = 0;
     for (const auto& [name, bytes] : p["chunks"].items()) sum += bytes.get<double>();
@@ -169,6 +178,18 @@ void CompareAgainstItselfIsZero() {
   const nlohmann::json c = ReadJson(json);
   EXPECT_NEAR(c["bd_rate_percent"].get<double>(), 0.0, 1e-9);
   EXPECT_NEAR(c["bd_psnr_db"].get<double>(), 0.0, 1e-9);
+  // --plot: the points' table (written with or without matplotlib) carries each file's cost.
+  const int drawn =
+      Invoke(RunReport, {"report", "compare", dir_, dir_, "--plot", root_ + "/compare.png"});
+  const auto rows = ReadCsv(root_ + "/compare.csv");
+  ASSERT_EQ(rows.size(), 5u);  // header, two points per series
+  ASSERT_EQ(rows[0][4], "work_per_pixel");
+  ASSERT_EQ(rows[0][5], "seconds_per_view");
+  for (size_t k = 1; k < rows.size(); ++k) {
+    EXPECT_GT(std::stod(rows[k][4]), 0.0);
+    EXPECT_GT(std::stod(rows[k][5]), 0.0);
+  }
+  if (drawn == 0) EXPECT_FALSE(ReadText(root_ + "/compare_cost.png").empty());
 }
 
 TEST(Report, BuiltinSweepMatchesEvalResumesAndCompares) {
