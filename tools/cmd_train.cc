@@ -43,6 +43,8 @@ int RunTrain(int argc, char** argv) {
     TrainEncodeEvaluate(o);
   } catch (const trainer::TrainingStopped& e) {
     std::printf("%s; continue with the same command and --resume\n", e.what());
+    // A run stopped by a signal exits as the shell reports one (130 for Ctrl-C, 143 SIGTERM).
+    if (e.signal() != 0) return 128 + e.signal();
   }
   return 0;
 }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
@@ -21,6 +22,7 @@
 #include "trainer/train/camera_warmup.h"
 #include "trainer/train/checkpoint.h"
 #include "trainer/train/eval_progress.h"
+#include "trainer/train/stop_signal.h"
 #include "trainer/train/train_config.h"
 #include "trainer/train/trainer.h"
 
@@ -73,11 +75,16 @@ void CheckResumedSettings(const trainer::TrainOptions& o) {
 
 // A finished or started run is work a second `ecrf train -o` into its directory would silently
 // replace: refused, naming what is there, unless the user resumes or overwrites it.
-void RefuseExistingRun(const std::string& out_dir) {
+std::string RunFilesIn(const std::string& out_dir) {
   std::string found;
   for (const char* name : {"checkpoint.ckpt", "scene.ecrf", "metrics.json", "config.json"}) {
     if (FileExists(out_dir + "/" + name)) found += std::string(found.empty() ? "" : ", ") + name;
   }
+  return found;
+}
+
+void RefuseExistingRun(const std::string& out_dir) {
+  const std::string found = RunFilesIn(out_dir);
   if (found.empty()) return;
   throw std::invalid_argument(out_dir + " already holds a run (" + found +
                               "): --resume continues it, --overwrite replaces it, or choose "
@@ -112,8 +119,13 @@ void CheckRunCanStart(const trainer::TrainOptions& options) {
   }
   if (options.resume && !FileExists(options.out_dir + "/checkpoint.ckpt") &&
       !FileExists(trainer::CameraWarmupDir(options) + "/checkpoint.ckpt")) {
-    throw std::invalid_argument("--resume: no checkpoint to resume from (" + options.out_dir +
-                                "/checkpoint.ckpt does not exist)");
+    const std::string found = RunFilesIn(options.out_dir);
+    throw std::invalid_argument(
+        "--resume: " + options.out_dir + " has no checkpoint.ckpt to continue from" +
+        (found.empty() ? " (it holds no run): start the run without --resume"
+                       : " (it holds " + found +
+                             ": the run stopped before its first checkpoint): start it again "
+                             "with --overwrite"));
   }
   if (options.resume) CheckResumedSettings(options);
   if (!options.resume && !options.overwrite) RefuseExistingRun(options.out_dir);
@@ -379,6 +391,13 @@ void SaveRenders(const trainer::TrainOptions& o, const trainer::EvalResult& d) {
 
 }  // namespace
 
+bool CanResume(const trainer::TrainOptions& o) {
+  const std::string path = o.out_dir + "/checkpoint.ckpt";
+  if (!FileExists(path)) return false;
+  const trainer::CheckpointRunInfo info = trainer::ReadCheckpointRunInfo(path);
+  return info.has_config && trainer::ChangedSettings(info.config, o).empty();
+}
+
 nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
   CheckRunCanStart(options);
   const OutputDirectory out_dir(options.out_dir);  // before the data: a bad -o fails now
@@ -394,6 +413,8 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
   WriteRunConfig(options);
   trainer::SceneFit fit = trainer::FitScene(o.scene_type, train);
   PrintSceneFit(fit);
+  // Ctrl-C or SIGTERM while training: a checkpoint, then TrainingStopped (stop_signal.h).
+  auto stop_on_signal = std::make_unique<trainer::StopSignalScope>();
   const bool warmed_up = trainer::WarmUpCameras(o, fit, &train, &test);
   if (warmed_up) {
     fit = trainer::FitScene(o.scene_type, train);  // on the refined cameras
@@ -405,6 +426,7 @@ nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options) {
   trainer::TensorfModel model(trainer::ConfigFor(o, train, fit));
   trainer::RateState rate;
   const trainer::TrainResult r = trainer::Train(o, train, test, &model, &rate);
+  stop_on_signal.reset();  // encoding and scoring stop at Ctrl-C as any program does
 
   size_t float_bytes = 0;
   for (const auto& a : model.NamedParameters()) float_bytes += a.size * sizeof(float);

@@ -18,6 +18,10 @@ namespace tools {
 // Returns what it writes to RUN/metrics.json. Throws std::exception with a message on failure.
 nlohmann::json TrainEncodeEvaluate(const trainer::TrainOptions& options);
 
+// Whether RUN/checkpoint.ckpt exists and was written with the settings of `options`: a run
+// stopped (Ctrl-C, SIGTERM, a kill) that --resume can continue.
+bool CanResume(const trainer::TrainOptions& options);
+
 }  // namespace tools
 }  // namespace ecrf
 

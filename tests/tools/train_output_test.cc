@@ -16,7 +16,9 @@
 #include "tests/common/scoped_temp_dir.h"
 #include "tools/cli_args.h"
 #include "tools/commands.h"
+#include "tools/train_run.h"
 #include "trainer/data/file_io.h"
+#include "trainer/train/trainer.h"
 
 namespace ecrf {
 namespace tools {
@@ -64,11 +66,25 @@ TEST_F(TrainOutputTest, ReadOnlyOutputFailsBeforeLoadingData) {
   chmod(dir.c_str(), 0755);
 }
 
-TEST_F(TrainOutputTest, ResumeWithoutCheckpointSaysSo) {
-  const std::string error =
-      ErrorOf({"train", "--scene", "builtin", "--resume", "-o", root_ + "/fresh"});
-  EXPECT_NE(error.find("--resume: no checkpoint"), std::string::npos) << error;
-  EXPECT_FALSE(FileExists(root_ + "/fresh"));
+// --resume where nothing can be resumed says what is there and what to do instead.
+TEST_F(TrainOutputTest, ResumeWithoutCheckpointSaysWhatIsThereAndWhatToDo) {
+  const std::string fresh = root_ + "/fresh";
+  const std::string error = ErrorOf({"train", "--scene", "builtin", "--resume", "-o", fresh});
+  EXPECT_NE(error.find("--resume: " + fresh +
+                       " has no checkpoint.ckpt to continue from (it holds "
+                       "no run): start the run without --resume"),
+            std::string::npos)
+      << error;
+  EXPECT_FALSE(FileExists(fresh));
+  // A run stopped before its first checkpoint leaves its config.json.
+  const std::string started = root_ + "/started";
+  ASSERT_EQ(mkdir(started.c_str(), 0755), 0);
+  trainer::WriteFileAtomically(started + "/config.json", std::string("{}"));
+  const std::string again = ErrorOf({"train", "--scene", "builtin", "--resume", "-o", started});
+  EXPECT_NE(again.find("(it holds config.json: the run stopped before its first checkpoint): "
+                       "start it again with --overwrite"),
+            std::string::npos)
+      << again;
 }
 
 // A directory that holds a run is not overwritten silently: refused before the data is read
@@ -160,6 +176,27 @@ TEST_F(TrainOutputTest, RunWithCameraWarmUpResumesToTheSameFile) {
   EXPECT_FALSE(FileExists(parts + "/scene.ecrf"));
   ASSERT_EQ(Invoke(RunTrain, with({"--resume", "-o", parts})), 0);
   EXPECT_TRUE(ReadAll(parts + "/scene.ecrf") == file) << "the resumed run wrote another file";
+}
+
+// A sweep continues a point's checkpoint only when it holds the point's own settings (CanResume),
+// and starts it afresh otherwise.
+TEST_F(TrainOutputTest, CanResumeAStoppedRunWithItsOwnSettingsOnly) {
+  const std::string run = root_ + "/stopped";
+  ASSERT_EQ(Invoke(RunTrain, {"train", "--scene", "builtin", "--iters", "40", "--batch", "256",
+                              "--final-grid", "32", "--max-test-views", "1", "--stop-after", "10",
+                              "-o", run}),
+            0);
+  const trainer::CheckpointRunInfo info =
+      trainer::ReadCheckpointRunInfo(run + "/checkpoint.ckpt");
+  ASSERT_TRUE(info.has_config);
+  trainer::TrainOptions o = info.config;
+  o.out_dir = run;
+  EXPECT_TRUE(CanResume(o));
+  o.iters += 1;
+  EXPECT_FALSE(CanResume(o));
+  o = info.config;
+  o.out_dir = root_ + "/elsewhere";
+  EXPECT_FALSE(CanResume(o));
 }
 
 TEST(OutputDirectory, ProbesAndRemovesOnlyWhatItCreatedWhileEmpty) {

@@ -32,6 +32,7 @@
 #include "trainer/train/checkpoint.h"
 #include "trainer/train/train_config.h"
 #include "trainer/train/train_options.h"
+#include "trainer/train/trainer.h"
 
 namespace ecrf {
 namespace tools {
@@ -350,8 +351,9 @@ struct TrainingPace {
   int trained = 0;
 };
 
-// Trains point k into its run directory (again from the start, should an earlier sweep have left
-// it unfinished), first saying how many points are left to train and when the sweep should end.
+// Trains point k into its run directory (continuing the checkpoint of an earlier sweep's
+// unfinished run of the same settings, else from the start), first saying how many points are left
+// to train and when the sweep should end.
 nlohmann::json TrainPoint(const SweepRuns& sweep, size_t k, const std::string& out,
                           TrainingPace* pace, trainer::TrainOptions* run) {
   const std::string run_dir = out + "/runs/" + sweep.names[k];
@@ -365,7 +367,10 @@ nlohmann::json TrainPoint(const SweepRuns& sweep, size_t k, const std::string& o
   std::fprintf(stderr, "report: point %zu/%zu (%s): training into %s; %zu to train, %s\n", k + 1,
                count, sweep.names[k].c_str(), run_dir.c_str(), left, eta.c_str());
   run->out_dir = run_dir;
-  run->overwrite = true;
+  run->resume = CanResume(*run);  // stopped by Ctrl-C or SIGTERM, or killed after a checkpoint
+  run->overwrite = !run->resume;
+  if (run->resume)
+    std::fprintf(stderr, "report: continuing %s from its checkpoint\n", run_dir.c_str());
   const auto start = std::chrono::steady_clock::now();
   nlohmann::json metrics = TrainEncodeEvaluate(*run);
   pace->seconds += trainer::SecondsSince(start);
@@ -489,7 +494,13 @@ int RunReportSweep(int argc, char** argv) {
   nlohmann::json report = SweepReportHead(f, sweep, o, anchors);
   const std::string plan_dir = AbsolutePath(f.out) + "/plan";
   if (f.plan) return PlanSweep(f, args, sweep, plan_dir, SceneName(o));
-  const std::vector<std::string> unfinished = RunPoints(f, sweep, plan_dir, &report);
+  std::vector<std::string> unfinished;
+  try {
+    unfinished = RunPoints(f, sweep, plan_dir, &report);
+  } catch (const trainer::TrainingStopped& e) {  // Ctrl-C or SIGTERM: the point's checkpoint
+    std::fprintf(stderr, "report: %s; the same command continues the sweep from there\n", e.what());
+    return e.signal() != 0 ? 128 + e.signal() : 1;
+  }
   if (!unfinished.empty()) {
     PrintUnfinished(unfinished, sweep.options.size(), f.out);
     return 1;

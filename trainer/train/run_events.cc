@@ -12,6 +12,7 @@
 #include "trainer/data/seconds_since.h"
 #include "trainer/train/camera_refine.h"
 #include "trainer/train/evaluate.h"
+#include "trainer/train/stop_signal.h"
 #include "trainer/train/train_events.h"
 
 namespace ecrf {
@@ -35,15 +36,39 @@ void EvaluateTestCurve(TrainSession& s, int it) {
                e.psnr, s.result.psnr_curve.back().first);
 }
 
+namespace {
+
+bool TimedCheckpointDue(const TrainSession& s, int done) {
+  return !s.checkpoint_path.empty() && s.o.checkpoint_minutes > 0.f && done < s.o.iters &&
+         SecondsSince(s.last_checkpoint) >= 60.0 * s.o.checkpoint_minutes;
+}
+
+void WriteRunCheckpoint(TrainSession& s, int it) {
+  CheckModelFinite(*s.model, it, s.checkpoint_path);
+  s.SaveCheckpoint(it + 1, s.TrainSeconds());
+  s.last_checkpoint = TrainClock::now();
+  s.last_checkpoint_done = it + 1;
+}
+
+}  // namespace
+
 void SaveRunCheckpoint(TrainSession& s, int it) {
   const int done = it + 1;
-  if (!s.schedule.CheckpointDue(done)) return;
-  CheckModelFinite(*s.model, it, s.checkpoint_path);
-  s.SaveCheckpoint(done, s.TrainSeconds());
+  if (s.schedule.CheckpointDue(done) || TimedCheckpointDue(s, done)) WriteRunCheckpoint(s, it);
 }
 
 void StopIfAsked(TrainSession& s, int it) {
   const int done = it + 1;
+  if (const int signal = StopSignal(); signal != 0 && done < s.o.iters) {
+    // This step's checkpoint, unless SaveRunCheckpoint has just written it.
+    if (!s.checkpoint_path.empty() && s.last_checkpoint_done != done) WriteRunCheckpoint(s, it);
+    throw TrainingStopped(
+        std::string("training interrupted (") + StopSignalName(signal) + ") after iteration " +
+            std::to_string(done) + " of " + std::to_string(s.o.iters) +
+            (s.checkpoint_path.empty() ? std::string(": no output directory, nothing kept")
+                                       : "; " + s.checkpoint_path + " holds it"),
+        signal);
+  }
   if (s.schedule.StopDue(done)) {
     throw TrainingStopped("training stopped after iteration " + std::to_string(done) +
                           " (--stop-after)");
@@ -51,10 +76,7 @@ void StopIfAsked(TrainSession& s, int it) {
   const double minutes = SecondsSince(s.started) / 60.0;
   if (s.o.stop_after_minutes > 0.f && minutes >= s.o.stop_after_minutes && done < s.o.iters) {
     // Unlike --stop-after, the stop is not known in advance: its checkpoint is written here.
-    if (!s.checkpoint_path.empty() && !s.schedule.CheckpointDue(done)) {
-      CheckModelFinite(*s.model, it, s.checkpoint_path);
-      s.SaveCheckpoint(done, s.TrainSeconds());
-    }
+    if (!s.checkpoint_path.empty() && s.last_checkpoint_done != done) WriteRunCheckpoint(s, it);
     throw TrainingStopped("training stopped after " + std::to_string(int(minutes)) +
                           " minutes at iteration " + std::to_string(done) +
                           " (--stop-after-minutes; --resume continues it)");

@@ -92,6 +92,10 @@ struct TrainSession {
   int mse_count = 0;
   TrainClock::time_point interval_start;
   double eval_seconds = 0.0;  // evaluations of this process (not training time)
+  // The latest checkpoint this process wrote: --checkpoint-minutes counts from it, and a stop
+  // does not write the same iteration twice.
+  TrainClock::time_point last_checkpoint = TrainClock::now();
+  int last_checkpoint_done = -1;
 
   TrainResult result;
 

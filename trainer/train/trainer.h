@@ -62,11 +62,17 @@ TensorfConfig ConfigFor(const TrainOptions& options, const Dataset& data);
 TrainResult Train(const TrainOptions& options, const Dataset& train, const Dataset& test,
                   TensorfModel* model, RateState* rate = nullptr);
 
-// Thrown by Train when options.stop_after is reached: the checkpoint written at that
-// iteration (if it is a checkpoint iteration) is the run's state.
+// Thrown by Train when options.stop_after (or stop_after_minutes) is reached, or a stop signal
+// arrived (stop_signal.h): the checkpoint written at that iteration (if the run has an output
+// directory) is the run's state.
 class TrainingStopped : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  explicit TrainingStopped(const std::string& what, int signal = 0)
+      : std::runtime_error(what), signal_(signal) {}
+  int signal() const { return signal_; }  // the signal that stopped the run; 0: an option
+
+ private:
+  int signal_;
 };
 
 // Checkpoint <-> model (+ training progress).
