@@ -1,6 +1,9 @@
 #include "tools/encode_run.h"
 
+#include <filesystem>
 #include <nlohmann/json.hpp>
+#include <string>
+#include <system_error>
 #include <utility>
 
 #include "trainer/train/trainer.h"
@@ -8,13 +11,23 @@
 namespace ecrf {
 namespace tools {
 
+std::string MetaDataSource(const trainer::TrainOptions& o) {
+  const std::string source = trainer::DataSource(o);
+  if (o.meta_data_path || o.procedural_scene != trainer::ProceduralScene::kNone) return source;
+  // The folder's own name: "../data/chair/" and "." (run inside chair/) both give "chair".
+  std::error_code error;
+  std::filesystem::path p = std::filesystem::absolute(source, error).lexically_normal();
+  if (!p.has_filename()) p = p.parent_path();
+  return error ? std::string() : p.filename().string();
+}
+
 encoder::EncodeOptions TrainedRunEncodeOptions(const trainer::TrainOptions& o,
                                                const trainer::RateState& rate, int iterations,
                                                float final_lambda_e) {
   encoder::EncodeOptions eo = trainer::RunEncodeOptions(o, rate);
   eo.metadata_json = nlohmann::json{
       {"encoder", "ecrf"},
-      {"data", trainer::DataSource(o)},
+      {"data", MetaDataSource(o)},
       {"preset", trainer::NameOf(o.preset)},
       {"iterations", iterations},
       {"lambda_e", final_lambda_e},

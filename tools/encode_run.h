@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "encoder/encode_rate_control.h"
@@ -16,6 +17,10 @@
 
 namespace ecrf {
 namespace tools {
+
+// What the metadata chunk says of the data: the procedural scene's name, the dataset folder's
+// name, or with meta_data_path the path as given.
+std::string MetaDataSource(const trainer::TrainOptions& config);
 
 // The encoder settings of a run: its block shapes and frozen steps, coefficient depth, MLP levels
 // and rounding offset, and the metadata chunk (data, preset, iterations, final lambda_e, alpha).

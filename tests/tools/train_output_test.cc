@@ -16,6 +16,7 @@
 #include "tests/common/scoped_temp_dir.h"
 #include "tools/cli_args.h"
 #include "tools/commands.h"
+#include "tools/encode_run.h"
 #include "tools/train_run.h"
 #include "trainer/data/file_io.h"
 #include "trainer/train/trainer.h"
@@ -186,8 +187,7 @@ TEST_F(TrainOutputTest, CanResumeAStoppedRunWithItsOwnSettingsOnly) {
                               "--final-grid", "32", "--max-test-views", "1", "--stop-after", "10",
                               "-o", run}),
             0);
-  const trainer::CheckpointRunInfo info =
-      trainer::ReadCheckpointRunInfo(run + "/checkpoint.ckpt");
+  const trainer::CheckpointRunInfo info = trainer::ReadCheckpointRunInfo(run + "/checkpoint.ckpt");
   ASSERT_TRUE(info.has_config);
   trainer::TrainOptions o = info.config;
   o.out_dir = run;
@@ -197,6 +197,26 @@ TEST_F(TrainOutputTest, CanResumeAStoppedRunWithItsOwnSettingsOnly) {
   o = info.config;
   o.out_dir = root_ + "/elsewhere";
   EXPECT_FALSE(CanResume(o));
+}
+
+// A shipped file names the dataset folder, not the path on the training machine (#60), unless
+// --meta-data-path asks for it.
+TEST(MetaDataSource, NamesTheDatasetFolderUnlessAskedForThePath) {
+  trainer::TrainOptions o;
+  o.data_dir = "/home/someone/secret-project/scenes/chair/";
+  EXPECT_EQ(MetaDataSource(o), "chair");
+  o.data_dir = "../shared/data/nerf_synthetic_400/mic";
+  EXPECT_EQ(MetaDataSource(o), "mic");
+  const trainer::RateState rate;
+  const nlohmann::json meta =
+      nlohmann::json::parse(TrainedRunEncodeOptions(o, rate, 10, 0.f).metadata_json);
+  EXPECT_EQ(meta["data"], "mic");
+  EXPECT_EQ(meta.dump().find("shared"), std::string::npos) << meta.dump();
+  o.meta_data_path = true;
+  EXPECT_EQ(MetaDataSource(o), "../shared/data/nerf_synthetic_400/mic");
+  o.meta_data_path = false;
+  o.procedural_scene = trainer::ProceduralScene::kBuiltin;
+  EXPECT_EQ(MetaDataSource(o), "builtin");
 }
 
 TEST(OutputDirectory, ProbesAndRemovesOnlyWhatItCreatedWhileEmpty) {

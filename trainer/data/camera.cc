@@ -35,6 +35,14 @@ std::string PoseProblem(const double c2w[3][4]) {
                      c2w[0][1] * (c2w[1][0] * c2w[2][2] - c2w[1][2] * c2w[2][0]) +
                      c2w[0][2] * (c2w[1][0] * c2w[2][1] - c2w[1][1] * c2w[2][0]);
   if (!(det > 0.0)) return "the rotation is a reflection (det < 0)";
+  const double distance = std::hypot(c2w[0][3], c2w[1][3], c2w[2][3]);  // no overflow
+  if (!(distance <= kMaxCameraDistance)) {
+    std::snprintf(text, sizeof(text),
+                  "the camera position is %.3g from the origin, beyond %g scene units (rays are "
+                  "traced in single precision)",
+                  distance, kMaxCameraDistance);
+    return text;
+  }
   return "";
 }
 

@@ -29,12 +29,16 @@ struct Camera {
 // Largest |R^T R - I| entry accepted for a camera rotation: poses written with 6 or more
 // significant digits (COLMAP, Blender, nerfstudio) are orthonormal far within it.
 inline constexpr double kRotationTolerance = 1e-3;
+// Camera positions farther than this from the origin (scene units) are refused: rays are traced
+// in binary32, which at 1e6 keeps 0.06 units of precision and at 1e300 none (#60).
+constexpr double kMaxCameraDistance = 1e6;
 // A pinhole camera's field of view on either axis, in degrees (camera_angle_x = pi, or a focal
 // length of 1e-300, leaves no ray inside the scene).
 inline constexpr double kMinFieldOfViewDegrees = 0.1, kMaxFieldOfViewDegrees = 175.0;
 // |k1| |k2| |p1| |p2| above this are not a lens (real ones stay well below 1).
 inline constexpr double kMaxDistortion = 10.0;
-// The rotation orthonormal within kRotationTolerance and proper (det > 0), the translation finite.
+// The rotation orthonormal within kRotationTolerance and proper (det > 0), the translation finite
+// and within kMaxCameraDistance of the origin.
 std::string PoseProblem(const double c2w[3][4]);
 // A positive size, the field of view within [kMinFieldOfViewDegrees, kMaxFieldOfViewDegrees] on
 // both axes, the principal point within one image size of the image, finite distortion of at

@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "trainer/data/file_io.h"
 #include "trainer/data/llff.h"
 
 namespace ecrf::trainer {
@@ -187,6 +188,7 @@ Camera ResolveIntrinsics(const IntrinsicFields& fields, const std::string& image
 }
 
 json ReadJson(const std::string& path) {
+  CheckRegularFile(path);
   std::ifstream stream(path, std::ios::binary);
   if (!stream) throw std::runtime_error(path + ": cannot open");
   try {

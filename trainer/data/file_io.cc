@@ -1,5 +1,6 @@
 #include "trainer/data/file_io.h"
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -38,7 +39,21 @@ void WriteFileAtomically(const std::string& path, const void* bytes, size_t size
   }
 }
 
+void CheckRegularFile(const std::string& path) {
+  struct stat st;
+  if (stat(path.c_str(), &st) != 0)
+    throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
+  if (S_ISREG(st.st_mode)) return;
+  const char* what = S_ISDIR(st.st_mode)                          ? "a directory"
+                     : S_ISFIFO(st.st_mode)                       ? "a FIFO (named pipe)"
+                     : S_ISSOCK(st.st_mode)                       ? "a socket"
+                     : S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode) ? "a device"
+                                                                  : "not a regular file";
+  throw std::runtime_error(path + ": is " + std::string(what) + ", not a file to read");
+}
+
 std::vector<uint8_t> ReadWholeFile(const std::string& path) {
+  CheckRegularFile(path);
   FILE* f = std::fopen(path.c_str(), "rb");
   if (!f) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
   std::vector<uint8_t> bytes;

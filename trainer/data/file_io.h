@@ -25,6 +25,11 @@ inline void WriteFileAtomically(const std::string& path, const std::string& text
 // Throws std::runtime_error naming the path and the problem.
 std::vector<uint8_t> ReadWholeFile(const std::string& path);
 
+// Throws std::runtime_error naming the path and what it is unless it is a regular file (or a
+// link to one): opening a FIFO for reading blocks until something writes to it, and a device
+// may never end (#60). Every input file of the trainer goes through it.
+void CheckRegularFile(const std::string& path);
+
 }  // namespace trainer
 }  // namespace ecrf
 

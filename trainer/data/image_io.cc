@@ -41,6 +41,7 @@ struct FileCloser {
 using FilePtr = std::unique_ptr<FILE, FileCloser>;
 
 FilePtr OpenForRead(const std::string& path) {
+  CheckRegularFile(path);
   FilePtr file(std::fopen(path.c_str(), "rb"));
   if (!file) Fail(path, std::string("cannot open: ") + std::strerror(errno));
   return file;

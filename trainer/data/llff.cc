@@ -25,7 +25,7 @@ constexpr double kNearMargin = 0.9;
 constexpr double kAspectTolerance = 0.01;
 // Camera centres farther from the origin than this, in the units where the nearest bound is
 // 1 / kBoundFactor, mean bounds that do not belong to the poses (real captures: below 10).
-constexpr double kMaxCameraDistance = 1e4;
+constexpr double kMaxScaledCameraDistance = 1e4;
 
 using Mat34 = double[3][4];
 
@@ -210,13 +210,13 @@ DatasetManifest ReadLlffManifest(const std::string& dir, const std::string& spli
     const double distance =
         std::sqrt(camera.c2w[0][3] * camera.c2w[0][3] + camera.c2w[1][3] * camera.c2w[1][3] +
                   camera.c2w[2][3] * camera.c2w[2][3]);
-    if (!(distance <= kMaxCameraDistance)) {
+    if (!(distance <= kMaxScaledCameraDistance)) {
       char text[200];
       std::snprintf(
           text, sizeof(text),
           "row %zu: scaled so that the nearest bound (%g) is 1/0.75, the camera lies %.3g "
           "from the origin (at most %g): the bounds do not fit the poses",
-          i, min_bound, distance, kMaxCameraDistance);
+          i, min_bound, distance, kMaxScaledCameraDistance);
       fail(text);
     }
   }

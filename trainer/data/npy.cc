@@ -6,6 +6,8 @@
 #include <iterator>
 #include <stdexcept>
 
+#include "trainer/data/file_io.h"
+
 namespace ecrf::trainer {
 namespace {
 
@@ -133,6 +135,7 @@ NpyMatrix ParseNpyMatrix(const std::string& name, const std::vector<uint8_t>& by
 }
 
 NpyMatrix ReadNpyMatrix(const std::string& path) {
+  CheckRegularFile(path);
   std::ifstream stream(path, std::ios::binary);
   if (!stream) throw std::runtime_error(path + ": cannot open");
   const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(stream)),

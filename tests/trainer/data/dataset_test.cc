@@ -1,6 +1,7 @@
 #include "trainer/data/dataset.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -256,10 +257,38 @@ TEST_F(DatasetTest, RefusesDegenerateAndMirroredPoses) {
   intrinsics["k1"] = 1e30;
   EXPECT_TRUE(Contains(error_for(intrinsics), "k1 = 1e+30 is not a lens")) << error_for(intrinsics);
 
+  json far = root;  // finite, but no single-precision ray can start there
+  far["frames"][1]["transform_matrix"][0][3] = 1e300;
+  error = error_for(far);
+  EXPECT_TRUE(Contains(error, "frame 1") && Contains(error, "the camera position is 1e+300"))
+      << error;
+
   json slightly_off = root;  // rounding in written poses stays accepted
   slightly_off["frames"][0]["transform_matrix"][0][0] = 1.0 + 2e-5;
   WriteJson("transforms_train.json", slightly_off);
   EXPECT_NO_THROW(LoadDataset(Dir(), "train", 1));
+}
+
+// A FIFO where an image or the camera file should be: refused at once, naming it, instead of
+// blocking in open() until something writes to it (#60).
+TEST_F(DatasetTest, FifoImageOrCameraFileIsRefusedWithoutBlocking) {
+  const json root = WriteBlender();
+  const std::string image = (dir_ / "train/r_1.png").string();
+  fs::remove(image);
+  ASSERT_EQ(mkfifo(image.c_str(), 0644), 0);
+  std::string error = ErrorOf([&] { LoadDataset(Dir(), "train", 1); });
+  EXPECT_TRUE(Contains(error, image) && Contains(error, "is a FIFO (named pipe)")) << error;
+  const std::string cameras = Path("transforms_train.json");
+  fs::remove(cameras);
+  ASSERT_EQ(mkfifo(cameras.c_str(), 0644), 0);
+  error = ErrorOf([&] { LoadDataset(Dir(), "train", 1); });
+  EXPECT_TRUE(Contains(error, cameras) && Contains(error, "is a FIFO (named pipe)")) << error;
+  fs::remove(image);
+  fs::create_directory(image);
+  fs::remove(cameras);
+  WriteJson("transforms_train.json", root);  // the camera file again; the image a directory
+  error = ErrorOf([&] { LoadDataset(Dir(), "train", 1); });
+  EXPECT_TRUE(Contains(error, image) && Contains(error, "is a directory")) << error;
 }
 
 TEST_F(DatasetTest, MissingBlenderImageIsAnError) {
