@@ -16,6 +16,7 @@
 #include "decoder/ray_marcher.h"
 #include "decoder/scene_decoder.h"
 #include "ecrf/decoder.h"
+#include "format/container.h"
 #include "tests/common/invoke.h"
 #include "tests/common/scoped_temp_dir.h"
 #include "tools/bench/benches.h"
@@ -304,6 +305,10 @@ TEST(Cli, VersionFlagsAndCommandAgree) {
   const Output version = Capture(RunEcrf, {"ecrf", "version"});
   EXPECT_EQ(version.rc, 0);
   EXPECT_NE(version.out.find(ecrf_version_string()), std::string::npos) << version.out;
+  // The bitstream as major.minor, the newest this build knows (SPEC.md's header says which).
+  EXPECT_NE(version.out.find("bitstream 1.0 to 1." + std::to_string(int(kVersionMinor))),
+            std::string::npos)
+      << version.out;
   EXPECT_EQ(Capture(RunEcrf, {"ecrf", "--version"}).out, version.out);
   EXPECT_EQ(Capture(RunEcrf, {"ecrf", "-V"}).out, version.out);
 }
