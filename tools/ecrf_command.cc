@@ -20,9 +20,9 @@ namespace {
 // (a file says its own, `ecrf info`); SPEC.md names both in its header and section 9.
 void PrintVersion() {
   std::printf(
-      "ecrf %s: reads bitstream %d.0 to %d.%d, writes %d.%d when a stream needs it (SPEC.md)\n",
-      ecrf_version_string(), ecrf_bitstream_version(), kVersionMajor, kVersionMinor, kVersionMajor,
-      kVersionMinor);
+      "ecrf %s: reads bitstream %d.0 to %d.%d, writes each stream at the lowest of them its "
+      "features need (SPEC.md)\n",
+      ecrf_version_string(), ecrf_bitstream_version(), kVersionMajor, kVersionMinor);
 }
 
 int RunVersion(int argc, char** argv) {
