@@ -1,6 +1,7 @@
 #include "encoder/encode_rate_control.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -101,17 +102,19 @@ TargetSizeResult EncodeToTargetSize(const SceneDescription& scene, const EncodeO
 size_t ParseByteSize(const std::string& text) {
   char* end = nullptr;
   const double v = std::strtod(text.c_str(), &end);
-  const std::string unit = end ? std::string(end) : "";
+  // Units in any case ("500kb" is what people type): bytes are the only quantity here.
+  std::string unit = end ? std::string(end) : "";
+  for (char& ch : unit) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
   double mult = 0;
-  if (unit.empty() || unit == "B")
+  if (unit.empty() || unit == "b")
     mult = 1;
-  else if (unit == "KB" || unit == "kB" || unit == "K" || unit == "k")
+  else if (unit == "kb" || unit == "k")
     mult = 1e3;
-  else if (unit == "MB" || unit == "M")
+  else if (unit == "mb" || unit == "m")
     mult = 1e6;
-  else if (unit == "KiB")
+  else if (unit == "kib")
     mult = 1024;
-  else if (unit == "MiB")
+  else if (unit == "mib")
     mult = 1024.0 * 1024;
   if (mult == 0 || !(v > 0) || !std::isfinite(v) || v * mult > 1e12) {
     throw std::invalid_argument("'" + text + "' is not a size (e.g. 500KB, 1.2MB, 300000B)");

@@ -327,14 +327,15 @@ PYBIND11_MODULE(ecrf, m) {
       .def("mlp_params", &MlpParams, "Basis and MLP parameters in MLPW order (float32 copy)")
       .def("render", &Render, py::arg("c2w"), py::arg("fx"), py::arg("fy"), py::arg("cx"),
            py::arg("cy"), py::arg("width"), py::arg("height"), py::kw_only(),
-           py::arg("threads") = 1, py::arg("early_stop") = defaults.early_stop_transmittance,
+           py::arg("threads") = 0, py::arg("early_stop") = defaults.early_stop_transmittance,
            py::arg("step_scale") = defaults.step_scale, py::arg("weight_threshold") = py::none(),
            py::arg("skip_empty_space") = defaults.skip_empty_space != 0,
            py::arg("max_samples") = defaults.max_samples,
            py::arg("sample_budget") = defaults.sample_budget,
            py::arg("work_budget") = defaults.work_budget, py::arg("rgb") = false,
            "Renders one view: uint8 [height][width][4] RGBA, or with rgb=True float32 "
-           "[height][width][3] in [0, 1]. threads=0: all hardware threads.");
+           "[height][width][3] in [0, 1]. threads: 0 (the default) all hardware threads, as the "
+           "CLI.");
   m.def("decode", &Decode, py::arg("data"), py::arg("storage") = "float32",
         py::arg("memory_budget") = py::none(), py::arg("decode_budget") = py::none(),
         "Decodes an .ecrf stream from bytes-like data or a path; raises ecrf.DecodeError");

@@ -26,6 +26,7 @@
 #include "trainer/data/file_io.h"
 #include "trainer/data/seconds_since.h"
 #include "trainer/train/checkpoint.h"
+#include "trainer/train/eval_progress.h"
 
 namespace ecrf {
 namespace tools {
@@ -390,6 +391,8 @@ int RunRender(int argc, char** argv) {
   const LoadedScene s = LoadScene(c);
   double seconds = 0.0, max_work = 0.0;
   dec::RenderStats stats;
+  // An orbit of 36 views at 400x400 takes minutes: views done, time per view and ETA (#61).
+  trainer::EvalProgress progress("render", int(cameras.size()));
   for (const auto& [name, camera] : cameras) {
     const auto start = std::chrono::steady_clock::now();
     dec::RenderStats view;
@@ -399,6 +402,7 @@ int RunRender(int argc, char** argv) {
     max_work = std::max(max_work, static_cast<double>(view.work) /
                                       (static_cast<double>(camera.width) * camera.height));
     trainer::SavePng(frames_dir + "/" + name + ".png", img);
+    progress.ViewDone();
   }
   std::printf(
       "rendered %zu views into %s: %.1f ms/view (%d thread%s), decode %.1f ms, "

@@ -83,6 +83,9 @@ TEST(EncodeRateControl, ParsesSizes) {
   EXPECT_EQ(encoder::ParseByteSize("1.2MB"), 1200000u);
   EXPECT_EQ(encoder::ParseByteSize("300000"), 300000u);
   EXPECT_EQ(encoder::ParseByteSize("2KiB"), 2048u);
+  EXPECT_EQ(encoder::ParseByteSize("500kb"), 500000u);  // units in any case
+  EXPECT_EQ(encoder::ParseByteSize("1mib"), 1048576u);
+  EXPECT_EQ(encoder::ParseByteSize("7b"), 7u);
   for (const char* bad : {"", "KB", "-5KB", "12 parsecs", "1e99MB", "nan"}) {
     EXPECT_THROW(encoder::ParseByteSize(bad), std::invalid_argument) << bad;
   }

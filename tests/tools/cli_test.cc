@@ -156,7 +156,7 @@ TEST(Cli, OtherCommandsHelpExitsZeroWithTheirFlags) {
       {RunConformance, {"conformance", "--help"}, {"--write", "--check", "--retrain-builtin"}},
       {RunReport,
        {"report", "render", "--help"},
-       {"REPORT", "--lambda", "--test-stride", "--max-views"}},
+       {"REPORT", "--lambda", "--test-stride", "--max-test-views"}},
       {RunReport, {"report", "compare", "--help"}, {"A", "B", "--json", "--plot"}},
       {RunReport, {"report", "plot", "--help"}, {"REPORT"}},
       {RunBench, {"bench", "coder", "--help"}, {"--json"}},

@@ -233,12 +233,13 @@ int RunReportRender(int argc, char** argv) {
       ->type_name("K")
       ->check(CLI::Range(1, 1000000))
       ->default_str("twice the sweep's test stride");
-  app->add_option("--max-views", so.max_views,
+  app->add_option("--max-test-views", so.max_views,
                   "at most N views per setting (0 = the sweep's --max-test-views)")
       ->type_name("N")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   AddRenamedFlag(app.get(), "--stride", "--test-stride");
+  AddRenamedFlag(app.get(), "--max-views", "--max-test-views");  // as train and eval call it
   if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
   nlohmann::json report = ReadReport(dir);
   RunSpeedSweep(dir, so, &report);

@@ -1,6 +1,7 @@
 #include "trainer/data/dataset.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -429,6 +430,7 @@ DatasetManifest ReadDatasetManifest(const std::string& dir, const std::string& s
     throw std::runtime_error("unknown split '" + split + "' (expected train, val or test)");
   }
   std::error_code error;
+  if (!fs::exists(dir, error)) throw std::runtime_error(dir + ": no such directory");
   if (!fs::is_directory(dir, error)) throw std::runtime_error(dir + ": not a directory");
   const fs::path root(dir);
   const fs::path blender = root / ("transforms_" + split + ".json");
@@ -447,9 +449,19 @@ DatasetManifest ReadDatasetManifest(const std::string& dir, const std::string& s
     manifest.estimated_poses = true;
     return manifest;
   }
+  // Photos without poses: `ecrf prepare` makes a dataset of them (docs/photos-to-dataset.md).
+  bool photos = false;
+  for (const auto& entry : fs::directory_iterator(root, error)) {
+    std::string ext = entry.path().extension().string();
+    for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    photos = photos || ext == ".jpg" || ext == ".jpeg" || ext == ".png";
+  }
   throw std::runtime_error(dir + ": neither transforms_" + split +
                            ".json nor transforms.json found " +
-                           "(Blender, Instant-NGP), nor poses_bounds.npy (LLFF)");
+                           "(Blender, Instant-NGP), nor poses_bounds.npy (LLFF)" +
+                           (photos ? std::string("; for photos without camera poses: ecrf prepare " +
+                                                 dir + " -o DATASET_DIR, then --data DATASET_DIR")
+                                   : std::string()));
 }
 
 std::vector<View> LoadViews(const std::vector<ViewSource>& sources, int downscale) {

@@ -300,9 +300,19 @@ TEST_F(DatasetTest, MissingBlenderImageIsAnError) {
 
 TEST_F(DatasetTest, ReportsMissingDirectoryFileAndSplit) {
   EXPECT_TRUE(
-      Contains(ErrorOf([&] { LoadDataset(Path("nothing"), "train", 1); }), "not a directory"));
-  EXPECT_TRUE(Contains(ErrorOf([&] { LoadDataset(Dir(), "train", 1); }),
-                       "transforms_train.json nor transforms.json"));
+      Contains(ErrorOf([&] { LoadDataset(Path("nothing"), "train", 1); }), "no such directory"));
+  WriteJson("a_file", json::object());
+  EXPECT_TRUE(
+      Contains(ErrorOf([&] { LoadDataset(Path("a_file"), "train", 1); }), "not a directory"));
+  std::string error = ErrorOf([&] { LoadDataset(Dir(), "train", 1); });
+  EXPECT_TRUE(Contains(error, "transforms_train.json nor transforms.json")) << error;
+  EXPECT_FALSE(Contains(error, "ecrf prepare")) << error;
+  // A folder of photos without poses: the message points to `ecrf prepare`.
+  WriteRgba("IMG_0001.JPG.png", 4, 4, 0.5f);
+  fs::rename(dir_ / "IMG_0001.JPG.png", dir_ / "IMG_0001.JPG");
+  error = ErrorOf([&] { LoadDataset(Dir(), "train", 1); });
+  EXPECT_TRUE(Contains(error, "for photos without camera poses: ecrf prepare " + Dir())) << error;
+  fs::remove(dir_ / "IMG_0001.JPG");
   WriteBlender();
   EXPECT_TRUE(
       Contains(ErrorOf([&] { LoadDataset(Dir(), "training", 1); }), "unknown split 'training'"));
