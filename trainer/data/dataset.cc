@@ -456,12 +456,12 @@ DatasetManifest ReadDatasetManifest(const std::string& dir, const std::string& s
     for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
     photos = photos || ext == ".jpg" || ext == ".jpeg" || ext == ".png";
   }
-  throw std::runtime_error(dir + ": neither transforms_" + split +
-                           ".json nor transforms.json found " +
-                           "(Blender, Instant-NGP), nor poses_bounds.npy (LLFF)" +
-                           (photos ? std::string("; for photos without camera poses: ecrf prepare " +
-                                                 dir + " -o DATASET_DIR, then --data DATASET_DIR")
-                                   : std::string()));
+  throw std::runtime_error(
+      dir + ": neither transforms_" + split + ".json nor transforms.json found " +
+      "(Blender, Instant-NGP), nor poses_bounds.npy (LLFF)" +
+      (photos ? std::string("; for photos without camera poses: ecrf prepare " + dir +
+                            " -o DATASET_DIR, then --data DATASET_DIR")
+              : std::string()));
 }
 
 std::vector<View> LoadViews(const std::vector<ViewSource>& sources, int downscale) {
