@@ -11,6 +11,7 @@
 #include <string>
 
 #include "tests/common/scoped_temp_dir.h"
+#include "tests/common/tiny_run.h"
 #include "trainer/train/train_options.h"
 #include "trainer/train/trainer.h"
 
@@ -19,17 +20,11 @@ namespace trainer {
 namespace {
 
 TrainOptions TinyRun() {
-  TrainOptions o = PresetOptions("tiny");
-  o.procedural_scene = ProceduralScene::kBuiltin;
-  o.builtin_size = 32;
-  o.builtin_views = 16;
-  o.iters = 40;
+  TrainOptions o = testing_runs::TinyBuiltinRun(32, 16, 40);
   o.voxels_init = 16L * 16 * 16;
   o.voxels_final = 24L * 24 * 24;
   o.batch_rays = 256;
   o.mlp_hidden = 16;
-  o.progress_every = 100;
-  o.max_test_views = 1;
   return o;
 }
 

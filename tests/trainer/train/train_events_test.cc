@@ -18,6 +18,7 @@
 
 #include "format/vm_modes.h"
 #include "tests/common/scoped_temp_dir.h"
+#include "tests/common/tiny_run.h"
 #include "trainer/rate/train_rate_control.h"
 #include "trainer/train/trainer.h"
 
@@ -28,14 +29,8 @@ namespace {
 // The tiny preset shortened to 120 iterations (upsamples at 16, 32, 48, 64, alpha-mask updates
 // at 24, 56) on 8 views of 32 x 32 pixels.
 TrainOptions TinyRun() {
-  TrainOptions o = PresetOptions("tiny");
-  o.procedural_scene = ProceduralScene::kBuiltin;
-  o.builtin_size = 32;
-  o.builtin_views = 8;
-  o.iters = 120;
+  TrainOptions o = testing_runs::TinyBuiltinRun(32, 8, 120);  // no progress lines unless asked
   o.batch_rays = 512;
-  o.max_test_views = 1;
-  o.progress_every = 1000;  // no progress lines unless a test asks for them
   return o;
 }
 
