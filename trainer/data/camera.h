@@ -31,7 +31,7 @@ struct Camera {
 inline constexpr double kRotationTolerance = 1e-3;
 // Camera positions farther than this from the origin (scene units) are refused: rays are traced
 // in binary32, which at 1e6 keeps 0.06 units of precision and at 1e300 none (#60).
-constexpr double kMaxCameraDistance = 1e6;
+inline constexpr double kMaxCameraDistance = 1e6;
 // A pinhole camera's field of view on either axis, in degrees (camera_angle_x = pi, or a focal
 // length of 1e-300, leaves no ray inside the scene).
 inline constexpr double kMinFieldOfViewDegrees = 0.1, kMaxFieldOfViewDegrees = 175.0;

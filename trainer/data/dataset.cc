@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <optional>
 #include <stdexcept>
 #include <utility>
@@ -189,11 +188,9 @@ Camera ResolveIntrinsics(const IntrinsicFields& fields, const std::string& image
 }
 
 json ReadJson(const std::string& path) {
-  CheckRegularFile(path);
-  std::ifstream stream(path, std::ios::binary);
-  if (!stream) throw std::runtime_error(path + ": cannot open");
+  const std::vector<uint8_t> bytes = ReadWholeFile(path);  // regular files only
   try {
-    return json::parse(stream);
+    return json::parse(bytes.begin(), bytes.end());
   } catch (const json::exception& error) {  // parse_error, and out_of_range for numbers like 1e999
     throw std::runtime_error(path + ": invalid JSON: " + error.what());
   }

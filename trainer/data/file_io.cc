@@ -48,7 +48,7 @@ void CheckRegularFile(const std::string& path) {
                      : S_ISFIFO(st.st_mode)                       ? "a FIFO (named pipe)"
                      : S_ISSOCK(st.st_mode)                       ? "a socket"
                      : S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode) ? "a device"
-                                                                  : "not a regular file";
+                                                                  : "a special file";
   throw std::runtime_error(path + ": is " + std::string(what) + ", not a file to read");
 }
 

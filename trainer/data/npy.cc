@@ -2,8 +2,6 @@
 
 #include <cctype>
 #include <cstring>
-#include <fstream>
-#include <iterator>
 #include <stdexcept>
 
 #include "trainer/data/file_io.h"
@@ -135,12 +133,7 @@ NpyMatrix ParseNpyMatrix(const std::string& name, const std::vector<uint8_t>& by
 }
 
 NpyMatrix ReadNpyMatrix(const std::string& path) {
-  CheckRegularFile(path);
-  std::ifstream stream(path, std::ios::binary);
-  if (!stream) throw std::runtime_error(path + ": cannot open");
-  const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(stream)),
-                                   std::istreambuf_iterator<char>());
-  return ParseNpyMatrix(path, bytes);
+  return ParseNpyMatrix(path, ReadWholeFile(path));  // regular files only
 }
 
 }  // namespace ecrf::trainer

@@ -2,8 +2,6 @@
 
 #include <signal.h>
 
-#include <cstdio>
-
 namespace ecrf {
 namespace trainer {
 namespace {
@@ -32,13 +30,7 @@ StopSignalScope::~StopSignalScope() {
 
 int StopSignal() { return g_stop_signal; }
 
-const char* StopSignalName(int signal) {
-  if (signal == SIGINT) return "SIGINT";
-  if (signal == SIGTERM) return "SIGTERM";
-  static thread_local char name[24];
-  std::snprintf(name, sizeof(name), "signal %d", signal);
-  return name;
-}
+const char* StopSignalName(int signal) { return signal == SIGINT ? "SIGINT" : "SIGTERM"; }
 
 }  // namespace trainer
 }  // namespace ecrf

@@ -22,7 +22,7 @@ class StopSignalScope {
 // The signal received since the scope began (0: none).
 int StopSignal();
 
-// "SIGINT", "SIGTERM" or "signal N".
+// "SIGINT" or "SIGTERM", the two signals the scope records.
 const char* StopSignalName(int signal);
 
 }  // namespace trainer
