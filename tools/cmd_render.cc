@@ -502,11 +502,11 @@ int RunEval(int argc, char** argv) {
   const trainer::EvalResult r = EvaluateDecoded(*s.field, test, test_stride, max_test_views,
                                                 RenderOptionsFor(c), false, image_scale);
   std::printf(
-      "%s: %zu bytes, PSNR %.2f dB, SSIM %.4f over %d %s views; decode %.1f ms, render %.1f "
-      "ms/view "
+      "%s: %zu bytes, PSNR %.2f dB, SSIM %.4f over %d %s views of %dx%d; decode %.1f ms, render "
+      "%.1f ms/view "
       "(%d thread%s, %s grids; %s head: %.1f samples, %.1f coloured samples per ray, %.0f k "
       "multiply-adds per pixel)\n",
-      c.scene.c_str(), s.bytes.size(), r.psnr, r.ssim, r.views, split.c_str(),
+      c.scene.c_str(), s.bytes.size(), r.psnr, r.ssim, r.views, split.c_str(), r.width, r.height,
       1e3 * s.decode_seconds, 1e3 * r.seconds_per_view, RenderThreads(c),
       RenderThreads(c) == 1 ? "" : "s", c.int16 ? "int16" : "float32", HeadKindName(s.info.head),
       r.samples_per_ray, r.color_samples_per_ray, r.work_per_pixel / 1e3);
@@ -516,6 +516,8 @@ int RunEval(int argc, char** argv) {
                         {"psnr", r.psnr},
                         {"ssim", r.ssim},
                         {"views", r.views},
+                        {"width", r.width},
+                        {"height", r.height},
                         {"decode_seconds", s.decode_seconds},
                         {"render_seconds_per_view", r.seconds_per_view},
                         {"threads", RenderThreads(c)},

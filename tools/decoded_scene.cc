@@ -132,7 +132,10 @@ trainer::EvalResult EvaluateDecoded(const dec::SceneField& scene, const trainer:
       img = ResizeBilinear(img, test.views[v].rgb.width, test.views[v].rgb.height);
     r.psnr += std::min(100.0, trainer::Psnr(img, test.views[v].rgb));
     r.ssim += trainer::Ssim(img, test.views[v].rgb);
-    ++r.views;
+    if (r.views++ == 0) {
+      r.width = img.width;
+      r.height = img.height;
+    }
     if (keep_renders) r.renders.push_back(std::move(img));
     char extra[96];
     std::snprintf(extra, sizeof(extra), "%.1f samples and %.1f coloured samples per ray",

@@ -315,6 +315,7 @@ void AddCodedMetrics(const CodedRun& coded, const trainer::TrainResult& r, size_
                      nlohmann::json* m) {
   const trainer::EvalResult& d = coded.eval;
   (*m)["test_views"] = d.views;
+  (*m)["test_image_size"] = {d.width, d.height};
   (*m)["float32_model_bytes"] = float_bytes;
   (*m)["encode_step_scale"] = coded.step_scale;
   (*m)["file_bytes"] = coded.decoded.bytes.size();

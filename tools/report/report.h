@@ -43,6 +43,12 @@ std::vector<RdPoint> RateDistortionCurve(const nlohmann::json& report);
 nlohmann::json BorrowReference(const std::string& dir, const nlohmann::json& sweep,
                                const std::string& data);
 
+// The anchors of an --anchors file (docs/reports/anchors_*.json) drawn on `scene`'s report: those
+// without a "scene" (dataset averages, relative figures) and those of that scene
+// (case-insensitive). Each needs a label and file_bytes and psnr, or ratio and psnr_loss_db; throws
+// naming the entry. An empty path gives none.
+nlohmann::json ReadAnchors(const std::string& path, const std::string& scene);
+
 // Parses a JSON file (throws naming the file).
 nlohmann::json ReadJsonFile(const std::string& path);
 

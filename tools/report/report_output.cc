@@ -188,6 +188,22 @@ void Figure(std::ostringstream& o, const std::string& dir, const std::string& pn
   }
 }
 
+// Which test views the PSNR and SSIM are over, as published tables need it said: the count and
+// image size of the first point that records them (every point scores the same views).
+std::string ScoredViewsText(nlohmann::json& r) {
+  std::string text =
+      "Test PSNR and SSIM (TensoRF's rgb_ssim: 11x11 Gaussian window, sigma 1.5) over ";
+  for (nlohmann::json& p : r["points"]) {
+    if (!p["test_views"].is_number()) continue;
+    text += Num(p["test_views"]) + " test views";
+    nlohmann::json& size = p["test_image_size"];
+    if (size.is_array() && size.size() == 2) text += " of " + Num(size[0]) + "x" + Num(size[1]);
+    return text + " (view stride " + Num(r["sweep"]["test_view_stride"]) +
+           ", 0: at most 20 views); MB = 10^6 bytes.";
+  }
+  return text + "the test views with stride " + Num(r["sweep"]["test_view_stride"]) + ".";
+}
+
 // The page's head and style, the scene, and what the sweep trained, where and with which ecrf.
 void HtmlHead(std::ostringstream& o, nlohmann::json& r) {
   const std::string scene = Html(Str(r, "scene"));
@@ -203,13 +219,17 @@ void HtmlHead(std::ostringstream& o, nlohmann::json& r) {
   o << "<h1>ecrf report: " << scene << "</h1>\n";
   nlohmann::json& s = r["sweep"];
   o << "<p>Data <code>" << Html(Str(r, "data")) << "</code>, preset <code>"
-    << Html(Str(s, "preset")) << "</code>, " << Num(s["iterations"])
-    << " iterations per run, test PSNR over the test views with stride "
-    << Num(s["test_view_stride"]) << ". ecrf " << Html(Str(r, "ecrf_version")) << " (bitstream "
+    << Html(Str(s, "preset")) << "</code>, " << Num(s["iterations"]) << " iterations per run. "
+    << ScoredViewsText(r) << " ecrf " << Html(Str(r, "ecrf_version")) << " (bitstream "
     << Num(r["bitstream_version"]) << "), " << Html(Str(r, "date")) << ", "
     << Html(Str(r["machine"], "cpu")) << ", "
     << "training threads: " << Num(s["threads"])
     << ". All numbers in <a href=\"report.json\">report.json</a>.</p>\n";
+}
+
+// Bytes as the published tables count them: MB of 10^6 bytes, three decimals.
+std::string Megabytes(const nlohmann::json& bytes) {
+  return bytes.is_number() ? Num(nlohmann::json(bytes.get<double>() / 1e6), "%.3f") : Num(bytes);
 }
 
 // The rate–distortion plots, one table row per point, and the anchors drawn beside them.
@@ -231,14 +251,14 @@ void RateDistortionSection(std::ostringstream& o, const std::string& dir, nlohma
   if (costs) Figure(o, dir, "cost.png", "rd.csv", "work per pixel and render time vs PSNR");
   o << "<table>\n";
   Row(o,
-      {"point", "file bytes", "ratio", "decoded PSNR", "SSIM", "float PSNR", "quantization loss",
-       "loss vs lambda=0", "train min", "head", "work/pixel", "ms/view"},
+      {"point", "file bytes", "MB", "ratio", "decoded PSNR", "SSIM", "float PSNR",
+       "quantization loss", "loss vs lambda=0", "train min", "head", "work/pixel", "ms/view"},
       "th");
   for (nlohmann::json& p : r["points"]) {
-    Row(o, {Html(Str(p, "label")), Num(p["file_bytes"], "%.0f"), Num(p["ratio"], "%.1fx"),
-            Num(p["decoded_psnr"], "%.2f dB"), Num(p["decoded_ssim"], "%.4f"),
-            Num(p["float_psnr"], "%.2f dB"), Num(p["quantization_loss_db"], "%+.2f dB"),
-            Num(p["psnr_loss_db"], "%+.2f dB"),
+    Row(o, {Html(Str(p, "label")), Num(p["file_bytes"], "%.0f"), Megabytes(p["file_bytes"]),
+            Num(p["ratio"], "%.1fx"), Num(p["decoded_psnr"], "%.2f dB"),
+            Num(p["decoded_ssim"], "%.4f"), Num(p["float_psnr"], "%.2f dB"),
+            Num(p["quantization_loss_db"], "%+.2f dB"), Num(p["psnr_loss_db"], "%+.2f dB"),
             Num(nlohmann::json(p["train_seconds"].get<double>() / 60.0), "%.1f"),
             Html(Str(p, "head")), Num(p["decoded_work_per_pixel"], "%.0f"),
             Num(p["decoded_render_seconds_per_view"].is_number()
@@ -249,9 +269,10 @@ void RateDistortionSection(std::ostringstream& o, const std::string& dir, nlohma
   o << "</table>\n";
   if (!r["anchors"].empty()) {
     o << "<h3>Anchors</h3>\n<table>\n";
-    Row(o, {"anchor", "file bytes", "PSNR", "ratio", "loss", "note"}, "th");
+    Row(o, {"anchor", "file bytes", "MB", "PSNR", "ratio", "loss", "note"}, "th");
     for (nlohmann::json& a : r["anchors"]) {
       Row(o, {Html(Str(a, "label")), Num(a.value("file_bytes", nlohmann::json()), "%.0f"),
+              Megabytes(a.value("file_bytes", nlohmann::json())),
               Num(a.value("psnr", nlohmann::json()), "%.2f dB"),
               Num(a.value("ratio", nlohmann::json()), "%.1fx"),
               Num(a.value("psnr_loss_db", nlohmann::json()), "%+.2f dB"), Html(Str(a, "note"))});

@@ -48,6 +48,7 @@ nlohmann::json RatePointFromMetrics(const nlohmann::json& m, const std::string& 
   p["float_psnr"] = m.at("test_psnr");
   p["float_ssim"] = m.at("test_ssim");
   p["test_views"] = m.at("test_views");
+  p["test_image_size"] = m.value("test_image_size", nlohmann::json());  // absent before #58
   p["float32_bytes"] = m.at("float32_model_bytes");
   p["decode_seconds"] = m.value("decode_seconds", 0.0);
   p["decoded_render_seconds_per_view"] = m.value("decoded_render_seconds_per_view", 0.0);

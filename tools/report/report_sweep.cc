@@ -7,6 +7,7 @@
 
 #include <unistd.h>
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <climits>
 #include <cmath>
@@ -67,6 +68,35 @@ std::string Today() {
 }
 
 }  // namespace
+
+nlohmann::json ReadAnchors(const std::string& path, const std::string& scene) {
+  nlohmann::json kept = nlohmann::json::array();
+  if (path.empty()) return kept;
+  const nlohmann::json a = ReadJsonFile(path);
+  if (!a.contains("anchors") || !a["anchors"].is_array()) {
+    throw std::runtime_error(path + ": expected {\"anchors\": [{\"label\": ..., ...}]}");
+  }
+  const auto lower = [](std::string s) {
+    for (char& ch : s) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    return s;
+  };
+  for (size_t i = 0; i < a["anchors"].size(); ++i) {
+    const nlohmann::json& e = a["anchors"][i];
+    const auto number = [&e](const char* key) { return e.contains(key) && e[key].is_number(); };
+    if (!e.is_object() || !e.contains("label") || !e["label"].is_string() ||
+        (e.contains("scene") && !e["scene"].is_string()) ||
+        !((number("file_bytes") && number("psnr")) ||
+          (number("ratio") && number("psnr_loss_db")))) {
+      throw std::runtime_error(path + ": anchor " + std::to_string(i) +
+                               " needs a \"label\" (and a \"scene\" name, if any) and numbers "
+                               "\"file_bytes\" and \"psnr\" or "
+                               "\"ratio\" and \"psnr_loss_db\"");
+    }
+    if (e.contains("scene") && lower(e.value("scene", "")) != lower(scene)) continue;
+    kept.push_back(e);
+  }
+  return kept;
+}
 
 // The lambda = 0 float model of an earlier sweep, usable when this sweep trains it the same way.
 nlohmann::json BorrowReference(const std::string& dir, const nlohmann::json& sweep,
@@ -245,16 +275,6 @@ SweepRuns ResolveSweepRuns(const CLI::App& app, const std::vector<std::string>& 
     sweep.rate_points.push_back(RatePointLabel(p, sweep.options.back()));
   }
   return sweep;
-}
-
-// The anchors of --anchors FILE.json (none without it).
-nlohmann::json ReadAnchors(const std::string& path) {
-  if (path.empty()) return nlohmann::json::array();
-  const nlohmann::json a = ReadJsonFile(path);
-  if (!a.contains("anchors") || !a["anchors"].is_array()) {
-    throw std::runtime_error(path + ": expected {\"anchors\": [{\"label\": ..., ...}]}");
-  }
-  return a["anchors"];
 }
 
 // The report before its points: what was swept, on which machine and version, and the reference
@@ -488,7 +508,7 @@ int RunReportSweep(int argc, char** argv) {
   }
   const SweepRuns sweep = ResolveSweepRuns(*app, args, f, o);
   o = sweep.options.front();
-  const nlohmann::json anchors = ReadAnchors(f.anchors_path);
+  const nlohmann::json anchors = ReadAnchors(f.anchors_path, SceneName(o));
   // Find an unusable output directory now, not after the first hour of training.
   const OutputDirectory runs_dir(f.out + "/runs");
   nlohmann::json report = SweepReportHead(f, sweep, o, anchors);

@@ -40,7 +40,10 @@ EvalResult Evaluate(const TensorfModel& model, const Dataset& test, int stride, 
     // A view rendered exactly has infinite PSNR; cap it so one such view cannot swamp the mean.
     r.psnr += std::min(100.0, Psnr(img, test.views[v].rgb));
     r.ssim += Ssim(img, test.views[v].rgb);
-    ++r.views;
+    if (r.views++ == 0) {
+      r.width = img.width;
+      r.height = img.height;
+    }
     if (keep_renders) r.renders.push_back(std::move(img));
     progress.ViewDone();
   }

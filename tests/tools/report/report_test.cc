@@ -57,6 +57,10 @@ void WritesEveryFile() {
   const std::string html = ReadText(dir_ + "/index.html");
   EXPECT_NE(html.find("lambda=1e-08"), std::string::npos);
   EXPECT_NE(html.find("Speed against error"), std::string::npos);
+  // Published tables need the views and their size said: the built-in scene's 64x64 test views.
+  EXPECT_NE(html.find("over 4 test views of 64x64"), std::string::npos);
+  EXPECT_EQ(ReadJson(dir_ + "/report.json")["points"][0]["test_image_size"],
+            nlohmann::json::array({64, 64}));
   EXPECT_NE(html.find("</html>"), std::string::npos);
 }
 
@@ -300,6 +304,46 @@ TEST(ReportReference, APointWithoutAFloatScoreHasNoQuantizationLoss) {
   EXPECT_TRUE(p["quantization_loss_db"].is_null());
   EXPECT_DOUBLE_EQ(p["ratio"].get<double>(), 100.0);
   EXPECT_DOUBLE_EQ(p["psnr_loss_db"].get<double>(), 0.5);
+}
+
+TEST(ReportAnchors, OneScenesFiguresOnItsOwnReportAndAveragesOnEvery) {
+  const testing_util::ScopedTempDir tmp("ecrf_report_anchors");
+  const std::string path = tmp.path() + "/anchors.json";
+  WriteTextFile(path, R"({"anchors": [
+      {"label": "chair only", "scene": "Chair", "file_bytes": 7e7, "psnr": 35.76},
+      {"label": "mic only", "scene": "mic", "file_bytes": 7e7, "psnr": 34.61},
+      {"label": "average", "file_bytes": 8e5, "psnr": 32.2},
+      {"label": "relative", "ratio": 28.4, "psnr_loss_db": -0.1}]})");
+  auto labels = [&](const std::string& scene) {
+    std::vector<std::string> out;
+    for (const nlohmann::json& a : ReadAnchors(path, scene)) out.push_back(a["label"]);
+    return out;
+  };
+  EXPECT_EQ(labels("chair"), (std::vector<std::string>{"chair only", "average", "relative"}));
+  EXPECT_EQ(labels("mic"), (std::vector<std::string>{"mic only", "average", "relative"}));
+  EXPECT_EQ(labels("lego"), (std::vector<std::string>{"average", "relative"}));
+  EXPECT_TRUE(ReadAnchors("", "chair").empty());
+  // The committed file of the 800x800 protocol parses and gives chair its TensoRF figure.
+  const nlohmann::json committed =
+      ReadAnchors(ECRF_SOURCE_DIR "/docs/reports/anchors_synthetic_800.json", "chair");
+  ASSERT_FALSE(committed.empty());
+  EXPECT_EQ(committed[0]["psnr"], 35.76);
+  // An anchor that cannot be drawn is refused, named by the file and its index.
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {R"({"anchors": [{"label": "a", "file_bytes": 1, "psnr": 30}, {"label": "b", "psnr": 30}]})",
+       "anchor 1 needs"},
+      {R"({"anchors": [{"label": "a", "scene": 3, "file_bytes": 1, "psnr": 30}]})",
+       "anchor 0 needs"},
+      {R"({"anchors": {"label": "a"}})", "expected {\"anchors\": ["}};
+  for (const auto& [text, why] : bad) {
+    WriteTextFile(path, text);
+    try {
+      ReadAnchors(path, "chair");
+      ADD_FAILURE() << text;
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(path + ": " + why), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(ReportCli, UnwritableOutputFailsBeforeTraining) {
