@@ -40,6 +40,9 @@ struct CostlyScene {
   // (an empty mask: every sample is skipped, but an unbounded ray still marches them all).
   int occupancy = 0;
   int occupancy_res = 2;
+  int occupancy_depth = 0;  // the mask's z resolution (0: occupancy_res)
+  // Bytes of an ancillary `meta` chunk: a larger stream, so a larger decode budget (SPEC.md 8).
+  size_t padding = 0;
   bool unbounded = false;  // scene_model 1: samples spaced in contracted distance (SPEC.md 7.2.1)
 };
 
@@ -120,15 +123,17 @@ inline std::vector<uint8_t> BuildCostlyStream(const CostlyScene& cs) {
     ByteWriter occ;
     for (int a = 0; a < 3; ++a) occ.F32(-extent);
     for (int a = 0; a < 3; ++a) occ.F32(extent);
-    for (int a = 0; a < 3; ++a) occ.U16(static_cast<uint16_t>(cs.occupancy_res));
+    const int n = cs.occupancy_res, depth = cs.occupancy_depth > 0 ? cs.occupancy_depth : n;
+    occ.U16(static_cast<uint16_t>(n));
+    occ.U16(static_cast<uint16_t>(n));
+    occ.U16(static_cast<uint16_t>(depth));
     occ.U16(0);
     // Rows flagged (or not), every voxel 0: SPEC.md 6.3's syntax, coded with its contexts.
-    const int n = cs.occupancy_res;
     const int flag = cs.occupancy == 1 ? 1 : 0;
-    std::vector<uint8_t> row_any(static_cast<size_t>(n) * n, 0);
+    std::vector<uint8_t> row_any(static_cast<size_t>(n) * depth, 0);
     occupancy_internal::OccupancyContexts ctx;
     RangeEncoder enc;
-    for (int z = 0; z < n; ++z) {
+    for (int z = 0; z < depth; ++z) {
       for (int y = 0; y < n; ++y) {
         enc.EncodeBool(flag, ctx.row[occupancy_internal::RowContext(row_any.data(), n, y, z)]);
         row_any[static_cast<size_t>(z) * n + y] = static_cast<uint8_t>(flag);
@@ -169,6 +174,7 @@ inline std::vector<uint8_t> BuildCostlyStream(const CostlyScene& cs) {
     }
   }
   writer.AddChunk(kChunkMlpWeights, ZeroMlpChunk(h));
+  if (cs.padding > 0) writer.AddChunk(kChunkMetadata, std::vector<uint8_t>(cs.padding, ' '));
   return writer.Finish();
 }
 

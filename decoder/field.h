@@ -183,6 +183,9 @@ class OccupancyMask {
   bool EmptyBlock(int level, const float idx[3], int lo[3], int hi[3]) const;
 
  private:
+  // Marks the blocks of every level whose closed corner range holds set voxel (x, y, z).
+  void MarkBlocks(int x, int y, int z);
+
   float min_[3] = {0.f, 0.f, 0.f};
   float max_[3] = {0.f, 0.f, 0.f};
   float inv_size_[3] = {0.f, 0.f, 0.f};  // 2 / (max - min)

@@ -66,6 +66,13 @@ std::vector<CostlyCase> Cases() {
         s.occupancy = 2;
         s.occupancy_res = 64;
       });
+  add("occupancy_empty_4096", "OCCU 4096 x 4096 x 112, no row flagged, 13 KB of meta",
+      [](costly::CostlyScene& s) {
+        s.occupancy = 2;
+        s.occupancy_res = 4096;
+        s.occupancy_depth = 112;
+        s.padding = 13000;  // the budget covers the mask's 29.4 M units
+      });
   add("occupancy_empty_rows_512", "OCCU 512^3, every row flagged, no voxel set",
       [](costly::CostlyScene& s) { s = costly::EmptyFlaggedRows(512); });
   add("occupancy_empty_rows_1024", "OCCU 1024^3, every row flagged, no voxel set",

@@ -1,0 +1,87 @@
+// The occupancy mask's acceleration levels (decoder/field.h): built from the set voxels only, they
+// must still mark exactly the blocks whose closed corner range holds a set voxel, whatever the
+// mask's size (bits past the last voxel, resolutions that are not a multiple of the block size).
+#include <gtest/gtest.h>
+
+#include <random>
+#include <vector>
+
+#include "decoder/field.h"
+
+namespace ecrf {
+namespace dec {
+namespace {
+
+struct MaskCase {
+  int res[3];
+  double density;  // share of voxels set
+};
+
+// Every block of every level against the definition: empty iff no set voxel lies in the closed
+// range [b * B, min((b + 1) * B, res - 1)] on every axis.
+void ExpectLevelsMatchTheDefinition(const OccupancyMask& mask, const std::vector<char>& set) {
+  const int* res = mask.res();
+  auto voxel = [&](int x, int y, int z) {
+    return set[(static_cast<size_t>(z) * res[1] + y) * res[0] + x] != 0;
+  };
+  for (int level = 0; level < OccupancyMask::kLevels; ++level) {
+    const int B = OccupancyMask::kBlock[level];
+    for (int bz = 0; bz * B < res[2] - 1; ++bz) {
+      for (int by = 0; by * B < res[1] - 1; ++by) {
+        for (int bx = 0; bx * B < res[0] - 1; ++bx) {
+          const int b[3] = {bx, by, bz};
+          int lo[3], hi[3];
+          bool any = false;
+          for (int a = 0; a < 3; ++a) {
+            lo[a] = b[a] * B;
+            hi[a] = std::min(lo[a] + B, res[a] - 1);
+          }
+          for (int z = lo[2]; z <= hi[2]; ++z)
+            for (int y = lo[1]; y <= hi[1]; ++y)
+              for (int x = lo[0]; x <= hi[0]; ++x) any |= voxel(x, y, z);
+          const float idx[3] = {static_cast<float>(lo[0]) + 0.5f, static_cast<float>(lo[1]) + 0.5f,
+                                static_cast<float>(lo[2]) + 0.5f};
+          int got_lo[3], got_hi[3];
+          EXPECT_EQ(mask.EmptyBlock(level, idx, got_lo, got_hi), !any)
+              << "level " << level << " block " << bx << "," << by << "," << bz;
+          for (int a = 0; a < 3; ++a) {
+            EXPECT_EQ(got_lo[a], lo[a]);
+            EXPECT_EQ(got_hi[a], hi[a]);
+          }
+        }
+      }
+    }
+  }
+}
+
+TEST(OccupancyMask, LevelsFromTheSetVoxelsMatchTheDefinition) {
+  const MaskCase cases[] = {
+      {{7, 13, 33}, 0.02},  {{17, 5, 9}, 0.3},  {{33, 33, 2}, 0.0},  {{2, 2, 2}, 1.0},
+      {{19, 23, 29}, 0.005}, {{64, 3, 5}, 1.0}, {{9, 17, 65}, 0.001},
+  };
+  std::mt19937 rng(5);
+  for (const MaskCase& c : cases) {
+    SCOPED_TRACE(testing::Message() << c.res[0] << "x" << c.res[1] << "x" << c.res[2]);
+    const float lo[3] = {-1.f, -1.f, -1.f}, hi[3] = {1.f, 1.f, 1.f};
+    OccupancyMask mask;
+    ASSERT_TRUE(mask.Init(lo, hi, c.res).ok());
+    std::vector<char> set(mask.voxel_count(), 0);
+    std::bernoulli_distribution on(c.density);
+    size_t count = 0;
+    for (int z = 0; z < c.res[2]; ++z)
+      for (int y = 0; y < c.res[1]; ++y)
+        for (int x = 0; x < c.res[0]; ++x) {
+          const bool v = on(rng);
+          set[(static_cast<size_t>(z) * c.res[1] + y) * c.res[0] + x] = v;
+          count += v;
+          if (v) mask.Set(x, y, z, true);
+        }
+    ASSERT_TRUE(mask.BuildAcceleration().ok());
+    EXPECT_EQ(mask.occupied_count(), count);
+    ExpectLevelsMatchTheDefinition(mask, set);
+  }
+}
+
+}  // namespace
+}  // namespace dec
+}  // namespace ecrf
