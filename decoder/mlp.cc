@@ -49,7 +49,7 @@ bool AllFinite(const float* p, size_t n) {
 
 }  // namespace
 
-void FastSinCos(const float* x, int count, float* s, float* c) {
+int FastSinCos(const float* x, int count, float* s, float* c) {
   using namespace fast_sincos;  // NOLINT(google-build-using-namespace)
   constexpr float kLimit = 8192.f;
   // Float-only, select-based body so the loop vectorises (no int conversions, no branches).
@@ -83,6 +83,7 @@ void FastSinCos(const float* x, int count, float* s, float* c) {
       }
     }
   }
+  return big;
 }
 
 AppearanceMlp::~AppearanceMlp() { Release(); }
@@ -246,8 +247,9 @@ size_t AppearanceMlp::ScratchFloats() const {
   return C * (fd_pad_ + in_stride_ + 2 * hid_pad_ + kOutPad) + 3 * C * pe + 4 * P + 64;
 }
 
-void AppearanceMlp::Infer(int rows, const float* products, size_t products_stride,
-                          const float* viewdirs, float* rgb, float* scratch) const {
+uint64_t AppearanceMlp::Infer(int rows, const float* products, size_t products_stride,
+                              const float* viewdirs, float* rgb, float* scratch) const {
+  uint64_t wide = 0;  // encoding arguments past the fast sin/cos range
   const int C = kChunkRows;
   const int P = config_.num_products, F = config_.feature_dim, H = config_.hidden;
   const int Ff = config_.feature_pe_freqs, Fv = config_.viewdir_pe_freqs;
@@ -292,7 +294,7 @@ void AppearanceMlp::Infer(int rows, const float* products, size_t products_strid
         for (int q = 0; q < Fv; ++q, m *= 2.f) a[nf + c * Fv + q] = vd[c] * m;
       }
     }
-    FastSinCos(pe_arg, n8 * (nf + nv), pe_sin, pe_cos);
+    wide += static_cast<uint64_t>(FastSinCos(pe_arg, n8 * (nf + nv), pe_sin, pe_cos));
     // Input rows: [features, viewdir, sin(feat args), cos(feat args), sin(vd args), cos(vd args)].
     for (int r = 0; r < n8; ++r) {
       float* x = in + static_cast<size_t>(r) * in_stride_;
@@ -324,6 +326,7 @@ void AppearanceMlp::Infer(int rows, const float* products, size_t products_strid
       }
     }
   }
+  return wide;
 }
 
 }  // namespace dec

@@ -72,8 +72,10 @@ class AppearanceMlp {
   // rgb[r*3 + c] for `rows` rows: products row r at products + r * products_stride (P floats),
   // viewdir row r at viewdirs + r * 3 (unit vectors). scratch: ScratchFloats() floats, 32-byte
   // alignment recommended. Processes kChunkRows rows at a time so activations stay in cache.
-  void Infer(int rows, const float* products, size_t products_stride, const float* viewdirs,
-             float* rgb, float* scratch) const;
+  // Returns how many positional-encoding arguments fell outside FastSinCos's fast range (the
+  // renderer charges them what the library sin and cos cost: kWideSinCosWork).
+  uint64_t Infer(int rows, const float* products, size_t products_stride, const float* viewdirs,
+                 float* rgb, float* scratch) const;
 
   static constexpr int kChunkRows = 32;
 
@@ -92,8 +94,9 @@ class AppearanceMlp {
 };
 
 // s[i] = sin(x[i]), c[i] = cos(x[i]); absolute error ~1e-7 for |x| <= 8192 (Cody-Waite reduction
-// and minimax polynomials, branch-free so it vectorises), std::sin/std::cos beyond.
-void FastSinCos(const float* x, int count, float* s, float* c);
+// and minimax polynomials, branch-free so it vectorises), std::sin/std::cos beyond. Returns how
+// many x took that slower path (|x| > 8192 or not finite).
+int FastSinCos(const float* x, int count, float* s, float* c);
 
 }  // namespace dec
 }  // namespace ecrf

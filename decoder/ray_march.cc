@@ -114,8 +114,9 @@ void Flush(const Ctx& c, RayMarcher::Workspace& ws) {
     vd[1] = d[1];
     vd[2] = d[2];
   }
-  c.s->mlp.Infer(n, ws.products.data(), ws.pstride, ws.viewdirs.data(), ws.colors.data(),
-                 ws.mlp_scratch.data());
+  const uint64_t wide = c.s->mlp.Infer(n, ws.products.data(), ws.pstride, ws.viewdirs.data(),
+                                       ws.colors.data(), ws.mlp_scratch.data());
+  if (wide != 0) Spend(ws, wide * kWideSinCosWork);  // past the budget: the view is refused
   for (int e = 0; e < n; ++e) {
     const BatchEntry& be = ws.entries[e];
     float* rgb = ws.ray_rgb.data() + static_cast<size_t>(be.slot) * 3;
@@ -159,8 +160,9 @@ void ShadeRays(const Ctx& c, RayMarcher::Workspace& ws, int nrays) {
       ++n;
     }
     if (n == 0) break;
-    c.s->mlp.Infer(n, ws.products.data(), ws.pstride, ws.viewdirs.data(), ws.colors.data(),
-                   ws.mlp_scratch.data());
+    const uint64_t wide = c.s->mlp.Infer(n, ws.products.data(), ws.pstride, ws.viewdirs.data(),
+                                         ws.colors.data(), ws.mlp_scratch.data());
+    if (wide != 0 && !Spend(ws, wide * kWideSinCosWork)) return;
     for (int e = 0; e < n; ++e) {
       const int slot = ws.entries[e].slot;
       const float w = ws.ray_color_weight[slot];

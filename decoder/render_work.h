@@ -33,6 +33,13 @@ namespace dec {
 // scenes spend at most ~1/10 of it on their most expensive views (docs/benchmarks-and-fuzzing.md).
 inline constexpr uint64_t kDefaultWorkBudget = ECRF_DEFAULT_WORK_BUDGET;
 
+// A positional-encoding argument of magnitude above 8192 (or not finite) leaves the vectorised
+// sin/cos for the library's (decoder/mlp.h): ~10-13 ns a pair here, about 80 units where the
+// coloured sample's cost counts 16. The renderer charges each such pair this much more, after the
+// batch of at most RayMarcher's batch capacity rows that computed it (the argument is only known
+// then), so a view stops within one batch of its budget.
+inline constexpr uint64_t kWideSinCosWork = 64;
+
 struct SampleCosts {
   uint64_t position = 0;  // a marched sample position: box, mask and contraction tests
   uint64_t density = 0;   // its density: grid location, 7 taps per density rank, softplus, exp

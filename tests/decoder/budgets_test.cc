@@ -138,6 +138,52 @@ TEST(WorkBudget, CountingLeavesTheImageUnchanged) {
   EXPECT_LE(a.work, evaluated + a.rays * 64 * costs.position);
 }
 
+// A positional-encoding argument beyond the vectorised sin/cos range (|x| > 8192) takes the
+// library's sin and cos, ~6x what the sample's cost counts for it: each such pair is charged
+// kWideSinCosWork more. Huge basis weights made a 1.9 KB stream cost 687 s of CPU at 400x400
+// within its budget (issue #60).
+TEST(WorkBudget, SinesBeyondTheFastRangeAreChargedWhatTheyCost) {
+  CostlyScene cs;
+  cs.num_samples = 64;
+  cs.weight_threshold = 1e-7f;
+  cs.pe_freqs = 2;
+  const std::vector<uint8_t> bytes = BuildCostlyStream(cs);
+  SceneField field;
+  ASSERT_TRUE(DecodeScene(bytes.data(), bytes.size(), DecodeOptions(), &field, nullptr).ok());
+  // Appearance values of 1: every product is 1, so a feature is the sum of its basis row.
+  ASSERT_EQ(field.appearance.storage, GridStorage::kFloat32);
+  for (int m = 0; m < 3; ++m) {
+    for (size_t i = 0; i < field.appearance.plane_count(m); ++i)
+      field.appearance.plane_f32[m][i] = 1.f;
+    for (size_t i = 0; i < field.appearance.line_count(m); ++i)
+      field.appearance.line_f32[m][i] = 1.f;
+  }
+  field.grids_known_finite = false;
+  const MlpConfig& cfg = field.mlp.config();
+  std::vector<float> params(field.mlp.num_params());
+  ASSERT_TRUE(field.mlp.GetParams(params.data(), params.size()).ok());
+  const Camera cam = FrontCamera(16);
+  auto render = [&](float basis, RenderStats* stats) {
+    for (int i = 0; i < cfg.feature_dim * cfg.num_products; ++i) params[i] = basis;
+    EXPECT_TRUE(field.mlp.SetParams(params.data(), params.size()).ok());
+    RayMarcher marcher;
+    RenderOptions o;
+    o.work_budget = 0;
+    EXPECT_TRUE(marcher.Init(&field, o).ok());
+    std::vector<uint8_t> rgba(16 * 16 * 4);
+    EXPECT_TRUE(marcher.RenderImage(cam, rgba.data(), nullptr, stats).ok());
+  };
+  RenderStats small, huge;
+  render(1e-3f, &small);  // features 3e-3 x P: every argument in the fast range
+  render(1e5f, &huge);    // features 3e5 x P: every feature argument beyond it
+  ASSERT_GT(small.color_samples, 0u);
+  ASSERT_EQ(small.samples, huge.samples);
+  ASSERT_EQ(small.color_samples, huge.color_samples);
+  // Exactly the feature arguments (F x Ff a sample) were charged more; view directions stay small.
+  const uint64_t wide = huge.color_samples * cfg.feature_dim * cfg.feature_pe_freqs;
+  EXPECT_EQ(huge.work - small.work, wide * kWideSinCosWork);
+}
+
 Status DecodeWith(const std::vector<uint8_t>& bytes, uint64_t work_per_byte, SceneField* field,
                   SceneInfo* info = nullptr) {
   DecodeOptions o;
