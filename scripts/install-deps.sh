@@ -2,9 +2,9 @@
 # Installs the Debian packages ecrf builds with; `--test` adds those the test suite needs.
 # Skips apt when all are present.
 set -euo pipefail
-# python3-matplotlib draws the plots of `ecrf report` (which works without it: tables and CSV).
+# libexif-dev reads the orientation of camera JPEGs; python3-matplotlib draws the plots of `ecrf report` (which works without it: tables and CSV).
 packages=(build-essential cmake ninja-build pkg-config libgtest-dev libeigen3-dev libpng-dev
-          libjpeg-dev libzstd-dev nlohmann-json3-dev libcli11-dev zstd python3-matplotlib)
+          libjpeg-dev libexif-dev libzstd-dev nlohmann-json3-dev libcli11-dev zstd python3-matplotlib)
 if [ "${1:-}" = "--test" ]; then
   # clang and emscripten build the decoder for scripts/conformance-matrix.sh and the web viewer;
   # clang-format and clang-tidy check the sources (scripts/check-format.sh, check-tidy.sh); the

@@ -13,6 +13,7 @@
 #include "tools/cli.h"
 #include "tools/prepare/colmap_model.h"
 #include "tools/run_program.h"
+#include "trainer/data/image_io.h"
 
 namespace ecrf {
 namespace tools {
@@ -106,10 +107,23 @@ std::vector<fs::path> ImagesIn(const fs::path& dir) {
   return images;
 }
 
-// The photos of a folder, copied (hard links where the file system allows).
+// The photos of a folder, copied (hard links where the file system allows). A JPEG stored
+// sideways (its EXIF orientation) is written upright as a PNG of the same name: COLMAP reads the
+// stored pixels, and the trainer turns JPEGs upright, so both must see the upright image.
 void CopyPhotos(const fs::path& input, const fs::path& images) {
   std::error_code ec;
   for (const fs::path& p : ImagesIn(input)) {
+    if (trainer::ReadImageSize(p.string()).orientation != 1) {
+      fs::path to = images / p.filename();
+      to.replace_extension(".png");
+      if (fs::exists(to, ec) || fs::exists(input / to.filename(), ec)) {
+        throw std::runtime_error(p.string() + ": stored sideways (EXIF orientation), and " +
+                                 to.filename().string() +
+                                 " for its upright copy is taken; rename one of them");
+      }
+      trainer::SavePng(to.string(), trainer::LoadImage(p.string()));
+      continue;
+    }
     const fs::path to = images / p.filename();
     fs::create_hard_link(p, to, ec);
     if (ec) {

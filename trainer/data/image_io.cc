@@ -21,6 +21,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "trainer/data/exif_orientation.h"
 #include "trainer/data/file_io.h"
 
 namespace ecrf::trainer {
@@ -200,7 +201,8 @@ void JpegOnMessage(j_common_ptr cinfo, int level) {
 }
 
 struct JpegRaw {
-  int width = 0, height = 0, channels = 0;
+  int width = 0, height = 0, channels = 0;  // upright: after the EXIF orientation
+  int orientation = 1;                      // EXIF Orientation, 1 to 8 (1: as stored)
   std::vector<uint8_t> bytes;
   char error[JMSG_LENGTH_MAX] = {0};
 };
@@ -219,9 +221,19 @@ bool DecodeJpegRaw(const std::vector<uint8_t>& data, bool header_only, JpegRaw* 
   }
   jpeg_create_decompress(&cinfo);
   jpeg_mem_src(&cinfo, data.data(), static_cast<unsigned long>(data.size()));
+  jpeg_save_markers(&cinfo, JPEG_APP0 + 1, 0xFFFF);  // EXIF lives in APP1
   jpeg_read_header(&cinfo, TRUE);
-  out->width = static_cast<int>(cinfo.image_width);
-  out->height = static_cast<int>(cinfo.image_height);
+  for (jpeg_saved_marker_ptr m = cinfo.marker_list; m != nullptr; m = m->next) {
+    if (m->marker != JPEG_APP0 + 1) continue;
+    const int orientation = ExifOrientation(m->data, m->data_length);
+    if (orientation != 1) {
+      out->orientation = orientation;
+      break;
+    }
+  }
+  const bool swap = OrientationSwapsAxes(out->orientation);
+  out->width = static_cast<int>(swap ? cinfo.image_height : cinfo.image_width);
+  out->height = static_cast<int>(swap ? cinfo.image_width : cinfo.image_height);
   if (header_only) {
     jpeg_destroy_decompress(&cinfo);
     return true;
@@ -250,6 +262,8 @@ bool DecodeJpegRaw(const std::vector<uint8_t>& data, bool header_only, JpegRaw* 
   }
   jpeg_finish_decompress(&cinfo);
   jpeg_destroy_decompress(&cinfo);
+  int width = static_cast<int>(cinfo.output_width), height = static_cast<int>(cinfo.output_height);
+  ApplyOrientation(out->orientation, out->channels, &width, &height, &out->bytes);
   return true;
 }
 
@@ -355,7 +369,7 @@ ImageSize SizeFromHeader(const std::string& path, const std::vector<uint8_t>& by
       if (!DecodeJpegRaw(bytes, /*header_only=*/true, &raw)) {
         Fail(path, std::string("corrupt or truncated JPEG: ") + raw.error);
       }
-      return {raw.width, raw.height};
+      return {raw.width, raw.height, raw.orientation};
     }
     case Format::kUnknown:
       break;

@@ -28,13 +28,15 @@ struct Image {
 Image MakeImage(int width, int height, int channels, float value = 0.0f);
 
 struct ImageSize {
-  int width = 0;
+  int width = 0;  // upright: after a JPEG's EXIF orientation
   int height = 0;
+  int orientation = 1;  // a JPEG's EXIF Orientation (1 to 8; 1: stored upright, and every PNG)
 };
 
 // Decodes a PNG (8 or 16 bit; gray, gray+alpha, RGB, RGBA, palette; tRNS becomes an alpha
 // channel) or a baseline/progressive JPEG (gray or RGB). The format comes from the file's
 // magic bytes, not its extension. Colour values are returned as stored: no gamma conversion.
+// A JPEG is turned upright as its EXIF Orientation tag says (phones store photos sideways).
 // Throws std::runtime_error naming the path for a missing, unrecognised, corrupt or truncated file.
 Image LoadImage(const std::string& path);
 

@@ -66,9 +66,9 @@ Image Ramp(int width, int height, int channels, int levels) {
   return image;
 }
 
-// Encodes RGB or gray bytes with libjpeg, quality 95.
+// Encodes RGB or gray bytes with libjpeg, quality 95, with an APP1 segment when app1 is given.
 void WriteJpeg(const std::string& path, int width, int height, int channels,
-               const std::vector<uint8_t>& bytes) {
+               const std::vector<uint8_t>& bytes, const std::vector<uint8_t>& app1 = {}) {
   jpeg_compress_struct cinfo;
   jpeg_error_mgr errors;
   cinfo.err = jpeg_std_error(&errors);
@@ -83,6 +83,9 @@ void WriteJpeg(const std::string& path, int width, int height, int channels,
   jpeg_set_defaults(&cinfo);
   jpeg_set_quality(&cinfo, 95, TRUE);
   jpeg_start_compress(&cinfo, TRUE);
+  if (!app1.empty()) {
+    jpeg_write_marker(&cinfo, JPEG_APP0 + 1, app1.data(), static_cast<unsigned>(app1.size()));
+  }
   while (cinfo.next_scanline < cinfo.image_height) {
     JSAMPROW row =
         const_cast<uint8_t*>(bytes.data()) + size_t{cinfo.next_scanline} * width * channels;
@@ -106,6 +109,89 @@ void WriteQuadrantJpeg(const std::string& path) {
     }
   }
   WriteJpeg(path, size, size, 3, rgb);
+}
+
+// An EXIF APP1 payload whose IFD0 holds only the Orientation tag (0x0112, SHORT), in the byte
+// order a camera chose: "II" little-endian or "MM" big-endian.
+std::vector<uint8_t> ExifWithOrientation(int orientation, bool big_endian) {
+  std::vector<uint8_t> b = {'E', 'x', 'i', 'f', 0, 0};
+  auto u16 = [&](int v) {
+    const uint8_t lo = static_cast<uint8_t>(v & 0xff), hi = static_cast<uint8_t>(v >> 8);
+    b.insert(b.end(), big_endian ? std::initializer_list<uint8_t>{hi, lo}
+                                 : std::initializer_list<uint8_t>{lo, hi});
+  };
+  auto u32 = [&](uint32_t v) {
+    big_endian ? (u16(int(v >> 16)), u16(int(v & 0xffff)))
+               : (u16(int(v & 0xffff)), u16(int(v >> 16)));
+  };
+  b.push_back(big_endian ? 'M' : 'I');
+  b.push_back(big_endian ? 'M' : 'I');
+  u16(42);
+  u32(8);  // IFD0 right after the header
+  u16(1);  // one entry
+  u16(0x0112);
+  u16(3);  // SHORT
+  u32(1);
+  u16(orientation);
+  u16(0);  // the value field's unused half
+  u32(0);  // no next IFD
+  return b;
+}
+
+// A 48x32 JPEG of four flat quadrants (top-left red, top-right green, bottom-left blue,
+// bottom-right white) stored with the given EXIF orientation.
+void WriteOrientedJpeg(const std::string& path, const std::vector<uint8_t>& app1) {
+  const int w = 48, h = 32;
+  std::vector<uint8_t> rgb(w * h * 3);
+  const uint8_t colours[4][3] = {{255, 0, 0}, {0, 255, 0}, {0, 0, 255}, {255, 255, 255}};
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const uint8_t* c = colours[(y >= h / 2) * 2 + (x >= w / 2)];
+      for (int k = 0; k < 3; ++k) rgb[(y * w + x) * 3 + k] = c[k];
+    }
+  }
+  WriteJpeg(path, w, h, 3, rgb, app1);
+}
+
+// Phones store photos sideways and say so in EXIF: each orientation loads upright. Where the stored
+// top-left (red) and top-right (green) quadrants land pins each of the eight down.
+TEST_F(ImageIoTest, JpegsLoadUprightAsTheirExifOrientationSays) {
+  enum Corner { kTL, kTR, kBL, kBR };
+  const Corner red_at[9] = {kTL, kTL, kTR, kBR, kBL, kTL, kTR, kBR, kBL};
+  const Corner green_at[9] = {kTR, kTR, kTL, kBL, kBR, kBL, kBR, kTR, kTL};
+  for (const bool big_endian : {false, true}) {
+    for (int o = 1; o <= 8; ++o) {
+      SCOPED_TRACE(testing::Message() << "orientation " << o << (big_endian ? " MM" : " II"));
+      const std::string path = Path("oriented_" + std::to_string(o) + ".jpg");
+      WriteOrientedJpeg(path, ExifWithOrientation(o, big_endian));
+      const Image image = LoadImage(path);
+      const bool swapped = o >= 5;
+      ASSERT_EQ(image.width, swapped ? 32 : 48);
+      ASSERT_EQ(image.height, swapped ? 48 : 32);
+      const ImageSize size = ReadImageSize(path);
+      EXPECT_EQ(size.width, image.width);
+      EXPECT_EQ(size.height, image.height);
+      EXPECT_EQ(size.orientation, o);
+      auto colour_at = [&](Corner c) {  // a pixel well inside that quadrant
+        const int x = (c == kTR || c == kBR) ? image.width - 4 : 3;
+        const int y = (c == kBL || c == kBR) ? image.height - 4 : 3;
+        return std::vector<float>{image.at(x, y, 0), image.at(x, y, 1), image.at(x, y, 2)};
+      };
+      const std::vector<float> red = colour_at(red_at[o]), green = colour_at(green_at[o]);
+      EXPECT_GT(red[0], 0.9f);
+      EXPECT_LT(red[1], 0.1f);
+      EXPECT_LT(green[0], 0.1f);
+      EXPECT_GT(green[1], 0.9f);
+      EXPECT_LT(green[2], 0.1f);
+    }
+  }
+  // An APP1 segment that is not EXIF (XMP), or an orientation outside 1 to 8, leaves it as stored.
+  const std::string xmp_text = "http://ns.adobe.com/xap/1.0/";
+  WriteOrientedJpeg(Path("xmp.jpg"), std::vector<uint8_t>(xmp_text.begin(), xmp_text.end()));
+  EXPECT_EQ(ReadImageSize(Path("xmp.jpg")).orientation, 1);
+  EXPECT_EQ(LoadImage(Path("xmp.jpg")).width, 48);
+  WriteOrientedJpeg(Path("nine.jpg"), ExifWithOrientation(9, false));
+  EXPECT_EQ(LoadImage(Path("nine.jpg")).width, 48);
 }
 
 class PngRoundTrip : public ImageIoTest,
