@@ -6,7 +6,7 @@
 # sizes and exports.
 #
 # Debian packages: build-essential cmake ninja-build pkg-config libeigen3-dev libpng-dev
-#   libjpeg-dev libzstd-dev nlohmann-json3-dev pybind11-dev python3-dev python3-numpy
+#   libjpeg-dev libexif-dev libzstd-dev nlohmann-json3-dev pybind11-dev python3-dev python3-numpy
 #
 #   bash scripts/test-install.sh    # ECRF_JOBS=N (default 2), PYTHON=... (default /usr/bin/python3),
 #                                   # ECRF_INSTALL_BUILD_DIR=DIR (default: build build-install/),
