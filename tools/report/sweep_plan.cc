@@ -95,7 +95,7 @@ void MakePlanDirectories(const std::string& dir) {
 std::vector<std::string> TaskArgs(const PlannedTask& t) {
   std::vector<std::string> args = {"train"};
   args.insert(args.end(), t.train_args.begin(), t.train_args.end());
-  args.insert(args.end(), {"-o", t.run_dir, "--overwrite"});
+  args.insert(args.end(), {"-o", t.run_dir});
   return args;
 }
 
@@ -111,8 +111,8 @@ std::string TaskScript(const SweepPlan& plan, size_t k, const std::vector<std::s
          "task " +
          std::to_string(k) +
          "), run_local.sh or by hand.\n"
-         "# A finished point is left as it is; an unfinished one is trained from the "
-         "start.\n"
+         "# A finished point is left as it is; an interrupted one (Slurm's SIGTERM at the time "
+         "limit, a preemption, Ctrl-C) continues from its checkpoint; any other starts afresh.\n"
          "# Threads: the Slurm task's CPUs, else $ECRF_THREADS, else all cores (the "
          "model is the same bits for any count).\n"
          "set -e\n"
@@ -131,8 +131,17 @@ std::string TaskScript(const SweepPlan& plan, size_t k, const std::vector<std::s
          ecrf +
          "}\n"
          "threads=${SLURM_CPUS_PER_TASK:-${ECRF_THREADS:-0}}\n"
+         "start=--overwrite\n"
+         "if [ -f " +
+         ShellQuote(t.run_dir + "/checkpoint.ckpt") +
+         " ]; then\n"
+         "  start=--resume\n"
+         "  echo \"task " +
+         std::to_string(k) + " (" + t.name + "): continuing from " + t.run_dir +
+         "/checkpoint.ckpt\"\n"
+         "fi\n"
          "exec \"$ecrf\" " +
-         Join(args) + " --threads \"$threads\"\n";
+         Join(args) + " \"$start\" --threads \"$threads\"\n";
 }
 
 // Writes task_K.sh for every task and tasks.txt, one shell line per task (each task's script with

@@ -48,7 +48,7 @@ TEST(SweepPlan, WritesOneScriptPerTaskTheArrayAndTheCollector) {
   EXPECT_NE(task1.find("cd '/home/me/work dir'\n"), std::string::npos) << task1;
   EXPECT_NE(task1.find("if [ -f report/runs/target_316KB/metrics.json ]"), std::string::npos);
   EXPECT_NE(task1.find("exec \"$ecrf\" train --target-size 316KB -o report/runs/target_316KB "
-                       "--overwrite --threads \"$threads\""),
+                       "\"$start\" --threads \"$threads\""),
             std::string::npos)
       << task1;
   struct stat st;
@@ -71,6 +71,43 @@ TEST(SweepPlan, WritesOneScriptPerTaskTheArrayAndTheCollector) {
             std::string::npos);
   struct stat logs;
   EXPECT_EQ(stat((p.plan_dir + "/logs").c_str(), &logs), 0);
+}
+
+// A task killed at Slurm's time limit (or preempted) continues from its checkpoint when the array
+// task runs again; without one it starts afresh, and a finished point is left alone. The script is
+// run with ECRF pointing at echo, so it prints the command it would run.
+TEST(SweepPlan, ATaskContinuesFromItsCheckpoint) {
+  const testing_util::ScopedTempDir tmp("ecrf_plan_resume");
+  const std::string root = tmp.path();
+  SweepPlan p;
+  p.plan_dir = root + "/plan";
+  p.ecrf = "/nonexistent/ecrf";
+  p.work_dir = root;
+  p.job_name = "ecrf-sweep";
+  p.tasks = {{"rate_low", "runs/rate_low", {"--rate", "low"}}};
+  p.collect_args = {"report", "sweep", "--collect"};
+  WriteSweepPlan(p);
+  const std::string out = root + "/out.txt";
+  auto run = [&] {
+    const std::string cmd =
+        "ECRF=/bin/echo ECRF_THREADS=3 sh '" + p.plan_dir + "/task_0.sh' > '" + out + "' 2>&1";
+    EXPECT_EQ(std::system(cmd.c_str()), 0);
+    return ReadText(out);
+  };
+  EXPECT_NE(run().find("train --rate low -o runs/rate_low --overwrite --threads 3"),
+            std::string::npos)
+      << ReadText(out);
+  ASSERT_EQ(mkdir((root + "/runs").c_str(), 0755), 0);
+  ASSERT_EQ(mkdir((root + "/runs/rate_low").c_str(), 0755), 0);
+  std::ofstream(root + "/runs/rate_low/checkpoint.ckpt") << "x";
+  const std::string resumed = run();
+  EXPECT_NE(resumed.find("continuing from runs/rate_low/checkpoint.ckpt"), std::string::npos)
+      << resumed;
+  EXPECT_NE(resumed.find("train --rate low -o runs/rate_low --resume --threads 3"),
+            std::string::npos)
+      << resumed;
+  std::ofstream(root + "/runs/rate_low/metrics.json") << "{}";
+  EXPECT_NE(run().find("finished already"), std::string::npos) << ReadText(out);
 }
 
 TEST(SweepPlan, RefusesAPlanDirectorySlurmCannotName) {
