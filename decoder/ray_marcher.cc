@@ -18,6 +18,14 @@ namespace {
 
 uint8_t ToByte(float v) { return static_cast<uint8_t>(ClipUnit(v) * 255.f + 0.5f); }
 
+// pixels x work_budget (0: no limit), saturated rather than wrapped (pixels < 2^62).
+int64_t ViewBudget(uint64_t pixels, uint64_t budget) {
+  const int64_t kUnlimited = INT64_MAX / 2;
+  return budget == 0 || pixels > static_cast<uint64_t>(kUnlimited) / budget
+             ? kUnlimited
+             : static_cast<int64_t>(pixels * budget);
+}
+
 }  // namespace
 
 // Samples per ray after the speed knobs of SPEC.md 7.8: ceil(n / step_scale) in float64, then
@@ -42,6 +50,7 @@ Status RayMarcher::Init(const SceneField* scene, const RenderOptions& options) {
   delete[] workspaces_;
   workspaces_ = nullptr;
   scene_ = nullptr;
+  view_ = false;
   ECRF_CHECK_OR_RETURN(scene != nullptr, kErrInvalidArgument, "render: null scene");
   ECRF_RETURN_IF_ERROR(scene->Validate());
   ECRF_CHECK_OR_RETURN(options.num_threads >= 0 && options.num_threads <= kMaxRenderThreads,
@@ -131,6 +140,12 @@ void Worker(const Ctx& c, RayMarcher::Job* job, RayMarcher::Workspace* ws);
 
 }  // namespace
 
+void RayMarcher::BeginView(uint64_t view_pixels) {
+  view_ = true;
+  view_pixels_ = view_pixels;
+  view_left_ = ViewBudget(view_pixels, options_.work_budget);
+}
+
 Status RayMarcher::Run(Job* job, uint64_t pixels, RenderStats* stats) {
   const SceneField& s = *scene_;
   Ctx c;
@@ -169,12 +184,9 @@ Status RayMarcher::Run(Job* job, uint64_t pixels, RenderStats* stats) {
   c.tile_rays = options_.tile_size * options_.tile_size;
   c.cost = costs_;
 
-  // pixels < 2^62 (RenderRays' count check), work_budget < 2^64: saturate instead of wrapping.
   const uint64_t budget = options_.work_budget;
-  const int64_t kUnlimited = INT64_MAX / 2;
-  job->work_left.store(budget == 0 || pixels > static_cast<uint64_t>(kUnlimited) / budget
-                           ? kUnlimited
-                           : static_cast<int64_t>(pixels * budget));
+  if (view_) pixels = view_pixels_;  // the refusal names the view
+  job->work_left.store(view_ ? view_left_ : ViewBudget(pixels, budget));
   for (int t = 0; t < threads_; ++t) {
     workspaces_[t].stats = RenderStats();
     workspaces_[t].credit = 0;
@@ -194,6 +206,12 @@ Status RayMarcher::Run(Job* job, uint64_t pixels, RenderStats* stats) {
   }
   RenderStats total;
   for (int t = 0; t < threads_; ++t) total.Add(workspaces_[t].stats);
+  if (view_) {  // what the threads took from the pool and did not spend goes back to the view
+    int64_t left = job->work_left.load();
+    for (int t = 0; t < threads_; ++t)
+      left += workspaces_[t].credit > 0 ? workspaces_[t].credit : 0;
+    view_left_ = left;
+  }
   if (stats != nullptr) *stats = total;
   ECRF_CHECK_OR_RETURN(
       !job->exhausted.load(), kErrLimit,

@@ -99,6 +99,13 @@ class RayMarcher {
   Status RenderRays(size_t count, const float* origins, const float* dirs, float* rgb, float* acc,
                     RenderStats* stats = nullptr);
 
+  // One work budget for a view rendered in several RenderRays calls (a caller that renders a
+  // large image a band of rows at a time): view_pixels x work_budget, spent by every call until
+  // EndView, and the refusal names the view's pixels. Without it each call has its own budget of
+  // count x work_budget. Init ends a view.
+  void BeginView(uint64_t view_pixels);
+  void EndView() { view_ = false; }
+
   // Internal (defined in ray_marcher.cc).
   struct Workspace;
   struct Job;
@@ -111,6 +118,9 @@ class RayMarcher {
   int threads_ = 1;
   SampleCosts costs_;
   Workspace* workspaces_ = nullptr;  // threads_ of them
+  bool view_ = false;                // between BeginView and EndView
+  uint64_t view_pixels_ = 0;
+  int64_t view_left_ = 0;  // the view's unspent budget (below 0 once spent)
 };
 
 }  // namespace dec

@@ -179,6 +179,9 @@ Status DecodeCoefficientChunk(const ChunkView& chunk, const SceneHeader& h, int 
   const uint64_t context_bytes =
       context_set == CoefContextSet::kNeighbour ? NeighbourBytes(shape, blocks) : 0;
   ECRF_RETURN_IF_ERROR(budget->Take(context_bytes, "COEF: the neighbour contexts"));
+  // Clearing them (when the chunk starts, and as it ends) costs like clearing a mask: one unit
+  // per 32 bytes; a few hundred bytes of COEF could otherwise clear 200 MB twice per chunk.
+  if (!work->Take(context_bytes / 32)) return work->Refuse("COEF: the neighbour contexts");
   CoefContexts contexts;
   ECRF_RETURN_IF_ERROR(
       contexts.Init(shape, context_set, blocks, static_cast<size_t>(context_bytes)));

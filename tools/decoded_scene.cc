@@ -52,6 +52,8 @@ trainer::Image RenderDecoded(const dec::SceneField& scene, const trainer::Camera
   img.channels = 3;
   img.pixels.resize(size_t(img.width) * img.height * 3);
   const int rows_per_chunk = std::max(1, 65536 / std::max(1, camera.width));
+  // Bands of rows, one work budget for the whole view (SPEC.md 8.2).
+  marcher.BeginView(uint64_t(camera.width) * uint64_t(camera.height));
   std::vector<float> origins, dirs;
   for (int y0 = 0; y0 < camera.height; y0 += rows_per_chunk) {
     const int rows = std::min(rows_per_chunk, camera.height - y0);

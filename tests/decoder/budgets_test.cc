@@ -184,6 +184,53 @@ TEST(WorkBudget, SinesBeyondTheFastRangeAreChargedWhatTheyCost) {
   EXPECT_EQ(huge.work - small.work, wide * kWideSinCosWork);
 }
 
+// A view rendered in bands of rays (the CLI renders 65,536 at a time) spends one budget between
+// BeginView and EndView: the same rays twice within one view cost twice, and the second band is
+// refused where, each with a budget of its own, both pass.
+TEST(WorkBudget, BandsOfOneViewShareItsBudget) {
+  CostlyScene cs;
+  cs.num_samples = 256;
+  cs.weight_threshold = 1e-7f;
+  const std::vector<uint8_t> bytes = BuildCostlyStream(cs);
+  SceneField field;
+  ASSERT_TRUE(DecodeScene(bytes.data(), bytes.size(), DecodeOptions(), &field, nullptr).ok());
+  const size_t n = 64;  // rays straight through the box
+  std::vector<float> o(n * 3), d(n * 3), rgb(n * 3);
+  for (size_t i = 0; i < n; ++i) {
+    o[i * 3 + 0] = -0.5f + static_cast<float>(i) / n;
+    o[i * 3 + 1] = 0.1f;
+    o[i * 3 + 2] = 3.f;
+    d[i * 3 + 2] = -1.f;
+  }
+  RenderOptions opts;
+  opts.num_threads = 1;
+  opts.work_budget = 0;
+  RayMarcher marcher;
+  ASSERT_TRUE(marcher.Init(&field, opts).ok());
+  RenderStats one;
+  ASSERT_TRUE(marcher.RenderRays(n, o.data(), d.data(), rgb.data(), nullptr, &one).ok());
+  ASSERT_GT(one.work, uint64_t{1} << 23);  // well above a thread's share of the pool
+  // A per-pixel budget that covers one band of n rays but not two.
+  opts.work_budget = one.work * 3 / 2 / n;
+  ASSERT_TRUE(marcher.Init(&field, opts).ok());
+  for (int band = 0; band < 2; ++band) {
+    EXPECT_TRUE(marcher.RenderRays(n, o.data(), d.data(), rgb.data(), nullptr).ok()) << band;
+  }
+  marcher.BeginView(2 * n);  // the two bands as one view of 2n pixels: the same budget in all
+  ASSERT_TRUE(marcher.RenderRays(n, o.data(), d.data(), rgb.data(), nullptr).ok());
+  RenderStats second;
+  const Status s = marcher.RenderRays(n, o.data(), d.data(), rgb.data(), nullptr, &second);
+  EXPECT_TRUE(s.ok()) << "2n pixels cover two bands: " << s.message();
+  marcher.BeginView(n);  // one band's pixels for two bands: the second is refused
+  ASSERT_TRUE(marcher.RenderRays(n, o.data(), d.data(), rgb.data(), nullptr).ok());
+  const Status refused = marcher.RenderRays(n, o.data(), d.data(), rgb.data(), nullptr);
+  EXPECT_EQ(refused.code(), kErrLimit);
+  EXPECT_TRUE(Contains(refused.message(), (" x " + std::to_string(n) + " pixels").c_str()))
+      << refused.message();
+  marcher.EndView();
+  EXPECT_TRUE(marcher.RenderRays(n, o.data(), d.data(), rgb.data(), nullptr).ok());
+}
+
 Status DecodeWith(const std::vector<uint8_t>& bytes, uint64_t work_per_byte, SceneField* field,
                   SceneInfo* info = nullptr) {
   DecodeOptions o;
