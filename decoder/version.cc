@@ -30,6 +30,7 @@ unsigned ecrf_version(void) {
 }
 const char* ecrf_version_string(void) { return ECRF_VERSION_TEXT; }
 int ecrf_bitstream_version(void) { return ecrf::kVersionMajor; }
+int ecrf_bitstream_version_minor(void) { return ecrf::kVersionMinor; }
 const char* ecrf_error_name(int code) { return ecrf::ErrorCodeName(code); }
 
 }  // extern "C"

@@ -2,8 +2,9 @@
  *
  *   decode_render scene.ecrf out.ppm [width height azimuth elevation radius]
  *
- * Angles in radians; the defaults (200x200, 0.3, 0.5, 4) suit the Blender-style scenes (z up,
- * cameras 4 units from the origin). Plain C99: builds against an installed ecrf with CMake
+ * Azimuth and elevation in degrees, as `ecrf render --orbit`, Python and the web viewer take
+ * them; the defaults (200x200, 17, 29, 4) suit the Blender-style scenes (z up, cameras 4 units
+ * from the origin). Plain C99: builds against an installed ecrf with CMake
  * (examples/CMakeLists.txt) or with `cc decode_render.c $(pkg-config --cflags --libs ecrf-decoder) -lm`. */
 #include <ecrf/decoder.h>
 
@@ -30,7 +31,7 @@ int main(int argc, char** argv) {
   ecrf_render_options options;
   ecrf_camera cam;
   int width = 200, height = 200, rc;
-  float az = 0.3f, el = 0.5f, radius = 4.f;
+  float az_deg = 17.f, el_deg = 29.f, radius = 4.f;
 
   if (argc != 3 && argc != 8) {
     fprintf(stderr, "usage: %s scene.ecrf out.ppm [width height azimuth elevation radius]\n", argv[0]);
@@ -39,15 +40,17 @@ int main(int argc, char** argv) {
   if (argc == 8) {
     width = atoi(argv[3]);
     height = atoi(argv[4]);
-    az = (float)atof(argv[5]);
-    el = (float)atof(argv[6]);
+    az_deg = (float)atof(argv[5]);
+    el_deg = (float)atof(argv[6]);
     radius = (float)atof(argv[7]);
-    if (width <= 0 || height <= 0 || width > 8192 || height > 8192 || !(radius > 0.f)) {
+    if (width <= 0 || height <= 0 || width > 8192 || height > 8192 || !(radius > 0.f) ||
+        !(el_deg >= -89.f && el_deg <= 89.f)) {
       fprintf(stderr, "bad camera arguments\n");
       return 2;
     }
   }
-  printf("ecrf decoder %s (bitstream %d)\n", ecrf_version_string(), ecrf_bitstream_version());
+  printf("ecrf decoder %s (reads bitstream %d.0 to %d.%d)\n", ecrf_version_string(),
+         ecrf_bitstream_version(), ecrf_bitstream_version(), ecrf_bitstream_version_minor());
   scene = decode_scene_file(argv[1], ECRF_STORAGE_FLOAT32);
   if (!scene) return 1;
   ecrf_scene_get_info(scene, &info);
@@ -60,7 +63,7 @@ int main(int argc, char** argv) {
          info.aabb_max[2], info.num_samples, info.step_size, info.has_occupancy ? "yes" : "no",
          info.grid_bytes);
 
-  orbit_camera(&cam, width, height, az, el, radius);
+  orbit_camera_degrees(&cam, width, height, az_deg, el_deg, radius);
   ecrf_render_options_default(&options);
   options.num_threads = 0;
   rgba = (unsigned char*)malloc((size_t)width * (size_t)height * 4);

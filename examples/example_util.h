@@ -57,7 +57,9 @@ static inline ecrf_scene* decode_scene_file(const char* path, int storage) {
   return scene;
 }
 
-/* SPEC.md 7.1 (informative OrbitCamera): on a sphere around the origin, looking at it, z up. */
+/* SPEC.md 7.1 (informative OrbitCamera): on a sphere of `radius` around the origin, looking at
+ * it, z up; azimuth and elevation in radians (benchmarks/decoder_speed.c's views). People type
+ * degrees: orbit_camera_degrees. */
 static inline void orbit_camera(ecrf_camera* cam, int width, int height, float az, float el,
                                 float radius) {
   const float pos[3] = {radius * cosf(el) * cosf(az), radius * cosf(el) * sinf(az),
@@ -82,6 +84,14 @@ static inline void orbit_camera(ecrf_camera* cam, int width, int height, float a
   cam->fx = cam->fy = 0.5f * (float)width / tanf(0.5f * 0.6911112070083618f);
   cam->cx = 0.5f * (float)width;
   cam->cy = 0.5f * (float)height;
+}
+
+/* orbit_camera with azimuth and elevation in degrees, as `ecrf render --orbit`, Python and the web
+ * viewer take them (frame k of `ecrf render --orbit N` is azimuth 360 k / N). */
+static inline void orbit_camera_degrees(ecrf_camera* cam, int width, int height, float az_deg,
+                                        float el_deg, float radius) {
+  orbit_camera(cam, width, height, az_deg * 0.017453292519943295f, el_deg * 0.017453292519943295f,
+               radius);
 }
 
 #endif /* ECRF_EXAMPLES_EXAMPLE_UTIL_H_ */

@@ -296,7 +296,8 @@ py::tuple OrbitCamera(int width, int height, double azimuth_deg, double elevatio
 PYBIND11_MODULE(ecrf, m) {
   m.doc() = "Decoder and renderer of ecrf compressed radiance fields";
   m.attr("__version__") = ecrf_version_string();
-  m.attr("bitstream_version") = ecrf_bitstream_version();
+  m.attr("bitstream_version") = ecrf_bitstream_version();  // major: reads 1.0 to 1.<minor>
+  m.attr("bitstream_version_minor") = ecrf_bitstream_version_minor();
   g_error =
       PyErr_NewExceptionWithDoc("ecrf.Error", "An ecrf call failed; .code is the ECRF_ERR_* code.",
                                 PyExc_ValueError, nullptr);

@@ -22,7 +22,8 @@ void PrintVersion() {
   std::printf(
       "ecrf %s: reads bitstream %d.0 to %d.%d, writes each stream at the lowest of them its "
       "features need (SPEC.md)\n",
-      ecrf_version_string(), ecrf_bitstream_version(), kVersionMajor, kVersionMinor);
+      ecrf_version_string(), ecrf_bitstream_version(), ecrf_bitstream_version(),
+      ecrf_bitstream_version_minor());
 }
 
 int RunVersion(int argc, char** argv) {

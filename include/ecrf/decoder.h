@@ -58,8 +58,10 @@ extern "C" {
 /* Library version as (major << 16) | (minor << 8) | patch, and as text. */
 ECRF_API unsigned ecrf_version(void);
 ECRF_API const char* ecrf_version_string(void);
-/* Highest bitstream major version this decoder reads. */
+/* Highest bitstream version this decoder reads, major and minor (1 and 6: it reads 1.0 to 1.6;
+ * a file states its own, ecrf_scene_info). Print them as major.minor, as `ecrf --version` does. */
 ECRF_API int ecrf_bitstream_version(void);
+ECRF_API int ecrf_bitstream_version_minor(void);
 /* Short name of an error code ("truncated", "corrupt", ...). */
 ECRF_API const char* ecrf_error_name(int code);
 

@@ -105,6 +105,13 @@ class DecodeTest(unittest.TestCase):
             plane[0, 0, 0] = 1.0
         self.assertTrue(np.isfinite(plane).all())
 
+    def test_versions_read_as_the_cli_prints_them(self):
+        # One version story (#61): the library's version, and bitstream major.minor as
+        # `ecrf --version` prints it ("reads bitstream 1.0 to 1.6").
+        self.assertRegex(ecrf.__version__, r"^\d+\.\d+\.\d+$")
+        self.assertEqual(ecrf.bitstream_version, 1)
+        self.assertGreaterEqual(ecrf.bitstream_version_minor, 6)
+
     def test_views_keep_the_scene_alive(self):
         plane = ecrf.decode(SCENE).tensor(1, 0)
         copy = plane.copy()
