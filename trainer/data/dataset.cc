@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <stdexcept>
 #include <utility>
@@ -283,7 +284,11 @@ DatasetManifest ParseTransforms(const fs::path& dir, const std::string& json_pat
     source.image_path = ResolveImagePath(dir, file_path);
     source.name = ViewName(file_path);
     std::error_code error;
-    if (layout == Layout::kNgp && !fs::exists(source.image_path, error)) {
+    const bool exists = fs::exists(source.image_path, error);
+    if (error) {  // a symlink loop, a folder without permission: not a missing image
+      context.FailFrame(index, "image " + source.image_path + ": " + error.message());
+    }
+    if (layout == Layout::kNgp && !exists) {
       std::fprintf(stderr, "warning: %s: frame %zu: image %s not found, skipping it\n",
                    json_path.c_str(), index, source.image_path.c_str());
       ++skipped;
@@ -306,13 +311,16 @@ DatasetManifest ParseTransforms(const fs::path& dir, const std::string& json_pat
 
 // Loads one view; `had_alpha` reports whether compositing changed the background.
 View LoadView(const ViewSource& source, int downscale, bool* had_alpha) {
-  Image image = LoadImage(source.image_path);
-  if (image.width != source.camera.width || image.height != source.camera.height) {
-    throw std::runtime_error(source.image_path + ": image is " + std::to_string(image.width) + "x" +
-                             std::to_string(image.height) + " but its camera says " +
+  // The size from the header first: a file larger than its camera says is refused before it is
+  // decoded (a small PNG can hold 8192^2 pixels).
+  const ImageSize size = ReadImageSize(source.image_path);
+  if (size.width != source.camera.width || size.height != source.camera.height) {
+    throw std::runtime_error(source.image_path + ": image is " + std::to_string(size.width) + "x" +
+                             std::to_string(size.height) + " but its camera says " +
                              std::to_string(source.camera.width) + "x" +
                              std::to_string(source.camera.height));
   }
+  Image image = LoadImage(source.image_path);
   *had_alpha = image.channels == 2 || image.channels == 4;
   View view;
   view.name = source.name;
@@ -344,12 +352,25 @@ std::vector<View> LoadViewsImpl(const std::vector<ViewSource>& sources, int down
                              std::to_string(kMaxDatasetPixels) +
                              " (12 GiB as float RGB): use a larger --downscale");
   }
+  // Each distinct file is decoded once: views that name the same file (the same camera size)
+  // copy the first one's pixels.
+  std::vector<int> first(sources.size());
+  {
+    std::map<std::string, int> seen;
+    for (size_t i = 0; i < sources.size(); ++i) {
+      std::error_code ec;
+      const fs::path canonical = fs::weakly_canonical(sources[i].image_path, ec);
+      const std::string key = (ec ? fs::path(sources[i].image_path) : canonical).string();
+      first[i] = seen.emplace(key, int(i)).first->second;
+    }
+  }
   const int count = static_cast<int>(sources.size());
   std::vector<View> views(sources.size());
   std::vector<std::string> errors(sources.size());
   std::vector<char> alpha(sources.size(), 0);
 #pragma omp parallel for schedule(dynamic)
   for (int i = 0; i < count; ++i) {
+    if (first[i] != i) continue;
     // Exceptions must not leave an OpenMP region; keep each view's error for later.
     try {
       bool had_alpha = false;
@@ -361,6 +382,21 @@ std::vector<View> LoadViewsImpl(const std::vector<ViewSource>& sources, int down
   }
   for (const std::string& error : errors) {
     if (!error.empty()) throw std::runtime_error(error);
+  }
+  for (int i = 0; i < count; ++i) {
+    const int f = first[i];
+    if (f == i) continue;
+    const ViewSource& s = sources[i];
+    if (s.camera.width != sources[f].camera.width || s.camera.height != sources[f].camera.height) {
+      throw std::runtime_error(
+          s.image_path + ": its camera says " + std::to_string(s.camera.width) + "x" +
+          std::to_string(s.camera.height) + ", another frame's " +
+          std::to_string(sources[f].camera.width) + "x" + std::to_string(sources[f].camera.height));
+    }
+    views[i].name = s.name;
+    views[i].rgb = views[f].rgb;
+    views[i].camera = ScaledCamera(s.camera, downscale);
+    alpha[i] = alpha[f];
   }
   *any_alpha = std::find(alpha.begin(), alpha.end(), 1) != alpha.end();
   return views;

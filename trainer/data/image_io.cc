@@ -203,6 +203,7 @@ void JpegOnMessage(j_common_ptr cinfo, int level) {
 struct JpegRaw {
   int width = 0, height = 0, channels = 0;  // upright: after the EXIF orientation
   int orientation = 1;                      // EXIF Orientation, 1 to 8 (1: as stored)
+  bool unsupported = false;                 // a valid JPEG this loader does not read
   std::vector<uint8_t> bytes;
   char error[JMSG_LENGTH_MAX] = {0};
 };
@@ -244,7 +245,9 @@ bool DecodeJpegRaw(const std::vector<uint8_t>& data, bool header_only, JpegRaw* 
     cinfo.out_color_space = JCS_RGB;
   } else {
     jpeg_destroy_decompress(&cinfo);
-    std::snprintf(out->error, sizeof out->error, "unsupported JPEG colour space (CMYK/YCCK)");
+    std::snprintf(out->error, sizeof out->error,
+                  "unsupported JPEG: CMYK or YCCK colour (print-ready files; save it as RGB)");
+    out->unsupported = true;
     return false;
   }
   jpeg_start_decompress(&cinfo);
@@ -270,7 +273,8 @@ bool DecodeJpegRaw(const std::vector<uint8_t>& data, bool header_only, JpegRaw* 
 Image DecodeJpeg(const std::string& path, const std::vector<uint8_t>& bytes) {
   JpegRaw raw;
   if (!DecodeJpegRaw(bytes, /*header_only=*/false, &raw)) {
-    Fail(path, std::string("corrupt or truncated JPEG: ") + raw.error);
+    Fail(path, raw.unsupported ? std::string(raw.error)
+                               : std::string("corrupt or truncated JPEG: ") + raw.error);
   }
   Image image = MakeImage(raw.width, raw.height, raw.channels);
   for (size_t i = 0; i < raw.bytes.size(); ++i) image.pixels[i] = raw.bytes[i] / 255.0f;

@@ -88,7 +88,13 @@ std::vector<fs::path> SortedImages(const fs::path& folder) {
   std::vector<fs::path> images;
   std::error_code error;
   for (const auto& entry : fs::directory_iterator(folder, error)) {
-    if (entry.is_regular_file(error) && IsImageName(entry.path())) images.push_back(entry.path());
+    if (!IsImageName(entry.path())) continue;
+    std::error_code status;
+    const bool regular = entry.is_regular_file(status);
+    // An image name that cannot be followed (a symlink loop, no permission) is an error, not a
+    // file to leave out: the poses match the images by position.
+    if (status) throw std::runtime_error(entry.path().string() + ": " + status.message());
+    if (regular) images.push_back(entry.path());
   }
   if (error) throw std::runtime_error(folder.string() + ": cannot list: " + error.message());
   std::sort(images.begin(), images.end());

@@ -278,6 +278,36 @@ TEST_F(ImageIoTest, DecodesJpegColours) {
   EXPECT_EQ(size.height, 32);
 }
 
+// A CMYK JPEG (print workflows) is a valid file this loader does not read: said so, not
+// "corrupt".
+TEST_F(ImageIoTest, CmykJpegIsUnsupportedNotCorrupt) {
+  jpeg_compress_struct cinfo;
+  jpeg_error_mgr errors;
+  cinfo.err = jpeg_std_error(&errors);
+  jpeg_create_compress(&cinfo);
+  unsigned char* buffer = nullptr;
+  unsigned long size = 0;
+  jpeg_mem_dest(&cinfo, &buffer, &size);
+  cinfo.image_width = 8;
+  cinfo.image_height = 8;
+  cinfo.input_components = 4;
+  cinfo.in_color_space = JCS_CMYK;
+  jpeg_set_defaults(&cinfo);
+  jpeg_start_compress(&cinfo, TRUE);
+  std::vector<uint8_t> row(8 * 4, 128);
+  while (cinfo.next_scanline < cinfo.image_height) {
+    JSAMPROW r = row.data();
+    jpeg_write_scanlines(&cinfo, &r, 1);
+  }
+  jpeg_finish_compress(&cinfo);
+  jpeg_destroy_compress(&cinfo);
+  WriteAll(Path("cmyk.jpg"), std::vector<uint8_t>(buffer, buffer + size));
+  free(buffer);
+  const std::string error = ErrorOf([&] { LoadImage(Path("cmyk.jpg")); });
+  EXPECT_NE(error.find("unsupported JPEG: CMYK"), std::string::npos) << error;
+  EXPECT_EQ(error.find("corrupt"), std::string::npos) << error;
+}
+
 TEST_F(ImageIoTest, DetectsFormatByContentNotExtension) {
   WriteQuadrantJpeg(Path("actually_jpeg.png"));
   EXPECT_EQ(LoadImage(Path("actually_jpeg.png")).channels, 3);

@@ -278,8 +278,15 @@ TEST_F(LlffTest, ErrorsNameTheFileAndTheProblem) {
   WriteBytes("poses_bounds.npy", NpyBytes(bad, "(10, 17)"));
   EXPECT_TRUE(Contains(error(), "img_00.png") && Contains(error(), "64x60")) << error();
 
-  fs::remove_all(dir_ / "images");
+  // An image name that cannot be followed (a symlink loop) is named with its cause, not left out
+  // (the poses pair with the images by position).
   WriteBytes("poses_bounds.npy", NpyBytes(table, "(10, 17)"));
+  const fs::path loop = dir_ / "images/img_05.png";
+  fs::remove(loop);
+  fs::create_symlink(loop.filename(), loop);
+  EXPECT_TRUE(Contains(error(), loop.string()) && Contains(error(), "symbolic links")) << error();
+
+  fs::remove_all(dir_ / "images");
   EXPECT_TRUE(Contains(error(), "images") && Contains(error(), "no such directory")) << error();
 }
 
