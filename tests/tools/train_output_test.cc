@@ -1,11 +1,15 @@
 // `ecrf train` finds an unusable output before it loads data or trains, and a run that fails
 // early leaves no empty directory behind.
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -111,6 +115,39 @@ TEST_F(TrainOutputTest, ExistingRunIsRefusedUnlessResumedOrOverwritten) {
 
 // --eval-downscale: a short run scored at half size records it, with the renderer's samples per
 // ray.
+// A disk that fills up (here a 1 MB limit on the size of any file the process writes): the final
+// checkpoint (9 MB) cannot be written, but the run's file (about 120 KB) and metrics.json still
+// are, from the model in memory. Before, the run ended with the checkpoint's error and no file.
+TEST_F(TrainOutputTest, AFullDiskStillGetsTheRunsFile) {
+  const std::string out = root_ + "/run";
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    std::signal(SIGXFSZ, SIG_IGN);  // a write past the limit fails with EFBIG instead
+    const rlimit limit = {1 << 20, 1 << 20};
+    if (setrlimit(RLIMIT_FSIZE, &limit) != 0) _exit(3);
+    int rc = 4;
+    try {
+      rc = Invoke(RunTrain,
+                  {"train", "--scene", "builtin", "--iters", "40", "--builtin-size", "32",
+                   "--builtin-views", "16", "--max-test-views", "1", "--threads", "1", "-o", out});
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "%s\n", e.what());
+    }
+    _exit(rc);
+  }
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  EXPECT_TRUE(FileExists(out + "/scene.ecrf"));
+  EXPECT_TRUE(FileExists(out + "/metrics.json"));
+  EXPECT_FALSE(FileExists(out + "/checkpoint.ckpt"));  // and no temporary left behind either
+  for (const auto& e : std::filesystem::directory_iterator(out)) {
+    EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos) << e.path();
+  }
+}
+
 TEST_F(TrainOutputTest, EvalDownscaleIsRecordedWithSamplesPerRay) {
   const std::string out = root_ + "/run";
   Invoke(RunTrain,

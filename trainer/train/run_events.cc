@@ -112,7 +112,18 @@ TrainResult FinishTraining(TrainSession& s) {
   result.final_lambda_e = s.live.lambda_e;
   result.train_seconds = s.TrainSeconds();
   CheckModelFinite(*model, o.iters - 1, s.checkpoint_path);
-  if (!s.checkpoint_path.empty()) s.SaveCheckpoint(o.iters, result.train_seconds);
+  if (!s.checkpoint_path.empty()) {
+    try {
+      s.SaveCheckpoint(o.iters, result.train_seconds);
+    } catch (const std::runtime_error& e) {
+      // A full disk (or a file size limit): the checkpoint is far larger than the scene file the
+      // run is for, and the model is in memory. Say so and go on to write the file.
+      std::fprintf(stderr,
+                   "warning: %s\nwarning: the final checkpoint was not written (ecrf encode RUN "
+                   "needs it); writing the run's file from the model in memory\n",
+                   e.what());
+    }
+  }
   if (!s.schedule.use_rate && o.report_rate) {
     // Without the rate objective, fit an entropy model to the final grids anyway so every run
     // reports the size its coefficients would cost (the lambda_e = 0 point of a sweep).
