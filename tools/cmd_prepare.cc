@@ -28,7 +28,8 @@ int RunPrepare(int argc, char** argv) {
       ->type_name("N")
       ->capture_default_str();
   app->add_option("--max-size", o.max_size,
-                  "video: longest side of the frames in pixels (0: the video's)")
+                  "longest side in pixels: a video's frames are scaled to it; photos keep their "
+                  "size and COLMAP's SIFT reads them scaled to it (0: as they are)")
       ->type_name("PX")
       ->capture_default_str();
   app->add_option("--matcher", o.matcher,

@@ -74,7 +74,8 @@ std::string ProgramResult::Status() const {
                 : "killed by signal " + std::to_string(signal);
 }
 
-ProgramResult RunProgram(const std::vector<std::string>& argv) {
+ProgramResult RunProgram(const std::vector<std::string>& argv,
+                         const std::function<void(const std::string&)>& on_line) {
   if (argv.empty()) throw std::invalid_argument("RunProgram: empty argv");
   int fds[2];
   if (pipe2(fds, O_CLOEXEC) != 0) {
@@ -83,7 +84,11 @@ ProgramResult RunProgram(const std::vector<std::string>& argv) {
   Descriptor read_end(fds[0]), write_end(fds[1]);
   SpawnSetup setup;
   posix_spawn_file_actions_addopen(&setup.actions, 0, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&setup.actions, 1, "/dev/null", O_WRONLY, 0);
+  if (on_line) {
+    posix_spawn_file_actions_adddup2(&setup.actions, write_end.get(), 1);
+  } else {
+    posix_spawn_file_actions_addopen(&setup.actions, 1, "/dev/null", O_WRONLY, 0);
+  }
   // dup2 clears close-on-exec on the copy, so the child keeps stderr and nothing else of ours.
   posix_spawn_file_actions_adddup2(&setup.actions, write_end.get(), 2);
   std::vector<char*> args;
@@ -98,15 +103,27 @@ ProgramResult RunProgram(const std::vector<std::string>& argv) {
   write_end.Close();  // else the read below never sees end-of-file
   ProgramResult result;
   char buffer[4096];
+  std::string line;  // the unfinished line for on_line
   for (;;) {
     const ssize_t n = read(read_end.get(), buffer, sizeof(buffer));
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) break;
+    if (on_line) {
+      for (ssize_t k = 0; k < n; ++k) {
+        if (buffer[k] == '\n' || buffer[k] == '\r') {
+          if (!line.empty()) on_line(line);
+          line.clear();
+        } else if (line.size() < kErrorTailBytes) {
+          line += buffer[k];
+        }
+      }
+    }
     result.error_tail.append(buffer, size_t(n));
     if (result.error_tail.size() > 2 * kErrorTailBytes) {
       result.error_tail.erase(0, result.error_tail.size() - kErrorTailBytes);
     }
   }
+  if (on_line && !line.empty()) on_line(line);
   if (result.error_tail.size() > kErrorTailBytes) {
     result.error_tail.erase(0, result.error_tail.size() - kErrorTailBytes);
   }

@@ -4,6 +4,7 @@
 #ifndef ECRF_TOOLS_RUN_PROGRAM_H_
 #define ECRF_TOOLS_RUN_PROGRAM_H_
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -27,7 +28,10 @@ inline constexpr size_t kErrorTailBytes = 4096;
 
 // Runs argv[0] (a path, as FindExecutable returns) with argv, stdin and stdout on /dev/null,
 // stderr captured, and waits for it. Throws std::runtime_error when it cannot be started.
-ProgramResult RunProgram(const std::vector<std::string>& argv);
+// With on_line, stdout is captured too and each line of either stream (without its newline, in
+// the order the program wrote them) goes to on_line as it arrives: progress for a long run.
+ProgramResult RunProgram(const std::vector<std::string>& argv,
+                         const std::function<void(const std::string&)>& on_line = nullptr);
 
 // argv as one line a user can paste into a POSIX shell: each word single-quoted when it holds
 // anything but letters, digits and -_./%+:=,@.

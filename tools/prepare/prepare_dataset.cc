@@ -12,6 +12,7 @@
 
 #include "tools/cli.h"
 #include "tools/prepare/colmap_model.h"
+#include "tools/prepare/colmap_progress.h"
 #include "tools/run_program.h"
 #include "trainer/data/image_io.h"
 
@@ -86,9 +87,14 @@ std::string Executable(const std::string& name, const char* package, const char*
   return path;
 }
 
-void Run(const std::vector<std::string>& argv, const std::string& step) {
+// Runs one step; a COLMAP phase of `frames` frames (frames > 0) shows its progress as it goes.
+void Run(const std::vector<std::string>& argv, const std::string& step, int frames = 0) {
   std::fprintf(stderr, "prepare: %s\n", step.c_str());
-  const ProgramResult result = RunProgram(argv);
+  ColmapProgress progress(step, frames);
+  const ProgramResult result =
+      frames > 0 ? RunProgram(argv, [&progress](const std::string& line) { progress(line); })
+                 : RunProgram(argv);
+  progress.Finish();
   if (!result.Succeeded()) {
     throw std::runtime_error(step + " failed (" + result.Status() + "): " + ShellCommandLine(argv) +
                              "\n" + TailLines(result.error_tail, 12));
@@ -208,15 +214,22 @@ PrepareResult PrepareDataset(const PrepareOptions& o) {
     extract.insert(extract.end(),
                    {"--SiftExtraction.max_num_features", std::to_string(o.max_features)});
   }
-  Run(extract, "COLMAP feature extraction of " + std::to_string(result.frames) + " frames");
+  if (o.max_size > 0 && !video) {
+    // Photos keep their size (the trainer's --downscale shrinks them); SIFT reads them shrunk to
+    // --max-size, which is most of its time on large photos (frames of a video are scaled by
+    // ffmpeg already).
+    extract.insert(extract.end(), {"--SiftExtraction.max_image_size", std::to_string(o.max_size)});
+  }
+  Run(extract, "COLMAP feature extraction of " + std::to_string(result.frames) + " frames",
+      result.frames);
   const std::string matcher =
       o.matcher == "auto" ? (video ? "sequential" : "exhaustive") : o.matcher;
   Run({colmap, matcher + "_matcher", "--database_path", db.string(), "--SiftMatching.use_gpu", "0",
        "--SiftMatching.num_threads", std::to_string(threads)},
-      "COLMAP " + matcher + " matching");
+      "COLMAP " + matcher + " matching", result.frames);
   Run({colmap, "mapper", "--database_path", db.string(), "--image_path", images.string(),
        "--output_path", sparse.string(), "--Mapper.num_threads", std::to_string(threads)},
-      "COLMAP mapping");
+      "COLMAP mapping", result.frames);
 
   // COLMAP writes one folder per disconnected reconstruction: keep the one with most images.
   ColmapModel best;

@@ -36,7 +36,7 @@ struct PrepareOptions {
   std::string out_dir;   // must not exist (or be an empty folder)
   double fps = 2.0;      // video: frames extracted per second
   int max_frames = 300;  // video: at most this many frames
-  int max_size = 0;      // video: longest side of the frames in pixels (0: the video's)
+  int max_size = 0;  // video: longest side of the frames (0: the video's); photos: of SIFT's copy
   // exhaustive (every pair), sequential (neighbours in name order: video) or auto (sequential
   // for a video, exhaustive for photos).
   std::string matcher = "auto";
