@@ -132,8 +132,13 @@ trainer::EvalResult EvaluateDecoded(const dec::SceneField& scene, const trainer:
     render_seconds += trainer::SecondsSince(start);
     if (image_scale > 1)
       img = ResizeBilinear(img, test.views[v].rgb.width, test.views[v].rgb.height);
-    r.psnr += std::min(100.0, trainer::Psnr(img, test.views[v].rgb));
-    r.ssim += trainer::Ssim(img, test.views[v].rgb);
+    // The half-image protocol: columns that fitted the view's camera are not scored.
+    const int x0 = test.views[v].fitted_columns;
+    const trainer::Image scored = trainer::ColumnsFrom(img, x0);
+    const trainer::Image truth = trainer::ColumnsFrom(test.views[v].rgb, x0);
+    r.psnr += std::min(100.0, trainer::Psnr(scored, truth));
+    r.ssim += trainer::Ssim(scored, truth);
+    r.fitted_columns = std::max(r.fitted_columns, x0);
     if (r.views++ == 0) {
       r.width = img.width;
       r.height = img.height;

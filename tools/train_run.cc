@@ -214,10 +214,11 @@ void PrintRunSummary(const trainer::TrainOptions& o, const trainer::TrainResult&
   std::printf(
       "encoded %s/scene.ecrf: %zu bytes (%.1fx smaller than float32); decoded file: test PSNR %.2f "
       "dB%s, "
-      "SSIM %.4f over %d views; decode %.0f ms, render %.0f ms/view (%s head: %.1f samples, %.1f "
-      "coloured samples per ray, %.0f k multiply-adds per pixel)\n",
+      "SSIM %.4f over %d views%s; decode %.0f ms, render %.0f ms/view (%s head: %.1f samples, "
+      "%.1f coloured samples per ray, %.0f k multiply-adds per pixel)\n",
       o.out_dir.c_str(), coded.decoded.bytes.size(),
       double(float_bytes) / coded.decoded.bytes.size(), d.psnr, versus.c_str(), d.ssim, d.views,
+      d.fitted_columns > 0 ? " (their right halves: the left halves aligned the cameras)" : "",
       1e3 * coded.decoded.decode_seconds, 1e3 * d.seconds_per_view,
       HeadKindName(coded.decoded.info.head), d.samples_per_ray, d.color_samples_per_ray,
       d.work_per_pixel / 1e3);
@@ -316,6 +317,10 @@ void AddCodedMetrics(const CodedRun& coded, const trainer::TrainResult& r, size_
   const trainer::EvalResult& d = coded.eval;
   (*m)["test_views"] = d.views;
   (*m)["test_image_size"] = {d.width, d.height};
+  // Which pixels the test scores cover: with refined cameras each held-out camera is aligned on
+  // its view's left half and the right half is scored (the half-image protocol); else all.
+  (*m)["held_out_scoring"] =
+      d.fitted_columns > 0 ? "right halves; cameras aligned on the left halves" : "whole views";
   (*m)["float32_model_bytes"] = float_bytes;
   (*m)["encode_step_scale"] = coded.step_scale;
   (*m)["file_bytes"] = coded.decoded.bytes.size();

@@ -16,6 +16,10 @@ struct View {
   Camera camera;
   Image rgb;  // 3 channels, alpha composited on white
   std::string name;
+  // A held-out view whose camera was fitted to its image (AlignHeldOutCameras): columns
+  // [0, fitted_columns) fitted it and are never scored; scores cover the columns right of them
+  // (the half-image protocol). 0: nothing of the view was fitted, the whole view is scored.
+  int fitted_columns = 0;
 };
 
 struct Dataset {

@@ -90,6 +90,18 @@ double Psnr(const Image& a, const Image& b) {
   return -10.0 * std::log10(mse);
 }
 
+Image ColumnsFrom(const Image& image, int x0) {
+  if (x0 <= 0) return image;
+  x0 = std::min(x0, image.width);
+  Image out = MakeImage(image.width - x0, image.height, image.channels);
+  const size_t row = size_t(out.width) * image.channels;
+  for (int y = 0; y < image.height; ++y) {
+    std::copy_n(&image.pixels[(size_t(y) * image.width + x0) * image.channels], row,
+                &out.pixels[size_t(y) * row]);
+  }
+  return out;
+}
+
 double Ssim(const Image& a, const Image& b) {
   CheckSameShape(a, b, "SSIM");
   if (a.width < kSsimWindow || a.height < kSsimWindow) {

@@ -14,6 +14,10 @@ double MeanSquaredError(const Image& a, const Image& b);
 // Throws std::runtime_error if the shapes differ.
 double Psnr(const Image& a, const Image& b);
 
+// Columns [x0, width) of `image` (all rows and channels): the scored part of a view whose left
+// columns fitted its camera (View::fitted_columns). x0 <= 0: the image itself.
+Image ColumnsFrom(const Image& image, int x0);
+
 // Structural similarity (Wang et al. 2004) exactly as TensoRF's rgb_ssim computes it: 11x11
 // Gaussian window with sigma 1.5 applied separably with 'valid' borders, C1 = 0.01^2,
 // C2 = 0.03^2 (data range 1), variances clipped at 0, averaged over the valid pixels and the

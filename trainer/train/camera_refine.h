@@ -28,6 +28,7 @@ namespace trainer {
 
 struct CameraRefineOptions {
   int pixels_per_view = 512;  // residual pixels per view (of 4x as many random ones)
+  bool left_half = false;     // pixels only from the left half of each view (columns < width / 2)
   int steps = 3;              // Levenberg-Marquardt steps
   bool intrinsics = true;     // also the shared intrinsics (only when all views share them)
   uint64_t seed = 1;          // which pixels
@@ -58,16 +59,19 @@ std::vector<Camera> FollowRefinedCameras(const std::vector<Camera>& before,
 // The held-out cameras of `test` for scoring a field trained with refined cameras: first moved
 // with the training cameras' common drift (FollowRefinedCameras from the views' own cameras to
 // `refined`), then the poses of the views in `scored` (indices into test.views, as EvalViews
-// gives them) refined against `model` on their own images (exposure neutral; the intrinsics stay
-// the refined shared ones). Views that are not scored only follow the drift: refining a camera
-// costs about as much as rendering its view, and a run that scores 20 of 200 held-out views
-// should not pay for 200. Appends the alignment's statistics to stats_or_null.
+// gives them) refined against `model` on the left halves of their own images (exposure neutral;
+// the intrinsics stay the refined shared ones): the right halves are what is scored, so no scored
+// pixel fits the camera it is scored with. Views that are not scored only follow the drift:
+// refining a camera costs about as much as rendering its view, and a run that scores 20 of 200
+// held-out views should not pay for 200. Appends the alignment's statistics to stats_or_null.
 std::vector<Camera> AlignHeldOutCameras(const TensorfModel& model, const Dataset& train,
                                         const Dataset& test, const std::vector<Camera>& refined,
                                         const std::vector<size_t>& scored, uint64_t seed,
                                         std::vector<CameraRefineStats>* stats_or_null);
 
-// `data` with cameras[v] for view v (cameras empty: `data` unchanged).
+// `data` with cameras[v] for view v, aligned to the left halves of their views as
+// AlignHeldOutCameras does: each view's fitted_columns becomes width / 2, so that only the right
+// half is scored (cameras empty: `data` unchanged).
 Dataset WithCameras(Dataset data, const std::vector<Camera>& cameras);
 
 // Whether every camera has the same size and intrinsics (one physical camera).

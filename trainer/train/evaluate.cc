@@ -37,9 +37,13 @@ EvalResult Evaluate(const TensorfModel& model, const Dataset& test, int stride, 
   EvalProgress progress("evaluating the float model", int(views.size()));
   for (const size_t v : views) {
     Image img = RenderView(model, test.views[v].camera);
+    // The half-image protocol: columns that fitted the view's camera are not scored.
+    const int x0 = test.views[v].fitted_columns;
+    const Image scored = ColumnsFrom(img, x0), truth = ColumnsFrom(test.views[v].rgb, x0);
     // A view rendered exactly has infinite PSNR; cap it so one such view cannot swamp the mean.
-    r.psnr += std::min(100.0, Psnr(img, test.views[v].rgb));
-    r.ssim += Ssim(img, test.views[v].rgb);
+    r.psnr += std::min(100.0, Psnr(scored, truth));
+    r.ssim += Ssim(scored, truth);
+    r.fitted_columns = std::max(r.fitted_columns, x0);
     if (r.views++ == 0) {
       r.width = img.width;
       r.height = img.height;

@@ -16,6 +16,7 @@ struct EvalResult {
   double ssim = 0.0;  // mean over views
   int views = 0;
   int width = 0, height = 0;  // the scored images' size (the first view's), for the record
+  int fitted_columns = 0;     // > 0: the half-image protocol (View::fitted_columns) scored them
   double seconds_per_view = 0.0;
   // Density and MLP evaluations per ray (what bounds render time), where the renderer counts them.
   double samples_per_ray = 0.0;
