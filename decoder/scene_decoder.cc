@@ -113,6 +113,21 @@ TensorTarget TargetOf(VmGrid* grid, const SceneHeader& h, int g, int t) {
   return target;
 }
 
+// A COEF chunk's contexts (SPEC.md 8.1). The neighbour set keeps the capped levels of one block
+// per (b1, b2) column while the chunk decodes (about a quarter of a channel block's float32
+// bytes, more where the block pads the tensor): its memory is charged for the chunk, and
+// clearing it (when the chunk starts, and as it ends) costs like clearing a mask, one unit per
+// 32 bytes: a few hundred bytes of COEF could otherwise clear 200 MB twice per chunk.
+Status InitChunkContexts(const BlockShape& shape, CoefContextSet set, const int blocks[3],
+                         MemoryBudget* budget, WorkBudget* work, CoefContexts* contexts) {
+  const uint64_t bytes = set == CoefContextSet::kNeighbour ? NeighbourBytes(shape, blocks) : 0;
+  ECRF_RETURN_IF_ERROR(budget->Take(bytes, "COEF: the neighbour contexts"));
+  if (!work->Take(bytes / 32)) return work->Refuse("COEF: the neighbour contexts");
+  ECRF_RETURN_IF_ERROR(contexts->Init(shape, set, blocks, static_cast<size_t>(bytes)));
+  budget->Give(bytes);  // nothing else is charged while the chunk decodes
+  return Status::Ok();
+}
+
 Status DecodeCoefficientChunk(const ChunkView& chunk, const SceneHeader& h, int g, int t,
                               int version_minor, MemoryBudget* budget, WorkBudget* work,
                               VmGrid* grid, TensorChunkInfo* info) {
@@ -172,20 +187,9 @@ Status DecodeCoefficientChunk(const ChunkView& chunk, const SceneHeader& h, int 
   info->blocks = static_cast<uint32_t>(blocks[0]) * blocks[1] * blocks[2];
   info->coded_blocks = 0;
 
-  // The neighbour contexts keep the capped levels of one block per (b1, b2) column while the
-  // chunk decodes (about a quarter of a channel block's float32 bytes, more where the block
-  // pads the tensor): charged to the memory budget for the length of the chunk.
-  const BlockShape shape{dims[0], dims[1], dims[2]};
-  const uint64_t context_bytes =
-      context_set == CoefContextSet::kNeighbour ? NeighbourBytes(shape, blocks) : 0;
-  ECRF_RETURN_IF_ERROR(budget->Take(context_bytes, "COEF: the neighbour contexts"));
-  // Clearing them (when the chunk starts, and as it ends) costs like clearing a mask: one unit
-  // per 32 bytes; a few hundred bytes of COEF could otherwise clear 200 MB twice per chunk.
-  if (!work->Take(context_bytes / 32)) return work->Refuse("COEF: the neighbour contexts");
   CoefContexts contexts;
-  ECRF_RETURN_IF_ERROR(
-      contexts.Init(shape, context_set, blocks, static_cast<size_t>(context_bytes)));
-  budget->Give(context_bytes);
+  ECRF_RETURN_IF_ERROR(InitChunkContexts(BlockShape{dims[0], dims[1], dims[2]}, context_set, blocks,
+                                         budget, work, &contexts));
   HeapArray<int32_t> block_buffers;
   ECRF_RETURN_IF_ERROR(block_buffers.Allocate(2 * static_cast<size_t>(kMaxBlockVolume)));
   int32_t* coeffs = block_buffers.data();
