@@ -43,6 +43,7 @@ struct CostlyScene {
   int occupancy_depth = 0;  // the mask's z resolution (0: occupancy_res)
   // Bytes of an ancillary `meta` chunk: a larger stream, so a larger decode budget (SPEC.md 8).
   size_t padding = 0;
+  bool neighbour = false;  // COEF chunks with the neighbour contexts (version 1.5, SPEC.md 4.4)
   bool unbounded = false;  // scene_model 1: samples spaced in contracted distance (SPEC.md 7.2.1)
 };
 
@@ -115,7 +116,8 @@ inline std::vector<uint8_t> BuildCostlyStream(const CostlyScene& cs) {
   h.has_occupancy = cs.occupancy != 0;
   h.scene_model = static_cast<uint8_t>(cs.unbounded ? SceneModel::kUnbounded : SceneModel::kObject);
   const float extent = cs.unbounded ? 2.f : 1.f;  // the box the grids and the mask span
-  ContainerWriter writer(cs.unbounded ? 2 : 1);   // the quantized MLP is a 1.1 feature
+  // The quantized MLP is a 1.1 feature, the unbounded model 1.2, the neighbour contexts 1.5.
+  ContainerWriter writer(cs.neighbour ? 5 : (cs.unbounded ? 2 : 1));
   ByteWriter head;
   WriteSceneHeader(h, &head);
   writer.AddChunk(kChunkHead, head.bytes());
@@ -151,10 +153,14 @@ inline std::vector<uint8_t> BuildCostlyStream(const CostlyScene& cs) {
       const int dims[3] = {t < 3 ? cs.block : 1, cs.block, cs.block};
       int extent[3];
       SceneTensorExtent(h, g, t, extent);
-      int blocks = 1;
-      for (int a = 0; a < 3; ++a) blocks *= (extent[a] + dims[a] - 1) / dims[a];
+      int grid[3], blocks = 1;
+      for (int a = 0; a < 3; ++a) blocks *= grid[a] = (extent[a] + dims[a] - 1) / dims[a];
       CoefContexts ctx;
-      if (!ctx.Init(BlockShape{dims[0], dims[1], dims[2]}, CoefContextSet::kNarrow).ok()) return {};
+      const BlockShape shape{dims[0], dims[1], dims[2]};
+      const Status init = cs.neighbour
+                              ? ctx.Init(shape, CoefContextSet::kNeighbour, grid, size_t{1} << 31)
+                              : ctx.Init(shape, CoefContextSet::kNarrow);
+      if (!init.ok()) return {};
       RangeEncoder enc;
       std::vector<int32_t> q(static_cast<size_t>(dims[0]) * dims[1] * dims[2], 0);
       if (cs.blocks == 1) {
@@ -165,7 +171,8 @@ inline std::vector<uint8_t> BuildCostlyStream(const CostlyScene& cs) {
       c.U8(static_cast<uint8_t>(g));
       c.U8(static_cast<uint8_t>(t));
       c.U8(8);
-      c.U8(0);
+      c.U8(static_cast<uint8_t>(cs.neighbour ? CoefContextSet::kNeighbour
+                                             : CoefContextSet::kNarrow));
       for (int a = 0; a < 3; ++a) c.U8(static_cast<uint8_t>(dims[a]));
       c.U8(0);
       c.F32(1e-6f);

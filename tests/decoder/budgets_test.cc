@@ -298,6 +298,30 @@ TEST(DecodeBudget, BlocksCodedToTheirFullLengthAreRefusedAsTheyDecode) {
   EXPECT_LT(info.decode_work, uint64_t{1} << 20);
 }
 
+// Neighbour contexts over a large block grid (2048^2 planes of rank 1 in 16^3 blocks: 67 MB of
+// contexts a plane chunk) are charged for allocating and clearing them: 582 bytes of stream cleared
+// 400 MB at 171 decode units a byte before (issue #60); now the default budget refuses it, and
+// with no limit its work counts each chunk's NB[1] * NB[2] * (V + 2) / 16.
+TEST(DecodeBudget, NeighbourContextsAreChargedForTheirMemory) {
+  CostlyScene cs;
+  cs.res = 2048;
+  cs.block = 16;
+  cs.neighbour = true;
+  const std::vector<uint8_t> bytes = BuildCostlyStream(cs);
+  ASSERT_FALSE(bytes.empty());
+  EXPECT_LT(bytes.size(), 1024u);
+  SceneField field;
+  const Status s = DecodeWith(bytes, kDefaultDecodeWorkPerByte, &field);
+  EXPECT_EQ(s.code(), kErrLimit);
+  EXPECT_TRUE(Contains(s.message(), "neighbour contexts") && Contains(s.message(), "decode budget"))
+      << s.message();
+  SceneInfo info;
+  ASSERT_TRUE(DecodeWith(bytes, 0, &field, &info).ok());
+  const uint64_t plane_chunk = uint64_t{2048 / 16} * (2048 / 16) * (16 * 16 * 16 + 2) / 16;
+  EXPECT_GE(info.decode_work, 6 * plane_chunk);  // two grids of three planes
+  EXPECT_LT(info.decode_work, 6 * plane_chunk + (uint64_t{1} << 20));
+}
+
 // Real streams cost a small fraction of the default: the conformance vectors and a trained one.
 TEST(DecodeBudget, RealStreamsCostLittleOfTheDefault) {
   const std::string dir = std::string(ECRF_SOURCE_DIR) + "/tests/conformance/";
