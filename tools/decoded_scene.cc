@@ -132,17 +132,7 @@ trainer::EvalResult EvaluateDecoded(const dec::SceneField& scene, const trainer:
     render_seconds += trainer::SecondsSince(start);
     if (image_scale > 1)
       img = ResizeBilinear(img, test.views[v].rgb.width, test.views[v].rgb.height);
-    // The half-image protocol: columns that fitted the view's camera are not scored.
-    const int x0 = test.views[v].fitted_columns;
-    const trainer::Image scored = trainer::ColumnsFrom(img, x0);
-    const trainer::Image truth = trainer::ColumnsFrom(test.views[v].rgb, x0);
-    r.psnr += std::min(100.0, trainer::Psnr(scored, truth));
-    r.ssim += trainer::Ssim(scored, truth);
-    r.fitted_columns = std::max(r.fitted_columns, x0);
-    if (r.views++ == 0) {
-      r.width = img.width;
-      r.height = img.height;
-    }
+    trainer::AddViewScore(img, test.views[v], &r);
     if (keep_renders) r.renders.push_back(std::move(img));
     char extra[96];
     std::snprintf(extra, sizeof(extra), "%.1f samples and %.1f coloured samples per ray",

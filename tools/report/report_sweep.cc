@@ -5,9 +5,9 @@
 // reports what those tasks finished without training anything.
 #include <omp.h>
 
+#include <strings.h>
 #include <unistd.h>
 #include <algorithm>
-#include <cctype>
 #include <chrono>
 #include <climits>
 #include <cmath>
@@ -76,10 +76,6 @@ nlohmann::json ReadAnchors(const std::string& path, const std::string& scene) {
   if (!a.contains("anchors") || !a["anchors"].is_array()) {
     throw std::runtime_error(path + ": expected {\"anchors\": [{\"label\": ..., ...}]}");
   }
-  const auto lower = [](std::string s) {
-    for (char& ch : s) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-    return s;
-  };
   for (size_t i = 0; i < a["anchors"].size(); ++i) {
     const nlohmann::json& e = a["anchors"][i];
     const auto number = [&e](const char* key) { return e.contains(key) && e[key].is_number(); };
@@ -92,7 +88,9 @@ nlohmann::json ReadAnchors(const std::string& path, const std::string& scene) {
                                "\"file_bytes\" and \"psnr\" or "
                                "\"ratio\" and \"psnr_loss_db\"");
     }
-    if (e.contains("scene") && lower(e.value("scene", "")) != lower(scene)) continue;
+    if (e.contains("scene") && strcasecmp(e.value("scene", "").c_str(), scene.c_str()) != 0) {
+      continue;
+    }
     kept.push_back(e);
   }
   return kept;

@@ -311,16 +311,8 @@ DatasetManifest ParseTransforms(const fs::path& dir, const std::string& json_pat
 
 // Loads one view; `had_alpha` reports whether compositing changed the background.
 View LoadView(const ViewSource& source, int downscale, bool* had_alpha) {
-  // The size from the header first: a file larger than its camera says is refused before it is
-  // decoded (a small PNG can hold 8192^2 pixels).
-  const ImageSize size = ReadImageSize(source.image_path);
-  if (size.width != source.camera.width || size.height != source.camera.height) {
-    throw std::runtime_error(source.image_path + ": image is " + std::to_string(size.width) + "x" +
-                             std::to_string(size.height) + " but its camera says " +
-                             std::to_string(source.camera.width) + "x" +
-                             std::to_string(source.camera.height));
-  }
-  Image image = LoadImage(source.image_path);
+  const ImageSize camera_size{source.camera.width, source.camera.height};
+  Image image = LoadImage(source.image_path, &camera_size);
   *had_alpha = image.channels == 2 || image.channels == 4;
   View view;
   view.name = source.name;

@@ -383,10 +383,15 @@ ImageSize SizeFromHeader(const std::string& path, const std::vector<uint8_t>& by
 
 }  // namespace
 
-Image LoadImage(const std::string& path) {
+Image LoadImage(const std::string& path, const ImageSize* expected) {
   const std::vector<uint8_t> bytes = ReadBytes(path);
   // The header alone, before decoding allocates anything.
   const ImageSize size = SizeFromHeader(path, bytes);
+  if (expected && (size.width != expected->width || size.height != expected->height)) {
+    Fail(path, "image is " + std::to_string(size.width) + "x" + std::to_string(size.height) +
+                   " but its camera says " + std::to_string(expected->width) + "x" +
+                   std::to_string(expected->height));
+  }
   if (int64_t{size.width} * size.height > kMaxImagePixels) {
     Fail(path, "image is " + std::to_string(size.width) + "x" + std::to_string(size.height) +
                    " = " + std::to_string(int64_t{size.width} * size.height) +

@@ -38,7 +38,9 @@ struct ImageSize {
 // magic bytes, not its extension. Colour values are returned as stored: no gamma conversion.
 // A JPEG is turned upright as its EXIF Orientation tag says (phones store photos sideways).
 // Throws std::runtime_error naming the path for a missing, unrecognised, corrupt or truncated file.
-Image LoadImage(const std::string& path);
+// With `expected`, a file whose header gives another (upright) size is refused before it is
+// decoded: "image is WxH but its camera says WxH" (a small PNG can hold 8192^2 pixels).
+Image LoadImage(const std::string& path, const ImageSize* expected = nullptr);
 
 // The largest image LoadImage decodes, checked from the file's header before decoding: 2^26
 // pixels (8192 x 8192), the decoder's image limit too. A 16384^2 PNG of 1 MB would otherwise

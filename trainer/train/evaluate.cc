@@ -29,6 +29,26 @@ Image RenderView(const TensorfModel& model, const Camera& camera) {
   return img;
 }
 
+void AddViewScore(const Image& render, const View& view, EvalResult* r) {
+  const int x0 = view.fitted_columns;
+  double psnr = 0.0, ssim = 0.0;
+  if (x0 > 0) {
+    const Image scored = ColumnsFrom(render, x0), truth = ColumnsFrom(view.rgb, x0);
+    psnr = Psnr(scored, truth);
+    ssim = Ssim(scored, truth);
+  } else {
+    psnr = Psnr(render, view.rgb);
+    ssim = Ssim(render, view.rgb);
+  }
+  r->psnr += std::min(100.0, psnr);
+  r->ssim += ssim;
+  r->fitted_columns = std::max(r->fitted_columns, x0);
+  if (r->views++ == 0) {
+    r->width = render.width;
+    r->height = render.height;
+  }
+}
+
 EvalResult Evaluate(const TensorfModel& model, const Dataset& test, int stride, int max_views,
                     bool keep_renders) {
   EvalResult r;
@@ -37,17 +57,7 @@ EvalResult Evaluate(const TensorfModel& model, const Dataset& test, int stride, 
   EvalProgress progress("evaluating the float model", int(views.size()));
   for (const size_t v : views) {
     Image img = RenderView(model, test.views[v].camera);
-    // The half-image protocol: columns that fitted the view's camera are not scored.
-    const int x0 = test.views[v].fitted_columns;
-    const Image scored = ColumnsFrom(img, x0), truth = ColumnsFrom(test.views[v].rgb, x0);
-    // A view rendered exactly has infinite PSNR; cap it so one such view cannot swamp the mean.
-    r.psnr += std::min(100.0, Psnr(scored, truth));
-    r.ssim += Ssim(scored, truth);
-    r.fitted_columns = std::max(r.fitted_columns, x0);
-    if (r.views++ == 0) {
-      r.width = img.width;
-      r.height = img.height;
-    }
+    AddViewScore(img, test.views[v], &r);
     if (keep_renders) r.renders.push_back(std::move(img));
     progress.ViewDone();
   }

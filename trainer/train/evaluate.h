@@ -27,6 +27,11 @@ struct EvalResult {
   std::vector<Image> renders;  // filled when requested
 };
 
+// Adds one view's render to r's sums: PSNR (capped at 100 dB, so that one exact view cannot swamp
+// the mean) and SSIM against the view's image over the columns it scores (the half-image
+// protocol: View::fitted_columns are not), the view count, and the first view's size.
+void AddViewScore(const Image& render, const View& view, EvalResult* r);
+
 // Renders every stride-th view of `test` (at most max_views, 0: all) and compares it with its
 // image.
 EvalResult Evaluate(const TensorfModel& model, const Dataset& test, int stride, int max_views,
