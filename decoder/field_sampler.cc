@@ -86,8 +86,10 @@ float DensityFeatureT(const VmGrid& g, const GridPoint& gp) {
   return total;
 }
 
-template <typename T>
-void AppearanceProductsT(const VmGrid& g, const GridPoint& gp, float* out) {
+// kAccumulate: out[k] += weight * product (the deferred head's weighted sum, 7.6, rounded as the
+// product's own value times the weight), else out[k] = product.
+template <typename T, bool kAccumulate>
+void AppearanceProductsT(const VmGrid& g, const GridPoint& gp, float weight, float* out) {
   for (int m = 0; m < 3; ++m) {
     const int R = g.ranks[m];
     if (R == 0) continue;
@@ -100,7 +102,11 @@ void AppearanceProductsT(const VmGrid& g, const GridPoint& gp, float* out) {
       const float p = w00 * static_cast<float>(t.p00[r]) + w01 * static_cast<float>(t.p01[r]) +
                       w10 * static_cast<float>(t.p10[r]) + w11 * static_cast<float>(t.p11[r]);
       const float l = wl0 * static_cast<float>(t.l0[r]) + wl1 * static_cast<float>(t.l1[r]);
-      o[r] = p * l;
+      if (kAccumulate) {
+        o[r] += weight * (p * l);
+      } else {
+        o[r] = p * l;
+      }
     }
   }
 }
@@ -121,9 +127,18 @@ float DensityFeature(const VmGrid& grid, const GridPoint& gp) {
 
 void AppearanceProducts(const VmGrid& grid, const GridPoint& gp, float* out) {
   if (grid.storage == GridStorage::kInt16) {
-    AppearanceProductsT<int16_t>(grid, gp, out);
+    AppearanceProductsT<int16_t, false>(grid, gp, 0.f, out);
   } else {
-    AppearanceProductsT<float>(grid, gp, out);
+    AppearanceProductsT<float, false>(grid, gp, 0.f, out);
+  }
+}
+
+void AccumulateAppearanceProducts(const VmGrid& grid, const GridPoint& gp, float weight,
+                                  float* sum) {
+  if (grid.storage == GridStorage::kInt16) {
+    AppearanceProductsT<int16_t, true>(grid, gp, weight, sum);
+  } else {
+    AppearanceProductsT<float, true>(grid, gp, weight, sum);
   }
 }
 

@@ -17,6 +17,9 @@ namespace dec {
 float DensityFeature(const VmGrid& grid, const GridPoint& gp);
 // out[rank_offset(m) + r] = plane_m[r](u,v) * line_m[r](w), total_rank() floats.
 void AppearanceProducts(const VmGrid& grid, const GridPoint& gp, float* out);
+// sum[k] += weight * products[k] for the products above, without storing them.
+void AccumulateAppearanceProducts(const VmGrid& grid, const GridPoint& gp, float weight,
+                                  float* sum);
 
 // dst = src (float32) as int16 fixed point, one scale per tensor (max |value| / 32767, 1 for an
 // all-zero tensor), q = round(value / scale).

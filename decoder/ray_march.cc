@@ -64,41 +64,65 @@ int LastIndexAtMost(float t0, float step, int n, int i, double lim) {
   return j;
 }
 
+// The straight ray's line in mask index units, per axis: index(t) = A + D t, with the margin m
+// that covers the float rounding of the reference's index computation (7.3). Computed once per
+// ray, so that a skip costs multiplications, not divisions.
+struct SkipFrame {
+  double A[3], inv_D[3], m[3];
+  bool moving[3];  // d[a] != 0; a constant index stays inside any block it starts in
+};
+
+SkipFrame MakeSkipFrame(const Ctx& c, const float o[3], const float d[3], double tspan) {
+  const OccupancyMask& mask = *c.mask;
+  SkipFrame f;
+  for (int a = 0; a < 3; ++a) {
+    const double S = c.mask_scale[a];
+    f.moving[a] = d[a] != 0.f;
+    f.A[a] = (static_cast<double>(o[a]) - mask.aabb_min()[a]) * S;
+    f.inv_D[a] = f.moving[a] ? 1.0 / (static_cast<double>(d[a]) * S) : 0.0;
+    f.m[a] = 1e-4 + 2e-6 * mask.res()[a] +
+             1e-6 *
+                 (std::fabs(o[a]) + std::fabs(d[a]) * tspan + std::fabs(mask.aabb_min()[a]) +
+                  std::fabs(mask.aabb_max()[a])) *
+                 S;
+  }
+  return f;
+}
+
 // Sample i (mask index idx) lies in an empty block: returns the first sample index past the run of
-// samples that provably stay inside that block (i itself when that cannot be proven).
-int SkipEmpty(const Ctx& c, const float o[3], const float d[3], float t0, int i, double tspan,
-              const float idx[3]) {
+// samples that provably stay inside that block (i itself when that cannot be proven). The finest
+// level is asked first: each block of a level lies inside its block of the coarser level
+// (OccupancyMask), so a sample in an occupied fine block is in an occupied coarse one.
+int SkipEmpty(const Ctx& c, const SkipFrame& f, float t0, int i, const float idx[3]) {
   const OccupancyMask& mask = *c.mask;
   const int* res = mask.res();
   for (int a = 0; a < 3; ++a) {
     if (!(idx[a] >= 0.f && idx[a] <= static_cast<float>(res[a] - 1))) return i;
   }
-  for (int level = 0; level < OccupancyMask::kLevels; ++level) {
-    int lo[3], hi[3];
-    if (!mask.EmptyBlock(level, idx, lo, hi)) continue;
-    // t-range where the exact position o + d t stays within [lo + m, hi - m] per axis; m covers
-    // the float rounding of the reference's index computation.
-    double tlo = -INFINITY, thi = INFINITY;
-    for (int a = 0; a < 3; ++a) {
-      if (d[a] == 0.f) continue;  // constant float index, already inside [lo, hi]
-      const double S = c.mask_scale[a];
-      const double A = (static_cast<double>(o[a]) - mask.aabb_min()[a]) * S;
-      const double D = static_cast<double>(d[a]) * S;
-      const double m = 1e-4 + 2e-6 * res[a] +
-                       1e-6 *
-                           (std::fabs(o[a]) + std::fabs(d[a]) * tspan +
-                            std::fabs(mask.aabb_min()[a]) + std::fabs(mask.aabb_max()[a])) *
-                           S;
-      double ta = (lo[a] + m - A) / D, tb = (hi[a] - m - A) / D;
-      if (ta > tb) std::swap(ta, tb);
-      tlo = std::max(tlo, ta);
-      thi = std::min(thi, tb);
-    }
-    if (!(static_cast<double>(SampleT(t0, c.step, i)) >= tlo)) return i;
-    const int j = LastIndexAtMost(t0, c.step, c.n, i, thi);
-    return j >= i ? j + 1 : i;
+  constexpr int kFinest = OccupancyMask::kLevels - 1;
+  int lo[3], hi[3];
+  if (!mask.EmptyBlock(kFinest, idx, lo, hi)) return i;
+  for (int level = 0; level < kFinest; ++level) {  // the coarsest empty block skips furthest
+    int clo[3], chi[3];
+    if (!mask.EmptyBlock(level, idx, clo, chi)) continue;
+    std::memcpy(lo, clo, sizeof(lo));
+    std::memcpy(hi, chi, sizeof(hi));
+    break;
   }
-  return i;
+  // t-range where the exact position o + d t stays within [lo + m, hi - m] per axis. The
+  // reciprocal's rounding (relative 2^-53) is far inside the margin.
+  double tlo = -INFINITY, thi = INFINITY;
+  for (int a = 0; a < 3; ++a) {
+    if (!f.moving[a]) continue;
+    double ta = (lo[a] + f.m[a] - f.A[a]) * f.inv_D[a];
+    double tb = (hi[a] - f.m[a] - f.A[a]) * f.inv_D[a];
+    if (ta > tb) std::swap(ta, tb);
+    tlo = std::max(tlo, ta);
+    thi = std::min(thi, tb);
+  }
+  if (!(static_cast<double>(SampleT(t0, c.step, i)) >= tlo)) return i;
+  const int j = LastIndexAtMost(t0, c.step, c.n, i, thi);
+  return j >= i ? j + 1 : i;
 }
 
 void Flush(const Ctx& c, RayMarcher::Workspace& ws) {
@@ -132,11 +156,8 @@ void Flush(const Ctx& c, RayMarcher::Workspace& ws) {
 // Deferred head (SPEC.md 7.6): adds the weighted products of a coloured sample to its ray's sums.
 void AccumulateProducts(const Ctx& c, RayMarcher::Workspace& ws, int slot, const GridPoint& gp,
                         float weight) {
-  float* prod = ws.sample_products.data();
-  AppearanceProducts(c.s->appearance, gp, prod);
-  float* sum = ws.ray_products.data() + static_cast<size_t>(slot) * ws.pstride;
-  const int P = c.s->appearance.total_rank();
-  for (int k = 0; k < P; ++k) sum[k] += weight * prod[k];
+  AccumulateAppearanceProducts(c.s->appearance, gp, weight,
+                               ws.ray_products.data() + static_cast<size_t>(slot) * ws.pstride);
   ws.ray_color_weight[slot] += weight;
   ++ws.stats.color_samples;
 }
@@ -249,6 +270,9 @@ void MarchStraight(const Ctx& c, RayMarcher::Workspace& ws, int slot, const floa
   float T = 1.f, acc = 0.f;
   int i = FirstIndexAtLeast(t0, step, n, te);
   uint64_t positions = 0;
+  const bool skip = c.mask != nullptr && c.skip;
+  SkipFrame frame;
+  if (skip) frame = MakeSkipFrame(c, o, d, tspan);
   while (i < n) {
     ++positions;
     const float t = SampleT(t0, step, i);
@@ -262,8 +286,8 @@ void MarchStraight(const Ctx& c, RayMarcher::Workspace& ws, int slot, const floa
     if (c.mask != nullptr) {
       float idx[3];
       c.mask->Index(p, idx);
-      if (c.skip) {
-        const int j = SkipEmpty(c, o, d, t0, i, tspan, idx);
+      if (skip) {
+        const int j = SkipEmpty(c, frame, t0, i, idx);
         if (j > i) {
           i = j;
           continue;

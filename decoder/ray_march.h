@@ -31,8 +31,8 @@ struct RayMarcher::Workspace {
   HeapArray<float> mlp_scratch;
   HeapArray<float> ray_o, ray_d, ray_rgb, ray_acc;  // tile rays
   // Deferred head (SPEC.md 7.6): per tile ray the weighted sum of its coloured samples' products
-  // (tile rays x pstride) and of their weights; one sample's products.
-  HeapArray<float> ray_products, ray_color_weight, sample_products;
+  // (tile rays x pstride) and of their weights.
+  HeapArray<float> ray_products, ray_color_weight;
   size_t pstride = 1;
   int capacity = 0;
   int count = 0;

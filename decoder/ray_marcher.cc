@@ -122,7 +122,6 @@ Status RayMarcher::Init(const SceneField* scene, const RenderOptions& options) {
     if (scene->head == HeadKind::kDeferred) {
       ECRF_RETURN_IF_ERROR(ws.ray_products.Allocate(static_cast<size_t>(tile_rays) * pstride));
       ECRF_RETURN_IF_ERROR(ws.ray_color_weight.Allocate(static_cast<size_t>(tile_rays)));
-      ECRF_RETURN_IF_ERROR(ws.sample_products.Allocate(pstride));
     }
     ws.pstride = pstride;
     ws.capacity = options.batch_rows;
