@@ -137,8 +137,11 @@ struct VmGrid {
 // [z][y][x] (x fastest), bit i in byte i/8 at position i%8 (LSB first).
 class OccupancyMask {
  public:
-  static constexpr int kLevels = 2;
-  static constexpr int kBlock[kLevels] = {16, 4};  // cells per block edge, coarse to fine
+  // Cells per block edge, coarse to fine (powers of two: kBlock = 1 << kBlockShift). Each block
+  // lies inside its block of every coarser level. The coarsest level is pooled from the next one.
+  static constexpr int kLevels = 3;
+  static constexpr int kBlockShift[kLevels] = {6, 4, 2};
+  static constexpr int kBlock[kLevels] = {64, 16, 4};
 
   Status Init(const float aabb_min[3], const float aabb_max[3], const int res[3]);
   const int* res() const { return res_; }
@@ -180,10 +183,25 @@ class OccupancyMask {
   bool OccupiedAtIndex(const float idx[3]) const;
   // Block of `level` containing idx (all idx in [0, res-1]); true when that block's corners
   // are all empty. lo/hi receive the block's closed corner range per axis.
-  bool EmptyBlock(int level, const float idx[3], int lo[3], int hi[3]) const;
+  // Inline: the renderer asks at most once per level at every marched position.
+  bool EmptyBlock(int level, const float idx[3], int lo[3], int hi[3]) const {
+    const int B = kBlock[level], shift = kBlockShift[level];
+    int b[3];
+    for (int a = 0; a < 3; ++a) {
+      int i = static_cast<int>(idx[a]);  // idx >= 0 (checked by the caller): a shift is i / B
+      b[a] = i >> shift;
+      if (b[a] > dims_[level][a] - 1) b[a] = dims_[level][a] - 1;
+      lo[a] = b[a] * B;
+      hi[a] = lo[a] + B;
+      if (hi[a] > res_[a] - 1) hi[a] = res_[a] - 1;
+    }
+    return blocks_[level][(static_cast<size_t>(b[2]) * dims_[level][1] + b[1]) * dims_[level][0] +
+                          b[0]] == 0;
+  }
 
  private:
-  // Marks the blocks of every level whose closed corner range holds set voxel (x, y, z).
+  // Marks the blocks of every level but the coarsest whose closed corner range holds set voxel
+  // (x, y, z).
   void MarkBlocks(int x, int y, int z);
 
   float min_[3] = {0.f, 0.f, 0.f};

@@ -296,13 +296,23 @@ Status OccupancyMask::BuildAcceleration() {
       }
     }
   }
+  // The coarsest level from the next: the closed range of a coarse block is the union of those of
+  // the fine blocks inside it (a corner on a coarse boundary is in the last fine block before it),
+  // so it is marked exactly when one of them is; one visit per fine block.
+  static_assert(kBlock[0] == 4 * kBlock[1], "the coarsest level pools 4^3 blocks of the next");
+  for (int bz = 0; bz < dims_[1][2]; ++bz)
+    for (int by = 0; by < dims_[1][1]; ++by)
+      for (int bx = 0; bx < dims_[1][0]; ++bx)
+        if (blocks_[1][(static_cast<size_t>(bz) * dims_[1][1] + by) * dims_[1][0] + bx] != 0)
+          blocks_[0][(static_cast<size_t>(bz >> 2) * dims_[0][1] + (by >> 2)) * dims_[0][0] +
+                     (bx >> 2)] = 1;
   accel_ready_ = true;
   return Status::Ok();
 }
 
 void OccupancyMask::MarkBlocks(int x, int y, int z) {
   const int c[3] = {x, y, z};
-  for (int l = 0; l < kLevels; ++l) {
+  for (int l = 1; l < kLevels; ++l) {
     const int B = kBlock[l];
     // A corner on a block boundary belongs to the closed ranges of both blocks.
     int lo[3], hi[3];
@@ -320,21 +330,6 @@ void OccupancyMask::MarkBlocks(int x, int y, int z) {
 
 bool OccupancyMask::OccupiedAtIndex(const float idx[3]) const {
   return AnyWeightedCornerSet(idx, res_, [this](int x, int y, int z) { return Get(x, y, z); });
-}
-
-bool OccupancyMask::EmptyBlock(int level, const float idx[3], int lo[3], int hi[3]) const {
-  const int B = kBlock[level];
-  int b[3];
-  for (int a = 0; a < 3; ++a) {
-    int i = static_cast<int>(idx[a]);  // idx >= 0 (checked by the caller)
-    b[a] = i / B;
-    if (b[a] > dims_[level][a] - 1) b[a] = dims_[level][a] - 1;
-    lo[a] = b[a] * B;
-    hi[a] = lo[a] + B;
-    if (hi[a] > res_[a] - 1) hi[a] = res_[a] - 1;
-  }
-  return blocks_[level][(static_cast<size_t>(b[2]) * dims_[level][1] + b[1]) * dims_[level][0] +
-                        b[0]] == 0;
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -55,9 +55,10 @@ int FirstIndexAtLeast(float t0, float step, int n, double lim) {
   return j;
 }
 
-// Largest j in [i - 1, n - 1] with SampleT(j) <= lim.
-int LastIndexAtMost(float t0, float step, int n, int i, double lim) {
-  const double est = std::floor((lim - t0) / step);
+// Largest j in [i - 1, n - 1] with SampleT(j) <= lim. The estimate by the reciprocal (no
+// division: this runs at every skip) is at most one off; the loops make it exact.
+int LastIndexAtMost(float t0, float step, double inv_step, int n, int i, double lim) {
+  const double est = std::floor((lim - t0) * inv_step);
   int j = !(est > i - 1) ? i - 1 : (est >= n - 1 ? n - 1 : static_cast<int>(est));
   while (j + 1 < n && static_cast<double>(SampleT(t0, step, j + 1)) <= lim) ++j;
   while (j >= i && static_cast<double>(SampleT(t0, step, j)) > lim) --j;
@@ -121,7 +122,7 @@ int SkipEmpty(const Ctx& c, const SkipFrame& f, float t0, int i, const float idx
     thi = std::min(thi, tb);
   }
   if (!(static_cast<double>(SampleT(t0, c.step, i)) >= tlo)) return i;
-  const int j = LastIndexAtMost(t0, c.step, c.n, i, thi);
+  const int j = LastIndexAtMost(t0, c.step, c.inv_step, c.n, i, thi);
   return j >= i ? j + 1 : i;
 }
 

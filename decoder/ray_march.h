@@ -65,6 +65,7 @@ struct Ctx {
   const SceneField* s;
   float min[3], max[3], inv[3];  // inv = 2 / (max - min), as TensoRF's invaabbSize
   float step;
+  double inv_step;  // 1 / step: a positive float's reciprocal is finite and normal in double
   int n;
   float near, far;
   float shift, dscale, wthr, early;

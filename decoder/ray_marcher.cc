@@ -161,6 +161,7 @@ Status RayMarcher::Run(Job* job, uint64_t pixels, RenderStats* stats) {
   }
   c.step = s.StepSize();
   if (options_.step_scale != 1.f) c.step *= options_.step_scale;
+  c.inv_step = 1.0 / static_cast<double>(c.step);
   c.n = SamplesPerRay(s, options_);
   c.near = s.near_far[0];
   c.far = s.near_far[1];

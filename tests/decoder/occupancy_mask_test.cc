@@ -56,8 +56,9 @@ void ExpectLevelsMatchTheDefinition(const OccupancyMask& mask, const std::vector
 
 TEST(OccupancyMask, LevelsFromTheSetVoxelsMatchTheDefinition) {
   const MaskCase cases[] = {
-      {{7, 13, 33}, 0.02},   {{17, 5, 9}, 0.3}, {{33, 33, 2}, 0.0},   {{2, 2, 2}, 1.0},
-      {{19, 23, 29}, 0.005}, {{64, 3, 5}, 1.0}, {{9, 17, 65}, 0.001},
+      {{7, 13, 33}, 0.02},  {{17, 5, 9}, 0.3},       {{33, 33, 2}, 0.0},
+      {{2, 2, 2}, 1.0},     {{19, 23, 29}, 0.005},   {{64, 3, 5}, 1.0},
+      {{9, 17, 65}, 0.001}, {{150, 70, 20}, 0.0004}, {{130, 129, 3}, 0.002},
   };
   std::mt19937 rng(5);
   for (const MaskCase& c : cases) {
