@@ -4,7 +4,10 @@
  * REPS times, and prints the best repetition's milliseconds per view and a hash of every pixel
  * (FNV-1a over the RGBA bytes of all views) that tells whether two builds render the same image.
  *
- *   decoder_speed SCENE.ecrf [VIEWS [SIZE [THREADS [REPS]]]]     defaults 4 400 2 4
+ *   decoder_speed SCENE.ecrf [VIEWS [SIZE [THREADS [REPS [STEP_SCALE [EARLY_STOP]]]]]]
+ *
+ * defaults 4 400 2 4, and the library's render options (STEP_SCALE, EARLY_STOP: the renderer's
+ * step_scale and early_stop_transmittance, SPEC.md 7.8).
  *
  * One output line: "ms_per_view=... decode_ms=... hash=... views=... size=... threads=..."
  * (decode_ms: reading and decoding the stream). */
@@ -33,8 +36,10 @@ int main(int argc, char** argv) {
   double t0, decode_ms, best = -1.0;
   uint64_t hash = 1469598103934665603ull;
 
-  if (argc < 2 || argc > 6) {
-    fprintf(stderr, "usage: %s SCENE.ecrf [VIEWS [SIZE [THREADS [REPS]]]]\n", argv[0]);
+  if (argc < 2 || argc > 8) {
+    fprintf(stderr,
+            "usage: %s SCENE.ecrf [VIEWS [SIZE [THREADS [REPS [STEP_SCALE [EARLY_STOP]]]]]]\n",
+            argv[0]);
     return 2;
   }
   if (argc > 2) views = atoi(argv[2]);
@@ -52,6 +57,8 @@ int main(int argc, char** argv) {
   if (!scene) return 1;
   ecrf_render_options_default(&options);
   options.num_threads = threads;
+  if (argc > 6) options.step_scale = (float)atof(argv[6]);
+  if (argc > 7) options.early_stop_transmittance = (float)atof(argv[7]);
   n = (size_t)size * (size_t)size * 4;
   rgba = (unsigned char*)malloc(n);
   if (!rgba) {
@@ -78,8 +85,11 @@ int main(int argc, char** argv) {
   if (rc < 0) {
     fprintf(stderr, "render: %s (%s)\n", ecrf_scene_message(scene), ecrf_error_name(rc));
   } else {
-    printf("ms_per_view=%.1f decode_ms=%.1f hash=%016llx views=%d size=%d threads=%d reps=%d\n",
-           best / views, decode_ms, (unsigned long long)hash, views, size, threads, reps);
+    printf(
+        "ms_per_view=%.1f decode_ms=%.1f hash=%016llx views=%d size=%d threads=%d reps=%d "
+        "step_scale=%g early_stop=%g\n",
+        best / views, decode_ms, (unsigned long long)hash, views, size, threads, reps,
+        (double)options.step_scale, (double)options.early_stop_transmittance);
   }
   free(rgba);
   ecrf_scene_destroy(scene);

@@ -3,12 +3,13 @@
 // decoder of any commit), decodes a stream, renders VIEWS orbit views REPS times on one thread
 // (as the viewer's workers do) and prints the same line as the C program (with a 32-bit hash).
 //
-//   node benchmarks/decoder_speed.mjs MODULE.js SCENE.ecrf [VIEWS [SIZE [REPS]]]
+//   node benchmarks/decoder_speed.mjs MODULE.js SCENE.ecrf [VIEWS [SIZE [REPS [STEP_SCALE
+//                                     [EARLY_STOP]]]]]
 import {createRequire} from 'node:module';
 import {readFileSync} from 'node:fs';
 
-const [modulePath, scenePath, viewsArg = '4', sizeArg = '400', repsArg = '3'] =
-    process.argv.slice(2);
+const [modulePath, scenePath, viewsArg = '4', sizeArg = '400', repsArg = '3', stepArg,
+       earlyArg] = process.argv.slice(2);
 if (!modulePath || !scenePath) {
   console.error('usage: node decoder_speed.mjs MODULE.js SCENE.ecrf [VIEWS [SIZE [REPS]]]');
   process.exit(2);
@@ -34,6 +35,9 @@ if (rc < 0) {
 const options = m._malloc(64);
 m._ecrf_render_options_default(options);
 m.HEAP32[options >> 2] = 1;
+// early_stop_transmittance and step_scale: floats 2 and 4 of the struct.
+if (earlyArg !== undefined) m.HEAPF32[(options >> 2) + 2] = Number(earlyArg);
+if (stepArg !== undefined) m.HEAPF32[(options >> 2) + 4] = Number(stepArg);
 // ecrf_camera: c2w[12], fx, fy, cx, cy (floats), width, height (ints).
 const camera = m._malloc(72);
 const rgba = m._malloc(size * size * 4);
@@ -83,4 +87,5 @@ for (let r = 0; r < reps; ++r) {
 }
 console.log(`ms_per_view=${(best / views).toFixed(1)} decode_ms=${decodeMs.toFixed(1)} ` +
             `hash=${hash.toString(16).padStart(8, '0')} views=${views} size=${size} threads=1 ` +
-            `reps=${reps}`);
+            `reps=${reps} step_scale=${m.HEAPF32[(options >> 2) + 4]} ` +
+            `early_stop=${m.HEAPF32[(options >> 2) + 2]}`);

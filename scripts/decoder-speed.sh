@@ -9,15 +9,18 @@
 # with scripts/build-wasm.sh's flags, one thread, timed in node by benchmarks/decoder_speed.mjs).
 #
 #   bash scripts/decoder-speed.sh [--base COMMIT] [--head COMMIT] [--views N] [--size N]
-#                                 [--threads N] [--reps N] [--builds portable,native,wasm] SCENE...
+#                                 [--threads N] [--reps N] [--builds portable,native,wasm]
+#                                 [--step-scale S] [--early-stop T] SCENE...
 #
+# --step-scale and --early-stop set the renderer's knobs of SPEC.md 7.8 for both commits (their
+# C API must have them); without them the library's defaults.
 # --base defaults to 949596a, main when issue #32 (a native renderer twice as fast at identical
 # pixels) was filed; --head to the working tree. Needs g++ and gcc (and em++, node for wasm);
 # takes a few minutes.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-base=949596a head="" views=4 size=400 threads=2 reps=3 builds=portable,native
+base=949596a head="" views=4 size=400 threads=2 reps=3 builds=portable,native render=()
 scenes=()
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -28,13 +31,19 @@ while [ $# -gt 0 ]; do
     --threads) threads="$2"; shift 2 ;;
     --reps) reps="$2"; shift 2 ;;
     --builds) builds="$2"; shift 2 ;;
-    -h|--help) sed -n '2,17p' "$0"; exit 0 ;;
+    --step-scale) step_scale="$2"; shift 2 ;;
+    --early-stop) early_stop="$2"; shift 2 ;;
+    -h|--help) sed -n '2,21p' "$0"; exit 0 ;;
     -*) echo "decoder-speed: unknown option $1" >&2; exit 2 ;;
     *) [ -f "$1" ] || { echo "decoder-speed: no file $1" >&2; exit 2; }
        scenes+=("$(realpath "$1")"); shift ;;
   esac
 done
 [ ${#scenes[@]} -gt 0 ] || { echo "decoder-speed: name at least one .ecrf file" >&2; exit 2; }
+# Positional in both benchmark programs: the step scale first (1, the default, when only the
+# early stop is given).
+if [ -n "${step_scale:-}${early_stop:-}" ]; then render=("${step_scale:-1}"); fi
+if [ -n "${early_stop:-}" ]; then render+=("$early_stop"); fi
 git rev-parse --verify -q "$base^{commit}" >/dev/null || { echo "decoder-speed: no commit $base" >&2; exit 2; }
 
 work="$(mktemp -d /tmp/ecrf_decoder_speed.XXXXXX)"
@@ -90,9 +99,9 @@ done
 
 run() {  # run TREE FLAVOUR SCENE
   if [ "$2" = wasm ]; then
-    node benchmarks/decoder_speed.mjs "$1/wasm/ecrf_speed.js" "$3" "$views" "$size" "$reps"
+    node benchmarks/decoder_speed.mjs "$1/wasm/ecrf_speed.js" "$3" "$views" "$size" "$reps" "${render[@]}"
   else
-    "$1/decoder_speed_$2" "$3" "$views" "$size" "$threads" "$reps"
+    "$1/decoder_speed_$2" "$3" "$views" "$size" "$threads" "$reps" "${render[@]}"
   fi
 }
 
@@ -116,4 +125,4 @@ for s in "${scenes[@]}"; do
       "$f" "$best_b" "$best_h" "$ratio" "$same"
   done
 done
-echo "($views orbit views of ${size}x$size, $threads threads (wasm: 1), best of $reps x 2 repetitions; $(grep -m1 'model name' /proc/cpuinfo | sed 's/.*: //'), $(nproc) cores)"
+echo "($views orbit views of ${size}x$size, $threads threads (wasm: 1), step scale ${step_scale:-1}, early stop ${early_stop:-default}, best of $reps x 2 repetitions; $(grep -m1 'model name' /proc/cpuinfo | sed 's/.*: //'), $(nproc) cores)"
