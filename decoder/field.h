@@ -18,6 +18,7 @@
 #include <type_traits>
 
 #include "decoder/mlp.h"
+#include "decoder/occupancy_rule.h"
 #include "format/mlp_coder.h"
 #include "format/ndc_frame.h"
 #include "format/scene_header.h"
@@ -179,8 +180,10 @@ class OccupancyMask {
       idx[a] = (c + 1.f) / 2.f * static_cast<float>(res_[a] - 1);
     }
   }
-  // Trilinear mask value > 0 at mask index idx (exact reference test).
-  bool OccupiedAtIndex(const float idx[3]) const;
+  // Trilinear mask value > 0 at mask index idx (exact reference test). Inline, as EmptyBlock.
+  bool OccupiedAtIndex(const float idx[3]) const {
+    return AnyWeightedCornerSet(idx, res_, [this](int x, int y, int z) { return Get(x, y, z); });
+  }
   // Block of `level` containing idx (all idx in [0, res-1]); true when that block's corners
   // are all empty. lo/hi receive the block's closed corner range per axis.
   // Inline: the renderer asks at most once per level at every marched position.

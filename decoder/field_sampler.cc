@@ -6,7 +6,6 @@
 #include <type_traits>
 
 #include "decoder/contraction.h"
-#include "decoder/occupancy_rule.h"
 
 namespace ecrf {
 namespace dec {
@@ -326,10 +325,6 @@ void OccupancyMask::MarkBlocks(int x, int y, int z) {
         for (int bx = lo[0]; bx <= hi[0]; ++bx)
           blocks_[l][(static_cast<size_t>(bz) * dims_[l][1] + by) * dims_[l][0] + bx] = 1;
   }
-}
-
-bool OccupancyMask::OccupiedAtIndex(const float idx[3]) const {
-  return AnyWeightedCornerSet(idx, res_, [this](int x, int y, int z) { return Get(x, y, z); });
 }
 
 // ---------------------------------------------------------------------------------------------
