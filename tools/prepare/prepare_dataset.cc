@@ -192,6 +192,15 @@ PrepareResult PrepareDataset(const PrepareOptions& o) {
                              "; structure from motion needs at least 3");
   }
 
+  const MatchPlan plan = PlanMatching(video, result.frames, o.matcher, o.max_features);
+  result.plan = plan;
+  std::fprintf(stderr,
+               "prepare: %d %s: COLMAP %s matching of at most %lld pairs, %d SIFT features a "
+               "frame%s; about %.0f min of matching for real photos on 2 cores\n",
+               result.frames, video ? "frames" : "photos", plan.matcher.c_str(), plan.pairs,
+               plan.max_features,
+               plan.features_auto ? " (automatic; --max-features N sets it)" : "",
+               plan.predicted_seconds / 60.0);
   const int threads = o.threads > 0 ? o.threads : AllCores();
   const fs::path db = tmp.path() / "colmap" / "database.db";
   const fs::path sparse = tmp.path() / "colmap" / "sparse";
@@ -210,10 +219,8 @@ PrepareResult PrepareDataset(const PrepareOptions& o) {
                                       "0",
                                       "--SiftExtraction.num_threads",
                                       std::to_string(threads)};
-  if (o.max_features > 0) {
-    extract.insert(extract.end(),
-                   {"--SiftExtraction.max_num_features", std::to_string(o.max_features)});
-  }
+  extract.insert(extract.end(),
+                 {"--SiftExtraction.max_num_features", std::to_string(plan.max_features)});
   if (o.max_size > 0 && !video) {
     // Photos keep their size (the trainer's --downscale shrinks them); SIFT reads them shrunk to
     // --max-size, which is most of its time on large photos (frames of a video are scaled by
@@ -222,11 +229,22 @@ PrepareResult PrepareDataset(const PrepareOptions& o) {
   }
   Run(extract, "COLMAP feature extraction of " + std::to_string(result.frames) + " frames",
       result.frames);
-  const std::string matcher =
-      o.matcher == "auto" ? (video ? "sequential" : "exhaustive") : o.matcher;
-  Run({colmap, matcher + "_matcher", "--database_path", db.string(), "--SiftMatching.use_gpu", "0",
-       "--SiftMatching.num_threads", std::to_string(threads)},
-      "COLMAP " + matcher + " matching", result.frames);
+  std::vector<std::string> match = {colmap,
+                                    plan.matcher + "_matcher",
+                                    "--database_path",
+                                    db.string(),
+                                    "--SiftMatching.use_gpu",
+                                    "0",
+                                    "--SiftMatching.num_threads",
+                                    std::to_string(threads)};
+  if (plan.matcher == "sequential") {
+    match.insert(match.end(), {"--SequentialMatching.overlap", std::to_string(kSequentialOverlap),
+                               "--SequentialMatching.quadratic_overlap", "1"});
+  }
+  Run(match,
+      "COLMAP " + plan.matcher + " matching (at most " + std::to_string(plan.pairs) +
+          " pairs of frames)",
+      result.frames);
   Run({colmap, "mapper", "--database_path", db.string(), "--image_path", images.string(),
        "--output_path", sparse.string(), "--Mapper.num_threads", std::to_string(threads)},
       "COLMAP mapping", result.frames);

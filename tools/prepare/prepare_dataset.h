@@ -11,8 +11,9 @@
 #define ECRF_TOOLS_PREPARE_PREPARE_DATASET_H_
 
 #include <string>
-
 #include <vector>
+
+#include "tools/prepare/match_plan.h"
 #include "trainer/data/named_choice.h"
 
 namespace ecrf {
@@ -38,13 +39,15 @@ struct PrepareOptions {
   int max_frames = 300;  // video: at most this many frames
   int max_size = 0;  // video: longest side of the frames (0: the video's); photos: of SIFT's copy
   // exhaustive (every pair), sequential (neighbours in name order: video) or auto (sequential
-  // for a video, exhaustive for photos).
+  // for a video and for more than kExhaustiveMaxPhotos photos, exhaustive below: match_plan.h).
   std::string matcher = "auto";
   // COLMAP camera model, one shared by all frames: OPENCV (k1 k2 p1 p2), RADIAL, SIMPLE_RADIAL,
   // PINHOLE or SIMPLE_PINHOLE (the distortion models the trainer's loader reads).
   std::string camera_model = "OPENCV";
-  int max_features = 0;  // SIFT features per frame (0: COLMAP's default, 8192); fewer match faster
-  int aabb_scale = 16;   // Instant-NGP's scene cube (the trainer fits its box inside)
+  // SIFT features per frame (0: automatic, the most up to COLMAP's 8192 whose matching is
+  // predicted within about 3 minutes, at least 2048: match_plan.h); fewer match faster.
+  int max_features = 0;
+  int aabb_scale = 16;          // Instant-NGP's scene cube (the trainer fits its box inside)
   double min_registered = 0.5;  // fail when COLMAP poses a smaller share of the frames
   int threads = 0;              // 0: all cores
   std::string colmap = "colmap";
@@ -56,6 +59,7 @@ struct PrepareResult {
   int registered = 0;                     // images with a pose in transforms.json
   int models = 0;                         // reconstructions COLMAP made (the largest is kept)
   std::vector<std::string> unregistered;  // frames without a pose, by name
+  MatchPlan plan;                         // the matcher and features COLMAP was given
 };
 
 // Throws std::runtime_error (or std::invalid_argument for bad options) with what failed, where
