@@ -167,6 +167,11 @@ int ecrf_scene_head(const ecrf_scene* scene) {
   return static_cast<int>(scene->field.head);
 }
 
+int ecrf_scene_version(const ecrf_scene* scene) {
+  if (!scene || !scene->decoded) return ECRF_ERR_INVALID_ARGUMENT;
+  return (static_cast<int>(scene->info.version_major) << 8) | scene->info.version_minor;
+}
+
 int ecrf_scene_ndc_frame(const ecrf_scene* scene, float frame[15]) {
   if (!scene || !frame || !scene->decoded ||
       scene->field.scene_model != ecrf::SceneModel::kForward) {

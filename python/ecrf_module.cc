@@ -96,6 +96,8 @@ py::dict Info(Scene& s) {
                                                    : "object";
   // "deferred": the MLP once per ray (SPEC.md 7.6); "mlp": once per coloured sample.
   d["head"] = ecrf_scene_head(s.get()) == ECRF_HEAD_DEFERRED ? "deferred" : "mlp";
+  const int version = ecrf_scene_version(s.get());
+  d["version"] = std::to_string(version >> 8) + "." + std::to_string(version & 0xff);
   float frame[15];
   if (ecrf_scene_ndc_frame(s.get(), frame) == ECRF_OK) {
     // A 3x4 world-to-reference matrix, the two NDC scales and the near plane (SPEC.md 6.2.1).

@@ -84,7 +84,12 @@
       this.imageBytes = 0;
     }
 
-    version() { return this.m.UTF8ToString(this.m._ecrf_version_string()); }
+    // The library's version and the bitstreams it reads, as `ecrf --version` words them.
+    version() {
+      const m = this.m;
+      return `${m.UTF8ToString(m._ecrf_version_string())}, reads bitstream 1.0 to ` +
+             `${m._ecrf_bitstream_version()}.${m._ecrf_bitstream_version_minor()}`;
+    }
 
     message() { return this.m.UTF8ToString(this.m._ecrf_scene_message(this.scene)); }
 
@@ -113,6 +118,7 @@
       const f = (off, n) => Array.from(m.HEAPF32.subarray((p + off) >> 2, ((p + off) >> 2) + n));
       const i = (off, n) => Array.from(m.HEAP32.subarray((p + off) >> 2, ((p + off) >> 2) + n));
       const u = (off) => m.HEAP32[(p + off) >> 2] >>> 0;
+      const version = m._ecrf_scene_version(this.scene);
       const info = {
         aabbMin: f(INFO.aabb_min, 3), aabbMax: f(INFO.aabb_max, 3), gridRes: i(INFO.grid_res, 3),
         densityRanks: i(INFO.density_ranks, 3), appearanceRanks: i(INFO.appearance_ranks, 3),
@@ -126,6 +132,8 @@
         sceneModel: m._ecrf_scene_model(this.scene),
         // 0 the MLP per coloured sample, 1 deferred (SPEC.md 7.6: once per ray).
         head: m._ecrf_scene_head(this.scene),
+        // The bitstream version the file states (SPEC.md 2.1), as `ecrf info` prints it.
+        version: `${version >> 8}.${version & 255}`,
       };
       m._free(p);
       if (info.sceneModel === 2) {

@@ -251,7 +251,7 @@
     const rows = [
       ['file', name],
       ['decoder', res.version],
-      ['stream', `${info.streamBytes.toLocaleString()} bytes`],
+      ['stream', `${info.streamBytes.toLocaleString()} bytes, bitstream ${info.version}`],
       ['grid', r3(info.gridRes)],
       ['density ranks', info.densityRanks.join(', ')],
       ['appearance ranks', info.appearanceRanks.join(', ')],

@@ -182,6 +182,11 @@ ECRF_API int ecrf_scene_model(const ecrf_scene* scene);
 #define ECRF_HEAD_DEFERRED 1
 ECRF_API int ecrf_scene_head(const ecrf_scene* scene);
 
+/* The bitstream version the decoded stream states (its file header, SPEC.md 2.1), as
+ * (major << 8) | minor: 0x0106 is 1.6. Print it as major.minor, as `ecrf info` does.
+ * ECRF_ERR_INVALID_ARGUMENT before a decode. */
+ECRF_API int ecrf_scene_version(const ecrf_scene* scene);
+
 /* The NDC frame of an ECRF_SCENE_FORWARD scene (the NDCP chunk, SPEC.md 6.2.1) as 15 floats: the
  * world-to-reference matrix [A | b] row-major (p_ref = A p + b), then 2 fx / width and
  * 2 fy / height of the reference camera, then its near plane. ECRF_ERR_INVALID_ARGUMENT for other

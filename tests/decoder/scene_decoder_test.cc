@@ -495,9 +495,14 @@ TEST(SceneDecoder, CApiExposesTheFieldOccupancyAndMlpOfTheReferenceRenderer) {
     ecrf_scene* scene = ecrf_scene_create();
     ecrf_scene_field f;
     EXPECT_EQ(ecrf_scene_get_field(scene, &f), ECRF_ERR_INVALID_ARGUMENT);  // nothing decoded
+    EXPECT_EQ(ecrf_scene_version(scene), ECRF_ERR_INVALID_ARGUMENT);
     ASSERT_EQ(ecrf_scene_decode(scene, bytes.data(), bytes.size(), ECRF_STORAGE_FLOAT32), ECRF_OK);
     ASSERT_EQ(ecrf_scene_get_field(scene, &f), ECRF_OK);
     EXPECT_EQ(ecrf_scene_model(scene), static_cast<int>(field.scene_model));
+    // The file header's version: the unbounded model needs 1.2, the forward-facing one 1.3.
+    EXPECT_EQ(ecrf_scene_version(scene), (info.version_major << 8) | info.version_minor);
+    if (std::string(name) == "scene_unbounded.ecrf") EXPECT_EQ(ecrf_scene_version(scene), 0x0102);
+    if (std::string(name) == "scene_forward.ecrf") EXPECT_EQ(ecrf_scene_version(scene), 0x0103);
     EXPECT_EQ(ecrf_scene_model(scene) == ECRF_SCENE_UNBOUNDED,
               std::string(name) == "scene_unbounded.ecrf");
     EXPECT_EQ(ecrf_scene_model(scene) == ECRF_SCENE_FORWARD,

@@ -176,6 +176,10 @@ class RenderTest(unittest.TestCase):
                 self.assertEqual(scene.info["scene_model"], model)
                 self.assertEqual(scene.info["head"],
                                  "deferred" if name == "scene_deferred_head" else "mlp")
+                # The file header's version (SPEC.md 2.1), as `ecrf info` prints it.
+                self.assertEqual(scene.info["version"],
+                                 {"scene_builtin": "1.0", "scene_unbounded": "1.2",
+                                  "scene_forward": "1.3", "scene_deferred_head": "1.6"}[name])
                 self.assertEqual("ndc_near_plane" in scene.info, model == "forward")
                 if model == "forward":
                     self.assertEqual(scene.info["ndc_near_plane"], 1.5)  # the vector's NDCP chunk

@@ -45,7 +45,8 @@ MatchPlan PlanMatching(bool video, int frames, const std::string& matcher, int m
   } else {
     plan.max_features = max_features;
   }
-  plan.predicted_seconds = double(plan.pairs) * PairSeconds(std::min(plan.max_features, kMaxFeatures));
+  plan.predicted_seconds =
+      double(plan.pairs) * PairSeconds(std::min(plan.max_features, kMaxFeatures));
   return plan;
 }
 

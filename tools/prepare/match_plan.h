@@ -25,9 +25,9 @@ inline constexpr double kPairSecondsAt8192 = 1.2;
 inline constexpr int kMinAutoFeatures = 2048, kMaxFeatures = 8192;
 
 struct MatchPlan {
-  std::string matcher;     // "exhaustive" or "sequential"
-  long long pairs = 0;     // image pairs COLMAP will match (sequential: an upper bound)
-  int max_features = 0;    // SIFT features per frame
+  std::string matcher;   // "exhaustive" or "sequential"
+  long long pairs = 0;   // image pairs COLMAP will match (sequential: an upper bound)
+  int max_features = 0;  // SIFT features per frame
   bool features_auto = false;
   double predicted_seconds = 0.0;  // pairs x the per-pair cost at these features (real photos)
 };
