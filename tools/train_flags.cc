@@ -11,6 +11,7 @@
 #include "tools/train_field_text.h"
 #include "trainer/data/scene_fit.h"
 #include "trainer/train/train_options.h"
+#include "trainer/train/train_schedule.h"
 
 namespace ecrf {
 namespace tools {
@@ -221,9 +222,15 @@ std::string DescribeSettings(const trainer::TrainOptions& o) {
        (o.mlp_levels > 0 ? std::to_string(o.mlp_levels) + " MLP levels"
                          : std::string("binary16 MLP")) +
        ", ranks " + std::to_string(o.density_rank) + "," + std::to_string(o.appearance_rank) +
-       ", final grid " + std::to_string(FinalGridEdge(o)) + "^3, upsampling at " +
-       JoinText(o.upsample_iters, ",") + " of " + std::to_string(o.iters) +
-       " iterations, rate terms from " + FloatText(o.rate_start) + " of the run";
+       ", final grid " + std::to_string(FinalGridEdge(o)) + "^3";
+  // The run's own milestones (the preset's scaled to --iters), as the schedule runs them.
+  std::vector<int> upsample_at;
+  for (int m : o.upsample_iters)
+    upsample_at.push_back(trainer::ScaleMilestone(m, o.iters, o.reference_iters));
+  s += ", upsampling at " + JoinText(upsample_at, ",") + " of " + std::to_string(o.iters) +
+       " iterations";
+  const bool rate = o.lambda_e > 0.f || o.target_bytes > 0;
+  if (rate) s += ", rate terms from iteration " + std::to_string(trainer::RateStartIteration(o));
   return s;
 }
 

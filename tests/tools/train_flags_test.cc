@@ -57,6 +57,21 @@ TEST(TrainFlags, UnknownFlagsAndBareSizesGiveShortErrorsWithTheFix) {
   EXPECT_NE(error({"--target-size", "5parsecs"}).find("unknown unit"), std::string::npos);
 }
 
+TEST(TrainFlags, TheSettingsLineNamesTheRunsOwnMilestones) {
+  // The default medium point trains 4500 iterations: the preset's milestones at 3000 scale by 1.5.
+  const trainer::TrainOptions o = Parse({"--upsample-at", "200,400,600,800,1000"});
+  ASSERT_EQ(o.iters, 4500);
+  const std::string line = DescribeSettings(o);
+  EXPECT_NE(line.find("upsampling at 300,600,900,1200,1500 of 4500 iterations"), std::string::npos)
+      << line;
+  EXPECT_NE(
+      line.find("rate terms from iteration " + std::to_string(trainer::RateStartIteration(o))),
+      std::string::npos)
+      << line;
+  // Plain TensoRF has no rate phase to name.
+  EXPECT_EQ(DescribeSettings(Parse({"--lambda-e", "0"})).find("rate terms"), std::string::npos);
+}
+
 TEST(TrainFlags, RanksSetDensityAndAppearanceComponents) {
   const trainer::TrainOptions fast = Parse({});
   EXPECT_EQ(fast.density_rank, 16);
