@@ -65,6 +65,16 @@ inline CostlyScene EmptyFlaggedRows(int n) {
   s.occupancy_res = n;
   return s;
 }
+// 2048^2 planes of rank 1 in 16^3 blocks, coded with the neighbour contexts (1.5): a few hundred
+// bytes whose decode allocates and clears the contexts of 2048^2 / 16^2 blocks per plane.
+inline CostlyScene NeighbourContexts2048() {
+  CostlyScene s;
+  s.res = 2048;
+  s.block = 16;
+  s.neighbour = true;
+  s.weight_threshold = 1.f;
+  return s;
+}
 // 512^2 planes of rank 16 in block^3 blocks (4^2 for lines), each coded to its last position.
 inline CostlyScene FullLengthBlocks(int block) {
   CostlyScene s;

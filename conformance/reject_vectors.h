@@ -209,6 +209,13 @@ inline std::vector<RejectVector> RejectVectors() {
         costly::BuildCostlyStream(cs));
   }
   {
+    add("reject_budget_neighbour_contexts", "decode", kErrLimit, true,
+        "2048^2 planes of rank 1 in 16^3 blocks with the neighbour contexts: clearing their "
+        "contexts costs one unit per 16 bytes, beyond the decode work budget of the few hundred "
+        "bytes that ask for it (8.1)",
+        costly::BuildCostlyStream(costly::NeighbourContexts2048()));
+  }
+  {
     costly::CostlyScene cs;
     cs.res = 2048;
     cs.density_rank = 8;

@@ -78,12 +78,7 @@ std::vector<CostlyCase> Cases() {
   add("occupancy_empty_rows_1024", "OCCU 1024^3, every row flagged, no voxel set",
       [](costly::CostlyScene& s) { s = costly::EmptyFlaggedRows(1024); });
   add("neighbour_contexts_2048", "2048^2 planes of rank 1 in 16^3 blocks, neighbour contexts",
-      [](costly::CostlyScene& s) {
-        s.res = 2048;
-        s.block = 16;
-        s.neighbour = true;
-        s.weight_threshold = 1.f;
-      });
+      [](costly::CostlyScene& s) { s = costly::NeighbourContexts2048(); });
   add("full_length_blocks", "512^2 planes, rank 16, 16^3 blocks coded to their last position",
       [](costly::CostlyScene& s) { s = costly::FullLengthBlocks(16); });
   add("full_length_small_blocks", "512^2 planes, rank 16, 4^3 blocks coded to their last position",
