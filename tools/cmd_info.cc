@@ -1,6 +1,9 @@
 // `ecrf info SCENE.ecrf [--md5]`: what a stream holds (chunks, sizes, grid, ranks, steps) and,
 // with --md5, the checksums of its decoded grids.
+#include <algorithm>
+#include <cstdint>
 #include <cstdio>
+#include <stdexcept>
 #include <string>
 
 #include "conformance/grid_md5.h"
@@ -36,6 +39,28 @@ std::string PrintableMetadata(const uint8_t* text, size_t size, size_t limit) {
   return out;
 }
 
+// --md5 reads every decoded value twice (each tensor's checksum, then the whole grids'), about
+// 7 ns a value here: two units a value (the decode budget's unit is a few ns, SPEC.md 8.1) are
+// charged to what is left of the stream's decode budget before any hashing, so that a few
+// hundred bytes declaring huge untouched grids cannot make `info --md5` hash gigabytes.
+void ChargeChecksums(const LoadedScene& s, const std::string& path, uint64_t work_per_byte) {
+  // No limit as for the decode itself (SPEC.md 8.1): 0, or a product past 2^63 - 1.
+  constexpr uint64_t kMax = (uint64_t{1} << 63) - 1;
+  const uint64_t n = std::max<uint64_t>(1, s.bytes.size());
+  if (work_per_byte == 0 || work_per_byte > kMax / n) return;
+  const uint64_t values =
+      (s.field->density.StorageBytes() + s.field->appearance.StorageBytes()) / sizeof(float);
+  const uint64_t budget = dec::kDecodeWorkBase + work_per_byte * s.bytes.size();
+  const uint64_t need = s.info.decode_work + 2 * values;
+  if (need > budget) {
+    throw std::runtime_error(
+        path + ": --md5 of its " + std::to_string(values) + " decoded values costs " +
+        std::to_string(2 * values) + " units, past what its decode left of its budget of " +
+        std::to_string(budget) + " (2^24 + " + std::to_string(work_per_byte) + " per byte of its " +
+        std::to_string(s.bytes.size()) + " bytes; --decode-budget N, 0 for no limit)");
+  }
+}
+
 }  // namespace
 
 int RunInfo(int argc, char** argv) {
@@ -47,8 +72,16 @@ int RunInfo(int argc, char** argv) {
   app->add_flag(
       "--md5", md5,
       "also print the MD5 of each decoded grid (SPEC.md 6.5, as the conformance vectors)");
+  uint64_t decode_budget = dec::kDefaultDecodeWorkPerByte;
+  app->add_option("--decode-budget", decode_budget,
+                  "refuse streams whose decoding (and --md5) costs more than 2^24 + N units per "
+                  "byte of the file (0 = no limit)")
+      ->type_name("N")
+      ->capture_default_str();
   if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
-  const LoadedScene s = LoadSceneFile(path);
+  const LoadedScene s = LoadSceneFile(path, dec::GridStorage::kFloat32,
+                                      dec::kDefaultDecodeMemoryBudget, decode_budget);
+  if (md5) ChargeChecksums(s, path, decode_budget);
   const dec::SceneInfo& in = s.info;
   const SceneHeader& h = in.header;
   std::printf(

@@ -5,9 +5,11 @@
 #include <cstdio>
 #include <fstream>
 #include <iterator>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "conformance/costly_streams.h"
 #include "format/container.h"
 #include "tools/commands.h"
 
@@ -66,6 +68,40 @@ TEST(Info, MetadataIsEscapedAndTruncated) {
   // Plain ASCII JSON is shown as it is.
   EXPECT_NE(InfoOutput(WithMetadata("{\"encoder\":\"ecrf\"}")).find("{\"encoder\":\"ecrf\"}"),
             std::string::npos);
+}
+
+// `info --md5` hashes every decoded value: a small stream of large untouched (all-zero) grids
+// decodes cheaply, and its checksums are charged to the same budget, before any hashing.
+TEST(Info, ChecksumsOfLargeUntouchedGridsAreChargedToTheDecodeBudget) {
+  costly::CostlyScene cs;
+  cs.res = 512;
+  cs.density_rank = 16;
+  cs.appearance_rank = 16;  // 2 x (3 x 512^2 x 16 + 3 x 512 x 16) = 25.2 M values
+  const std::vector<uint8_t> stream = costly::BuildCostlyStream(cs);
+  ASSERT_LT(stream.size(), size_t{8192});
+  const std::string path = std::string(::testing::TempDir()) + "/info_md5.ecrf";
+  std::ofstream(path, std::ios::binary)
+      .write(reinterpret_cast<const char*>(stream.data()), stream.size());
+  auto run = [&](std::vector<std::string> args) {
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    ::testing::internal::CaptureStdout();
+    std::string error;
+    try {
+      RunInfo(int(argv.size()), argv.data());
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    ::testing::internal::GetCapturedStdout();
+    return error;
+  };
+  // It decodes within its budget, and the checksums would pass it: refused, naming the flag.
+  EXPECT_EQ(run({"info", path}), "");
+  const std::string refused = run({"info", path, "--md5"});
+  EXPECT_NE(refused.find("--md5 of its 25214976 decoded values"), std::string::npos) << refused;
+  // With no limit the checksums are computed.
+  EXPECT_EQ(run({"info", path, "--md5", "--decode-budget", "0"}), "");
+  std::remove(path.c_str());
 }
 
 }  // namespace
