@@ -153,6 +153,51 @@ void ExtractFrames(const std::string& ffmpeg, const PrepareOptions& o, const fs:
       "extracting frames from " + o.input + " (ffmpeg)");
 }
 
+// COLMAP's SIFT extraction and matching as the plan says, into the database db.
+void ExtractAndMatch(const std::string& colmap, const PrepareOptions& o, const MatchPlan& plan,
+                     bool video, const fs::path& images, const fs::path& db, int threads,
+                     int frames) {
+  std::vector<std::string> extract = {colmap,
+                                      "feature_extractor",
+                                      "--database_path",
+                                      db.string(),
+                                      "--image_path",
+                                      images.string(),
+                                      "--ImageReader.single_camera",
+                                      "1",
+                                      "--ImageReader.camera_model",
+                                      o.camera_model,
+                                      "--SiftExtraction.use_gpu",
+                                      "0",
+                                      "--SiftExtraction.num_threads",
+                                      std::to_string(threads)};
+  extract.insert(extract.end(),
+                 {"--SiftExtraction.max_num_features", std::to_string(plan.max_features)});
+  if (o.max_size > 0 && !video) {
+    // Photos keep their size (the trainer's --downscale shrinks them); SIFT reads them shrunk to
+    // --max-size, which is most of its time on large photos (frames of a video are scaled by
+    // ffmpeg already).
+    extract.insert(extract.end(), {"--SiftExtraction.max_image_size", std::to_string(o.max_size)});
+  }
+  Run(extract, "COLMAP feature extraction of " + std::to_string(frames) + " frames", frames);
+  std::vector<std::string> match = {colmap,
+                                    plan.matcher + "_matcher",
+                                    "--database_path",
+                                    db.string(),
+                                    "--SiftMatching.use_gpu",
+                                    "0",
+                                    "--SiftMatching.num_threads",
+                                    std::to_string(threads)};
+  if (plan.matcher == "sequential") {
+    match.insert(match.end(), {"--SequentialMatching.overlap", std::to_string(kSequentialOverlap),
+                               "--SequentialMatching.quadratic_overlap", "1"});
+  }
+  Run(match,
+      "COLMAP " + plan.matcher + " matching (at most " + std::to_string(plan.pairs) +
+          " pairs of frames)",
+      frames);
+}
+
 }  // namespace
 
 PrepareResult PrepareDataset(const PrepareOptions& o) {
@@ -205,46 +250,7 @@ PrepareResult PrepareDataset(const PrepareOptions& o) {
   const fs::path db = tmp.path() / "colmap" / "database.db";
   const fs::path sparse = tmp.path() / "colmap" / "sparse";
   fs::create_directories(sparse, ec);
-  std::vector<std::string> extract = {colmap,
-                                      "feature_extractor",
-                                      "--database_path",
-                                      db.string(),
-                                      "--image_path",
-                                      images.string(),
-                                      "--ImageReader.single_camera",
-                                      "1",
-                                      "--ImageReader.camera_model",
-                                      o.camera_model,
-                                      "--SiftExtraction.use_gpu",
-                                      "0",
-                                      "--SiftExtraction.num_threads",
-                                      std::to_string(threads)};
-  extract.insert(extract.end(),
-                 {"--SiftExtraction.max_num_features", std::to_string(plan.max_features)});
-  if (o.max_size > 0 && !video) {
-    // Photos keep their size (the trainer's --downscale shrinks them); SIFT reads them shrunk to
-    // --max-size, which is most of its time on large photos (frames of a video are scaled by
-    // ffmpeg already).
-    extract.insert(extract.end(), {"--SiftExtraction.max_image_size", std::to_string(o.max_size)});
-  }
-  Run(extract, "COLMAP feature extraction of " + std::to_string(result.frames) + " frames",
-      result.frames);
-  std::vector<std::string> match = {colmap,
-                                    plan.matcher + "_matcher",
-                                    "--database_path",
-                                    db.string(),
-                                    "--SiftMatching.use_gpu",
-                                    "0",
-                                    "--SiftMatching.num_threads",
-                                    std::to_string(threads)};
-  if (plan.matcher == "sequential") {
-    match.insert(match.end(), {"--SequentialMatching.overlap", std::to_string(kSequentialOverlap),
-                               "--SequentialMatching.quadratic_overlap", "1"});
-  }
-  Run(match,
-      "COLMAP " + plan.matcher + " matching (at most " + std::to_string(plan.pairs) +
-          " pairs of frames)",
-      result.frames);
+  ExtractAndMatch(colmap, o, plan, video, images, db, threads, result.frames);
   Run({colmap, "mapper", "--database_path", db.string(), "--image_path", images.string(),
        "--output_path", sparse.string(), "--Mapper.num_threads", std::to_string(threads)},
       "COLMAP mapping", result.frames);
