@@ -35,6 +35,7 @@ struct SceneSpec {
   int mask_res[3] = {37, 41, 29};  // 0: no mask
   float blob_amp = 3.5f;
   bool empty_mask = false;
+  bool random_voxels = true;  // the mask also sets about one voxel in 997 at random
   MlpConfig mlp;
   uint32_t seed = 7;
 };
@@ -98,7 +99,7 @@ inline void BuildScene(const SceneSpec& spec, TestScene* ts) {
                                 float(z) / (r[2] - 1) * 2 - 1};
             float d2 = 0.f;
             for (int a = 0; a < 3; ++a) d2 += (c[a] - center[a]) * (c[a] - center[a]);
-            const bool on = d2 < 0.45f * 0.45f || (rng() % 997) == 0;
+            const bool on = d2 < 0.45f * 0.45f || (spec.random_voxels && (rng() % 997) == 0);
             if (on) s.mask.Set(x, y, z, true);
           }
     }

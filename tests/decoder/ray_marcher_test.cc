@@ -248,6 +248,39 @@ TEST(RayMarcherTest, SkippingGivesIdenticalImage) {
   EXPECT_EQ(a1, a2);
 }
 
+// A mask fine enough for every skipping level (64^3, 16^3 and 4^3 blocks of cells) to have
+// empty blocks: the ball alone, no random voxels. Skipping must still change nothing.
+TEST(RayMarcherTest, SkippingAtEveryLevelGivesIdenticalImage) {
+  SceneSpec spec;
+  spec.mask_res[0] = 150;
+  spec.mask_res[1] = 170;
+  spec.mask_res[2] = 140;
+  spec.random_voxels = false;
+  TestScene ts;
+  BuildScene(spec, &ts);
+  RenderOptions with = Exact(), without = Exact();
+  without.skip_empty_space = false;
+  const Rays rays = MakeRays(ts.field, 22);
+  std::vector<float> r1, a1, r2, a2;
+  RenderWith(ts.field, with, rays, &r1, &a1);
+  RenderWith(ts.field, without, rays, &r2, &a2);
+  EXPECT_EQ(r1, r2);
+  EXPECT_EQ(a1, a2);
+  const Camera cam = TestCamera(48, 40);
+  std::vector<float> a(48 * 40 * 3), b(48 * 40 * 3);
+  RayMarcher skip, noskip;
+  ASSERT_TRUE(skip.Init(&ts.field, with).ok());
+  ASSERT_TRUE(noskip.Init(&ts.field, without).ok());
+  RenderStats sa, sb;
+  ASSERT_TRUE(skip.RenderImage(cam, nullptr, a.data(), &sa).ok());
+  ASSERT_TRUE(noskip.RenderImage(cam, nullptr, b.data(), &sb).ok());
+  EXPECT_EQ(a, b);
+  EXPECT_EQ(sa.samples, sb.samples);
+  EXPECT_GT(sa.samples, 0u);
+  // The skip visited fewer positions: less work charged for the same samples.
+  EXPECT_LT(sa.work, sb.work);
+}
+
 TEST(RayMarcherTest, ThreadCountDoesNotChangeOutput) {
   TestScene ts;
   BuildScene(SceneSpec(), &ts);
