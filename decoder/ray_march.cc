@@ -272,8 +272,7 @@ void MarchStraight(const Ctx& c, RayMarcher::Workspace& ws, int slot, const floa
   int i = FirstIndexAtLeast(t0, step, n, te);
   uint64_t positions = 0;
   const bool skip = c.mask != nullptr && c.skip;
-  SkipFrame frame;
-  if (skip) frame = MakeSkipFrame(c, o, d, tspan);
+  const SkipFrame frame = skip ? MakeSkipFrame(c, o, d, tspan) : SkipFrame{};
   while (i < n) {
     ++positions;
     const float t = SampleT(t0, step, i);
