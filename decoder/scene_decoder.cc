@@ -61,6 +61,7 @@ class WorkBudget {
   }
   uint64_t* left() { return &left_; }
   uint64_t spent() const { return total_ - left_; }
+  uint64_t total() const { return total_; }
   Status Refuse(const char* where) const {
     return Status::Error(
         kErrLimit,
@@ -578,6 +579,7 @@ Status DecodeScene(const uint8_t* data, size_t size, const DecodeOptions& option
   const Status s = DecodeChunks(data, size, options, budget, work, scene, info);
   // Also after a refusal: what the stream had cost when it was refused.
   info.decode_work = work.spent();
+  info.decode_budget = work.total();
   info.memory_bytes = budget.spent();
   return s;
 }

@@ -75,8 +75,9 @@ struct SceneInfo {
   // The meta chunk (UTF-8 JSON), pointing into the caller's buffer; null if absent.
   const uint8_t* metadata = nullptr;
   uint32_t metadata_size = 0;
-  uint64_t decode_work = 0;   // what the stream cost against the decode work budget
-  uint64_t memory_bytes = 0;  // what it took of the memory budget (grids, mask, MLP)
+  uint64_t decode_work = 0;    // what the stream cost against the decode work budget
+  uint64_t decode_budget = 0;  // that budget (~0: no limit), for work charged after decoding
+  uint64_t memory_bytes = 0;   // what it took of the memory budget (grids, mask, MLP)
 };
 
 // Decodes `data` into *scene (replacing its contents). info may be null.

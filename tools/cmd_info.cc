@@ -1,6 +1,5 @@
 // `ecrf info SCENE.ecrf [--md5]`: what a stream holds (chunks, sizes, grid, ranks, steps) and,
 // with --md5, the checksums of its decoded grids.
-#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <stdexcept>
@@ -44,15 +43,10 @@ std::string PrintableMetadata(const uint8_t* text, size_t size, size_t limit) {
 // charged to what is left of the stream's decode budget before any hashing, so that a few
 // hundred bytes declaring huge untouched grids cannot make `info --md5` hash gigabytes.
 void ChargeChecksums(const LoadedScene& s, const std::string& path, uint64_t work_per_byte) {
-  // No limit as for the decode itself (SPEC.md 8.1): 0, or a product past 2^63 - 1.
-  constexpr uint64_t kMax = (uint64_t{1} << 63) - 1;
-  const uint64_t n = std::max<uint64_t>(1, s.bytes.size());
-  if (work_per_byte == 0 || work_per_byte > kMax / n) return;
   const uint64_t values =
       (s.field->density.StorageBytes() + s.field->appearance.StorageBytes()) / sizeof(float);
-  const uint64_t budget = dec::kDecodeWorkBase + work_per_byte * s.bytes.size();
-  const uint64_t need = s.info.decode_work + 2 * values;
-  if (need > budget) {
+  const uint64_t budget = s.info.decode_budget;  // the decoder's, ~0 when there is no limit
+  if (2 * values > budget - s.info.decode_work) {
     throw std::runtime_error(
         path + ": --md5 of its " + std::to_string(values) + " decoded values costs " +
         std::to_string(2 * values) + " units, past what its decode left of its budget of " +

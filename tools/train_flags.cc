@@ -224,13 +224,11 @@ std::string DescribeSettings(const trainer::TrainOptions& o) {
        ", ranks " + std::to_string(o.density_rank) + "," + std::to_string(o.appearance_rank) +
        ", final grid " + std::to_string(FinalGridEdge(o)) + "^3";
   // The run's own milestones (the preset's scaled to --iters), as the schedule runs them.
-  std::vector<int> upsample_at;
-  for (int m : o.upsample_iters)
-    upsample_at.push_back(trainer::ScaleMilestone(m, o.iters, o.reference_iters));
-  s += ", upsampling at " + JoinText(upsample_at, ",") + " of " + std::to_string(o.iters) +
-       " iterations";
-  const bool rate = o.lambda_e > 0.f || o.target_bytes > 0;
-  if (rate) s += ", rate terms from iteration " + std::to_string(trainer::RateStartIteration(o));
+  s += ", upsampling at " + JoinText(trainer::ScaledMilestones(o.upsample_iters, o), ",") + " of " +
+       std::to_string(o.iters) + " iterations";
+  if (trainer::UsesRateObjective(o)) {
+    s += ", rate terms from iteration " + std::to_string(trainer::RateStartIteration(o));
+  }
   return s;
 }
 

@@ -303,11 +303,7 @@ TEST(DecodeBudget, BlocksCodedToTheirFullLengthAreRefusedAsTheyDecode) {
 // 400 MB at 171 decode units a byte before (issue #60); now the default budget refuses it, and
 // with no limit its work counts each chunk's NB[1] * NB[2] * (V + 2) / 16.
 TEST(DecodeBudget, NeighbourContextsAreChargedForTheirMemory) {
-  CostlyScene cs;
-  cs.res = 2048;
-  cs.block = 16;
-  cs.neighbour = true;
-  const std::vector<uint8_t> bytes = BuildCostlyStream(cs);
+  const std::vector<uint8_t> bytes = BuildCostlyStream(costly::NeighbourContexts2048());
   ASSERT_FALSE(bytes.empty());
   EXPECT_LT(bytes.size(), 1024u);
   SceneField field;

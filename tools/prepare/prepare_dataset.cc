@@ -170,9 +170,9 @@ void ExtractAndMatch(const std::string& colmap, const PrepareOptions& o, const M
                                       "--SiftExtraction.use_gpu",
                                       "0",
                                       "--SiftExtraction.num_threads",
-                                      std::to_string(threads)};
-  extract.insert(extract.end(),
-                 {"--SiftExtraction.max_num_features", std::to_string(plan.max_features)});
+                                      std::to_string(threads),
+                                      "--SiftExtraction.max_num_features",
+                                      std::to_string(plan.max_features)};
   if (o.max_size > 0 && !video) {
     // Photos keep their size (the trainer's --downscale shrinks them); SIFT reads them shrunk to
     // --max-size, which is most of its time on large photos (frames of a video are scaled by

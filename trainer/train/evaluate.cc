@@ -40,6 +40,7 @@ void AddViewScore(const Image& render, const View& view, EvalResult* r) {
     psnr = Psnr(render, view.rgb);
     ssim = Ssim(render, view.rgb);
   }
+  // A view rendered exactly has infinite PSNR; cap it so one such view cannot swamp the mean.
   r->psnr += std::min(100.0, psnr);
   r->ssim += ssim;
   r->fitted_columns = std::max(r->fitted_columns, x0);

@@ -15,14 +15,21 @@ int GridFinalIteration(const TrainOptions& o) {
   return final_it;
 }
 
+bool UsesRateObjective(const TrainOptions& o) { return o.lambda_e > 0.0f || o.target_bytes > 0; }
+
+std::vector<int> ScaledMilestones(const std::vector<int>& milestones, const TrainOptions& o) {
+  std::vector<int> at;
+  for (int m : milestones) at.push_back(ScaleMilestone(m, o.iters, o.reference_iters));
+  return at;
+}
+
 int RateStartIteration(const TrainOptions& o) {
   return std::max(int(std::lround(double(o.rate_start) * o.iters)), GridFinalIteration(o));
 }
 
 int QatStartIteration(const TrainOptions& o) {
   if (o.qat_start < 0.0f) {
-    return o.lambda_e > 0.0f || o.target_bytes > 0 ? std::min(RateStartIteration(o), o.iters)
-                                                   : o.iters;
+    return UsesRateObjective(o) ? std::min(RateStartIteration(o), o.iters) : o.iters;
   }
   if (!(o.qat_start < 1.0f)) return o.iters;
   int start = int(std::lround(double(std::max(0.0f, o.qat_start)) * o.iters));
@@ -84,14 +91,12 @@ bool TrainSchedule::StopDue(int done) const {
 TrainSchedule ScheduleFor(const TrainOptions& o, const Dataset& train) {
   TrainSchedule s;
   s.options = o;
-  s.use_rate = o.lambda_e > 0.0f || o.target_bytes > 0;
+  s.use_rate = UsesRateObjective(o);
   s.rate_start = RateStartIteration(o);
   s.qat_start = QatStartIteration(o);
   s.grid_final = GridFinalIteration(o);
-  for (int m : o.upsample_iters)
-    s.upsample_at.push_back(ScaleMilestone(m, o.iters, o.reference_iters));
-  for (int m : o.alpha_mask_iters)
-    s.mask_at.push_back(ScaleMilestone(m, o.iters, o.reference_iters));
+  s.upsample_at = ScaledMilestones(o.upsample_iters, o);
+  s.mask_at = ScaledMilestones(o.alpha_mask_iters, o);
   s.voxel_counts = UpsampleVoxelCounts(o);
   s.cameras = CameraRefineScheduleFor(o, train);
   return s;

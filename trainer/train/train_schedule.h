@@ -16,9 +16,13 @@
 namespace ecrf {
 namespace trainer {
 
+// Milestones of the preset's schedule (o.upsample_iters, o.alpha_mask_iters) scaled to this run.
+std::vector<int> ScaledMilestones(const std::vector<int>& milestones, const TrainOptions& options);
 // The first iteration after the last upsample and alpha-mask update (0 without them): from it on
 // the grid has its final shape (and --head auto chooses, head_choice.h).
 int GridFinalIteration(const TrainOptions& options);
+// Whether the rate objective is asked for: lambda_e > 0 or a target size.
+bool UsesRateObjective(const TrainOptions& options);
 // The iteration at which the rate terms switch on: options.rate_start of the run, but never
 // before the grid is final.
 int RateStartIteration(const TrainOptions& options);
