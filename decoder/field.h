@@ -201,11 +201,34 @@ class OccupancyMask {
     return blocks_[level][(static_cast<size_t>(b[2]) * dims_[level][1] + b[1]) * dims_[level][0] +
                           b[0]] == 0;
   }
+  // The finest level's empty radius: for each finest block, the chessboard radius (in blocks,
+  // at most kEmptyRadiusCap) of the cube of finest blocks around it that are all empty, blocks
+  // outside the grid counting as empty. Near the scene's surface, where the aligned blocks are
+  // small, the cube lets a ray skip several blocks at once. Built only for masks of at most
+  // kMaxRadiusBlocks finest blocks, so that its time is bounded whatever the stream declares.
+  static constexpr int kEmptyRadiusCap = 8;
+  static constexpr size_t kMaxRadiusBlocks = size_t{1} << 22;
+  // lo/hi: the closed range of an empty finest block (from EmptyBlock); widened to the closed
+  // voxel range of the empty cube around it. Returns its radius; 0 (lo/hi unchanged) without a
+  // radius map.
+  int EmptyCube(int lo[3], int hi[3]) const {
+    constexpr int L = kLevels - 1, B = kBlock[L], shift = kBlockShift[L];
+    if (radius_.empty()) return 0;
+    int b[3];
+    for (int a = 0; a < 3; ++a) b[a] = lo[a] >> shift;
+    const int k = radius_[(static_cast<size_t>(b[2]) * dims_[L][1] + b[1]) * dims_[L][0] + b[0]];
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::max(0, (b[a] - k) * B);
+      hi[a] = std::min((b[a] + k + 1) * B, res_[a] - 1);
+    }
+    return k;
+  }
 
  private:
   // Marks the blocks of every level but the coarsest whose closed corner range holds set voxel
   // (x, y, z).
   void MarkBlocks(int x, int y, int z);
+  Status BuildEmptyRadius();
 
   float min_[3] = {0.f, 0.f, 0.f};
   float max_[3] = {0.f, 0.f, 0.f};
@@ -216,6 +239,7 @@ class OccupancyMask {
   // in the block's closed range [b*B, min((b+1)*B, res-1)] set.
   int dims_[kLevels][3] = {};
   HeapArray<uint8_t> blocks_[kLevels];
+  HeapArray<uint8_t> radius_;  // finest level; empty when not built
   size_t occupied_ = 0;
   bool accel_ready_ = false;
 };

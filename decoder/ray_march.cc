@@ -91,9 +91,11 @@ SkipFrame MakeSkipFrame(const Ctx& c, const float o[3], const float d[3], double
 }
 
 // Sample i (mask index idx) lies in an empty block: returns the first sample index past the run of
-// samples that provably stay inside that block (i itself when that cannot be proven). The finest
-// level is asked first: each block of a level lies inside its block of the coarser level
-// (OccupancyMask), so a sample in an occupied fine block is in an occupied coarse one.
+// samples that provably stay inside an empty region around it (i itself when that cannot be
+// proven). The finest level is asked first: each block of a level lies inside its block of the
+// coarser level (OccupancyMask), so a sample in an occupied fine block is in an occupied coarse
+// one. Two empty regions hold an empty finest block: the coarsest empty aligned block, and the
+// empty cube of finest blocks centred on it; the ray leaves one or the other last.
 int SkipEmpty(const Ctx& c, const SkipFrame& f, float t0, int i, const float idx[3]) {
   const OccupancyMask& mask = *c.mask;
   const int* res = mask.res();
@@ -103,6 +105,10 @@ int SkipEmpty(const Ctx& c, const SkipFrame& f, float t0, int i, const float idx
   constexpr int kFinest = OccupancyMask::kLevels - 1;
   int lo[3], hi[3];
   if (!mask.EmptyBlock(kFinest, idx, lo, hi)) return i;
+  int region_lo[2][3], region_hi[2][3];  // the aligned block, then the cube
+  std::memcpy(region_lo[1], lo, sizeof(lo));
+  std::memcpy(region_hi[1], hi, sizeof(hi));
+  const int regions = mask.EmptyCube(region_lo[1], region_hi[1]) > 0 ? 2 : 1;  // 0: the block
   for (int level = 0; level < kFinest; ++level) {  // the coarsest empty block skips furthest
     int clo[3], chi[3];
     if (!mask.EmptyBlock(level, idx, clo, chi)) continue;
@@ -110,19 +116,26 @@ int SkipEmpty(const Ctx& c, const SkipFrame& f, float t0, int i, const float idx
     std::memcpy(hi, chi, sizeof(hi));
     break;
   }
-  // t-range where the exact position o + d t stays within [lo + m, hi - m] per axis. The
-  // reciprocal's rounding (relative 2^-53) is far inside the margin.
-  double tlo = -INFINITY, thi = INFINITY;
-  for (int a = 0; a < 3; ++a) {
-    if (!f.moving[a]) continue;
-    double ta = (lo[a] + f.m[a] - f.A[a]) * f.inv_D[a];
-    double tb = (hi[a] - f.m[a] - f.A[a]) * f.inv_D[a];
-    if (ta > tb) std::swap(ta, tb);
-    tlo = std::max(tlo, ta);
-    thi = std::min(thi, tb);
+  std::memcpy(region_lo[0], lo, sizeof(lo));
+  std::memcpy(region_hi[0], hi, sizeof(hi));
+  // Per region, the t-range where the exact position o + d t stays within [lo + m, hi - m] on
+  // every axis. The reciprocal's rounding (relative 2^-53) is far inside the margin.
+  const double t = SampleT(t0, c.step, i);
+  double exit = -INFINITY;
+  for (int r = 0; r < regions; ++r) {
+    double tlo = -INFINITY, thi = INFINITY;
+    for (int a = 0; a < 3; ++a) {
+      if (!f.moving[a]) continue;
+      double ta = (region_lo[r][a] + f.m[a] - f.A[a]) * f.inv_D[a];
+      double tb = (region_hi[r][a] - f.m[a] - f.A[a]) * f.inv_D[a];
+      if (ta > tb) std::swap(ta, tb);
+      tlo = std::max(tlo, ta);
+      thi = std::min(thi, tb);
+    }
+    if (t >= tlo) exit = std::max(exit, thi);
   }
-  if (!(static_cast<double>(SampleT(t0, c.step, i)) >= tlo)) return i;
-  const int j = LastIndexAtMost(t0, c.step, c.inv_step, c.n, i, thi);
+  if (!(exit > -INFINITY)) return i;
+  const int j = LastIndexAtMost(t0, c.step, c.inv_step, c.n, i, exit);
   return j >= i ? j + 1 : i;
 }
 

@@ -3,6 +3,8 @@
 // mask's size (bits past the last voxel, resolutions that are not a multiple of the block size).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdlib>
 #include <random>
 #include <vector>
 
@@ -80,6 +82,68 @@ TEST(OccupancyMask, LevelsFromTheSetVoxelsMatchTheDefinition) {
     ASSERT_TRUE(mask.BuildAcceleration().ok());
     EXPECT_EQ(mask.occupied_count(), count);
     ExpectLevelsMatchTheDefinition(mask, set);
+  }
+}
+
+// The empty cube around every empty finest block against a brute-force chessboard distance to the
+// nearest occupied finest block: its radius is exactly min(d - 1, kEmptyRadiusCap), so the cube
+// holds no occupied block and is as large as the cap allows.
+TEST(OccupancyMask, EmptyCubeIsTheLargestEmptyCubeUpToTheCap) {
+  constexpr int L = OccupancyMask::kLevels - 1, B = OccupancyMask::kBlock[L];
+  const MaskCase cases[] = {{{97, 61, 45}, 0.00005},
+                            {{41, 130, 23}, 0.0002},
+                            {{150, 9, 70}, 0.00002},
+                            {{33, 33, 2}, 0.0}};
+  std::mt19937 rng(11);
+  for (const MaskCase& c : cases) {
+    SCOPED_TRACE(testing::Message() << c.res[0] << "x" << c.res[1] << "x" << c.res[2]);
+    const float lo[3] = {-1.f, -1.f, -1.f}, hi[3] = {1.f, 1.f, 1.f};
+    OccupancyMask mask;
+    ASSERT_TRUE(mask.Init(lo, hi, c.res).ok());
+    std::bernoulli_distribution on(c.density);
+    for (int z = 0; z < c.res[2]; ++z)
+      for (int y = 0; y < c.res[1]; ++y)
+        for (int x = 0; x < c.res[0]; ++x)
+          if (on(rng)) mask.Set(x, y, z, true);
+    ASSERT_TRUE(mask.BuildAcceleration().ok());
+    int dims[3];
+    for (int a = 0; a < 3; ++a) dims[a] = (c.res[a] - 1 + B - 1) / B;
+    std::vector<int> occupied;  // finest blocks, as x, y, z triples
+    auto centre = [&](int bx, int by, int bz, float idx[3]) {
+      const int b[3] = {bx, by, bz};
+      for (int a = 0; a < 3; ++a) idx[a] = static_cast<float>(b[a] * B) + 0.5f;
+    };
+    for (int bz = 0; bz < dims[2]; ++bz)
+      for (int by = 0; by < dims[1]; ++by)
+        for (int bx = 0; bx < dims[0]; ++bx) {
+          float idx[3];
+          int blo[3], bhi[3];
+          centre(bx, by, bz, idx);
+          if (!mask.EmptyBlock(L, idx, blo, bhi)) occupied.insert(occupied.end(), {bx, by, bz});
+        }
+    int widened = 0;
+    for (int bz = 0; bz < dims[2]; ++bz)
+      for (int by = 0; by < dims[1]; ++by)
+        for (int bx = 0; bx < dims[0]; ++bx) {
+          float idx[3];
+          int blo[3], bhi[3];
+          centre(bx, by, bz, idx);
+          if (!mask.EmptyBlock(L, idx, blo, bhi)) continue;
+          int d = 1 << 20;
+          for (size_t k = 0; k < occupied.size(); k += 3)
+            d = std::min(d, std::max({std::abs(occupied[k] - bx), std::abs(occupied[k + 1] - by),
+                                      std::abs(occupied[k + 2] - bz)}));
+          const int radius = std::min(d - 1, OccupancyMask::kEmptyRadiusCap);
+          const int b[3] = {bx, by, bz};
+          EXPECT_EQ(mask.EmptyCube(blo, bhi), radius);
+          for (int a = 0; a < 3; ++a) {
+            EXPECT_EQ(blo[a], std::max(0, (b[a] - radius) * B)) << bx << "," << by << "," << bz;
+            EXPECT_EQ(bhi[a], std::min((b[a] + radius + 1) * B, c.res[a] - 1));
+          }
+          widened += radius > 0;
+        }
+    EXPECT_GT(widened, 0);
+    if (c.density > 0) EXPECT_FALSE(occupied.empty());
   }
 }
 
