@@ -207,7 +207,7 @@ class OccupancyMask {
   // small, the cube lets a ray skip several blocks at once. Built only for masks of at most
   // kMaxRadiusBlocks finest blocks, so that its time is bounded whatever the stream declares.
   static constexpr int kEmptyRadiusCap = 8;
-  static constexpr size_t kMaxRadiusBlocks = size_t{1} << 22;
+  static constexpr size_t kMaxRadiusBlocks = size_t{1} << 21;
   // lo/hi: the closed range of an empty finest block (from EmptyBlock); widened to the closed
   // voxel range of the empty cube around it. Returns its radius; 0 (lo/hi unchanged) without a
   // radius map.

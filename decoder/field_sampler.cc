@@ -314,55 +314,52 @@ Status OccupancyMask::BuildAcceleration() {
 // C = kEmptyRadiusCap + 1, is separable: the distance along x, then the minimum over |dy| < C of
 // max(|dy|, that), then the same over z. Windows of C - 1 blocks give exactly min(d, C): a nearer
 // occupied block is inside the window, and every window holds the block's own capped value.
-// radius = d - 1. About 2C + 2 operations a finest block, on at most kMaxRadiusBlocks blocks.
+// radius = d - 1. A line of blocks that are all at the cap stays there in one pass, so empty
+// space costs a few operations a block; at most about 2C + 4 a block on at most kMaxRadiusBlocks
+// blocks otherwise (uncharged, like the 64^3 level: bounded whatever the stream, SPEC.md 8.1).
 Status OccupancyMask::BuildEmptyRadius() {
   constexpr int L = kLevels - 1, W = kEmptyRadiusCap, C = kEmptyRadiusCap + 1;
   const int X = dims_[L][0], Y = dims_[L][1], Z = dims_[L][2];
   const size_t n = static_cast<size_t>(X) * Y * Z;
   radius_.Reset();
   if (n > kMaxRadiusBlocks) return Status::Ok();
-  HeapArray<uint8_t> along_x, along_xy;
-  ECRF_RETURN_IF_ERROR(along_x.Allocate(n));
-  ECRF_RETURN_IF_ERROR(along_xy.Allocate(n));
+  ECRF_RETURN_IF_ERROR(radius_.Allocate(n));
+  uint8_t* d = radius_.data();  // the capped distance, then the radius
   const uint8_t* occupied = blocks_[L].data();
   for (size_t row = 0; row < static_cast<size_t>(Y) * Z; ++row) {
     const uint8_t* o = occupied + row * X;
-    uint8_t* g = along_x.data() + row * X;
-    int d = C;
-    for (int x = 0; x < X; ++x) g[x] = static_cast<uint8_t>(d = o[x] ? 0 : std::min(d + 1, C));
-    d = C;
+    uint8_t* g = d + row * X;
+    int run = C;
+    for (int x = 0; x < X; ++x) g[x] = static_cast<uint8_t>(run = o[x] ? 0 : std::min(run + 1, C));
+    run = C;
     for (int x = X - 1; x >= 0; --x) {
-      d = o[x] ? 0 : std::min(d + 1, C);
-      g[x] = static_cast<uint8_t>(std::min<int>(g[x], d));
+      run = o[x] ? 0 : std::min(run + 1, C);
+      g[x] = static_cast<uint8_t>(std::min<int>(g[x], run));
     }
   }
-  // One window pass: out[i] = min over |s| <= W (inside the axis) of max(|s|, in[i + s * stride]).
-  auto window = [W](const uint8_t* in, uint8_t* out, int len, size_t stride, int at) {
-    int best = in[static_cast<size_t>(at) * stride];
-    for (int s = 1; s <= W && s < best; ++s) {
-      if (at - s >= 0)
-        best = std::min(best, std::max(s, int{in[static_cast<size_t>(at - s) * stride]}));
-      if (at + s < len)
-        best = std::min(best, std::max(s, int{in[static_cast<size_t>(at + s) * stride]}));
+  // One window pass along a line of `len` blocks `stride` apart, in place through a copy.
+  uint8_t line[kMaxGridRes / 4 + 2];
+  auto window = [&line, W, C](uint8_t* at, int len, size_t stride) {
+    bool capped = true;
+    for (int i = 0; i < len; ++i) {
+      line[i] = at[static_cast<size_t>(i) * stride];
+      capped = capped && line[i] == C;
     }
-    *out = static_cast<uint8_t>(best);
+    if (capped) return;
+    for (int i = 0; i < len; ++i) {
+      int best = line[i];
+      for (int s = 1; s <= W && s < best; ++s) {
+        if (i - s >= 0) best = std::min(best, std::max(s, int{line[i - s]}));
+        if (i + s < len) best = std::min(best, std::max(s, int{line[i + s]}));
+      }
+      at[static_cast<size_t>(i) * stride] = static_cast<uint8_t>(best);
+    }
   };
   const size_t XY = static_cast<size_t>(X) * Y;
   for (int z = 0; z < Z; ++z)
-    for (int y = 0; y < Y; ++y)
-      for (int x = 0; x < X; ++x) {
-        const size_t at = z * XY + static_cast<size_t>(y) * X + x;
-        window(along_x.data() + z * XY + x, along_xy.data() + at, Y, X, y);
-      }
-  ECRF_RETURN_IF_ERROR(radius_.Allocate(n));
-  for (int z = 0; z < Z; ++z)
-    for (int y = 0; y < Y; ++y)
-      for (int x = 0; x < X; ++x) {
-        const size_t at = z * XY + static_cast<size_t>(y) * X + x;
-        uint8_t d = 0;
-        window(along_xy.data() + static_cast<size_t>(y) * X + x, &d, Z, XY, z);
-        radius_[at] = static_cast<uint8_t>(d == 0 ? 0 : d - 1);
-      }
+    for (int x = 0; x < X; ++x) window(d + z * XY + x, Y, static_cast<size_t>(X));
+  for (size_t xy = 0; xy < XY; ++xy) window(d + xy, Z, XY);
+  for (size_t i = 0; i < n; ++i) d[i] = static_cast<uint8_t>(d[i] == 0 ? 0 : d[i] - 1);
   return Status::Ok();
 }
 

@@ -273,10 +273,9 @@ Status DecodeOccupancyChunk(const ChunkView& chunk, int version_minor, MemoryBud
                        "OCCU: %llu voxels exceed the limit of %llu",
                        static_cast<unsigned long long>(voxels),
                        static_cast<unsigned long long>(kMaxOccupancyVoxels));
-  // The bits, plus one byte per 4^3 and per 16^3 cells for the acceleration levels, and three per
-  // 4^3 cells for the finest level's empty radius and its scratch (OccupancyMask::EmptyCube).
-  ECRF_RETURN_IF_ERROR(budget->Take((voxels + 7) / 8 + 4 * (voxels / 64) + voxels / 4096 + 2,
-                                    "OCCU: the occupancy mask"));
+  // The bits, plus one byte per 4^3 and per 16^3 cells for the acceleration levels.
+  ECRF_RETURN_IF_ERROR(
+      budget->Take((voxels + 7) / 8 + voxels / 64 + voxels / 4096 + 2, "OCCU: the occupancy mask"));
   // Clearing the mask and building its acceleration levels: one unit per 64 voxels.
   if (!work->Take(voxels / 64)) return work->Refuse("OCCU");
   ECRF_RETURN_IF_ERROR(scene->mask.Init(lo, hi, res));
