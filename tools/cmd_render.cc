@@ -447,6 +447,7 @@ int RunEval(int argc, char** argv) {
   CommonArgs c;
   std::string data, split = "test", json_path;
   int test_stride = 1, max_test_views = 0, eval_downscale = 1, image_scale = 1;
+  bool fit_exposure = false;
   std::string procedural;  // --scene NAME
   uint32_t seed = trainer::TrainOptions().seed;
   auto app = MakeCommand("eval",
@@ -486,6 +487,10 @@ int RunEval(int argc, char** argv) {
       ->type_name("K")
       ->check(CLI::Range(1, 1024))
       ->capture_default_str();
+  app->add_flag("--fit-exposure", fit_exposure,
+                "the half-image protocol for captures trained with exposure codes (the file "
+                "renders the neutral exposure): fit each view's gain per channel on its left half, "
+                "score its right half");
   app->add_option("--json", json_path, "write the figures as JSON")->type_name("FILE");
   AddCommonFlags(app.get(), &c);
   AddRenamedFlag(app.get(), "--stride", "--test-stride");
@@ -495,18 +500,20 @@ int RunEval(int argc, char** argv) {
   if (data.empty() && procedural.empty())
     return UsageError(*app, "needs --data DIR or --scene NAME");
   const LoadedScene s = LoadScene(c);
-  const trainer::Dataset test =
+  trainer::Dataset test =
       procedural.empty()
           ? trainer::LoadDataset(data, split, eval_downscale)
           : trainer::DownscaleViews(ProceduralDataset(procedural, split, seed), eval_downscale);
+  if (fit_exposure) test = trainer::WithExposureFit(std::move(test));
   const trainer::EvalResult r = EvaluateDecoded(*s.field, test, test_stride, max_test_views,
                                                 RenderOptionsFor(c), false, image_scale);
   std::printf(
-      "%s: %zu bytes, PSNR %.2f dB, SSIM %.4f over %d %s views of %dx%d; decode %.1f ms, render "
+      "%s: %zu bytes, PSNR %.2f dB, SSIM %.4f over %d %s views of %dx%d%s; decode %.1f ms, render "
       "%.1f ms/view "
       "(%d thread%s, %s grids; %s head: %.1f samples, %.1f coloured samples per ray, %.0f k "
       "multiply-adds per pixel)\n",
       c.scene.c_str(), s.bytes.size(), r.psnr, r.ssim, r.views, split.c_str(), r.width, r.height,
+      r.exposure_fitted ? " (right halves; exposure gains fitted on the left halves)" : "",
       1e3 * s.decode_seconds, 1e3 * r.seconds_per_view, RenderThreads(c),
       RenderThreads(c) == 1 ? "" : "s", c.int16 ? "int16" : "float32", HeadKindName(s.info.head),
       r.samples_per_ray, r.color_samples_per_ray, r.work_per_pixel / 1e3);
@@ -518,6 +525,9 @@ int RunEval(int argc, char** argv) {
                         {"views", r.views},
                         {"width", r.width},
                         {"height", r.height},
+                        {"held_out_scoring", r.exposure_fitted ? "right halves; exposure gains "
+                                                                 "fitted on the left halves"
+                                                               : "whole views"},
                         {"decode_seconds", s.decode_seconds},
                         {"render_seconds_per_view", r.seconds_per_view},
                         {"threads", RenderThreads(c)},

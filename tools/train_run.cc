@@ -169,6 +169,10 @@ struct CodedRun {
   double encode_seconds = 0.0;
   LoadedScene decoded;
   trainer::EvalResult eval;  // the decoded file's scores on the test views
+  // With exposure codes or refined cameras, `eval` fits them on each view's left half and scores
+  // its right half; `as_given` scores whole views with the dataset's cameras at the file's own
+  // exposure (what tables that keep the dataset's poses report, LLFF's). views 0: not scored.
+  trainer::EvalResult as_given;
 };
 
 void EncodeDecodeEvaluate(const trainer::TrainOptions& o, const trainer::TensorfModel& model,
@@ -192,9 +196,26 @@ void EncodeDecodeEvaluate(const trainer::TrainOptions& o, const trainer::Tensorf
                                     dec::GridStorage::kFloat32, kUnlimitedMemory);
   dec::RenderOptions ro;
   ro.num_threads = 0;
-  // With refined cameras the held-out views are scored from their cameras aligned to the field.
-  coded->eval = EvaluateDecoded(*coded->decoded.field, trainer::WithCameras(test, r.test_cameras),
-                                o.test_view_stride, o.max_test_views, ro, o.save_renders);
+  // With refined cameras the held-out views are scored from their cameras aligned to the field;
+  // with exposure codes (left out of the file) each view's gain is fitted on its left half.
+  trainer::Dataset scored = trainer::WithCameras(test, r.test_cameras);
+  const bool exposure = !r.exposure_log_gain.empty();
+  if (exposure) scored = trainer::WithExposureFit(std::move(scored));
+  coded->eval = EvaluateDecoded(*coded->decoded.field, scored, o.test_view_stride, o.max_test_views,
+                                ro, o.save_renders);
+  if (exposure || !r.test_cameras.empty()) {
+    coded->as_given = EvaluateDecoded(*coded->decoded.field, test, o.test_view_stride,
+                                      o.max_test_views, ro, false);
+  }
+}
+
+// How the held-out views were scored, for the summary and metrics.json.
+std::string HeldOutScoring(const trainer::EvalResult& d, bool cameras_aligned) {
+  if (d.fitted_columns == 0) return "whole views";
+  const char* fitted = !d.exposure_fitted ? "cameras aligned"
+                       : cameras_aligned  ? "cameras aligned and exposure gains fitted"
+                                          : "exposure gains fitted";
+  return std::string("right halves; ") + fitted + " on the left halves";
 }
 
 void PrintRunSummary(const trainer::TrainOptions& o, const trainer::TrainResult& r,
@@ -211,6 +232,8 @@ void PrintRunSummary(const trainer::TrainOptions& o, const trainer::TrainResult&
   }
   const std::string versus =
       o.score_float ? " (" + FormatDb(d.psnr - r.test.psnr) + " against the float model)" : "";
+  const std::string scoring =
+      d.fitted_columns > 0 ? " (" + HeldOutScoring(d, !r.test_cameras.empty()) + ")" : "";
   std::printf(
       "encoded %s/scene.ecrf: %zu bytes (%.1fx smaller than float32); decoded file: test PSNR %.2f "
       "dB%s, "
@@ -218,10 +241,15 @@ void PrintRunSummary(const trainer::TrainOptions& o, const trainer::TrainResult&
       "%.1f coloured samples per ray, %.0f k multiply-adds per pixel)\n",
       o.out_dir.c_str(), coded.decoded.bytes.size(),
       double(float_bytes) / coded.decoded.bytes.size(), d.psnr, versus.c_str(), d.ssim, d.views,
-      d.fitted_columns > 0 ? " (their right halves: the left halves aligned the cameras)" : "",
-      1e3 * coded.decoded.decode_seconds, 1e3 * d.seconds_per_view,
+      scoring.c_str(), 1e3 * coded.decoded.decode_seconds, 1e3 * d.seconds_per_view,
       HeadKindName(coded.decoded.info.head), d.samples_per_ray, d.color_samples_per_ray,
       d.work_per_pixel / 1e3);
+  if (coded.as_given.views > 0) {
+    std::printf(
+        "decoded file, whole views with the dataset's cameras at the file's exposure: test "
+        "PSNR %.2f dB, SSIM %.4f over %d views\n",
+        coded.as_given.psnr, coded.as_given.ssim, coded.as_given.views);
+  }
 }
 
 // What a run trained: its settings, the model it ended with, the scene fit, the float model's
@@ -319,8 +347,13 @@ void AddCodedMetrics(const CodedRun& coded, const trainer::TrainResult& r, size_
   (*m)["test_image_size"] = {d.width, d.height};
   // Which pixels the test scores cover: with refined cameras each held-out camera is aligned on
   // its view's left half and the right half is scored (the half-image protocol); else all.
-  (*m)["held_out_scoring"] =
-      d.fitted_columns > 0 ? "right halves; cameras aligned on the left halves" : "whole views";
+  (*m)["held_out_scoring"] = HeldOutScoring(d, !r.test_cameras.empty());
+  if (coded.as_given.views > 0) {
+    // Whole views, the dataset's cameras, the file's exposure: the figure of tables that keep the
+    // dataset's poses (LLFF's), beside the half-image protocol's.
+    (*m)["decoded_test_psnr_as_given"] = coded.as_given.psnr;
+    (*m)["decoded_test_ssim_as_given"] = coded.as_given.ssim;
+  }
   (*m)["float32_model_bytes"] = float_bytes;
   (*m)["encode_step_scale"] = coded.step_scale;
   (*m)["file_bytes"] = coded.decoded.bytes.size();

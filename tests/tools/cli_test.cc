@@ -341,6 +341,17 @@ TEST(Cli, RenderAndEvalUseEveryCoreByDefault) {
   EXPECT_EQ(j["threads"], all);
   EXPECT_EQ(j["views"], 1);
   EXPECT_EQ(j["downscale"], 4);
+  EXPECT_EQ(j["held_out_scoring"], "whole views");
+  // The half-image protocol for exposure: said in the line and the JSON.
+  const Output fitted = Capture(RunEval, {"eval", kScene, "--scene", "builtin", "--max-test-views",
+                                          "1", "--fit-exposure", "--json", json});
+  ASSERT_EQ(fitted.rc, 0) << fitted.err;
+  EXPECT_NE(fitted.out.find("(right halves; exposure gains fitted on the left halves)"),
+            std::string::npos)
+      << fitted.out;
+  std::ifstream again(json);
+  EXPECT_EQ(nlohmann::json::parse(again)["held_out_scoring"],
+            "right halves; exposure gains fitted on the left halves");
 }
 
 }  // namespace

@@ -205,7 +205,10 @@ TEST_F(TrainOutputTest, RunWithCameraWarmUpResumesToTheSameFile) {
   const std::string file = ReadAll(whole + "/scene.ecrf");
   ASSERT_FALSE(file.empty());
   EXPECT_TRUE(FileExists(whole + "/warmup/checkpoint.ckpt"));
-  EXPECT_EQ(nlohmann::json::parse(ReadAll(whole + "/metrics.json"))["camera_warmup_iters"], 80);
+  const nlohmann::json metrics = nlohmann::json::parse(ReadAll(whole + "/metrics.json"));
+  EXPECT_EQ(metrics["camera_warmup_iters"], 80);
+  EXPECT_EQ(metrics["held_out_scoring"], "right halves; cameras aligned on the left halves");
+  EXPECT_TRUE(metrics.contains("decoded_test_psnr_as_given"));
 
   ASSERT_EQ(Invoke(RunTrain, with({"--stop-after", "100", "-o", parts})), 0);
   EXPECT_FALSE(FileExists(parts + "/scene.ecrf"));
@@ -214,6 +217,29 @@ TEST_F(TrainOutputTest, RunWithCameraWarmUpResumesToTheSameFile) {
   EXPECT_FALSE(FileExists(parts + "/scene.ecrf"));
   ASSERT_EQ(Invoke(RunTrain, with({"--resume", "-o", parts})), 0);
   EXPECT_TRUE(ReadAll(parts + "/scene.ecrf") == file) << "the resumed run wrote another file";
+}
+
+// A run with exposure codes (left out of the file) scores its held-out views with the half-image
+// protocol, and also whole views at the file's exposure with the dataset's cameras (#59).
+TEST_F(TrainOutputTest, ExposureCodesScoreRightHalvesAndWholeViewsAsGiven) {
+  const std::string run = root_ + "/exposure";
+  ASSERT_EQ(Invoke(RunTrain, {"train", "--scene", "builtin", "--iters", "40", "--batch", "256",
+                              "--final-grid", "32", "--max-test-views", "1", "--exposure-codes",
+                              "on", "-o", run}),
+            0);
+  const nlohmann::json m = nlohmann::json::parse(ReadAll(run + "/metrics.json"));
+  EXPECT_EQ(m["held_out_scoring"], "right halves; exposure gains fitted on the left halves");
+  ASSERT_TRUE(m.contains("decoded_test_psnr_as_given"));
+  EXPECT_GT(m["decoded_test_psnr_as_given"].get<double>(), 5.0);  // 40 iterations: ~7.5 dB
+  EXPECT_NE(m["decoded_test_psnr_as_given"], m["decoded_test_psnr"]);
+  // Without them (an object scene, no refined cameras) whole views, one figure.
+  const std::string plain = root_ + "/plain";
+  ASSERT_EQ(Invoke(RunTrain, {"train", "--scene", "builtin", "--iters", "40", "--batch", "256",
+                              "--final-grid", "32", "--max-test-views", "1", "-o", plain}),
+            0);
+  const nlohmann::json p = nlohmann::json::parse(ReadAll(plain + "/metrics.json"));
+  EXPECT_EQ(p["held_out_scoring"], "whole views");
+  EXPECT_FALSE(p.contains("decoded_test_psnr_as_given"));
 }
 
 // A sweep continues a point's checkpoint only when it holds the point's own settings (CanResume),

@@ -20,6 +20,10 @@ struct View {
   // [0, fitted_columns) fitted it and are never scored; scores cover the columns right of them
   // (the half-image protocol). 0: nothing of the view was fitted, the whole view is scored.
   int fitted_columns = 0;
+  // The half-image protocol for appearance (a capture trained with per-image exposure codes, which
+  // the file leaves out): the view's per-channel gain is fitted on columns [0, fitted_columns)
+  // and applied to the render before the rest is scored (WithExposureFit).
+  bool fit_exposure = false;
 };
 
 struct Dataset {

@@ -29,11 +29,45 @@ Image RenderView(const TensorfModel& model, const Camera& camera) {
   return img;
 }
 
+void FitExposureGain(const Image& render, const Image& truth, int x1, float gain[3]) {
+  double rt[3] = {0, 0, 0}, rr[3] = {0, 0, 0};
+  x1 = std::min(x1, std::min(render.width, truth.width));
+  for (int y = 0; y < std::min(render.height, truth.height); ++y) {
+    for (int x = 0; x < x1; ++x) {
+      for (int c = 0; c < 3; ++c) {
+        const double r = render.pixels[(size_t(y) * render.width + x) * render.channels + c];
+        const double t = truth.pixels[(size_t(y) * truth.width + x) * truth.channels + c];
+        rt[c] += r * t;
+        rr[c] += r * r;
+      }
+    }
+  }
+  for (int c = 0; c < 3; ++c) gain[c] = rr[c] > 0 ? float(rt[c] / rr[c]) : 1.f;
+}
+
+Dataset WithExposureFit(Dataset data) {
+  for (View& v : data.views) {
+    v.fit_exposure = true;
+    v.fitted_columns = std::max(v.fitted_columns, v.rgb.width / 2);
+  }
+  return data;
+}
+
 void AddViewScore(const Image& render, const View& view, EvalResult* r) {
   const int x0 = view.fitted_columns;
   double psnr = 0.0, ssim = 0.0;
   if (x0 > 0) {
-    const Image scored = ColumnsFrom(render, x0), truth = ColumnsFrom(view.rgb, x0);
+    Image scored = ColumnsFrom(render, x0);
+    const Image truth = ColumnsFrom(view.rgb, x0);
+    if (view.fit_exposure) {
+      float gain[3];
+      FitExposureGain(render, view.rgb, x0, gain);
+      for (size_t i = 0; i < scored.pixels.size(); ++i) {
+        const int c = int(i % size_t(scored.channels));
+        if (c < 3) scored.pixels[i] = std::min(1.f, gain[c] * scored.pixels[i]);
+      }
+      r->exposure_fitted = true;
+    }
     psnr = Psnr(scored, truth);
     ssim = Ssim(scored, truth);
   } else {

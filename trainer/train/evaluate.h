@@ -15,8 +15,9 @@ struct EvalResult {
   double psnr = 0.0;  // mean over views
   double ssim = 0.0;  // mean over views
   int views = 0;
-  int width = 0, height = 0;  // the scored images' size (the first view's), for the record
-  int fitted_columns = 0;     // > 0: the half-image protocol (View::fitted_columns) scored them
+  int width = 0, height = 0;     // the scored images' size (the first view's), for the record
+  int fitted_columns = 0;        // > 0: the half-image protocol (View::fitted_columns) scored them
+  bool exposure_fitted = false;  // each view's gain fitted on its left half (View::fit_exposure)
   double seconds_per_view = 0.0;
   // Density and MLP evaluations per ray (what bounds render time), where the renderer counts them.
   double samples_per_ray = 0.0;
@@ -31,6 +32,14 @@ struct EvalResult {
 // the mean) and SSIM against the view's image over the columns it scores (the half-image
 // protocol: View::fitted_columns are not), the view count, and the first view's size.
 void AddViewScore(const Image& render, const View& view, EvalResult* r);
+
+// The gain per channel that best maps `render` to `truth` over columns [0, x1) in least squares
+// (sum render * truth / sum render^2; 1 where the render is black there).
+void FitExposureGain(const Image& render, const Image& truth, int x1, float gain[3]);
+
+// `data` with every view marked for the half-image protocol's exposure fit: the gain fitted on the
+// left half, the right half scored (View::fit_exposure; fitted_columns at least half the width).
+Dataset WithExposureFit(Dataset data);
 
 // Renders every stride-th view of `test` (at most max_views, 0: all) and compares it with its
 // image.
