@@ -56,6 +56,31 @@ void ExpectLevelsMatchTheDefinition(const OccupancyMask& mask, const std::vector
   }
 }
 
+// A mask over [-1, 1]^3 whose voxels are set with probability c.density, its acceleration built;
+// `set` holds the voxels (x fastest).
+struct RandomMask {
+  OccupancyMask mask;
+  std::vector<char> set;
+  RandomMask(const MaskCase& c, std::mt19937& rng) {
+    const float lo[3] = {-1.f, -1.f, -1.f}, hi[3] = {1.f, 1.f, 1.f};
+    EXPECT_TRUE(mask.Init(lo, hi, c.res).ok());
+    set.assign(mask.voxel_count(), 0);
+    std::bernoulli_distribution on(c.density);
+    for (int z = 0; z < c.res[2]; ++z)
+      for (int y = 0; y < c.res[1]; ++y)
+        for (int x = 0; x < c.res[0]; ++x) {
+          const bool v = on(rng);
+          set[(static_cast<size_t>(z) * c.res[1] + y) * c.res[0] + x] = v;
+          if (v) mask.Set(x, y, z, true);
+        }
+    EXPECT_TRUE(mask.BuildAcceleration().ok());
+  }
+};
+
+testing::Message Name(const MaskCase& c) {
+  return testing::Message() << c.res[0] << "x" << c.res[1] << "x" << c.res[2];
+}
+
 TEST(OccupancyMask, LevelsFromTheSetVoxelsMatchTheDefinition) {
   const MaskCase cases[] = {
       {{7, 13, 33}, 0.02},  {{17, 5, 9}, 0.3},       {{33, 33, 2}, 0.0},
@@ -64,24 +89,11 @@ TEST(OccupancyMask, LevelsFromTheSetVoxelsMatchTheDefinition) {
   };
   std::mt19937 rng(5);
   for (const MaskCase& c : cases) {
-    SCOPED_TRACE(testing::Message() << c.res[0] << "x" << c.res[1] << "x" << c.res[2]);
-    const float lo[3] = {-1.f, -1.f, -1.f}, hi[3] = {1.f, 1.f, 1.f};
-    OccupancyMask mask;
-    ASSERT_TRUE(mask.Init(lo, hi, c.res).ok());
-    std::vector<char> set(mask.voxel_count(), 0);
-    std::bernoulli_distribution on(c.density);
-    size_t count = 0;
-    for (int z = 0; z < c.res[2]; ++z)
-      for (int y = 0; y < c.res[1]; ++y)
-        for (int x = 0; x < c.res[0]; ++x) {
-          const bool v = on(rng);
-          set[(static_cast<size_t>(z) * c.res[1] + y) * c.res[0] + x] = v;
-          count += v;
-          if (v) mask.Set(x, y, z, true);
-        }
-    ASSERT_TRUE(mask.BuildAcceleration().ok());
-    EXPECT_EQ(mask.occupied_count(), count);
-    ExpectLevelsMatchTheDefinition(mask, set);
+    SCOPED_TRACE(Name(c));
+    const RandomMask m(c, rng);
+    EXPECT_EQ(m.mask.occupied_count(),
+              static_cast<size_t>(std::count(m.set.begin(), m.set.end(), 1)));
+    ExpectLevelsMatchTheDefinition(m.mask, m.set);
   }
 }
 
@@ -96,54 +108,48 @@ TEST(OccupancyMask, EmptyCubeIsTheLargestEmptyCubeUpToTheCap) {
                             {{33, 33, 2}, 0.0}};
   std::mt19937 rng(11);
   for (const MaskCase& c : cases) {
-    SCOPED_TRACE(testing::Message() << c.res[0] << "x" << c.res[1] << "x" << c.res[2]);
-    const float lo[3] = {-1.f, -1.f, -1.f}, hi[3] = {1.f, 1.f, 1.f};
-    OccupancyMask mask;
-    ASSERT_TRUE(mask.Init(lo, hi, c.res).ok());
-    std::bernoulli_distribution on(c.density);
-    for (int z = 0; z < c.res[2]; ++z)
-      for (int y = 0; y < c.res[1]; ++y)
-        for (int x = 0; x < c.res[0]; ++x)
-          if (on(rng)) mask.Set(x, y, z, true);
-    ASSERT_TRUE(mask.BuildAcceleration().ok());
-    int dims[3];
-    for (int a = 0; a < 3; ++a) dims[a] = (c.res[a] - 1 + B - 1) / B;
-    std::vector<int> occupied;  // finest blocks, as x, y, z triples
-    auto centre = [&](int bx, int by, int bz, float idx[3]) {
-      const int b[3] = {bx, by, bz};
-      for (int a = 0; a < 3; ++a) idx[a] = static_cast<float>(b[a] * B) + 0.5f;
+    SCOPED_TRACE(Name(c));
+    const RandomMask m(c, rng);
+    const OccupancyMask& mask = m.mask;
+    struct Block {
+      int b[3];
+      bool empty;
+      int lo[3], hi[3];  // its closed range, from EmptyBlock
     };
-    for (int bz = 0; bz < dims[2]; ++bz)
-      for (int by = 0; by < dims[1]; ++by)
-        for (int bx = 0; bx < dims[0]; ++bx) {
+    std::vector<Block> blocks;
+    for (int bz = 0; bz * B < c.res[2] - 1; ++bz)
+      for (int by = 0; by * B < c.res[1] - 1; ++by)
+        for (int bx = 0; bx * B < c.res[0] - 1; ++bx) {
+          Block k = {{bx, by, bz}, false, {}, {}};
           float idx[3];
-          int blo[3], bhi[3];
-          centre(bx, by, bz, idx);
-          if (!mask.EmptyBlock(L, idx, blo, bhi)) occupied.insert(occupied.end(), {bx, by, bz});
+          for (int a = 0; a < 3; ++a) idx[a] = static_cast<float>(k.b[a] * B) + 0.5f;
+          k.empty = mask.EmptyBlock(L, idx, k.lo, k.hi);
+          blocks.push_back(k);
         }
     int widened = 0;
-    for (int bz = 0; bz < dims[2]; ++bz)
-      for (int by = 0; by < dims[1]; ++by)
-        for (int bx = 0; bx < dims[0]; ++bx) {
-          float idx[3];
-          int blo[3], bhi[3];
-          centre(bx, by, bz, idx);
-          if (!mask.EmptyBlock(L, idx, blo, bhi)) continue;
-          int d = 1 << 20;
-          for (size_t k = 0; k < occupied.size(); k += 3)
-            d = std::min(d, std::max({std::abs(occupied[k] - bx), std::abs(occupied[k + 1] - by),
-                                      std::abs(occupied[k + 2] - bz)}));
-          const int radius = std::min(d - 1, OccupancyMask::kEmptyRadiusCap);
-          const int b[3] = {bx, by, bz};
-          EXPECT_EQ(mask.EmptyCube(blo, bhi), radius);
-          for (int a = 0; a < 3; ++a) {
-            EXPECT_EQ(blo[a], std::max(0, (b[a] - radius) * B)) << bx << "," << by << "," << bz;
-            EXPECT_EQ(bhi[a], std::min((b[a] + radius + 1) * B, c.res[a] - 1));
-          }
-          widened += radius > 0;
-        }
+    bool any_occupied = false;
+    for (Block& k : blocks) {
+      if (!k.empty) {
+        any_occupied = true;
+        continue;
+      }
+      int d = 1 << 20;
+      for (const Block& o : blocks) {
+        if (o.empty) continue;
+        d = std::min(d, std::max({std::abs(o.b[0] - k.b[0]), std::abs(o.b[1] - k.b[1]),
+                                  std::abs(o.b[2] - k.b[2])}));
+      }
+      const int radius = std::min(d - 1, OccupancyMask::kEmptyRadiusCap);
+      EXPECT_EQ(mask.EmptyCube(k.lo, k.hi), radius);
+      for (int a = 0; a < 3; ++a) {
+        EXPECT_EQ(k.lo[a], std::max(0, (k.b[a] - radius) * B))
+            << k.b[0] << "," << k.b[1] << "," << k.b[2];
+        EXPECT_EQ(k.hi[a], std::min((k.b[a] + radius + 1) * B, c.res[a] - 1));
+      }
+      widened += radius > 0;
+    }
     EXPECT_GT(widened, 0);
-    if (c.density > 0) EXPECT_FALSE(occupied.empty());
+    EXPECT_EQ(any_occupied, c.density > 0);
   }
 }
 
