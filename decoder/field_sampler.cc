@@ -339,7 +339,7 @@ Status OccupancyMask::BuildEmptyRadius() {
   }
   // One window pass along a line of `len` blocks `stride` apart, in place through a copy.
   uint8_t line[kMaxGridRes / 4 + 2];
-  auto window = [&line, W, C](uint8_t* at, int len, size_t stride) {
+  auto window = [&line](uint8_t* at, int len, size_t stride) {
     bool capped = true;
     for (int i = 0; i < len; ++i) {
       line[i] = at[static_cast<size_t>(i) * stride];
