@@ -170,7 +170,8 @@ struct CodedRun {
   LoadedScene decoded;
   trainer::EvalResult eval;  // the decoded file's scores on the test views
   // With exposure codes or refined cameras, `eval` fits them on each view's left half and scores
-  // its right half; `as_given` scores whole views with the dataset's cameras at the file's own
+  // its right half; `as_given` scores whole views with the held-out cameras unaligned (the
+  // dataset's, or carried through a camera warm-up) at the file's own
   // exposure (what tables that keep the dataset's poses report, LLFF's). views 0: not scored.
   trainer::EvalResult as_given;
 };
@@ -246,7 +247,7 @@ void PrintRunSummary(const trainer::TrainOptions& o, const trainer::TrainResult&
       d.work_per_pixel / 1e3);
   if (coded.as_given.views > 0) {
     std::printf(
-        "decoded file, whole views with the dataset's cameras at the file's exposure: test "
+        "decoded file, whole views with unaligned held-out cameras at the file's exposure: test "
         "PSNR %.2f dB, SSIM %.4f over %d views\n",
         coded.as_given.psnr, coded.as_given.ssim, coded.as_given.views);
   }
@@ -349,8 +350,8 @@ void AddCodedMetrics(const CodedRun& coded, const trainer::TrainResult& r, size_
   // its view's left half and the right half is scored (the half-image protocol); else all.
   (*m)["held_out_scoring"] = HeldOutScoring(d, !r.test_cameras.empty());
   if (coded.as_given.views > 0) {
-    // Whole views, the dataset's cameras, the file's exposure: the figure of tables that keep the
-    // dataset's poses (LLFF's), beside the half-image protocol's.
+    // Whole views, unaligned held-out cameras, the file's exposure: the figure of tables that keep
+    // the dataset's poses (LLFF's), beside the half-image protocol's.
     (*m)["decoded_test_psnr_as_given"] = coded.as_given.psnr;
     (*m)["decoded_test_ssim_as_given"] = coded.as_given.ssim;
   }
