@@ -103,21 +103,18 @@ int SkipEmpty(const Ctx& c, const SkipFrame& f, float t0, int i, const float idx
     if (!(idx[a] >= 0.f && idx[a] <= static_cast<float>(res[a] - 1))) return i;
   }
   constexpr int kFinest = OccupancyMask::kLevels - 1;
-  int lo[3], hi[3];
-  if (!mask.EmptyBlock(kFinest, idx, lo, hi)) return i;
-  int region_lo[2][3], region_hi[2][3];  // the aligned block, then the cube
-  std::memcpy(region_lo[1], lo, sizeof(lo));
-  std::memcpy(region_hi[1], hi, sizeof(hi));
+  int region_lo[2][3], region_hi[2][3];  // the coarsest empty aligned block, then the cube
+  if (!mask.EmptyBlock(kFinest, idx, region_lo[0], region_hi[0])) return i;
+  std::memcpy(region_lo[1], region_lo[0], sizeof(region_lo[0]));
+  std::memcpy(region_hi[1], region_hi[0], sizeof(region_hi[0]));
   const int regions = mask.EmptyCube(region_lo[1], region_hi[1]) > 0 ? 2 : 1;  // 0: the block
   for (int level = 0; level < kFinest; ++level) {  // the coarsest empty block skips furthest
-    int clo[3], chi[3];
+    int clo[3], chi[3];  // EmptyBlock writes its range even when the block is occupied
     if (!mask.EmptyBlock(level, idx, clo, chi)) continue;
-    std::memcpy(lo, clo, sizeof(lo));
-    std::memcpy(hi, chi, sizeof(hi));
+    std::memcpy(region_lo[0], clo, sizeof(clo));
+    std::memcpy(region_hi[0], chi, sizeof(chi));
     break;
   }
-  std::memcpy(region_lo[0], lo, sizeof(lo));
-  std::memcpy(region_hi[0], hi, sizeof(hi));
   // Per region, the t-range where the exact position o + d t stays within [lo + m, hi - m] on
   // every axis. The reciprocal's rounding (relative 2^-53) is far inside the margin.
   const double t = SampleT(t0, c.step, i);

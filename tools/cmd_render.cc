@@ -27,6 +27,7 @@
 #include "trainer/data/seconds_since.h"
 #include "trainer/train/checkpoint.h"
 #include "trainer/train/eval_progress.h"
+#include "trainer/train/evaluate.h"
 
 namespace ecrf {
 namespace tools {
@@ -513,7 +514,7 @@ int RunEval(int argc, char** argv) {
       "(%d thread%s, %s grids; %s head: %.1f samples, %.1f coloured samples per ray, %.0f k "
       "multiply-adds per pixel)\n",
       c.scene.c_str(), s.bytes.size(), r.psnr, r.ssim, r.views, split.c_str(), r.width, r.height,
-      r.exposure_fitted ? " (right halves; exposure gains fitted on the left halves)" : "",
+      r.fitted_columns > 0 ? (" (" + trainer::HeldOutScoring(r, false) + ")").c_str() : "",
       1e3 * s.decode_seconds, 1e3 * r.seconds_per_view, RenderThreads(c),
       RenderThreads(c) == 1 ? "" : "s", c.int16 ? "int16" : "float32", HeadKindName(s.info.head),
       r.samples_per_ray, r.color_samples_per_ray, r.work_per_pixel / 1e3);
@@ -525,9 +526,7 @@ int RunEval(int argc, char** argv) {
                         {"views", r.views},
                         {"width", r.width},
                         {"height", r.height},
-                        {"held_out_scoring", r.exposure_fitted ? "right halves; exposure gains "
-                                                                 "fitted on the left halves"
-                                                               : "whole views"},
+                        {"held_out_scoring", trainer::HeldOutScoring(r, false)},
                         {"decode_seconds", s.decode_seconds},
                         {"render_seconds_per_view", r.seconds_per_view},
                         {"threads", RenderThreads(c)},

@@ -171,8 +171,8 @@ struct CodedRun {
   trainer::EvalResult eval;  // the decoded file's scores on the test views
   // With exposure codes or refined cameras, `eval` fits them on each view's left half and scores
   // its right half; `as_given` scores whole views with the held-out cameras unaligned (the
-  // dataset's, or carried through a camera warm-up) at the file's own
-  // exposure (what tables that keep the dataset's poses report, LLFF's). views 0: not scored.
+  // dataset's, or carried through a camera warm-up) at the file's own exposure (what tables that
+  // keep the dataset's poses report, LLFF's). views 0: not scored.
   trainer::EvalResult as_given;
 };
 
@@ -210,15 +210,6 @@ void EncodeDecodeEvaluate(const trainer::TrainOptions& o, const trainer::Tensorf
   }
 }
 
-// How the held-out views were scored, for the summary and metrics.json.
-std::string HeldOutScoring(const trainer::EvalResult& d, bool cameras_aligned) {
-  if (d.fitted_columns == 0) return "whole views";
-  const char* fitted = !d.exposure_fitted ? "cameras aligned"
-                       : cameras_aligned  ? "cameras aligned and exposure gains fitted"
-                                          : "exposure gains fitted";
-  return std::string("right halves; ") + fitted + " on the left halves";
-}
-
 void PrintRunSummary(const trainer::TrainOptions& o, const trainer::TrainResult& r,
                      size_t float_bytes, const CodedRun& coded) {
   const trainer::EvalResult& d = coded.eval;
@@ -234,7 +225,7 @@ void PrintRunSummary(const trainer::TrainOptions& o, const trainer::TrainResult&
   const std::string versus =
       o.score_float ? " (" + FormatDb(d.psnr - r.test.psnr) + " against the float model)" : "";
   const std::string scoring =
-      d.fitted_columns > 0 ? " (" + HeldOutScoring(d, !r.test_cameras.empty()) + ")" : "";
+      d.fitted_columns > 0 ? " (" + trainer::HeldOutScoring(d, !r.test_cameras.empty()) + ")" : "";
   std::printf(
       "encoded %s/scene.ecrf: %zu bytes (%.1fx smaller than float32); decoded file: test PSNR %.2f "
       "dB%s, "
@@ -348,7 +339,7 @@ void AddCodedMetrics(const CodedRun& coded, const trainer::TrainResult& r, size_
   (*m)["test_image_size"] = {d.width, d.height};
   // Which pixels the test scores cover: with refined cameras each held-out camera is aligned on
   // its view's left half and the right half is scored (the half-image protocol); else all.
-  (*m)["held_out_scoring"] = HeldOutScoring(d, !r.test_cameras.empty());
+  (*m)["held_out_scoring"] = trainer::HeldOutScoring(d, !r.test_cameras.empty());
   if (coded.as_given.views > 0) {
     // Whole views, unaligned held-out cameras, the file's exposure: the figure of tables that keep
     // the dataset's poses (LLFF's), beside the half-image protocol's.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <string>
 #include <vector>
 
 #include "trainer/data/camera.h"
@@ -51,6 +52,14 @@ Dataset WithExposureFit(Dataset data) {
     v.fitted_columns = std::max(v.fitted_columns, v.rgb.width / 2);
   }
   return data;
+}
+
+std::string HeldOutScoring(const EvalResult& r, bool cameras_aligned) {
+  if (r.fitted_columns == 0) return "whole views";
+  const char* fitted = !r.exposure_fitted ? "cameras aligned"
+                       : cameras_aligned  ? "cameras aligned and exposure gains fitted"
+                                          : "exposure gains fitted";
+  return std::string("right halves; ") + fitted + " on the left halves";
 }
 
 void AddViewScore(const Image& render, const View& view, EvalResult* r) {

@@ -2,6 +2,7 @@
 #ifndef ECRF_TRAINER_TRAIN_EVALUATE_H_
 #define ECRF_TRAINER_TRAIN_EVALUATE_H_
 
+#include <string>
 #include <vector>
 
 #include "trainer/data/dataset.h"
@@ -40,6 +41,10 @@ void FitExposureGain(const Image& render, const Image& truth, int x1, float gain
 // `data` with every view marked for the half-image protocol's exposure fit: the gain fitted on the
 // left half, the right half scored (View::fit_exposure; fitted_columns at least half the width).
 Dataset WithExposureFit(Dataset data);
+
+// How views were scored, for what a run prints and records: "whole views", or the half-image
+// protocol naming what the left halves fitted (cameras_aligned: the views' cameras were aligned).
+std::string HeldOutScoring(const EvalResult& r, bool cameras_aligned);
 
 // Renders every stride-th view of `test` (at most max_views, 0: all) and compares it with its
 // image.
