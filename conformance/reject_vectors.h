@@ -195,6 +195,25 @@ inline std::vector<RejectVector> RejectVectors() {
         "an MLPW head of 2, unknown to this version (6.6)", Join(c, d[5]));
   }
   {
+    const std::vector<uint8_t> d = BuildSceneVector(Named("scene_sh_deferred"));
+    add("reject_sh_colour_in_1_6", "decode", kErrCorrupt, false,
+        "the spherical-harmonics colour (HEAD hidden 0, 1.7) in a stream labelled 1.6 (2.1)",
+        Join(Split(d), 6));
+    // HEAD feature_dim (offset 82, u16) and viewdir_pe_freqs (85) of a hidden-0 stream.
+    auto with_head_bytes = [&](size_t offset, std::vector<uint8_t> bytes) {
+      Chunks c = Split(d);
+      for (auto& [type, payload] : c) {
+        if (type == kChunkHead) std::copy(bytes.begin(), bytes.end(), payload.begin() + offset);
+      }
+      return Join(c, d[5]);
+    };
+    add("reject_sh_feature_dim", "decode", kErrCorrupt, false,
+        "hidden 0 with feature_dim 26, the coefficients of no degree (6.2)",
+        with_head_bytes(82, {26, 0}));
+    add("reject_sh_positional_encoding", "decode", kErrCorrupt, false,
+        "hidden 0 with a view-direction encoding of 1 frequency (6.2)", with_head_bytes(85, {1}));
+  }
+  {
     const costly::CostlyScene cs = costly::EmptyFlaggedRows(512);
     add("reject_budget_occupancy_rows", "decode", kErrLimit, true,
         "OCCU 512^3 flagging every row and setting no voxel: 2^27 symbols from 3 KB, beyond the "

@@ -9,7 +9,7 @@
 // from outside its region of interest, a forward-facing scene (bitstream 1.3: NDC, 7.2.2) seen
 // from in front of its reference camera. Those carry the lowest version of their features and
 // the narrow coefficient contexts of 1.0-1.3; the `*_wide_contexts*` vectors are 1.4 streams,
-// `scene_neighbour_contexts` a 1.5 stream, `scene_deferred_head` a 1.6 one.
+// `scene_neighbour_contexts` a 1.5 stream, `scene_deferred_head` a 1.6 one, `scene_sh_*` 1.7.
 // Added with SPEC.md 1.5: a quantized MLP whose levels reach every magnitude class up to 24 (the
 // class escape with extra values up to 2^23), an unbounded scene whose rays end at their sample
 // limit inside the contracted cube, and a forward-facing scene seen from the side, so that a
@@ -56,6 +56,8 @@ struct SceneVector {
   // wide occupancy contexts.
   bool neighbour_contexts = false;
   HeadKind head = HeadKind::kPerSample;  // kDeferred: a 1.6 stream (SPEC.md 7.6)
+  // 0..3: the spherical-harmonics colour of this degree (HEAD hidden 0, a 1.7 stream, 7.6.2).
+  int sh_degree = -1;
 };
 
 inline const std::vector<SceneVector>& SceneVectors() {
@@ -222,6 +224,40 @@ inline const std::vector<SceneVector>& SceneVectors() {
        false,
        false,
        HeadKind::kDeferred},
+      // Added with SPEC.md 1.8 (bitstream 1.7): the spherical-harmonics colour (HEAD hidden 0),
+      // degree 2 once per ray with a quantized basis, degree 3 per sample in binary16.
+      {"scene_sh_deferred",
+       {12, 10, 11},
+       {{2, 2, 2}, {3, 2, 3}},
+       {2, 4, 4},
+       {1, 2, 8},
+       8,
+       2,
+       OccupancyKind::kSphere,
+       25,
+       SceneModel::kObject,
+       false,
+       0,
+       false,
+       false,
+       HeadKind::kDeferred,
+       2},
+      {"scene_sh_per_sample",
+       {10, 12, 9},
+       {{2, 2, 2}, {2, 3, 2}},
+       {2, 4, 4},
+       {1, 2, 8},
+       8,
+       0,
+       OccupancyKind::kNone,
+       26,
+       SceneModel::kObject,
+       false,
+       0,
+       false,
+       false,
+       HeadKind::kPerSample,
+       3},
   };
   return v;
 }
@@ -250,6 +286,12 @@ inline SceneHeader SceneVectorHeader(const SceneVector& v) {
   h.feature_pe_freqs = 1;
   h.viewdir_pe_freqs = 2;
   h.hidden = 16;
+  if (v.sh_degree >= 0) {
+    h.hidden = 0;
+    h.feature_dim = static_cast<uint16_t>(3 * (v.sh_degree + 1) * (v.sh_degree + 1));
+    h.feature_pe_freqs = 0;
+    h.viewdir_pe_freqs = 0;
+  }
   h.has_occupancy = v.occupancy == OccupancyKind::kNone ? 0 : 1;
   h.scene_model = static_cast<uint8_t>(v.scene_model);
   if (v.scene_model == SceneModel::kUnbounded) {
@@ -319,7 +361,7 @@ inline void MakeSceneBlock(Lcg& rng, const int dims[3], int32_t max_abs, bool de
 
 // The lowest minor version that has every feature the vector uses. 1.1: quantized MLP; 1.2:
 // unbounded scene model; 1.3: forward-facing scene model; 1.4: wide coefficient contexts; 1.5:
-// neighbour coefficient contexts; 1.6: the deferred head.
+// neighbour coefficient contexts; 1.6: the deferred head; 1.7: spherical-harmonics colour.
 inline uint8_t SceneVectorVersionMinor(const SceneVector& v) {
   return std::max<uint8_t>(
       {v.neighbour_contexts ? kNeighbourContextsMinVersionMinor
@@ -327,7 +369,8 @@ inline uint8_t SceneVectorVersionMinor(const SceneVector& v) {
                             : uint8_t{0},
        kSceneModelMinVersionMinor[static_cast<int>(v.scene_model)],
        v.mlp_precision == kMlpPrecisionQuantized ? kQuantizedMlpMinVersionMinor : uint8_t{0},
-       kHeadKindMinVersionMinor[static_cast<int>(v.head)]});
+       kHeadKindMinVersionMinor[static_cast<int>(v.head)],
+       v.sh_degree >= 0 ? kShColourMinVersionMinor : uint8_t{0}});
 }
 
 // The occupancy chunk: a 7x6x5 mask over the grid box, empty or a sphere.

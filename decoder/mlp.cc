@@ -1,6 +1,7 @@
 #include "decoder/mlp.h"
 #include "decoder/fast_sincos.h"
 #include "decoder/mlp_gemm.h"
+#include "decoder/sh_basis.h"
 
 #include <cmath>
 #include <cstring>
@@ -136,8 +137,15 @@ Status AppearanceMlp::Init(const MlpConfig& config) {
                            config.viewdir_pe_freqs <= kMaxMlpPeFreqs,
                        kErrLimit, "mlp: PE frequencies %d/%d out of range [0, %d]",
                        config.feature_pe_freqs, config.viewdir_pe_freqs, kMaxMlpPeFreqs);
-  ECRF_CHECK_OR_RETURN(config.hidden >= 1 && config.hidden <= kMaxMlpHidden, kErrLimit,
-                       "mlp: hidden width %d out of range [1, %d]", config.hidden, kMaxMlpHidden);
+  ECRF_CHECK_OR_RETURN(config.hidden >= 0 && config.hidden <= kMaxMlpHidden, kErrLimit,
+                       "mlp: hidden width %d out of range [0, %d]", config.hidden, kMaxMlpHidden);
+  ECRF_CHECK_OR_RETURN(
+      config.hidden > 0 ||
+          (config.sh_degree() >= 0 && config.feature_pe_freqs == 0 && config.viewdir_pe_freqs == 0),
+      kErrInvalidArgument,
+      "mlp: hidden 0 (spherical harmonics) needs feature_dim 3, 12, 27 or 48 and "
+      "no positional encoding, not %d, %d and %d",
+      config.feature_dim, config.feature_pe_freqs, config.viewdir_pe_freqs);
   config_ = config;
   kernel_ = BestGemmKernel();
   gemm8_ = Gemm8For(kernel_);
@@ -247,6 +255,22 @@ size_t AppearanceMlp::ScratchFloats() const {
   return C * (fd_pad_ + in_stride_ + 2 * hid_pad_ + kOutPad) + 3 * C * pe + 4 * P + 64;
 }
 
+void AppearanceMlp::ShColour(int n, const float* feat, const float* viewdirs, float* rgb) const {
+  const int degree = config_.sh_degree();
+  const int K = (degree + 1) * (degree + 1);
+  const float* b3 = weights_ + o_b3_;
+  float y[kMaxShFunctions];
+  for (int r = 0; r < n; ++r) {
+    ShBasis(viewdirs + static_cast<size_t>(r) * 3, degree, y);
+    const float* f = feat + static_cast<size_t>(r) * fd_pad_;
+    for (int c = 0; c < 3; ++c) {
+      float z = b3[c];
+      for (int k = 0; k < K; ++k) z += y[k] * f[c * K + k];
+      rgb[static_cast<size_t>(r) * 3 + c] = 1.f / (1.f + std::exp(-z));
+    }
+  }
+}
+
 uint64_t AppearanceMlp::Infer(int rows, const float* products, size_t products_stride,
                               const float* viewdirs, float* rgb, float* scratch) const {
   uint64_t wide = 0;  // encoding arguments past the fast sin/cos range
@@ -279,6 +303,10 @@ uint64_t AppearanceMlp::Infer(int rows, const float* products, size_t products_s
         y[q] = feat + static_cast<size_t>(r + q) * fd_pad_;
       }
       gemm8_(x, nullptr, P, weights_ + o_basis_, fd_pad_, wz, fd_pad_, false, y);
+    }
+    if (H == 0) {
+      ShColour(n, feat, viewdirs + static_cast<size_t>(r0) * 3, rgb + static_cast<size_t>(r0) * 3);
+      continue;
     }
     // PE arguments for the whole chunk, one vectorised sin/cos pass.
     for (int r = 0; r < n8; ++r) {

@@ -3,7 +3,8 @@
 //
 // products (P) -> basis [F x P, no bias] -> features (F)
 // -> input [features F, viewdir 3, PE(features, Ff), PE(viewdir, Fv)]
-// -> Linear(hidden) ReLU -> Linear(hidden) ReLU -> Linear(3) -> sigmoid.
+// -> Linear(hidden) ReLU -> Linear(hidden) ReLU -> Linear(3) -> sigmoid;
+// with hidden 0, features = spherical-harmonics coefficients -> + b3 -> sigmoid (SPEC.md 7.6.2).
 // PE(x, Fr): arguments x_c * 2^f ordered c-major, then all sines, then all cosines.
 // Widths come from MlpConfig (read from the scene), not constants.
 //
@@ -19,6 +20,7 @@
 #include <cstdlib>
 
 #include "decoder/mlp_gemm.h"
+#include "format/scene_header.h"
 #include "format/status.h"
 
 namespace ecrf {
@@ -30,6 +32,9 @@ struct MlpConfig {
   int feature_pe_freqs = 2;
   int viewdir_pe_freqs = 2;
   int hidden = 128;
+  // hidden 0: no MLP, the features are spherical-harmonics coefficients (SPEC.md 7.6.2) of this
+  // degree (-1: feature_dim fits none).
+  int sh_degree() const { return ShDegreeForFeatureDim(feature_dim); }
   int input_dim() const {
     return feature_dim + 3 + 2 * feature_dim * feature_pe_freqs + 2 * 3 * viewdir_pe_freqs;
   }
@@ -81,6 +86,8 @@ class AppearanceMlp {
 
  private:
   void Release();
+  // hidden 0: rgb of n rows of features (stride fd_pad_) by the spherical harmonics of 7.6.2.
+  void ShColour(int n, const float* feat, const float* viewdirs, float* rgb) const;
   MlpConfig config_;
   int fd_pad_ = 0, hid_pad_ = 0, in_dim_ = 0, in_stride_ = 0;
   // One allocation: basis_t [P x fd_pad], w1_t [in x hid_pad], b1 [hid_pad], w2_t [H x hid_pad],

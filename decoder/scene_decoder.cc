@@ -453,6 +453,10 @@ Status DecodeHeadChunk(const ChunkView& chunk, const DecodeOptions& options, Mem
                        "HEAD: scene_model %u needs version_minor >= %d, the stream says %u "
                        "(SPEC.md 2.1)",
                        h.scene_model, model_minor, info.version_minor);
+  ECRF_CHECK_OR_RETURN(h.hidden != 0 || info.version_minor >= kShColourMinVersionMinor, kErrCorrupt,
+                       "HEAD: hidden 0 (spherical-harmonics colour) needs version_minor >= %d, "
+                       "the stream says %u (SPEC.md 2.1)",
+                       kShColourMinVersionMinor, info.version_minor);
   // The 16-bit conversion holds both copies for a moment.
   const uint64_t grid_bytes = SceneGridValues(h) * (options.storage == GridStorage::kInt16 ? 6 : 4);
   ECRF_RETURN_IF_ERROR(budget.Take(grid_bytes, "HEAD: the grids"));

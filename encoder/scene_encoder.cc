@@ -104,11 +104,12 @@ SceneDescription DropComponents(const SceneDescription& in, const std::vector<ui
 }
 
 // The lowest minor version of the features used, wide contexts aside: 1.1 for the quantized MLP,
-// 1.2 unbounded, 1.3 forward-facing.
+// 1.2 unbounded, 1.3 forward-facing, 1.6 deferred, 1.7 spherical harmonics.
 uint8_t FeatureVersionMinor(const SceneDescription& s, const EncodeOptions& o) {
   return std::max({o.mlp_max_level > 0 ? kQuantizedMlpMinVersionMinor : uint8_t{0},
                    kSceneModelMinVersionMinor[s.header.scene_model],
-                   kHeadKindMinVersionMinor[static_cast<int>(s.head)]});
+                   kHeadKindMinVersionMinor[static_cast<int>(s.head)],
+                   s.header.hidden == 0 ? kShColourMinVersionMinor : uint8_t{0}});
 }
 
 // The shortest of the codes of `sets` (in order; the first wins ties) whose minimum version the

@@ -74,8 +74,18 @@ Status ParseSceneHeader(const uint8_t* payload, size_t size, SceneHeader* h) {
   ECRF_CHECK_OR_RETURN(
       h->feature_pe_freqs <= kMaxScenePeFreqs && h->viewdir_pe_freqs <= kMaxScenePeFreqs, kErrLimit,
       "HEAD: positional-encoding frequencies exceed %d", kMaxScenePeFreqs);
-  ECRF_CHECK_OR_RETURN(h->hidden >= 1 && h->hidden <= kMaxSceneHidden, kErrLimit,
-                       "HEAD: hidden width %u is outside [1, %d]", h->hidden, kMaxSceneHidden);
+  ECRF_CHECK_OR_RETURN(h->hidden <= kMaxSceneHidden, kErrLimit,
+                       "HEAD: hidden width %u is outside [0, %d]", h->hidden, kMaxSceneHidden);
+  if (h->hidden == 0) {  // spherical-harmonics colour: the basis output is its coefficients
+    ECRF_CHECK_OR_RETURN(ShDegreeForFeatureDim(h->feature_dim) >= 0, kErrCorrupt,
+                         "HEAD: hidden 0 (spherical harmonics) needs feature_dim 3 (D + 1)^2 for a "
+                         "degree D <= %d (3, 12, 27 or 48), not %u",
+                         kMaxShDegree, h->feature_dim);
+    ECRF_CHECK_OR_RETURN(h->feature_pe_freqs == 0 && h->viewdir_pe_freqs == 0, kErrCorrupt,
+                         "HEAD: hidden 0 (spherical harmonics) has no positional encoding, but "
+                         "the frequencies are %u and %u",
+                         h->feature_pe_freqs, h->viewdir_pe_freqs);
+  }
   ECRF_CHECK_OR_RETURN(h->total_rank(1) >= 1, kErrCorrupt,
                        "HEAD: the appearance grid has no component (the MLP needs at least one)");
   ECRF_RETURN_IF_ERROR(r.ReadU8(&h->has_occupancy, "has_occupancy"));

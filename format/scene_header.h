@@ -28,6 +28,18 @@ constexpr uint32_t kMaxSceneSamples = 1u << 20;  // samples per ray
 constexpr int kMaxSceneFeatureDim = 256;
 constexpr int kMaxScenePeFreqs = 16;
 constexpr int kMaxSceneHidden = 1024;
+// hidden = 0: no MLP; the colour is a spherical-harmonics expansion in the view direction of
+// degree 0 to 3 (SPEC.md 7.6.2), whose 3 (D + 1)^2 coefficients are the basis output
+// (feature_dim), channel-major, and which needs version_minor 7 (2.1).
+constexpr int kMaxShDegree = 3;
+constexpr uint8_t kShColourMinVersionMinor = 7;
+// The degree whose coefficients fill feature_dim (3 (D + 1)^2), or -1 when none does.
+inline int ShDegreeForFeatureDim(int feature_dim) {
+  for (int d = 0; d <= kMaxShDegree; ++d) {
+    if (3 * (d + 1) * (d + 1) == feature_dim) return d;
+  }
+  return -1;
+}
 
 constexpr int kNumSceneGrids = 2;        // 0: density, 1: appearance
 constexpr int kTensorsPerSceneGrid = 6;  // planes 0..2, then lines 0..2
@@ -66,7 +78,7 @@ struct SceneHeader {
   uint16_t feature_dim = 27;
   uint8_t feature_pe_freqs = 2;
   uint8_t viewdir_pe_freqs = 2;
-  uint16_t hidden = 128;
+  uint16_t hidden = 128;  // 0: spherical-harmonics colour, no MLP (kMaxShDegree)
   uint8_t has_occupancy = 0;
   // 0: object (the box is the scene); 1: unbounded (the box is the region of interest of a
   // contracted scene, SPEC.md 7.2.1; streams of version 1.2); 2: forward-facing (the box is in

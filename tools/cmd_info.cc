@@ -109,9 +109,13 @@ int RunInfo(int argc, char** argv) {
   std::printf("render   %u samples/ray, step %g, near %g, far %g, background %g %g %g\n",
               h.num_samples, h.step_size, h.near_far[0], h.near_far[1], h.background[0],
               h.background[1], h.background[2]);
-  // The head: where the MLP runs (SPEC.md 7.6), mlp per coloured sample, deferred per ray.
-  std::printf("mlp      %s head, features %u, PE %u/%u, hidden %u, %s\n", HeadKindName(in.head),
-              h.feature_dim, h.feature_pe_freqs, h.viewdir_pe_freqs, h.hidden,
+  // The head: where the MLP runs (SPEC.md 7.6), mlp per coloured sample, deferred per ray; sh
+  // spherical harmonics in place of the MLP (hidden 0, 7.6.2).
+  const std::string sh_degree =
+      h.hidden == 0 ? " (degree " + std::to_string(ShDegreeForFeatureDim(h.feature_dim)) + ")" : "";
+  std::printf("mlp      %s head%s, features %u, PE %u/%u, hidden %u, %s\n",
+              AppearanceName(in.head, h.hidden), sh_degree.c_str(), h.feature_dim,
+              h.feature_pe_freqs, h.viewdir_pe_freqs, h.hidden,
               in.mlp_precision_bits == 16   ? "float16"
               : in.mlp_precision_bits == 32 ? "float32"
                                             : "quantized (levels x row steps)");

@@ -516,8 +516,9 @@ int RunEval(int argc, char** argv) {
       c.scene.c_str(), s.bytes.size(), r.psnr, r.ssim, r.views, split.c_str(), r.width, r.height,
       r.fitted_columns > 0 ? (" (" + trainer::HeldOutScoring(r, false) + ")").c_str() : "",
       1e3 * s.decode_seconds, 1e3 * r.seconds_per_view, RenderThreads(c),
-      RenderThreads(c) == 1 ? "" : "s", c.int16 ? "int16" : "float32", HeadKindName(s.info.head),
-      r.samples_per_ray, r.color_samples_per_ray, r.work_per_pixel / 1e3);
+      RenderThreads(c) == 1 ? "" : "s", c.int16 ? "int16" : "float32",
+      AppearanceName(s.info.head, s.info.header.hidden), r.samples_per_ray, r.color_samples_per_ray,
+      r.work_per_pixel / 1e3);
   if (!json_path.empty()) {
     nlohmann::json j = {{"scene", c.scene},
                         {"bytes", s.bytes.size()},
@@ -536,7 +537,7 @@ int RunEval(int argc, char** argv) {
                         {"samples_per_ray", r.samples_per_ray},
                         {"mlp_samples_per_ray", r.color_samples_per_ray},  // coloured
                         {"work_per_pixel", r.work_per_pixel},
-                        {"head", HeadKindName(s.info.head)},
+                        {"head", AppearanceName(s.info.head, s.info.header.hidden)},
                         {"render_options",
                          {{"skip_empty_space", c.render.skip_empty_space},
                           {"early_stop_transmittance", c.render.early_stop_transmittance},

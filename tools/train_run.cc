@@ -234,8 +234,8 @@ void PrintRunSummary(const trainer::TrainOptions& o, const trainer::TrainResult&
       o.out_dir.c_str(), coded.decoded.bytes.size(),
       double(float_bytes) / coded.decoded.bytes.size(), d.psnr, versus.c_str(), d.ssim, d.views,
       scoring.c_str(), 1e3 * coded.decoded.decode_seconds, 1e3 * d.seconds_per_view,
-      HeadKindName(coded.decoded.info.head), d.samples_per_ray, d.color_samples_per_ray,
-      d.work_per_pixel / 1e3);
+      AppearanceName(coded.decoded.info.head, coded.decoded.info.header.hidden), d.samples_per_ray,
+      d.color_samples_per_ray, d.work_per_pixel / 1e3);
   if (coded.as_given.views > 0) {
     std::printf(
         "decoded file, whole views with unaligned held-out cameras at the file's exposure: test "
@@ -356,7 +356,7 @@ void AddCodedMetrics(const CodedRun& coded, const trainer::TrainResult& r, size_
   (*m)["decoded_samples_per_ray"] = d.samples_per_ray;
   (*m)["decoded_mlp_samples_per_ray"] = d.color_samples_per_ray;  // coloured samples
   (*m)["decoded_work_per_pixel"] = d.work_per_pixel;
-  (*m)["head"] = HeadKindName(coded.decoded.info.head);
+  (*m)["head"] = AppearanceName(coded.decoded.info.head, coded.decoded.info.header.hidden);
   (*m)["encode_seconds"] = coded.encode_seconds;
   (*m)["encode"] = EncodeReportJson(coded.report);
   (*m)["coded_to_estimated_grid_bytes"] =

@@ -104,7 +104,7 @@
                     w2: layer(H, H, W2, null, H4), w3: layer(3, H, W3, null, H4)};
     const padBias = (b, n4) => { const o = new Float32Array(4 * n4); o.set(b); return o; };
     return {F4, H4, IN4, FF: Ff, FV: Fv, layers, blocks: blocks.map((b) => new Float32Array(b)),
-            b1: padBias(b1, H4), b2: padBias(b2, H4), b3: padBias(b3, 1)};
+            b1: padBias(b1, Math.max(H4, 1)), b2: padBias(b2, Math.max(H4, 1)), b3: padBias(b3, 1)};
   }
 
   class GpuRenderer {
@@ -344,7 +344,7 @@
       }
       gl.bindBuffer(gl.UNIFORM_BUFFER, null);
       s.cfg = {dGroups, aGroups, aGroupOff, dLineRow: dl.rowsOf, aLineRow: al.rowsOf, P4,
-               F4: mlp.F4, H4: mlp.H4, IN4: mlp.IN4, FF: mlp.FF, FV: mlp.FV, occupancy: !!occupancy, model, head,
+               F4: mlp.F4, H4: mlp.H4, IN4: mlp.IN4, FF: mlp.FF, FV: mlp.FV, features: field.mlp.features, occupancy: !!occupancy, model, head,
                blockLevels: BLOCK_LEVELS, weightTexture, blockSizes: mlp.blocks.map((b) => b.length / 4), layers: mlp.layers};
       s.mlp = mlp;
       s.info = info;

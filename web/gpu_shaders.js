@@ -60,6 +60,7 @@ void main() {
   // q, cos); gpu_renderer.js permutes W1's columns to match and zeroes the padding lanes.
   function emitMlp(cfg, pr) {
     const {P4, F4, H4, FF, FV} = cfg;
+    if (H4 === 0) return emitSh(cfg, pr);
     const IN4 = cfg.IN4;
     let s = `  vec4 fe[${F4}], h[${H4}], g[${H4}], o[1];\n`;
     s += emitLayer(cfg.layers.basis, P4, (k) => `${pr}[${k}]`, 'fe', null, false, cfg.weightTexture);
@@ -77,6 +78,36 @@ void main() {
     s += emitLayer(cfg.layers.w2, H4, (j) => `h[${j}]`, 'g', 'uB2', true, cfg.weightTexture);
     s += emitLayer(cfg.layers.w3, H4, (j) => `g[${j}]`, 'o', 'uB3', false, cfg.weightTexture);
     return s + `  rgb = 1.0 / (1.0 + exp(-o[0].xyz));\n`;
+  }
+
+  // The spherical-harmonics colour of SPEC 7.6.2 (hidden 0): the basis, then per channel c the
+  // sigmoid of b3[c] + sum_k Y_k(d) feature[c K + k], the degree's K = F / 3 functions of d.
+  const SH_BASIS = [
+    '0.28209479177387814', '-0.4886025119029199 * d.y', '0.4886025119029199 * d.z',
+    '-0.4886025119029199 * d.x', '1.0925484305920792 * xy', '-1.0925484305920792 * yz',
+    '0.31539156525252005 * ((2.0 * zz - xx) - yy)', '-1.0925484305920792 * xz',
+    '0.5462742152960396 * (xx - yy)', '(-0.5900435899266435 * d.y) * (3.0 * xx - yy)',
+    '(2.890611442640554 * xy) * d.z', '(-0.4570457994644658 * d.y) * ((4.0 * zz - xx) - yy)',
+    '(0.3731763325901154 * d.z) * ((2.0 * zz - 3.0 * xx) - 3.0 * yy)',
+    '(-0.4570457994644658 * d.x) * ((4.0 * zz - xx) - yy)', '(1.445305721320277 * d.z) * (xx - yy)',
+    '(-0.5900435899266435 * d.x) * (xx - 3.0 * yy)'];
+  function emitSh(cfg, pr) {
+    const {P4, F4} = cfg;
+    const K = cfg.features / 3;
+    // In a block of its own: its names must not clash with the marching loop's around it.
+    let s = `  {\n  vec4 fe[${F4}];\n`;
+    s += emitLayer(cfg.layers.basis, P4, (k) => `${pr}[${k}]`, 'fe', null, false, cfg.weightTexture);
+    s += '  float xx = d.x * d.x, yy = d.y * d.y, zz = d.z * d.z, xy = d.x * d.y, yz = d.y * d.z, xz = d.x * d.z;\n';
+    s += `  float sh[${K}];\n`;
+    for (let k = 0; k < K; ++k) s += `  sh[${k}] = ${SH_BASIS[k]};\n`;
+    s += '  vec3 z = uB3[0].xyz;\n';
+    for (let c = 0; c < 3; ++c) {
+      for (let k = 0; k < K; ++k) {
+        const i = c * K + k;
+        s += `  z[${c}] += sh[${k}] * fe[${i >> 2}][${i & 3}];\n`;
+      }
+    }
+    return s + '  rgb = 1.0 / (1.0 + exp(-z));\n  }\n';
   }
 
   // cfg: {dGroups[3], aGroups[3] (rank groups of 4 per mode), aGroupOff[3], dLineRow[3], aLineRow[3]
@@ -104,7 +135,7 @@ precision highp usampler3D;
     s += `uniform sampler2DArray uDP0, uDP1, uDP2, uAP0, uAP1, uAP2;
 uniform sampler2D uDL, uAL, uCam;
 uniform usampler3D uOcc, uBlk0, uBlk1;
-uniform vec4 uB1[${H4}], uB2[${H4}], uB3[1];
+uniform vec4 uB1[${Math.max(H4, 1)}], uB2[${Math.max(H4, 1)}], uB3[1];
 uniform vec3 uC2W0, uC2W1, uC2W2, uOrigin;   // columns of c2w[:3,:3], and c2w[:3,3]
 uniform vec3 uMin, uMax, uInv, uRes1, uBg;
 uniform ivec3 uRes;

@@ -153,7 +153,7 @@ typedef struct ecrf_scene_field {
   float occupancy_min[3], occupancy_max[3]; /* the mask's own box (has_occupancy) */
   int mlp_features;                         /* F: rows of the basis B */
   int mlp_products;      /* P: appearance products, the sum of the appearance ranks */
-  int mlp_hidden;        /* H */
+  int mlp_hidden;        /* H; 0: no MLP, spherical-harmonics colour (SPEC.md 7.6.2) */
   int mlp_feature_freqs; /* Ff */
   int mlp_viewdir_freqs; /* Fv */
   int mlp_inputs;        /* In = F + 3 + 2 F Ff + 6 Fv */

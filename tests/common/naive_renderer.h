@@ -196,6 +196,35 @@ inline void NaiveMlp(const MlpConfig& cfg, const std::vector<float>& params,
   std::vector<double> feat(F, 0.0);
   for (int j = 0; j < F; ++j)
     for (int k = 0; k < P; ++k) feat[j] += double(params[size_t(j) * P + k]) * prod[k];
+  if (H == 0) {  // spherical harmonics (7.6.2): the real basis, as Plenoxels and 3DGS sign it
+    const double X = vd[0], Y = vd[1], Z = vd[2], pi = 3.14159265358979323846;
+    const double c1 = std::sqrt(3 / (4 * pi)), c2 = std::sqrt(15 / pi) / 2,
+                 c3 = std::sqrt(35 / (2 * pi)) / 4, c4 = std::sqrt(105 / pi) / 2,
+                 c5 = std::sqrt(21 / (2 * pi)) / 4;
+    const double basis[16] = {0.5 / std::sqrt(pi),
+                              -c1 * Y,
+                              c1 * Z,
+                              -c1 * X,
+                              c2 * X * Y,
+                              -c2 * Y * Z,
+                              std::sqrt(5 / pi) / 4 * (3 * Z * Z - 1),
+                              -c2 * X * Z,
+                              c2 / 2 * (X * X - Y * Y),
+                              -c3 * Y * (3 * X * X - Y * Y),
+                              c4 * X * Y * Z,
+                              -c5 * Y * (5 * Z * Z - 1),
+                              std::sqrt(7 / pi) / 4 * Z * (5 * Z * Z - 3),
+                              -c5 * X * (5 * Z * Z - 1),
+                              c4 / 2 * Z * (X * X - Y * Y),
+                              -c3 * X * (X * X - 3 * Y * Y)};
+    const int K = F / 3;
+    for (int c = 0; c < 3; ++c) {
+      double z = params[size_t(F) * P + c];  // b3: the only parameter after the basis
+      for (int k = 0; k < K; ++k) z += basis[k] * feat[size_t(c) * K + k];
+      rgb[c] = 1.0 / (1.0 + std::exp(-z));
+    }
+    return;
+  }
   std::vector<double> x(feat);
   for (int c = 0; c < 3; ++c) x.push_back(vd[c]);
   auto pe = [&](const std::vector<double>& v, int freqs) {

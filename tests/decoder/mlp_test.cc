@@ -278,8 +278,10 @@ TEST(MlpTest, RejectsBadConfigAndParams) {
   AppearanceMlp mlp;
   MlpConfig cfg;
   cfg.num_products = 10;
-  cfg.hidden = 0;
+  cfg.hidden = -1;
   EXPECT_EQ(mlp.Init(cfg).code(), kErrLimit);
+  cfg.hidden = 0;  // spherical harmonics: 27 features suit degree 2, the encodings do not
+  EXPECT_EQ(mlp.Init(cfg).code(), kErrInvalidArgument);
   cfg.hidden = kMaxMlpHidden + 1;
   EXPECT_EQ(mlp.Init(cfg).code(), kErrLimit);
   cfg.hidden = 8;

@@ -129,7 +129,16 @@ TEST(SceneHeader, RejectsInvalidFields) {
       {"no samples", [](SceneHeader* h) { h->num_samples = 0; }, kErrLimit},
       {"near > far", [](SceneHeader* h) { h->near_far[0] = 7.f; }, kErrCorrupt},
       {"background 2", [](SceneHeader* h) { h->background[0] = 2.f; }, kErrCorrupt},
-      {"hidden 0", [](SceneHeader* h) { h->hidden = 0; }, kErrLimit},
+      {"hidden 1025", [](SceneHeader* h) { h->hidden = 1025; }, kErrLimit},
+      // hidden 0 is the spherical-harmonics colour: 3 (D + 1)^2 features, no encoding (6.2).
+      {"hidden 0, 27 features with encodings", [](SceneHeader* h) { h->hidden = 0; }, kErrCorrupt},
+      {"hidden 0, 26 features",
+       [](SceneHeader* h) {
+         h->hidden = 0;
+         h->feature_dim = 26;
+         h->feature_pe_freqs = h->viewdir_pe_freqs = 0;
+       },
+       kErrCorrupt},
       {"pe 17", [](SceneHeader* h) { h->viewdir_pe_freqs = 17; }, kErrLimit},
       {"occupancy 2", [](SceneHeader* h) { h->has_occupancy = 2; }, kErrCorrupt},
   };

@@ -107,10 +107,10 @@ class DecodeTest(unittest.TestCase):
 
     def test_versions_read_as_the_cli_prints_them(self):
         # One version story (#61): the library's version, and bitstream major.minor as
-        # `ecrf --version` prints it ("reads bitstream 1.0 to 1.6").
+        # `ecrf --version` prints it ("reads bitstream 1.0 to 1.7").
         self.assertRegex(ecrf.__version__, r"^\d+\.\d+\.\d+$")
         self.assertEqual(ecrf.bitstream_version, 1)
-        self.assertGreaterEqual(ecrf.bitstream_version_minor, 6)
+        self.assertGreaterEqual(ecrf.bitstream_version_minor, 7)
 
     def test_views_keep_the_scene_alive(self):
         plane = ecrf.decode(SCENE).tensor(1, 0)
@@ -168,18 +168,23 @@ class RenderTest(unittest.TestCase):
         # An object scene, an unbounded one (SPEC.md 7.2.1), a forward-facing one (7.2.2) and
         # one with the deferred head (7.6).
         for name, model in (("scene_builtin", "object"), ("scene_unbounded", "unbounded"),
-                            ("scene_forward", "forward"), ("scene_deferred_head", "object")):
+                            ("scene_forward", "forward"), ("scene_deferred_head", "object"),
+                            ("scene_sh_deferred", "object")):
             with self.subTest(name):
                 _, c2w, (fx, fy, cx, cy), width, height = manifest_camera(name + ".ecrf")
                 reference = read_png(os.path.join(CONFORMANCE, name + ".png"))[:, :, :3].astype(int)
                 scene = ecrf.decode(os.path.join(CONFORMANCE, name + ".ecrf"))
                 self.assertEqual(scene.info["scene_model"], model)
                 self.assertEqual(scene.info["head"],
-                                 "deferred" if name == "scene_deferred_head" else "mlp")
+                                 "mlp" if name in ("scene_builtin", "scene_unbounded",
+                                                   "scene_forward") else "deferred")
+                # Hidden width 0: spherical-harmonics colour, no MLP (SPEC.md 7.6.2).
+                self.assertEqual(scene.field["mlp_hidden"] == 0, name == "scene_sh_deferred")
                 # The file header's version (SPEC.md 2.1), as `ecrf info` prints it.
                 self.assertEqual(scene.info["version"],
                                  {"scene_builtin": "1.0", "scene_unbounded": "1.2",
-                                  "scene_forward": "1.3", "scene_deferred_head": "1.6"}[name])
+                                  "scene_forward": "1.3", "scene_deferred_head": "1.6",
+                                  "scene_sh_deferred": "1.7"}[name])
                 self.assertEqual("ndc_near_plane" in scene.info, model == "forward")
                 if model == "forward":
                     self.assertEqual(scene.info["ndc_near_plane"], 1.5)  # the vector's NDCP chunk

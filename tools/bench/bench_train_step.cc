@@ -175,11 +175,10 @@ void AddTrainStepBenchFlags(CLI::App* app, TrainStepBenchFlags* f) {
       ->check(CLI::Range(0.0f, 10.0f))
       ->capture_default_str();
   app->add_option("--head", f->head,
-                  "the appearance head: mlp (per coloured sample) or deferred (per ray), as ecrf "
-                  "train --head")
+                  "the appearance head: mlp (per coloured sample), deferred (per ray) or sh "
+                  "(per ray, spherical harmonics), as ecrf train --head")
       ->type_name("NAME")
-      ->check(CLI::IsMember(
-          std::vector<std::string>(std::begin(kHeadKindNames), std::end(kHeadKindNames))))
+      ->check(CLI::IsMember(std::vector<std::string>{kHeadKindNames[0], kHeadKindNames[1], "sh"}))
       ->capture_default_str();
   app->add_option("--early-stop", f->early, "early_stop_transmittance of the ray marching")
       ->type_name("T")
@@ -218,6 +217,14 @@ TensorfConfig BenchModelConfig(const TrainStepBenchFlags& f) {
   config.early_stop_transmittance = f.early;
   for (int k = 0; k < kNumHeadKinds; ++k) {
     if (f.head == kHeadKindNames[k]) config.head.kind = static_cast<HeadKind>(k);
+  }
+  if (f.head == "sh") {  // as ecrf train --head sh at its default degree: deferred, no MLP
+    const int degree = trainer::TrainOptions().sh_degree;
+    config.head.kind = HeadKind::kDeferred;
+    config.head.hidden = 0;
+    config.head.feature_dim = 3 * (degree + 1) * (degree + 1);
+    config.head.feature_pe_freqs = 0;
+    config.head.viewdir_pe_freqs = 0;
   }
   return config;
 }

@@ -10,6 +10,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "decoder/sh_basis.h"
+#include "format/scene_header.h"
 #include "trainer/model/positional_encoding.h"
 #include "trainer/model/small_gemm.h"
 
@@ -129,6 +131,35 @@ TransposedWeights TransposeWeights(const Dims& d, const Params& w, std::vector<f
   return TransposedWeights{dst[0], dst[1], dst[2], dst[3]};
 }
 
+// hidden 0 (SPEC.md 7.6.2): rgb[c] = sigmoid(b3[c] + sum_k Y_k(d) x[c K + k]) over the m rows of x
+// (stride d.in; the features first, then the view direction), as the decoder evaluates it.
+void ShForwardRows(const Dims& d, const float* b3, int m, const float* x, float* rgb) {
+  const int degree = ShDegreeForFeatureDim(d.f), K = (degree + 1) * (degree + 1);
+  float y[kMaxShFunctions];
+  for (int r = 0; r < m; ++r) {
+    const float* xr = x + static_cast<size_t>(r) * d.in;
+    ShBasis(xr + d.f, degree, y);
+    for (int c = 0; c < kRgb; ++c) {
+      float z = b3[c];
+      for (int k = 0; k < K; ++k) z += y[k] * xr[c * K + k];
+      rgb[r * kRgb + c] = 1.0f / (1.0f + std::exp(-z));
+    }
+  }
+}
+
+// Its backward: dfeat[r][c K + k] = dz[r][c] Y_k(d).
+void ShBackwardRows(const Dims& d, int m, const float* x, const float* dz, float* dfeat) {
+  const int degree = ShDegreeForFeatureDim(d.f), K = (degree + 1) * (degree + 1);
+  float y[kMaxShFunctions];
+  for (int r = 0; r < m; ++r) {
+    ShBasis(x + static_cast<size_t>(r) * d.in + d.f, degree, y);
+    float* df = dfeat + static_cast<size_t>(r) * d.f;
+    for (int c = 0; c < kRgb; ++c) {
+      for (int k = 0; k < K; ++k) df[c * K + k] = dz[r * kRgb + c] * y[k];
+    }
+  }
+}
+
 // Runs the forward pass of rows [0, m) of a chunk. x: m x in (written), h1/h2: m x h (written),
 // rgb: m x 3 (written). pe_tmp: pe_tmp_per_row() * m floats.
 void ForwardChunk(const Dims& d, const Params& w, const TransposedWeights& wt, int m,
@@ -142,6 +173,10 @@ void ForwardChunk(const Dims& d, const Params& w, const TransposedWeights& wt, i
     xr[0] = v[0];
     xr[1] = v[1];
     xr[2] = v[2];
+  }
+  if (d.h == 0) {
+    ShForwardRows(d, w.b3, m, x, rgb);
+    return;
   }
   PositionalEncodingRows(x, d.in, m, d.f, d.ff, x + d.pe_feat_offset(), d.in, pe_tmp);
   PositionalEncodingRows(x + d.f, d.in, m, kViewDim, d.fv, x + d.pe_view_offset(), d.in, pe_tmp);
@@ -173,9 +208,15 @@ struct AppearanceHead::Activations {
 };
 
 AppearanceHead::AppearanceHead(const AppearanceHeadConfig& config) : config_(config) {
-  if (config.num_products <= 0 || config.feature_dim <= 0 || config.hidden <= 0 ||
+  if (config.num_products <= 0 || config.feature_dim <= 0 || config.hidden < 0 ||
       config.feature_pe_freqs < 0 || config.viewdir_pe_freqs < 0) {
     throw std::invalid_argument("AppearanceHead: bad config");
+  }
+  if (config.hidden == 0 && (ShDegreeForFeatureDim(config.feature_dim) < 0 ||
+                             config.feature_pe_freqs != 0 || config.viewdir_pe_freqs != 0)) {
+    throw std::invalid_argument(
+        "AppearanceHead: hidden 0 (spherical harmonics) needs feature_dim 3, 12, 27 or 48 and no "
+        "positional encoding");
   }
   params_.assign(b3_offset() + kRgb, 0.0f);
   grads_.assign(params_.size(), 0.0f);
@@ -430,26 +471,30 @@ void AppearanceHead::Backward(int n, const float* dl_drgb, float* dl_dproducts) 
     for (int r = 0; r < m; ++r) {
       for (int j = 0; j < kRgb; ++j) g_b3[j] += dz3[r * kRgb + j];
     }
-    // Weight gradients are (dL/dout)^T @ in: SmallGemm reads the transpose through a_row = 1.
-    SmallGemm(kRgb, d.h, m, dz3, 1, kRgb, h2, d.h, g_w3, d.h, true);
-    // Layer 2.
-    SmallGemm(m, d.h, kRgb, dz3, kRgb, 1, w3, d.h, da, d.h, false);
-    ReluBackwardColSum(da, h2, m, d.h, g_b2);
-    SmallGemm(d.h, d.h, m, da, 1, d.h, h1, d.h, g_w2, d.h, true);
-    // Layer 1.
-    SmallGemm(m, d.h, d.h, da, d.h, 1, w2, d.h, db, d.h, false);
-    ReluBackwardColSum(db, h1, m, d.h, g_b1);
-    SmallGemm(d.h, d.in, m, db, 1, d.h, x, d.in, g_w1, d.in, true);
-    // dL/dx only for the columns that depend on the features (the view-direction PE columns
-    // at the end have no gradient path).
-    SmallGemm(m, d.pe_view_offset(), d.h, db, d.h, 1, w1, d.in, dx, d.in, false);
-    // Features: direct input plus their positional encoding.
-    for (int r = 0; r < m; ++r) {
-      const float* dxr = dx + static_cast<size_t>(r) * d.in;
-      const float* xr = x + static_cast<size_t>(r) * d.in;
-      float* df = dfeat + static_cast<size_t>(r) * d.f;
-      for (int k = 0; k < d.f; ++k) df[k] = dxr[k];
-      PositionalEncodingBackward(xr + d.pe_feat_offset(), dxr + d.pe_feat_offset(), d.f, ff, df);
+    if (d.h == 0) {
+      ShBackwardRows(d, m, x, dz3, dfeat);
+    } else {
+      // Weight gradients are (dL/dout)^T @ in: SmallGemm reads the transpose through a_row = 1.
+      SmallGemm(kRgb, d.h, m, dz3, 1, kRgb, h2, d.h, g_w3, d.h, true);
+      // Layer 2.
+      SmallGemm(m, d.h, kRgb, dz3, kRgb, 1, w3, d.h, da, d.h, false);
+      ReluBackwardColSum(da, h2, m, d.h, g_b2);
+      SmallGemm(d.h, d.h, m, da, 1, d.h, h1, d.h, g_w2, d.h, true);
+      // Layer 1.
+      SmallGemm(m, d.h, d.h, da, d.h, 1, w2, d.h, db, d.h, false);
+      ReluBackwardColSum(db, h1, m, d.h, g_b1);
+      SmallGemm(d.h, d.in, m, db, 1, d.h, x, d.in, g_w1, d.in, true);
+      // dL/dx only for the columns that depend on the features (the view-direction PE columns
+      // at the end have no gradient path).
+      SmallGemm(m, d.pe_view_offset(), d.h, db, d.h, 1, w1, d.in, dx, d.in, false);
+      // Features: direct input plus their positional encoding.
+      for (int r = 0; r < m; ++r) {
+        const float* dxr = dx + static_cast<size_t>(r) * d.in;
+        const float* xr = x + static_cast<size_t>(r) * d.in;
+        float* df = dfeat + static_cast<size_t>(r) * d.f;
+        for (int k = 0; k < d.f; ++k) df[k] = dxr[k];
+        PositionalEncodingBackward(xr + d.pe_feat_offset(), dxr + d.pe_feat_offset(), d.f, ff, df);
+      }
     }
     // Basis.
     SmallGemm(m, d.p, d.f, dfeat, d.f, 1, basis, d.p, dl_dproducts + r0 * d.p, d.p, false);

@@ -69,6 +69,7 @@ HiddenDecision TestHiddenUnits(const TensorfModel& model, int mlp_levels, double
   HiddenDecision d;
   d.keep1.assign(h, 1);
   d.keep2.assign(h, 1);
+  if (h == 0) return d;  // spherical harmonics: no hidden units
   TensorfModel work = model;
   d.mse = RenderMse(work, n, origins, dirs, rgb, ray_gain);
   std::vector<float> saved;

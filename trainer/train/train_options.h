@@ -42,12 +42,13 @@ struct ChoiceNames<HeadKind> {  // indexed by the MLPW head byte (format/mlp_cod
   static constexpr const char* what = "head";
   static constexpr const char* const (&names)[kNumHeadKinds] = kHeadKindNames;
 };
-// --head: one of the stream's heads, or auto (trainer/train/head_choice.h).
-enum class HeadChoice { kMlp, kDeferred, kAuto };
+// --head: one of the stream's heads; sh, the deferred head with spherical-harmonics colour
+// (HEAD hidden 0, SPEC.md 7.6.2); or auto (trainer/train/head_choice.h).
+enum class HeadChoice { kMlp, kDeferred, kSh, kAuto };
 template <>
 struct ChoiceNames<HeadChoice> {
   static constexpr const char* what = "head";
-  static constexpr const char* names[] = {kHeadKindNames[0], kHeadKindNames[1], "auto"};
+  static constexpr const char* names[] = {kHeadKindNames[0], kHeadKindNames[1], "sh", "auto"};
 };
 // --device-class: a render budget of decoder/render_work.h's table, or none.
 enum class DeviceClassChoice { kNone, kDesktop, kLaptop, kPhone };

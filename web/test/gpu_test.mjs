@@ -1,7 +1,7 @@
 // Browser test of the WebGL2 renderer (web/gpu_renderer.js) in headless chromium
 // (SwiftShader): every scene vector of tests/conformance/manifest.json, all three scene models,
-// rendered at its exact camera against its reference PNG (PSNR >= 40 dB required; the SPEC 7.7
-// pixel criterion reported, and required of the unbounded and forward-facing vectors), empty-space
+// every head (per sample, deferred, spherical harmonics), rendered at its exact camera against its
+// reference PNG (PSNR >= 40 dB and the SPEC 7.7 pixel criterion required), empty-space
 // skipping in contracted and NDC space (byte-identical), the viewer's GPU path for both, a
 // larger orbit view of scene_builtin against the WebAssembly CPU renderer (>= 40 dB), the
 // deferred-shading option, the limit errors, and no console errors.
@@ -34,9 +34,10 @@ try {
     const r = await page.evaluate(([u, c]) => gpuTest.gpu(u, c, {earlyStop: 0}), [`../../${conf}${v.file}`, camera]);
     const c = compare(fromBase64(r.pixels), ref, camera.width, camera.height);
     const meets77 = c.within2 >= 0.99;
-    // The unbounded (7.2.1) and forward-facing (7.2.2) vectors must also meet the 7.7 criterion.
+    // Every vector, every scene model and head, meets the 7.7 criterion (a flipped sign in the
+    // harmonics of 7.6.2 still gave 42 dB on scene_sh_per_sample, but 698 pixels off by > 2).
     const model = v.scene_model || 'object';
-    check(c.psnr >= 40 && (model === 'object' || meets77), `${v.file} (${model}): PSNR ${fmtPsnr(c.psnr)} dB, max diff ${c.maxDiff}, ${c.over2}/${c.pixels} ` +
+    check(c.psnr >= 40 && meets77, `${v.file} (${model}): PSNR ${fmtPsnr(c.psnr)} dB, max diff ${c.maxDiff}, ${c.over2}/${c.pixels} ` +
           `pixels differ by > 2 (7.7 ${meets77 ? 'met' : 'NOT met'})`);
   }
   // Empty-space skipping in the contracted cube (7.2.1) and along the NDC line (7.2.2): the

@@ -78,6 +78,50 @@ TEST(DeferredHead, StreamIsVersion16AndTheDecoderRendersWhatTheTrainerRenders) {
   EXPECT_GT(cross.worst, 0.02f);
 }
 
+// hidden 0: spherical-harmonics colour (SPEC.md 7.6.2), a 1.7 feature, with either head; the
+// decoder renders what the trainer renders, with float and with quantized weights.
+TEST(DeferredHead, ShColourStreamIsVersion17AndRendersAsTheTrainer) {
+  for (const HeadKind kind : {HeadKind::kDeferred, HeadKind::kPerSample}) {
+    SCOPED_TRACE(HeadKindName(kind));
+    TensorfConfig c = testing_models::SmallTensorfConfig();
+    c.head.kind = kind;
+    c.head.hidden = 0;
+    c.head.feature_dim = 27;
+    c.head.feature_pe_freqs = 0;
+    c.head.viewdir_pe_freqs = 0;
+    c.white_background = true;
+    TensorfModel model(c);
+    model.Initialize({12, 11, 10}, 9);
+    for (float& w : model.head().params()) w *= 6.f;
+    model.UpdateAlphaMask({9, 8, 9});
+    for (const bool quantized : {false, true}) {
+      encoder::EncodeOptions o = FloatMlpOptions();
+      if (quantized) o.mlp_max_level = 127;  // precision 2, as ecrf encodes by default
+      o.drop_zero_components = false;
+      const std::vector<uint8_t> bytes = EncodeScene(model, o);
+      EXPECT_EQ(bytes[5], 7);  // version_minor
+      const dec::SceneField field = DecodeOrDie(bytes);
+      ASSERT_EQ(field.mlp.config().hidden, 0);
+      ASSERT_EQ(field.head, kind);
+      TensorfModel decoded = model;
+      LoadDecodedGrids(field, &decoded);
+      if (quantized) {  // the decoder's weights, so that both render one field
+        ASSERT_TRUE(
+            field.mlp.GetParams(decoded.head().params().data(), decoded.head().params().size())
+                .ok());
+      }
+      std::vector<float> origins, dirs;
+      SphereRays(300, &origins, &dirs);
+      const RendererAgreement r = RenderBothWays(decoded, field, origins, dirs);
+      EXPECT_LT(r.worst, 2e-3f) << "quantized " << quantized;
+      EXPECT_GT(r.spread, 0.05f);
+    }
+    encoder::EncodeOptions o = FloatMlpOptions();
+    o.max_version_minor = 6;
+    EXPECT_THROW(EncodeScene(model, o), std::invalid_argument);
+  }
+}
+
 TEST(DeferredHead, EncoderRefusesAStreamVersionWithoutIt) {
   const TensorfModel model = SmallDeferredModel(6);
   encoder::EncodeOptions o = FloatMlpOptions();
