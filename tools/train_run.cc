@@ -275,19 +275,21 @@ nlohmann::json TrainingMetrics(const trainer::TrainOptions& o, const trainer::Tr
     const trainer::HeadChoiceReport& h = r.head_choice;
     nlohmann::json candidates = nlohmann::json::array();
     for (const trainer::RenderCandidate& c : h.candidates) {
-      candidates.push_back({{"head", HeadKindName(c.head)},
+      candidates.push_back({{"head", c.sh_degree >= 0 ? "sh" : HeadKindName(c.head)},
+                            {"sh_degree", c.sh_degree},
                             {"step_ratio", c.step_ratio},
                             {"samples_per_ray", c.counts.samples},
                             {"coloured_samples_per_ray", c.counts.coloured},
                             {"coloured_ray_share", c.counts.coloured_rays},
                             {"predicted_work_per_pixel", c.work}});
     }
-    m["head_choice"] = {{"iteration", h.iteration},
-                        {"render_budget", h.budget},
-                        {"candidates", candidates},
-                        {"chosen", HeadKindName(h.choice().head)},
-                        {"step_ratio", h.choice().step_ratio},
-                        {"reason", h.reason}};
+    m["head_choice"] = {
+        {"iteration", h.iteration},
+        {"render_budget", h.budget},
+        {"candidates", candidates},
+        {"chosen", h.choice().sh_degree >= 0 ? "sh" : HeadKindName(h.choice().head)},
+        {"step_ratio", h.choice().step_ratio},
+        {"reason", h.reason}};
   }
   m["step_ratio"] = model.config().step_ratio;
   m["prune_at"] = o.prune_at;

@@ -219,12 +219,8 @@ TensorfConfig BenchModelConfig(const TrainStepBenchFlags& f) {
     if (f.head == kHeadKindNames[k]) config.head.kind = static_cast<HeadKind>(k);
   }
   if (f.head == "sh") {  // as ecrf train --head sh at its default degree: deferred, no MLP
-    const int degree = trainer::TrainOptions().sh_degree;
     config.head.kind = HeadKind::kDeferred;
-    config.head.hidden = 0;
-    config.head.feature_dim = 3 * (degree + 1) * (degree + 1);
-    config.head.feature_pe_freqs = 0;
-    config.head.viewdir_pe_freqs = 0;
+    config.head = trainer::ShHeadConfig(config.head, trainer::TrainOptions().sh_degree);
   }
   return config;
 }

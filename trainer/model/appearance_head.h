@@ -31,6 +31,16 @@ struct AppearanceHeadConfig {
   HeadKind kind = HeadKind::kPerSample;
 };
 
+// The head with spherical-harmonics colour of this degree (hidden 0, SPEC.md 7.6.2): 3 (D + 1)^2
+// features, no positional encoding, no MLP; `base` gives the products and the kind.
+inline AppearanceHeadConfig ShHeadConfig(AppearanceHeadConfig base, int degree) {
+  base.hidden = 0;
+  base.feature_dim = 3 * (degree + 1) * (degree + 1);
+  base.feature_pe_freqs = 0;
+  base.viewdir_pe_freqs = 0;
+  return base;
+}
+
 // All parameters in one flat float array so Adam and checkpoints treat them uniformly.
 // Layout (row-major, out x in): basis [feature_dim x P], W1 [hidden x in], b1 [hidden],
 // W2 [hidden x hidden], b2 [hidden], W3 [3 x hidden], b3 [3].

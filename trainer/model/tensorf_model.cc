@@ -339,6 +339,16 @@ void TensorfModel::KeepComponents(int grid, const std::array<std::vector<uint8_t
   train_workspace.reset();  // its buffers were sized for the old ranks
 }
 
+void TensorfModel::ReplaceHead(const AppearanceHeadConfig& head, uint32_t seed) {
+  if (head.num_products != head_.config().num_products) {
+    throw std::invalid_argument("ReplaceHead: the new head has other products than the grid");
+  }
+  head_ = AppearanceHead(head);
+  head_.Initialize(seed);
+  config_.head = head;
+  train_workspace.reset();
+}
+
 void TensorfModel::KeepHidden(const std::vector<uint8_t>& keep1,
                               const std::vector<uint8_t>& keep2) {
   head_.KeepHidden(keep1, keep2);

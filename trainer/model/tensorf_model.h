@@ -138,6 +138,9 @@ class TensorfModel {
   // Sample spacing step_ratio cells from now on; n_samples scales so that a ray covers the same
   // length (--head auto, train/head_choice.h).
   void SetStepRatio(float step_ratio);
+  // A new head of this config, initialised from seed (--head auto switching to spherical
+  // harmonics, train/head_choice.h); its products must be the appearance grid's.
+  void ReplaceHead(const AppearanceHeadConfig& head, uint32_t seed);
   // Removes hidden units of the head (AppearanceHead::KeepHidden); the config's width follows.
   void KeepHidden(const std::vector<uint8_t>& keep1, const std::vector<uint8_t>& keep2);
 

@@ -43,8 +43,9 @@ RayWorkCounts CountRayWork(const TensorfModel& model, int n, const float* origin
   return c;
 }
 
-std::vector<double> PredictHeadWork(const TensorfModel& model, const RayWorkCounts& counts) {
-  const AppearanceHeadConfig& h = model.config().head;
+std::vector<double> PredictHeadWork(const TensorfModel& model, const RayWorkCounts& counts,
+                                    const AppearanceHeadConfig* head) {
+  const AppearanceHeadConfig& h = head != nullptr ? *head : model.config().head;
   dec::MlpConfig m;
   m.num_products = model.appearance().total_rank();
   m.feature_dim = h.feature_dim;
@@ -68,10 +69,11 @@ double RenderBudget(const TrainOptions& o) {
 }
 
 std::vector<RenderCandidate> RenderCandidates(TensorfModel* model, int n, const float* origins,
-                                              const float* dirs) {
+                                              const float* dirs, int sh_degree) {
   const float ratio = model->config().step_ratio;
   const int n_samples = model->n_samples();
-  std::vector<RenderCandidate> out;
+  const AppearanceHeadConfig sh = ShHeadConfig(model->head().config(), sh_degree);
+  std::vector<RenderCandidate> out, with_sh;
   for (const float r : {ratio, 2.f * ratio}) {
     if (r != ratio) model->SetStepRatio(r);
     const RayWorkCounts counts = CountRayWork(*model, n, origins, dirs);
@@ -80,11 +82,16 @@ std::vector<RenderCandidate> RenderCandidates(TensorfModel* model, int n, const 
       // At twice the spacing only the cheaper head: the per-sample head's spacing stays the
       // trained one (its quality is what a budget gives up first).
       if (r != ratio && HeadKind(k) == HeadKind::kPerSample) continue;
-      out.push_back({HeadKind(k), r, counts, work[size_t(k)]});
+      out.push_back({HeadKind(k), r, -1, counts, work[size_t(k)]});
+    }
+    if (sh_degree >= 0) {
+      const double w = PredictHeadWork(*model, counts, &sh)[size_t(HeadKind::kDeferred)];
+      with_sh.push_back({HeadKind::kDeferred, r, sh_degree, counts, w});
     }
   }
   model->SetStepRatio(ratio);
   model->set_n_samples(n_samples);
+  out.insert(out.end(), with_sh.begin(), with_sh.end());
   return out;
 }
 
@@ -115,7 +122,12 @@ namespace {
 
 std::string Describe(const RenderCandidate& c) {
   char s[64];
-  std::snprintf(s, sizeof(s), "%s at step ratio %g", HeadKindName(c.head), double(c.step_ratio));
+  if (c.sh_degree >= 0) {
+    std::snprintf(s, sizeof(s), "sh (degree %d) at step ratio %g", c.sh_degree,
+                  double(c.step_ratio));
+  } else {
+    std::snprintf(s, sizeof(s), "%s at step ratio %g", HeadKindName(c.head), double(c.step_ratio));
+  }
   return s;
 }
 
@@ -140,10 +152,16 @@ void ChooseHeadIfAuto(TrainSession& s, int it) {
     }
   }
   const int n = int(origins.size() / 3);
-  HeadChoiceReport r =
-      ChooseRender(RenderCandidates(s.model, n, origins.data(), dirs.data()), RenderBudget(s.o));
+  HeadChoiceReport r = ChooseRender(
+      RenderCandidates(s.model, n, origins.data(), dirs.data(), s.o.sh_degree), RenderBudget(s.o));
   r.iteration = it;
   const RenderCandidate& c = r.choice();
+  if (c.sh_degree >= 0) {  // a head of other widths: its own initialisation and optimizer state
+    AppearanceHeadConfig sh = ShHeadConfig(s.model->head().config(), c.sh_degree);
+    sh.kind = c.head;
+    s.model->ReplaceHead(sh, s.o.seed + 1);
+    s.opt.head.Reset(s.model->head().params().size());
+  }
   s.model->SetHeadKind(c.head);
   if (c.step_ratio != s.model->config().step_ratio) s.model->SetStepRatio(c.step_ratio);
   std::string predicted;

@@ -4,9 +4,11 @@
 // the model, predicts the work per pixel of each candidate in the decoder's units
 // (decoder/render_work.h) and takes the first, in the order of expected quality, within the
 // render budget (--render-budget, --device-class): the per-sample head, the deferred head, the
-// deferred head at twice the spacing (--step-ratio); the cheapest when none is. The deferred
-// head's MLP starts from the per-sample one's weights (for an opaque surface the weighted sum of
-// the products is about the surface's products, the per-sample head's input). Without a budget
+// deferred head at twice the spacing (--step-ratio), then the deferred head with
+// spherical-harmonics colour (--sh-degree) at the spacing and at twice it; the cheapest when none
+// is. The deferred head's MLP starts from the per-sample one's weights (for an opaque surface the
+// weighted sum of the products is about the surface's products, the per-sample head's input);
+// the harmonics start afresh (no MLP to start from) and train on with the grids. Without a budget
 // auto keeps the per-sample head: on chair it has the better rate-distortion (docs/results.md).
 #ifndef ECRF_TRAINER_TRAIN_HEAD_CHOICE_H_
 #define ECRF_TRAINER_TRAIN_HEAD_CHOICE_H_
@@ -35,8 +37,10 @@ RayWorkCounts CountRayWork(const TensorfModel& model, int n, const float* origin
                            const float* dirs);
 
 // The predicted work per pixel of each head for these counts (marched positions taken as the
-// evaluated samples: a lower bound where the mask rejects samples), indexed by HeadKind.
-std::vector<double> PredictHeadWork(const TensorfModel& model, const RayWorkCounts& counts);
+// evaluated samples: a lower bound where the mask rejects samples), indexed by HeadKind; with
+// `head` the widths of another head on the model's grids (the model's own by default).
+std::vector<double> PredictHeadWork(const TensorfModel& model, const RayWorkCounts& counts,
+                                    const AppearanceHeadConfig* head = nullptr);
 
 // The render budget the options ask for (--render-budget, else --device-class; 0: none).
 double RenderBudget(const TrainOptions& options);
@@ -46,15 +50,17 @@ double RenderBudget(const TrainOptions& options);
 struct RenderCandidate {
   HeadKind head = HeadKind::kPerSample;
   float step_ratio = 0.5f;
+  int sh_degree = -1;  // >= 0: spherical-harmonics colour of this degree in place of the MLP
   RayWorkCounts counts;
   double work = 0.0;
 };
 
 // The candidates for a model in the order of expected quality: each head at the model's
-// spacing, then the deferred head at twice it. Traces the n rays once per spacing (the model's
+// spacing, then the deferred head at twice it, then with sh_degree >= 0 the deferred head with
+// harmonics of that degree at both spacings. Traces the n rays once per spacing (the model's
 // spacing is restored).
 std::vector<RenderCandidate> RenderCandidates(TensorfModel* model, int n, const float* origins,
-                                              const float* dirs);
+                                              const float* dirs, int sh_degree = -1);
 
 struct HeadChoiceReport {
   int iteration = -1;  // -1: no choice was made in this run

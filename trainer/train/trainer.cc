@@ -48,12 +48,7 @@ TensorfConfig ConfigFor(const TrainOptions& o, const Dataset& data, const SceneF
   // auto starts with the per-sample head and may switch once the grid is final (head_choice.h).
   c.head.kind = o.head == HeadChoice::kDeferred || o.head == HeadChoice::kSh ? HeadKind::kDeferred
                                                                              : HeadKind::kPerSample;
-  if (o.head == HeadChoice::kSh) {  // the basis output is the coefficients, no MLP
-    c.head.hidden = 0;
-    c.head.feature_dim = 3 * (o.sh_degree + 1) * (o.sh_degree + 1);
-    c.head.feature_pe_freqs = 0;
-    c.head.viewdir_pe_freqs = 0;
-  }
+  if (o.head == HeadChoice::kSh) c.head = ShHeadConfig(c.head, o.sh_degree);
   c.near = float(data.near);
   c.far = float(data.far);
   c.white_background = data.white_background;

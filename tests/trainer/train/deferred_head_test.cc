@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <unistd.h>
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <stdexcept>
@@ -212,7 +213,8 @@ TrainResult AutoRun(float budget, TensorfModel* model) {  // one run, one model
 }
 
 // One short run with a budget nothing meets: auto switches to the cheapest candidate, the
-// deferred head at twice the spacing, once the grid is final, training goes on through the switch,
+// deferred head with spherical-harmonics colour at twice the spacing, once the grid is final (a
+// new head, no MLP), training goes on through the switch,
 // and what it predicted is the decoder's own count of the work on the same rays, up to the
 // marched positions the mask rejects (which the decoder charges and the prediction leaves out).
 // Within a budget the first candidate that fits is taken.
@@ -220,17 +222,25 @@ TEST(HeadChoice, AutoSwitchesOverTheBudgetAndPredictsTheDecodersWork) {
   TensorfModel model(TensorfConfig{});
   const TrainResult r = AutoRun(1.f, &model);
   const std::vector<RenderCandidate>& c = r.head_choice.candidates;
-  ASSERT_EQ(c.size(), 3u);
+  ASSERT_EQ(c.size(), 5u);
   EXPECT_EQ(c[0].head, HeadKind::kPerSample);
-  EXPECT_EQ(c[1].head, HeadKind::kDeferred);
-  EXPECT_EQ(c[2].head, HeadKind::kDeferred);
-  EXPECT_EQ(c[0].step_ratio, 0.5f);
-  EXPECT_EQ(c[1].step_ratio, 0.5f);
-  EXPECT_EQ(c[2].step_ratio, 1.f);
-  EXPECT_EQ(r.head_choice.chosen, 2);
+  for (size_t k = 1; k < 5; ++k) EXPECT_EQ(c[k].head, HeadKind::kDeferred);
+  const float ratios[5] = {0.5f, 0.5f, 1.f, 0.5f, 1.f};
+  for (size_t k = 0; k < 5; ++k) {
+    EXPECT_EQ(c[k].step_ratio, ratios[k]);
+    EXPECT_EQ(c[k].sh_degree, k < 3 ? -1 : TrainOptions().sh_degree);
+  }
+  EXPECT_EQ(r.head_choice.chosen, 4);
   EXPECT_EQ(model.config().head.kind, HeadKind::kDeferred);
   EXPECT_EQ(model.head().config().kind, HeadKind::kDeferred);
+  EXPECT_EQ(model.head().config().hidden, 0);  // the harmonics replaced the MLP
+  EXPECT_EQ(model.config().head.hidden, 0);
   EXPECT_EQ(model.config().step_ratio, 1.f);
+  // The same counts at each spacing; the harmonics save the MLP of each coloured ray.
+  EXPECT_EQ(c[3].counts.samples, c[1].counts.samples);
+  EXPECT_EQ(c[4].counts.samples, c[2].counts.samples);
+  EXPECT_LT(c[3].work, c[1].work);
+  EXPECT_LT(c[4].work, c[2].work);
   EXPECT_LT(c[1].work, 0.5 * c[0].work);
   EXPECT_GT(c[1].counts.coloured, 1.0);
   // Twice the spacing: about half the samples (the same rays, the same field).
@@ -242,6 +252,7 @@ TEST(HeadChoice, AutoSwitchesOverTheBudgetAndPredictsTheDecodersWork) {
   EXPECT_EQ(ChooseRender(c, 0.0).chosen, 0);
   EXPECT_EQ(ChooseRender(c, 0.5 * (c[0].work + c[1].work)).chosen, 1);
   EXPECT_EQ(ChooseRender(c, 0.5 * (c[1].work + c[2].work)).chosen, 2);
+  EXPECT_EQ(ChooseRender(c, 0.5 * (c[4].work + std::min(c[2].work, c[3].work))).chosen, 4);
 
   // Two whole test views (the choice itself looks at training views).
   std::vector<float> origins, dirs;
