@@ -17,11 +17,7 @@ namespace {
 AppearanceHeadConfig ShHead(int degree, int products) {
   AppearanceHeadConfig c;
   c.num_products = products;
-  c.feature_dim = 3 * (degree + 1) * (degree + 1);
-  c.feature_pe_freqs = 0;
-  c.viewdir_pe_freqs = 0;
-  c.hidden = 0;
-  return c;
+  return ShHeadConfig(c, degree);
 }
 
 struct Inputs {
