@@ -49,9 +49,12 @@ inline const char* HeadKindName(HeadKind k) {
 
 // The head as tools name it (ecrf train --head, info, eval, metrics.json): with HEAD hidden 0 the
 // colour is spherical harmonics (SPEC.md 7.6.2), "sh" once per ray as --head sh trains it.
+constexpr const char* kShHeadName = "sh";
 inline const char* AppearanceName(HeadKind k, int hidden) {
   if (hidden != 0) return HeadKindName(k);
-  return k == HeadKind::kDeferred ? "sh" : k == HeadKind::kPerSample ? "sh per sample" : "unknown";
+  return k == HeadKind::kDeferred    ? kShHeadName
+         : k == HeadKind::kPerSample ? "sh per sample"
+                                     : "unknown";
 }
 
 // Magnitude classes: 0 for level 0, else the bit length of |level| (1 for 1, 2 for 2..3, 3 for

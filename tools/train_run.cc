@@ -275,7 +275,7 @@ nlohmann::json TrainingMetrics(const trainer::TrainOptions& o, const trainer::Tr
     const trainer::HeadChoiceReport& h = r.head_choice;
     nlohmann::json candidates = nlohmann::json::array();
     for (const trainer::RenderCandidate& c : h.candidates) {
-      candidates.push_back({{"head", c.sh_degree >= 0 ? "sh" : HeadKindName(c.head)},
+      candidates.push_back({{"head", c.sh_degree >= 0 ? kShHeadName : HeadKindName(c.head)},
                             {"sh_degree", c.sh_degree},
                             {"step_ratio", c.step_ratio},
                             {"samples_per_ray", c.counts.samples},
@@ -287,7 +287,7 @@ nlohmann::json TrainingMetrics(const trainer::TrainOptions& o, const trainer::Tr
         {"iteration", h.iteration},
         {"render_budget", h.budget},
         {"candidates", candidates},
-        {"chosen", h.choice().sh_degree >= 0 ? "sh" : HeadKindName(h.choice().head)},
+        {"chosen", h.choice().sh_degree >= 0 ? kShHeadName : HeadKindName(h.choice().head)},
         {"step_ratio", h.choice().step_ratio},
         {"reason", h.reason}};
   }

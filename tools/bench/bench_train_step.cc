@@ -178,7 +178,8 @@ void AddTrainStepBenchFlags(CLI::App* app, TrainStepBenchFlags* f) {
                   "the appearance head: mlp (per coloured sample), deferred (per ray) or sh "
                   "(per ray, spherical harmonics), as ecrf train --head")
       ->type_name("NAME")
-      ->check(CLI::IsMember(std::vector<std::string>{kHeadKindNames[0], kHeadKindNames[1], "sh"}))
+      ->check(CLI::IsMember(
+          std::vector<std::string>{kHeadKindNames[0], kHeadKindNames[1], kShHeadName}))
       ->capture_default_str();
   app->add_option("--early-stop", f->early, "early_stop_transmittance of the ray marching")
       ->type_name("T")
@@ -218,7 +219,7 @@ TensorfConfig BenchModelConfig(const TrainStepBenchFlags& f) {
   for (int k = 0; k < kNumHeadKinds; ++k) {
     if (f.head == kHeadKindNames[k]) config.head.kind = static_cast<HeadKind>(k);
   }
-  if (f.head == "sh") {  // as ecrf train --head sh at its default degree: deferred, no MLP
+  if (f.head == kShHeadName) {  // as ecrf train --head sh at its default degree: deferred, no MLP
     config.head.kind = HeadKind::kDeferred;
     config.head = trainer::ShHeadConfig(config.head, trainer::TrainOptions().sh_degree);
   }

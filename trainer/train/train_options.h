@@ -48,7 +48,8 @@ enum class HeadChoice { kMlp, kDeferred, kSh, kAuto };
 template <>
 struct ChoiceNames<HeadChoice> {
   static constexpr const char* what = "head";
-  static constexpr const char* names[] = {kHeadKindNames[0], kHeadKindNames[1], "sh", "auto"};
+  static constexpr const char* names[] = {kHeadKindNames[0], kHeadKindNames[1], kShHeadName,
+                                          "auto"};
 };
 // --device-class: a render budget of decoder/render_work.h's table, or none.
 enum class DeviceClassChoice { kNone, kDesktop, kLaptop, kPhone };
