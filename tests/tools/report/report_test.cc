@@ -180,8 +180,25 @@ void CompareAgainstItselfIsZero() {
   ASSERT_EQ(Invoke(RunReport, {"report", "compare", dir_, dir_ + "/report.json", "--json", json}),
             0);
   const nlohmann::json c = ReadJson(json);
-  EXPECT_NEAR(c["bd_rate_percent"].get<double>(), 0.0, 1e-9);
-  EXPECT_NEAR(c["bd_psnr_db"].get<double>(), 0.0, 1e-9);
+  ASSERT_EQ(c["comparisons"].size(), 1u);
+  EXPECT_NEAR(c["comparisons"][0]["bd_rate_percent"].get<double>(), 0.0, 1e-9);
+  EXPECT_NEAR(c["comparisons"][0]["bd_psnr_db"].get<double>(), 0.0, 1e-9);
+  // Three curves (as one per head): each compared with the first, each drawn under its label.
+  // (exit 1 only when matplotlib cannot draw: the JSON and CSV are written first)
+  Invoke(RunReport, {"report", "compare", dir_, dir_, dir_, "--labels", "mlp,deferred,sh", "--json",
+                     json, "--plot", root_ + "/heads.png"});
+  const nlohmann::json three = ReadJson(json);
+  ASSERT_EQ(three["comparisons"].size(), 2u);
+  EXPECT_EQ(three["anchor_label"], "mlp");
+  EXPECT_EQ(three["comparisons"][1]["label"], "sh");
+  EXPECT_NEAR(three["comparisons"][1]["bd_psnr_db"].get<double>(), 0.0, 1e-9);
+  const auto heads = ReadCsv(root_ + "/heads.csv");
+  ASSERT_EQ(heads.size(), 7u);  // header, two points per series
+  EXPECT_EQ(heads[1][0], "mlp");
+  EXPECT_EQ(heads[3][0], "deferred");
+  EXPECT_EQ(heads[5][0], "sh");
+  EXPECT_THROW(Invoke(RunReport, {"report", "compare", dir_, dir_, "--labels", "a,b,c"}),
+               std::runtime_error);
   // --plot: the points' table (written with or without matplotlib) carries each file's cost.
   const int drawn =
       Invoke(RunReport, {"report", "compare", dir_, dir_, "--plot", root_ + "/compare.png"});
