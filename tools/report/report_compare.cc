@@ -29,9 +29,10 @@ void PrintResult(const BdResult& r, const std::string& test, const std::string& 
   std::printf("%s against %s (decoded-file PSNR vs file bytes, PCHIP):\n", test.c_str(),
               anchor.c_str());
   if (r.bd_rate_bound == 0) {
-    std::printf("  BD-rate %+.2f%%  (%s needs %.2f%% %s bytes for the same PSNR, over %.2f-%.2f dB)\n",
-                r.bd_rate, test.c_str(), std::fabs(r.bd_rate), r.bd_rate <= 0 ? "fewer" : "more",
-                r.psnr_range[0], r.psnr_range[1]);
+    std::printf(
+        "  BD-rate %+.2f%%  (%s needs %.2f%% %s bytes for the same PSNR, over %.2f-%.2f dB)\n",
+        r.bd_rate, test.c_str(), std::fabs(r.bd_rate), r.bd_rate <= 0 ? "fewer" : "more",
+        r.psnr_range[0], r.psnr_range[1]);
   } else {
     std::printf(
         "  BD-rate %s%+.2f%%  (the PSNRs do not overlap: %s is %s %.2f-%.2f dB at every size; the "
@@ -92,8 +93,7 @@ int RunReportCompare(int argc, char** argv) {
   for (size_t i = 1; i < reports.size(); ++i) {
     const BdResult r = Bjontegaard(anchor, RateDistortionCurve(reports[i].second));
     if (!r.ok) {
-      throw std::runtime_error("cannot compare " + paths[i] + " with " + paths[0] + ": " +
-                               r.error);
+      throw std::runtime_error("cannot compare " + paths[i] + " with " + paths[0] + ": " + r.error);
     }
     PrintResult(r, reports[i].first, reports[0].first);
     anchor_left_out = PointsJson(r.dominated[0]);
