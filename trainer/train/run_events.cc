@@ -124,9 +124,10 @@ TrainResult FinishTraining(TrainSession& s) {
                    e.what());
     }
   }
-  if (!s.schedule.use_rate && o.report_rate) {
-    // Without the rate objective, fit an entropy model to the final grids anyway so every run
-    // reports the size its coefficients would cost (the lambda_e = 0 point of a sweep).
+  if (o.report_rate && (!s.schedule.use_rate || !s.rate.active)) {
+    // Without the rate objective (or a run too short to reach its phase: --iters 1), fit an
+    // entropy model to the final grids anyway so every run reports the size its coefficients
+    // would cost (the lambda_e = 0 point of a sweep).
     if (!s.rate.active) s.rate.Activate(*model, o);
     TrainOptions fit = o;
     fit.lambda_e = 0.0f;

@@ -172,6 +172,25 @@ TEST(TrainBuiltin, ARunWithoutTheRateTermReportsItsSizeUnlessTurnedOff) {
   for (size_t i = 0; i < a.pixels.size(); ++i) ASSERT_EQ(a.pixels[i], b.pixels[i]) << i;
 }
 
+// A run with the rate objective that ends before its rate phase starts (a smoke test's --iters 1)
+// reports its size as a run without the objective does, instead of failing at the end.
+TEST(TrainBuiltin, ARunShorterThanItsRatePhaseStillReportsItsSize) {
+  TrainOptions o = SmallRun();
+  o.builtin_size = 32;
+  o.builtin_views = 8;
+  o.score_float = false;
+  o.max_test_views = 1;
+  ApplyRatePoint("medium", &o);  // what `ecrf train` runs by default
+  ASSERT_GT(o.lambda_e, 0.0f);
+  const Dataset train = LoadTrainingViews(o, "train");
+  const Dataset test = LoadTrainingViews(o, "test");
+  o.iters = 1;
+  TensorfModel model(ConfigFor(o, train));
+  const TrainResult r = Train(o, train, test, &model);  // threw "need one step per tensor"
+  EXPECT_EQ(r.rate.bits.size(), 12u);
+  EXPECT_GT(r.rate.total_bits, 0.0);
+}
+
 // --target-size: lambda_e adapts during the rate phase (with quantization-aware steps) and
 // encode-time rate control finishes.
 TEST(TrainBuiltin, TargetSizeLands) {
