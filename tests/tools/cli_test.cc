@@ -157,7 +157,7 @@ TEST(Cli, OtherCommandsHelpExitsZeroWithTheirFlags) {
       {RunReport,
        {"report", "render", "--help"},
        {"REPORT", "--lambda", "--test-stride", "--max-test-views"}},
-      {RunReport, {"report", "compare", "--help"}, {"REPORTS", "--labels", "--json", "--plot"}},
+      {RunReport, {"report", "compare", "--help"}, {"REPORTS", "--label", "--json", "--plot"}},
       {RunReport, {"report", "plot", "--help"}, {"REPORT"}},
       {RunBench, {"bench", "coder", "--help"}, {"--json"}},
       {RunBench, {"bench", "idct", "--help"}, {"--json"}},

@@ -35,7 +35,7 @@ int RunReport(int argc, char** argv) {
            "the speed-error sweep of the renderer on one rate point: ecrf report render REPORT"},
           {"compare", RunReportCompare,
            "BD-rate and BD-PSNR of each report against the first, one curve each: ecrf report "
-           "compare A B [C ...] [--labels ...] [--json FILE] [--plot FILE.png]"},
+           "compare A B [C ...] [--label NAME ...] [--json FILE] [--plot FILE.png]"},
           {"sensitivity", RunReportSensitivity,
            "where quantization costs PSNR, tensor by tensor: ecrf report sensitivity RUN"},
           {"components", RunReportComponents,

@@ -2,6 +2,7 @@
 // together (one rate-distortion curve per head is a compare of sweeps that differ in --head).
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -71,16 +72,23 @@ int RunReportCompare(int argc, char** argv) {
                   "directories or their report.json")
       ->expected(2, 64)
       ->required();
-  app->add_option("--labels", labels, "names of the curves, in the order of REPORTS")
-      ->delimiter(',')
-      ->type_name("A,B,...");
+  app->add_option("--label", labels,
+                  "the name of a curve, once per report in the order of REPORTS (default: A, B, "
+                  "... and the path)")
+      ->allow_extra_args(false)
+      ->type_name("NAME");
   app->add_option("--json", json_path, "write the result as JSON")->type_name("FILE");
   app->add_option("--plot", plot_path, "draw the curves (writes FILE.csv beside it)")
       ->type_name("FILE.png");
   if (const int rc = ParseCommandLine(app.get(), argc, argv); rc >= 0) return rc;
   if (!labels.empty() && labels.size() != paths.size()) {
-    throw std::runtime_error("--labels names " + std::to_string(labels.size()) + " curves for " +
+    throw std::runtime_error("--label names " + std::to_string(labels.size()) + " curves for " +
                              std::to_string(paths.size()) + " reports");
+  }
+  // The outputs' folders first: a mistyped path fails before any work, not after it.
+  for (const std::string& out : {json_path, plot_path}) {
+    const std::filesystem::path parent = std::filesystem::path(out).parent_path();
+    if (!out.empty() && !parent.empty()) std::filesystem::create_directories(parent);
   }
   std::vector<std::pair<std::string, nlohmann::json>> reports;
   for (size_t i = 0; i < paths.size(); ++i) {

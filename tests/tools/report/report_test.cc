@@ -185,8 +185,8 @@ void CompareAgainstItselfIsZero() {
   EXPECT_NEAR(c["comparisons"][0]["bd_psnr_db"].get<double>(), 0.0, 1e-9);
   // Three curves (as one per head): each compared with the first, each drawn under its label.
   // (exit 1 only when matplotlib cannot draw: the JSON and CSV are written first)
-  Invoke(RunReport, {"report", "compare", dir_, dir_, dir_, "--labels", "mlp,deferred,sh", "--json",
-                     json, "--plot", root_ + "/heads.png"});
+  Invoke(RunReport, {"report", "compare", dir_, dir_, dir_, "--label", "mlp", "--label", "deferred",
+                     "--label", "sh", "--json", json, "--plot", root_ + "/heads.png"});
   const nlohmann::json three = ReadJson(json);
   ASSERT_EQ(three["comparisons"].size(), 2u);
   EXPECT_EQ(three["anchor_label"], "mlp");
@@ -197,7 +197,7 @@ void CompareAgainstItselfIsZero() {
   EXPECT_EQ(heads[1][0], "mlp");
   EXPECT_EQ(heads[3][0], "deferred");
   EXPECT_EQ(heads[5][0], "sh");
-  EXPECT_THROW(Invoke(RunReport, {"report", "compare", dir_, dir_, "--labels", "a,b,c"}),
+  EXPECT_THROW(Invoke(RunReport, {"report", "compare", dir_, dir_, "--label", "a"}),
                std::runtime_error);
   // --plot: the points' table (written with or without matplotlib) carries each file's cost.
   const int drawn =
