@@ -461,17 +461,27 @@ void PrintUnfinished(const std::vector<std::string>& unfinished, size_t points,
                out.c_str());
 }
 
-// One line per point: size, ratio, decoded and float PSNR, quantization loss, training time.
+// One line per point: size, ratio, decoded and float PSNR, quantization loss, training time; "-"
+// where a point has no such figure (no float score, no lambda = 0 reference).
 void PrintPointTable(const nlohmann::json& report) {
-  std::printf("%-24s %10s %8s %10s %10s %9s %10s\n", "point", "bytes", "ratio", "decoded", "float",
-              "loss", "train");
+  size_t width = 5;
+  for (const nlohmann::json& p : report["points"])
+    width = std::max(width, p["label"].get<std::string>().size());
+  auto cell = [](const nlohmann::json& x, const char* format) {
+    if (!x.is_number() || !std::isfinite(x.get<double>())) return std::string("-");
+    char text[32];
+    std::snprintf(text, sizeof(text), format, x.get<double>());
+    return std::string(text);
+  };
+  std::printf("%-*s %10s %8s %10s %10s %9s %10s\n", int(width), "point", "bytes", "ratio",
+              "decoded", "float", "loss", "train");
   for (const nlohmann::json& p : report["points"]) {
-    auto number = [](const nlohmann::json& x) { return x.is_null() ? NAN : x.get<double>(); };
-    const double loss = number(p["psnr_loss_db"]);
-    std::printf("%-24s %10lld %7.1fx %7.2f dB %7.2f dB %+6.2f dB %10s\n",
+    std::printf("%-*s %10lld %8s %10s %10s %9s %10s\n", int(width),
                 p["label"].get<std::string>().c_str(), p["file_bytes"].get<long long>(),
-                p["ratio"].get<double>(), p["decoded_psnr"].get<double>(), number(p["float_psnr"]),
-                loss, Minutes(p["train_seconds"].get<double>()).c_str());
+                cell(p["ratio"], "%.1fx").c_str(), cell(p["decoded_psnr"], "%.2f dB").c_str(),
+                cell(p["float_psnr"], "%.2f dB").c_str(),
+                cell(p["psnr_loss_db"], "%+.2f dB").c_str(),
+                Minutes(p["train_seconds"].get<double>()).c_str());
   }
 }
 
