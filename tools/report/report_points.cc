@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "format/mlp_coder.h"
 #include "tools/report/report.h"
 #include "trainer/data/file_io.h"
 #include "trainer/train/checkpoint.h"
@@ -53,7 +54,8 @@ nlohmann::json RatePointFromMetrics(const nlohmann::json& m, const std::string& 
   p["decode_seconds"] = m.value("decode_seconds", 0.0);
   p["decoded_render_seconds_per_view"] = m.value("decoded_render_seconds_per_view", 0.0);
   // What a view of the file costs (#57): its head and spacing, the decoder's work per pixel.
-  p["head"] = m.value("head", "mlp");
+  // Runs from before the sh head had its own name called it deferred; no MLP (hidden 0) is sh.
+  p["head"] = m.value("mlp_hidden", -1) == 0 ? std::string(kShHeadName) : m.value("head", "mlp");
   p["step_ratio"] = m.value("step_ratio", 0.5);
   p["decoded_work_per_pixel"] = m.value("decoded_work_per_pixel", 0.0);
   p["decoded_samples_per_ray"] = m.value("decoded_samples_per_ray", 0.0);

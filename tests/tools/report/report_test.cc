@@ -213,6 +213,20 @@ void CompareAgainstItselfIsZero() {
   if (drawn == 0) EXPECT_FALSE(ReadText(root_ + "/compare_cost.png").empty());
 }
 
+// A point names its file's head as metrics.json does, and a head without an MLP (hidden 0) sh,
+// as runs from before the sh head had its own name did not.
+void PointsNameTheirHead() {
+  nlohmann::json m = ReadJson(dir_ + "/runs/lambda_0/metrics.json");
+  EXPECT_EQ(RatePointFromMetrics(m, "r")["head"], "mlp");
+  m["head"] = "deferred";
+  EXPECT_EQ(RatePointFromMetrics(m, "r")["head"], "deferred");
+  m["mlp_hidden"] = 0;
+  EXPECT_EQ(RatePointFromMetrics(m, "r")["head"], "sh");
+  m.erase("head");
+  m.erase("mlp_hidden");
+  EXPECT_EQ(RatePointFromMetrics(m, "r")["head"], "mlp");  // before #57: the per-sample head
+}
+
 TEST(Report, BuiltinSweepMatchesEvalResumesAndCompares) {
   const testing_util::ScopedTempDir tmp("ecrf_report_test");
   root_ = tmp.path();
@@ -240,6 +254,10 @@ TEST(Report, BuiltinSweepMatchesEvalResumesAndCompares) {
   {
     SCOPED_TRACE("compare");
     CompareAgainstItselfIsZero();
+  }
+  {
+    SCOPED_TRACE("heads");
+    PointsNameTheirHead();
   }
   {
     SCOPED_TRACE("resume");
