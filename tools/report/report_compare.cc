@@ -98,10 +98,15 @@ int RunReportCompare(int argc, char** argv) {
   }
   const std::vector<RdPoint> anchor = RateDistortionCurve(reports[0].second);
   nlohmann::json comparisons = nlohmann::json::array(), anchor_left_out;
+  std::string not_compared;
   for (size_t i = 1; i < reports.size(); ++i) {
     const BdResult r = Bjontegaard(anchor, RateDistortionCurve(reports[i].second));
-    if (!r.ok) {
-      throw std::runtime_error("cannot compare " + paths[i] + " with " + paths[0] + ": " + r.error);
+    if (!r.ok) {  // drawn all the same (a single point is a cost point worth seeing)
+      const std::string why = "cannot compare " + paths[i] + " with " + paths[0] + ": " + r.error;
+      std::printf("%s: not compared (%s)\n", reports[i].first.c_str(), r.error.c_str());
+      comparisons.push_back({{"test", paths[i]}, {"label", reports[i].first}, {"error", r.error}});
+      if (not_compared.empty()) not_compared = why;
+      continue;
     }
     PrintResult(r, reports[i].first, reports[0].first);
     anchor_left_out = PointsJson(r.dominated[0]);
@@ -115,6 +120,7 @@ int RunReportCompare(int argc, char** argv) {
                            {"rate_range_bytes", {r.rate_range[0], r.rate_range[1]}},
                            {"test_points_left_out", PointsJson(r.dominated[1])}});
   }
+  if (anchor_left_out.is_null()) throw std::runtime_error(not_compared);  // nothing compared
   for (const nlohmann::json& p : anchor_left_out) {
     std::printf("left out of %s: %.0f bytes at %.2f dB (a point of its own curve is better)\n",
                 reports[0].first.c_str(), p["file_bytes"].get<double>(),

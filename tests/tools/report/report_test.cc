@@ -2,6 +2,7 @@
 // checked against `ecrf eval` on the same files, resumed, refused when incompatible, compared.
 #include <gtest/gtest.h>
 #include <unistd.h>
+#include <filesystem>
 
 #include <cstdlib>
 #include <fstream>
@@ -197,6 +198,20 @@ void CompareAgainstItselfIsZero() {
   EXPECT_EQ(heads[1][0], "mlp");
   EXPECT_EQ(heads[3][0], "deferred");
   EXPECT_EQ(heads[5][0], "sh");
+  // A one-point report (one file of a head) cannot be integrated, but is drawn and listed.
+  nlohmann::json one = ReadJson(dir_ + "/report.json");
+  one["points"].erase(1);
+  std::filesystem::create_directories(root_ + "/one");
+  WriteTextFile(root_ + "/one/report.json", one.dump());
+  Invoke(RunReport, {"report", "compare", dir_, dir_, root_ + "/one", "--json", json, "--plot",
+                     root_ + "/one.png"});
+  const nlohmann::json partial = ReadJson(json);
+  ASSERT_EQ(partial["comparisons"].size(), 2u);
+  EXPECT_FALSE(partial["comparisons"][0].contains("error"));
+  EXPECT_NE(partial["comparisons"][1]["error"].get<std::string>().find("two points"),
+            std::string::npos);
+  EXPECT_EQ(ReadCsv(root_ + "/one.csv").size(), 6u);  // header, 2 + 2 + 1 points
+  EXPECT_THROW(Invoke(RunReport, {"report", "compare", dir_, root_ + "/one"}), std::runtime_error);
   EXPECT_THROW(Invoke(RunReport, {"report", "compare", dir_, dir_, "--label", "a"}),
                std::runtime_error);
   // --plot: the points' table (written with or without matplotlib) carries each file's cost.
