@@ -386,7 +386,8 @@ def cost_panels(title, series):
         if labels:
             log_x(ax, (lambda v, digits: f"{v / 1e3:.{digits}g} k") if k == 0 else
                   (lambda v, digits: f"{v:.{digits}g}"))
-            ax.legend(loc="lower right", fontsize=8)
+            ax.margins(x=0.08, y=0.08)
+            place_legend(ax, below=True, fontsize=8)  # a corner hiding no point, else below
             place_labels(ax, labels, fontsize=7)
     return fig
 
