@@ -15,7 +15,7 @@ read -r -a heads <<<"${HEADS:-deferred sh deferred_h32}"
 scenes=("$@")
 [ ${#scenes[@]} -gt 0 ] || scenes=(chair mic)
 # The frontier's medium size and its smaller point, per scene.
-declare -A targets=([chair]=602657B,316KB [mic]=426623B,158KB)
+declare -A targets=([chair]="602657B,316KB" [mic]="426623B,158KB")
 for scene in "${scenes[@]}"; do
   compare=(--label "mlp (per sample, hidden 128)" "docs/reports/frontier/$scene")
   for head in "${heads[@]}"; do
