@@ -6,12 +6,12 @@
 # Finished runs under REPORT/runs are reused (their committed config.json and metrics.json
 # suffice), so each session can add points; a head with one point so far is drawn, not compared.
 #
-#   bash scripts/heads-reports.sh [chair mic]   # HEADS="deferred sh deferred_h32", DATA_ROOT=../shared/data/nerf_synthetic_400, ECRF=build/tools/ecrf
+#   bash scripts/heads-reports.sh [chair mic]   # HEADS="deferred sh sh_d3 deferred_h32", DATA_ROOT=../shared/data/nerf_synthetic_400, ECRF=build/tools/ecrf
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ecrf="${ECRF:-build/tools/ecrf}"
 data_root="${DATA_ROOT:-../shared/data/nerf_synthetic_400}"
-read -r -a heads <<<"${HEADS:-deferred sh deferred_h32}"
+read -r -a heads <<<"${HEADS:-deferred sh sh_d3 deferred_h32}"
 scenes=("$@")
 [ ${#scenes[@]} -gt 0 ] || scenes=(chair mic)
 # The frontier's medium size and its smaller point, per scene.
@@ -23,7 +23,8 @@ for scene in "${scenes[@]}"; do
       deferred) flags=(--head deferred) label="deferred (hidden 128)" ;;
       deferred_h32) flags=(--head deferred --mlp-hidden 32) label="deferred (hidden 32)" ;;
       sh) flags=(--head sh) label="sh (degree 2)" ;;
-      *) echo "heads-reports: unknown head $head (deferred, deferred_h32, sh)" >&2; exit 2 ;;
+      sh_d3) flags=(--head sh --sh-degree 3) label="sh (degree 3)" ;;
+      *) echo "heads-reports: unknown head $head (deferred, deferred_h32, sh, sh_d3)" >&2; exit 2 ;;
     esac
     out="docs/reports/heads/${scene}_$head"
     "$ecrf" report sweep --data "$data_root/$scene" --targets "${targets[$scene]}" "${flags[@]}" \
