@@ -97,7 +97,9 @@ int RunReportCompare(int argc, char** argv) {
                          ReadReport(paths[i]));
   }
   const std::vector<RdPoint> anchor = RateDistortionCurve(reports[0].second);
-  nlohmann::json comparisons = nlohmann::json::array(), anchor_left_out;
+  nlohmann::json comparisons = nlohmann::json::array();
+  std::vector<RdPoint> anchor_left_out;  // the same for every comparison
+  bool compared = false;
   std::string not_compared;
   for (size_t i = 1; i < reports.size(); ++i) {
     const BdResult r = Bjontegaard(anchor, RateDistortionCurve(reports[i].second));
@@ -109,7 +111,8 @@ int RunReportCompare(int argc, char** argv) {
       continue;
     }
     PrintResult(r, reports[i].first, reports[0].first);
-    anchor_left_out = PointsJson(r.dominated[0]);
+    anchor_left_out = r.dominated[0];
+    compared = true;
     comparisons.push_back({{"test", paths[i]},
                            {"label", reports[i].first},
                            {"bd_rate_percent", r.bd_rate},
@@ -120,17 +123,14 @@ int RunReportCompare(int argc, char** argv) {
                            {"rate_range_bytes", {r.rate_range[0], r.rate_range[1]}},
                            {"test_points_left_out", PointsJson(r.dominated[1])}});
   }
-  const bool compared = !anchor_left_out.is_null();
-  if (!compared) anchor_left_out = nlohmann::json::array();
-  for (const nlohmann::json& p : anchor_left_out) {
+  for (const RdPoint& p : anchor_left_out) {
     std::printf("left out of %s: %.0f bytes at %.2f dB (a point of its own curve is better)\n",
-                reports[0].first.c_str(), p["file_bytes"].get<double>(),
-                p["decoded_psnr"].get<double>());
+                reports[0].first.c_str(), p.rate, p.psnr);
   }
   if (!json_path.empty()) {
     const nlohmann::json j = {{"anchor", paths[0]},
                               {"anchor_label", reports[0].first},
-                              {"anchor_points_left_out", anchor_left_out},
+                              {"anchor_points_left_out", PointsJson(anchor_left_out)},
                               {"comparisons", comparisons},
                               {"interpolation", "pchip"},
                               {"distortion", "decoded-file test PSNR"},

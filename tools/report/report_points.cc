@@ -54,8 +54,14 @@ nlohmann::json RatePointFromMetrics(const nlohmann::json& m, const std::string& 
   p["decode_seconds"] = m.value("decode_seconds", 0.0);
   p["decoded_render_seconds_per_view"] = m.value("decoded_render_seconds_per_view", 0.0);
   // What a view of the file costs (#57): its head and spacing, the decoder's work per pixel.
-  // Runs from before the sh head had its own name called it deferred; no MLP (hidden 0) is sh.
-  p["head"] = m.value("mlp_hidden", -1) == 0 ? std::string(kShHeadName) : m.value("head", "mlp");
+  // Named as AppearanceName names a file's head: runs from before the sh head had its own name
+  // wrote the head kind alone ("deferred" with hidden 0).
+  std::string head = m.value("head", "mlp");
+  for (int k = 0; k < kNumHeadKinds; ++k) {
+    if (m.value("mlp_hidden", -1) == 0 && head == kHeadKindNames[k])
+      head = AppearanceName(static_cast<HeadKind>(k), 0);
+  }
+  p["head"] = head;
   p["step_ratio"] = m.value("step_ratio", 0.5);
   p["decoded_work_per_pixel"] = m.value("decoded_work_per_pixel", 0.0);
   p["decoded_samples_per_ray"] = m.value("decoded_samples_per_ray", 0.0);
