@@ -26,7 +26,7 @@ namespace {
 using testing_cli::Invoke;
 
 // Short runs that still pass through every phase (upsampling, mask, rate phase, QAT).
-const std::vector<std::string> kSmallRun = {"--scene",   "builtin", "--iters",      "160",
+const std::vector<std::string> kSmallRun = {"--scene",   "builtin", "--iters",      "100",
                                             "--batch",   "512",     "--final-grid", "48",
                                             "--threads", "2"};
 

@@ -90,7 +90,7 @@ done
 echo "SlurmSweep: one-node cluster up (ports $port-$((port + 1)))"
 
 cd "$work"
-sweep=(report sweep --scene builtin --rates low,medium --iters 150 --batch 512 --final-grid 48
+sweep=(report sweep --scene builtin --rates low,medium --iters 100 --batch 512 --final-grid 48
        --max-test-views 1)
 "$ecrf" "${sweep[@]}" --threads 2 -o local >local.log 2>&1 || { cat local.log; fail "the local sweep failed"; }
 "$ecrf" "${sweep[@]}" -o slurm --plan --task-cpus 1

@@ -152,7 +152,7 @@ void SweepResumesFromFinishedRunsAndRefusesIncompatibleOnes() {
   const nlohmann::json before = ReadJson(dir_ + "/report.json");
   // Same sweep again: nothing is trained (the runs' metrics are reused), the points are the same.
   ASSERT_EQ(Invoke(RunReport, {"report", "sweep", "--scene", "builtin", "--lambdas", "0,1e-8@2",
-                               "--iters", "150", "--batch", "512", "--final-grid", "48",
+                               "--iters", "120", "--batch", "512", "--final-grid", "48",
                                "--max-test-views", "4", "--seed", "7", "-o", dir_}),
             0);
   const nlohmann::json after = ReadJson(dir_ + "/report.json");
@@ -167,12 +167,12 @@ void SweepResumesFromFinishedRunsAndRefusesIncompatibleOnes() {
   // Other iterations: the finished runs no longer match, and the sweep says so.
   try {
     Invoke(RunReport,
-           {"report", "sweep", "--scene", "builtin", "--lambdas", "0", "--iters", "151", "--batch",
+           {"report", "sweep", "--scene", "builtin", "--lambdas", "0", "--iters", "121", "--batch",
             "512", "--final-grid", "48", "--max-test-views", "4", "--seed", "7", "-o", dir_});
     ADD_FAILURE() << "an incompatible finished run was reused";
   } catch (const std::exception& e) {
     // The run's config.json against the sweep's settings, named as config.json names them.
-    EXPECT_NE(std::string(e.what()).find("iters: 150 -> 151"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("iters: 120 -> 121"), std::string::npos) << e.what();
   }
 }
 
@@ -248,7 +248,7 @@ TEST(Report, BuiltinSweepMatchesEvalResumesAndCompares) {
   dir_ = root_ + "/nested/report";  // parents do not exist yet
   // Plots are drawn when matplotlib is installed; the checks below read the tables either way.
   ASSERT_EQ(Invoke(RunReport, {"report",           "sweep",    "--scene",      "builtin",
-                               "--lambdas",        "0,1e-8@2", "--iters",      "150",
+                               "--lambdas",        "0,1e-8@2", "--iters",      "120",
                                "--batch",          "512",      "--final-grid", "48",
                                "--max-test-views", "4",        "--seed",       "7",
                                "--threads",        "2",        "-o",           dir_}),
