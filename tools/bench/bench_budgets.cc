@@ -60,6 +60,18 @@ std::vector<CostlyCase> Cases() {
         s.res = 256;
         s.weight_threshold = 1.f;
       });
+  // The same charge per tap on planes past the caches (#60: taps in large grids miss them).
+  add("huge_grid_density", "2048^3 grid, rank 1, 16384 samples, none coloured",
+      [](costly::CostlyScene& s) {
+        s.res = 2048;
+        s.weight_threshold = 1.f;
+      });
+  add("huge_grid_density_rank16", "1024^3 grid, rank 16, 16384 samples, none coloured",
+      [](costly::CostlyScene& s) {
+        s.res = 1024;
+        s.density_rank = 16;
+        s.weight_threshold = 1.f;
+      });
   add("unbounded_empty_mask", "unbounded, empty 64^3 mask: 16384 positions per ray",
       [](costly::CostlyScene& s) {
         s.unbounded = true;
