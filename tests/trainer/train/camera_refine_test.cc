@@ -22,8 +22,9 @@ namespace {
 using testing_camera::AngleDeg;
 using testing_camera::RotationOf;
 
-// A short training of the built-in scene: a field with texture to align against (trained once for
-// the tests that need one).
+// A short training of the built-in scene: a field with texture to align against, trained once for
+// the checks that need one (they run in one test: ctest runs each test in its own process, which
+// would train the field again for each).
 struct TrainedField {
   TrainOptions options;
   Dataset train;
@@ -54,7 +55,7 @@ struct TrainedField {
 // Views the field itself renders from known cameras are the images; the cameras are then moved
 // by about two pixels and the focal length is made 3 % short, as structure from motion leaves
 // them. Refinement must bring them back.
-TEST(CameraRefineTest, RecoversMovedPosesAndFocalLengthOnViewsTheFieldRendered) {
+void RecoversMovedPosesAndFocalLengthOnViewsTheFieldRendered() {
   const TrainedField& f = TrainedField::Get();
   std::vector<View> views;
   std::vector<Camera> truth, cameras;
@@ -107,7 +108,7 @@ TEST(CameraRefineTest, RecoversMovedPosesAndFocalLengthOnViewsTheFieldRendered) 
 }
 
 // Cameras at their true place stay there: the field renders them exactly.
-TEST(CameraRefineTest, LeavesExactCamerasAlone) {
+void LeavesExactCamerasAlone() {
   const TrainedField& f = TrainedField::Get();
   std::vector<View> views;
   std::vector<Camera> cameras;
@@ -129,7 +130,7 @@ TEST(CameraRefineTest, LeavesExactCamerasAlone) {
 // Only the scored held-out views are aligned photometrically (the others follow the training
 // cameras' drift alone, at no rendering cost), and an aligned camera does not depend on which
 // other views were aligned with it.
-TEST(CameraRefineTest, AlignsOnlyTheScoredHeldOutViews) {
+void AlignsOnlyTheScoredHeldOutViews() {
   const TrainedField& f = TrainedField::Get();
   Dataset train, test;
   std::vector<Camera> refined;
@@ -198,6 +199,21 @@ TEST(CameraRefineTest, AlignsOnlyTheScoredHeldOutViews) {
   EXPECT_EQ(spoilt.psnr, clean.psnr);  // the left halves are not scored
   EXPECT_EQ(spoilt.ssim, clean.ssim);
   EXPECT_EQ(clean.fitted_columns, test.views[0].rgb.width / 2);
+}
+
+TEST(CameraRefineTest, OnAFieldTrainedOnce) {
+  {
+    SCOPED_TRACE("moved poses and focal length recovered");
+    RecoversMovedPosesAndFocalLengthOnViewsTheFieldRendered();
+  }
+  {
+    SCOPED_TRACE("exact cameras left alone");
+    LeavesExactCamerasAlone();
+  }
+  {
+    SCOPED_TRACE("only the scored held-out views aligned");
+    AlignsOnlyTheScoredHeldOutViews();
+  }
 }
 
 // Held-out cameras posed with the training ones follow their common drift exactly, and take the
