@@ -40,8 +40,9 @@ ALLOWED = {
     'tools': _TRAINER + ['conformance'],
     # The project's own benchmark programs. The decoder timing program times what a user's C
     # program does, so it shares the C example's helpers (reading and decoding a stream file, the
-    # orbit camera) rather than copy them.
-    'benchmarks': _TRAINER + ['examples'],
+    # orbit camera) rather than copy them; the budget cost program times the costly streams that
+    # `ecrf bench budgets` and the tests use.
+    'benchmarks': _TRAINER + ['examples', 'conformance'],
     'python': ['include', 'format', 'decoder'],
     # Programs a user builds against an installed ecrf: the C API and the trainer library only.
     'examples': ['include', 'trainer'],

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "conformance/costly_streams.h"
+#include "conformance/costly_classes.h"
 #include "decoder/camera.h"
 #include "decoder/ray_marcher.h"
 #include "decoder/render_work.h"
@@ -20,85 +20,6 @@
 
 namespace ecrf {
 namespace tools {
-namespace {
-
-struct CostlyCase {
-  const char* name;
-  const char* what;
-  costly::CostlyScene scene;
-};
-
-std::vector<CostlyCase> Cases() {
-  std::vector<CostlyCase> v;
-  auto add = [&v](const char* name, const char* what, auto configure) {
-    CostlyCase c{name, what, {}};
-    configure(c.scene);
-    v.push_back(c);
-  };
-  add("widest_head", "F 256, H 1024, P 3072, 16 frequencies, every sample coloured",
-      [](costly::CostlyScene& s) { s = costly::WidestHead(); });
-  add("wide_head_many_samples", "H 1024 (1.2 M per sample), 16384 samples, all coloured",
-      [](costly::CostlyScene& s) {
-        s.appearance_rank = 48;
-        s.feature_dim = 27;
-        s.hidden = 1024;
-        s.pe_freqs = 2;
-      });
-  add("small_head_many_samples", "H 64, 16384 samples, all coloured", [](costly::CostlyScene& s) {
-    s.appearance_rank = 8;
-    s.feature_dim = 8;
-    s.hidden = 64;
-    s.pe_freqs = 2;
-  });
-  add("dense_density", "density ranks 3 x 1024, 16384 samples, none coloured",
-      [](costly::CostlyScene& s) {
-        s.density_rank = 1024;
-        s.weight_threshold = 1.f;
-      });
-  add("big_grid_density", "256^3 grid, rank 1, 16384 samples, none coloured",
-      [](costly::CostlyScene& s) {
-        s.res = 256;
-        s.weight_threshold = 1.f;
-      });
-  // The same charge per tap on planes past the caches (#60: taps in large grids miss them).
-  add("huge_grid_density", "2048^3 grid, rank 1, 16384 samples, none coloured",
-      [](costly::CostlyScene& s) {
-        s.res = 2048;
-        s.weight_threshold = 1.f;
-      });
-  add("huge_grid_density_rank16", "1024^3 grid, rank 16, 16384 samples, none coloured",
-      [](costly::CostlyScene& s) {
-        s.res = 1024;
-        s.density_rank = 16;
-        s.weight_threshold = 1.f;
-      });
-  add("unbounded_empty_mask", "unbounded, empty 64^3 mask: 16384 positions per ray",
-      [](costly::CostlyScene& s) {
-        s.unbounded = true;
-        s.occupancy = 2;
-        s.occupancy_res = 64;
-      });
-  add("occupancy_empty_4096", "OCCU 4096 x 4096 x 112, no row flagged, 13 KB of meta",
-      [](costly::CostlyScene& s) {
-        s.occupancy = 2;
-        s.occupancy_res = 4096;
-        s.occupancy_depth = 112;
-        s.padding = 13000;  // the budget covers the mask's 29.4 M units
-      });
-  add("occupancy_empty_rows_512", "OCCU 512^3, every row flagged, no voxel set",
-      [](costly::CostlyScene& s) { s = costly::EmptyFlaggedRows(512); });
-  add("occupancy_empty_rows_1024", "OCCU 1024^3, every row flagged, no voxel set",
-      [](costly::CostlyScene& s) { s = costly::EmptyFlaggedRows(1024); });
-  add("neighbour_contexts_2048", "2048^2 planes of rank 1 in 16^3 blocks, neighbour contexts",
-      [](costly::CostlyScene& s) { s = costly::NeighbourContexts2048(); });
-  add("full_length_blocks", "512^2 planes, rank 16, 16^3 blocks coded to their last position",
-      [](costly::CostlyScene& s) { s = costly::FullLengthBlocks(16); });
-  add("full_length_small_blocks", "512^2 planes, rank 16, 4^3 blocks coded to their last position",
-      [](costly::CostlyScene& s) { s = costly::FullLengthBlocks(4); });
-  return v;
-}
-
-}  // namespace
 
 int RunBudgetBench(int argc, char** argv) {
   std::string json;
@@ -114,7 +35,7 @@ int RunBudgetBench(int argc, char** argv) {
   BenchReport report;
   std::printf("%-26s %8s %9s %10s %10s %9s %10s  %s\n", "stream", "bytes", "decode s", "units/B",
               "memory MiB", "render s", "work/px", "outcome");
-  for (const CostlyCase& c : Cases()) {
+  for (const costly::CostlyClass& c : costly::CostlyClasses()) {
     const std::vector<uint8_t> bytes = costly::BuildCostlyStream(c.scene);
     dec::SceneField field;
     dec::SceneInfo info;
