@@ -5,9 +5,15 @@
 #ifndef ECRF_CONFORMANCE_COSTLY_CLASSES_H_
 #define ECRF_CONFORMANCE_COSTLY_CLASSES_H_
 
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "conformance/costly_streams.h"
+#include "decoder/camera.h"
+#include "decoder/ray_marcher.h"
+#include "decoder/scene_decoder.h"
 
 namespace ecrf {
 namespace costly {
@@ -83,6 +89,44 @@ inline std::vector<CostlyClass> CostlyClasses() {
   add("full_length_small_blocks", "512^2 planes, rank 16, 4^3 blocks coded to their last position",
       [](CostlyScene& s) { s = FullLengthBlocks(4); });
   return v;
+}
+
+// What one class cost: its stream decoded at the default budgets of SPEC.md 8, then (if it
+// decoded) a 64x64 view rendered on `threads` threads, each timed.
+struct CostlyMeasurement {
+  size_t bytes = 0;
+  Status decoded, rendered;  // rendered: the decode's status when it failed
+  dec::SceneInfo info;
+  dec::RenderStats stats;
+  double decode_s = 0.0, render_s = 0.0;
+  const char* outcome() const {
+    return !decoded.ok() ? "decode refused" : !rendered.ok() ? "render refused" : "rendered";
+  }
+};
+
+inline CostlyMeasurement MeasureCostlyClass(const CostlyClass& c, int threads) {
+  auto seconds_since = [](std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  CostlyMeasurement m;
+  const std::vector<uint8_t> bytes = BuildCostlyStream(c.scene);
+  m.bytes = bytes.size();
+  dec::SceneField field;
+  auto start = std::chrono::steady_clock::now();
+  m.decoded = dec::DecodeScene(bytes.data(), bytes.size(), dec::DecodeOptions(), &field, &m.info);
+  m.decode_s = seconds_since(start);
+  m.rendered = m.decoded;
+  if (!m.decoded.ok()) return m;
+  dec::RenderOptions options;
+  options.num_threads = threads;
+  dec::RayMarcher marcher;
+  const dec::Camera camera = dec::OrbitCameraDegrees(64, 64, 0.0, 0.0, 3.f);
+  std::vector<uint8_t> rgba(64 * 64 * 4);
+  start = std::chrono::steady_clock::now();
+  m.rendered = marcher.Init(&field, options);
+  if (m.rendered.ok()) m.rendered = marcher.RenderImage(camera, rgba.data(), nullptr, &m.stats);
+  m.render_s = seconds_since(start);
+  return m;
 }
 
 }  // namespace costly

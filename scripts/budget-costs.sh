@@ -51,7 +51,7 @@ for name in names:
     for line in open(f"{out}/{name}.txt"):
         if line.startswith("#"):
             continue
-        cls, du, ds, ru, rs, outcome = line.split()
+        cls, du, ds, ru, rs, outcome = line.rstrip("\n").split(" ", 5)
         rows.setdefault(cls, {})[name] = (int(du), float(ds), int(ru), float(rs), outcome)
 def ns(units, seconds):  # under a millisecond the clock, not the work, is measured
     return seconds * 1e9 / units if units > 0 and seconds >= 1e-3 else None

@@ -3,20 +3,12 @@
 // memory the decoder's budget granted) and what a 64x64 view costs (seconds), with the outcome.
 // The budgets' goal: no stream of at most 64 KB takes more than 2 s to decode or 1 s to render
 // at 64x64 on 2 cores, while trained scenes decode and render unchanged.
-#include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <string>
-#include <vector>
 
 #include "conformance/costly_classes.h"
-#include "decoder/camera.h"
-#include "decoder/ray_marcher.h"
-#include "decoder/render_work.h"
-#include "decoder/scene_decoder.h"
 #include "tools/bench/bench_json.h"
 #include "tools/bench/benches.h"
-#include "trainer/data/seconds_since.h"
 
 namespace ecrf {
 namespace tools {
@@ -36,44 +28,21 @@ int RunBudgetBench(int argc, char** argv) {
   std::printf("%-26s %8s %9s %10s %10s %9s %10s  %s\n", "stream", "bytes", "decode s", "units/B",
               "memory MiB", "render s", "work/px", "outcome");
   for (const costly::CostlyClass& c : costly::CostlyClasses()) {
-    const std::vector<uint8_t> bytes = costly::BuildCostlyStream(c.scene);
-    dec::SceneField field;
-    dec::SceneInfo info;
-    auto start = std::chrono::steady_clock::now();
-    const Status decoded =
-        dec::DecodeScene(bytes.data(), bytes.size(), dec::DecodeOptions(), &field, &info);
-    const double decode_s = trainer::SecondsSince(start);
-    double render_s = 0.0, work_per_pixel = 0.0;
-    Status rendered = decoded;
-    if (decoded.ok()) {
-      dec::RenderOptions options;
-      options.num_threads = 2;
-      dec::RayMarcher marcher;
-      const dec::Camera camera = dec::OrbitCameraDegrees(64, 64, 0.0, 0.0, 3.f);
-      std::vector<uint8_t> rgba(64 * 64 * 4);
-      dec::RenderStats stats;
-      start = std::chrono::steady_clock::now();
-      rendered = marcher.Init(&field, options);
-      if (rendered.ok()) rendered = marcher.RenderImage(camera, rgba.data(), nullptr, &stats);
-      render_s = trainer::SecondsSince(start);
-      work_per_pixel = static_cast<double>(stats.work) / (64.0 * 64.0);
-    }
-    const std::string outcome = !decoded.ok()    ? "decode refused"
-                                : !rendered.ok() ? "render refused"
-                                                 : "rendered";
-    const double memory_mib = static_cast<double>(info.memory_bytes) / (1 << 20);
+    const costly::CostlyMeasurement m = costly::MeasureCostlyClass(c, 2);
+    const double memory_mib = static_cast<double>(m.info.memory_bytes) / (1 << 20);
     const double units_per_byte =
-        static_cast<double>(info.decode_work) / static_cast<double>(bytes.size());
-    std::printf("%-26s %8zu %9.3f %10.0f %10.1f %9.3f %10.0f  %s (%s)\n", c.name, bytes.size(),
-                decode_s, units_per_byte, memory_mib, render_s, work_per_pixel, outcome.c_str(),
+        static_cast<double>(m.info.decode_work) / static_cast<double>(m.bytes);
+    const double work_per_pixel = static_cast<double>(m.stats.work) / (64.0 * 64.0);
+    std::printf("%-26s %8zu %9.3f %10.0f %10.1f %9.3f %10.0f  %s (%s)\n", c.name, m.bytes,
+                m.decode_s, units_per_byte, memory_mib, m.render_s, work_per_pixel, m.outcome(),
                 c.what);
     const std::string key = std::string("budgets.") + c.name;
     if (!json.empty()) {
-      report.Add(key + ".bytes", static_cast<double>(bytes.size()), "B");
-      report.Add(key + ".decode_s", decode_s, "s");
+      report.Add(key + ".bytes", static_cast<double>(m.bytes), "B");
+      report.Add(key + ".decode_s", m.decode_s, "s");
       report.Add(key + ".memory_mib", memory_mib, "MiB");
-      report.Add(key + ".render_64x64_s", render_s, "s");
-      report.Add(key + ".refused", decoded.ok() && rendered.ok() ? 0.0 : 1.0, "");
+      report.Add(key + ".render_64x64_s", m.render_s, "s");
+      report.Add(key + ".refused", m.decoded.ok() && m.rendered.ok() ? 0.0 : 1.0, "");
     }
   }
   if (!json.empty() && !report.WriteJson(json)) {
