@@ -195,7 +195,7 @@ TEST(TrainBuiltin, ARunShorterThanItsRatePhaseStillReportsItsSize) {
 // encode-time rate control finishes.
 TEST(TrainBuiltin, TargetSizeLands) {
   TrainOptions o = SmallRun();
-  o.iters = 600;  // rate phase from 321 (after the last upsample at 320)
+  o.iters = 600;       // rate phase from 321 (after the last upsample at 320)
   o.batch_rays = 512;  // half of SmallRun's: the test is about the controller, not the quality
   const Dataset train = LoadTrainingViews(o, "train");
   const Dataset test = LoadTrainingViews(o, "test");
