@@ -22,7 +22,7 @@ for scene in "${scenes[@]}"; do
     case "$head" in
       deferred) flags=(--head deferred) label="deferred (hidden 128)" ;;
       deferred_h32) flags=(--head deferred --mlp-hidden 32) label="deferred (hidden 32)" ;;
-      sh) flags=(--head sh) label="sh (degree 2)" ;;
+      sh) flags=(--head sh --sh-degree 2) label="sh (degree 2)" ;;
       sh_d3) flags=(--head sh --sh-degree 3) label="sh (degree 3)" ;;
       *) echo "heads-reports: unknown head $head (deferred, deferred_h32, sh, sh_d3)" >&2; exit 2 ;;
     esac
