@@ -415,7 +415,8 @@ def save(fig, path):
         return
     tmp = os.path.join(os.path.dirname(path) or ".", f".{os.path.basename(path)}.{os.getpid()}.tmp")
     try:
-        fig.savefig(tmp, format="png", dpi=110)
+        # tight: long rotated tick labels (a sweep's point names) stay inside the picture.
+        fig.savefig(tmp, format="png", dpi=110, bbox_inches="tight")
         os.replace(tmp, path)
     except OSError as e:
         raise OSError(f"cannot write {path}: {e.strerror or e}") from None
