@@ -195,6 +195,18 @@ inline std::vector<RejectVector> RejectVectors() {
         "an MLPW head of 2, unknown to this version (6.6)", Join(c, d[5]));
   }
   {
+    const std::vector<uint8_t> d = BuildSceneVector(Named("scene_one_hidden_layer"));
+    add("reject_one_hidden_layer_in_1_7", "decode", kErrCorrupt, false,
+        "the MLP with one hidden layer (MLPW layers 1, 1.8) in a stream labelled 1.7 (2.1)",
+        Join(Split(d), 7));
+    Chunks c = Split(d);
+    for (auto& [type, payload] : c) {
+      if (type == kChunkMlpWeights) payload[2] = kMlpOneHiddenLayer + 1;
+    }
+    add("reject_unknown_mlp_layers", "decode", kErrUnsupported, false,
+        "an MLPW layers byte of 2, unknown to this version (6.6)", Join(c, d[5]));
+  }
+  {
     const std::vector<uint8_t> d = BuildSceneVector(Named("scene_sh_deferred"));
     add("reject_sh_colour_in_1_6", "decode", kErrCorrupt, false,
         "the spherical-harmonics colour (HEAD hidden 0, 1.7) in a stream labelled 1.6 (2.1)",

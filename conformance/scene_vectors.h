@@ -9,7 +9,8 @@
 // from outside its region of interest, a forward-facing scene (bitstream 1.3: NDC, 7.2.2) seen
 // from in front of its reference camera. Those carry the lowest version of their features and
 // the narrow coefficient contexts of 1.0-1.3; the `*_wide_contexts*` vectors are 1.4 streams,
-// `scene_neighbour_contexts` a 1.5 stream, `scene_deferred_head` a 1.6 one, `scene_sh_*` 1.7.
+// `scene_neighbour_contexts` a 1.5 stream, `scene_deferred_head` a 1.6 one, `scene_sh_*` 1.7,
+// `scene_one_hidden_layer` 1.8.
 // Added with SPEC.md 1.5: a quantized MLP whose levels reach every magnitude class up to 24 (the
 // class escape with extra values up to 2^23), an unbounded scene whose rays end at their sample
 // limit inside the contracted cube, and a forward-facing scene seen from the side, so that a
@@ -58,6 +59,7 @@ struct SceneVector {
   HeadKind head = HeadKind::kPerSample;  // kDeferred: a 1.6 stream (SPEC.md 7.6)
   // 0..3: the spherical-harmonics colour of this degree (HEAD hidden 0, a 1.7 stream, 7.6.2).
   int sh_degree = -1;
+  int hidden_layers = 2;  // 1: the MLP with one hidden layer (MLPW layers 1, a 1.8 stream, 6.6)
 };
 
 inline const std::vector<SceneVector>& SceneVectors() {
@@ -258,6 +260,25 @@ inline const std::vector<SceneVector>& SceneVectors() {
        false,
        HeadKind::kPerSample,
        3},
+      // Added with SPEC.md 1.9 (bitstream 1.8): the MLP with one hidden layer (MLPW layers 1),
+      // once per ray, quantized, with a mask.
+      {"scene_one_hidden_layer",
+       {11, 12, 10},
+       {{2, 2, 2}, {3, 3, 2}},
+       {2, 4, 4},
+       {1, 2, 8},
+       8,
+       2,
+       OccupancyKind::kSphere,
+       27,
+       SceneModel::kObject,
+       false,
+       0,
+       false,
+       false,
+       HeadKind::kDeferred,
+       -1,
+       1},
   };
   return v;
 }
@@ -361,7 +382,8 @@ inline void MakeSceneBlock(Lcg& rng, const int dims[3], int32_t max_abs, bool de
 
 // The lowest minor version that has every feature the vector uses. 1.1: quantized MLP; 1.2:
 // unbounded scene model; 1.3: forward-facing scene model; 1.4: wide coefficient contexts; 1.5:
-// neighbour coefficient contexts; 1.6: the deferred head; 1.7: spherical-harmonics colour.
+// neighbour coefficient contexts; 1.6: the deferred head; 1.7: spherical-harmonics colour; 1.8:
+// one hidden layer.
 inline uint8_t SceneVectorVersionMinor(const SceneVector& v) {
   return std::max<uint8_t>(
       {v.neighbour_contexts ? kNeighbourContextsMinVersionMinor
@@ -370,7 +392,8 @@ inline uint8_t SceneVectorVersionMinor(const SceneVector& v) {
        kSceneModelMinVersionMinor[static_cast<int>(v.scene_model)],
        v.mlp_precision == kMlpPrecisionQuantized ? kQuantizedMlpMinVersionMinor : uint8_t{0},
        kHeadKindMinVersionMinor[static_cast<int>(v.head)],
-       v.sh_degree >= 0 ? kShColourMinVersionMinor : uint8_t{0}});
+       v.sh_degree >= 0 ? kShColourMinVersionMinor : uint8_t{0},
+       v.hidden_layers == 1 ? kOneHiddenLayerMinVersionMinor : uint8_t{0}});
 }
 
 // The occupancy chunk: a 7x6x5 mask over the grid box, empty or a sphere.
@@ -450,11 +473,12 @@ inline std::vector<uint8_t> SceneVectorMlpChunk(const SceneVector& v, const Scen
                                                 Lcg& rng) {
   const int F = h.feature_dim, H = h.hidden, P = h.total_rank(1);
   const int in = F + 3 + 2 * F * h.feature_pe_freqs + 2 * 3 * h.viewdir_pe_freqs;
-  const size_t count = size_t(F) * P + size_t(H) * in + H + size_t(H) * H + H + 3 * size_t(H) + 3;
+  const size_t H2 = v.hidden_layers == 2 ? size_t(H) : 0;  // no W2, b2 with one hidden layer
+  const size_t count = size_t(F) * P + size_t(H) * in + H + H2 * H2 + H2 + 3 * size_t(H) + 3;
   ByteWriter mlp;
   mlp.U8(uint8_t(v.mlp_precision));
   mlp.U8(static_cast<uint8_t>(v.head));
-  mlp.U8(0);
+  mlp.U8(v.hidden_layers == 1 ? kMlpOneHiddenLayer : kMlpTwoHiddenLayers);
   mlp.U8(0);
   if (v.mlp_precision == kMlpPrecisionQuantized && v.mlp_escapes) {
     // Magnitudes 2^(1 - k) (k = i % 25) times a factor in [1, 2) so that with 2^24 - 1 levels
@@ -468,7 +492,8 @@ inline std::vector<uint8_t> SceneVectorMlpChunk(const SceneVector& v, const Scen
       const float sign = (rng.Next() & 1) ? -1.f : 1.f;
       w[i] = sign * std::ldexp(m, 1 - int(i % 25));
     }
-    const MlpLayout layout = MakeMlpLayout(F, P, H, h.feature_pe_freqs, h.viewdir_pe_freqs);
+    const MlpLayout layout =
+        MakeMlpLayout(F, P, H, h.feature_pe_freqs, h.viewdir_pe_freqs, v.hidden_layers);
     mlp.Bytes(EncodeQuantizedMlp(layout, w.data(), kMlpMaxLevel, nullptr));
   } else if (v.mlp_precision == kMlpPrecisionQuantized) {
     // Rows of very different scale (one step each); 20000 levels per row reach class 15.
@@ -476,7 +501,8 @@ inline std::vector<uint8_t> SceneVectorMlpChunk(const SceneVector& v, const Scen
     for (size_t i = 0; i < count; ++i) {
       w[i] = std::ldexp(float(int(rng.Below(257)) - 128) / 256.f, int(i / 7 % 7) - 3);
     }
-    const MlpLayout layout = MakeMlpLayout(F, P, H, h.feature_pe_freqs, h.viewdir_pe_freqs);
+    const MlpLayout layout =
+        MakeMlpLayout(F, P, H, h.feature_pe_freqs, h.viewdir_pe_freqs, v.hidden_layers);
     mlp.Bytes(EncodeQuantizedMlp(layout, w.data(), 20000, nullptr));
   }
   for (size_t i = 0; i < count && v.mlp_precision != kMlpPrecisionQuantized; ++i) {

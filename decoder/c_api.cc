@@ -167,6 +167,11 @@ int ecrf_scene_head(const ecrf_scene* scene) {
   return static_cast<int>(scene->field.head);
 }
 
+int ecrf_scene_mlp_layers(const ecrf_scene* scene) {
+  if (!scene || !scene->decoded) return ECRF_ERR_INVALID_ARGUMENT;
+  return scene->field.mlp.config().hidden_layers;
+}
+
 int ecrf_scene_version(const ecrf_scene* scene) {
   if (!scene || !scene->decoded) return ECRF_ERR_INVALID_ARGUMENT;
   return (static_cast<int>(scene->info.version_major) << 8) | scene->info.version_minor;

@@ -146,6 +146,10 @@ Status AppearanceMlp::Init(const MlpConfig& config) {
       "mlp: hidden 0 (spherical harmonics) needs feature_dim 3, 12, 27 or 48 and "
       "no positional encoding, not %d, %d and %d",
       config.feature_dim, config.feature_pe_freqs, config.viewdir_pe_freqs);
+  ECRF_CHECK_OR_RETURN(
+      config.hidden_layers == 2 || (config.hidden_layers == 1 && config.hidden > 0),
+      kErrInvalidArgument, "mlp: %d hidden layers (2, or 1 with a hidden width above 0)",
+      config.hidden_layers);
   config_ = config;
   kernel_ = BestGemmKernel();
   gemm8_ = Gemm8For(kernel_);
@@ -155,6 +159,7 @@ Status AppearanceMlp::Init(const MlpConfig& config) {
   hid_pad_ = RoundUp(config.hidden, kPad);
   const size_t P = static_cast<size_t>(config.num_products);
   const size_t H = static_cast<size_t>(config.hidden);
+  const size_t H2 = config.hidden_layers == 2 ? H : 0;  // W2's rows
   // All factors are bounded by the limits above, so these sizes cannot overflow.
   size_t off = 0;
   o_basis_ = off;
@@ -164,7 +169,7 @@ Status AppearanceMlp::Init(const MlpConfig& config) {
   o_b1_ = off;
   off += hid_pad_;
   o_w2_ = off;
-  off += H * hid_pad_;
+  off += H2 * hid_pad_;
   o_b2_ = off;
   off += hid_pad_;
   o_w3_ = off;
@@ -191,7 +196,8 @@ Status AppearanceMlp::UseGemmKernel(GemmKernel kernel) {
 
 size_t AppearanceMlp::num_params() const {
   const size_t P = config_.num_products, F = config_.feature_dim, H = config_.hidden;
-  return F * P + H * static_cast<size_t>(in_dim_) + H + H * H + H + 3 * H + 3;
+  const size_t H2 = config_.hidden_layers == 2 ? H : 0;
+  return F * P + H * static_cast<size_t>(in_dim_) + H + H2 * H2 + H2 + 3 * H + 3;
 }
 
 Status AppearanceMlp::SetParams(const float* params, size_t count) {
@@ -200,6 +206,7 @@ Status AppearanceMlp::SetParams(const float* params, size_t count) {
                        "mlp: expected %zu parameters, got %zu", num_params(), count);
   ECRF_CHECK_OR_RETURN(AllFinite(params, count), kErrCorrupt, "mlp: non-finite parameter");
   const int P = config_.num_products, F = config_.feature_dim, H = config_.hidden;
+  const int H2 = config_.hidden_layers == 2 ? H : 0;
   const int in = in_dim_;
   std::memset(weights_, 0, weights_count_ * sizeof(float));
   const float* p = params;
@@ -214,9 +221,9 @@ Status AppearanceMlp::SetParams(const float* params, size_t count) {
   transpose(H, in, weights_ + o_w1_, hid_pad_);
   std::memcpy(weights_ + o_b1_, p, H * sizeof(float));
   p += H;
-  transpose(H, H, weights_ + o_w2_, hid_pad_);
-  std::memcpy(weights_ + o_b2_, p, H * sizeof(float));
-  p += H;
+  transpose(H2, H2, weights_ + o_w2_, hid_pad_);
+  std::memcpy(weights_ + o_b2_, p, H2 * sizeof(float));
+  p += H2;
   transpose(3, H, weights_ + o_w3_, kOutPad);
   std::memcpy(weights_ + o_b3_, p, 3 * sizeof(float));
   return Status::Ok();
@@ -227,6 +234,7 @@ Status AppearanceMlp::GetParams(float* params, size_t count) const {
   ECRF_CHECK_OR_RETURN(params != nullptr && count == num_params(), kErrInvalidArgument,
                        "mlp: expected room for %zu parameters, got %zu", num_params(), count);
   const int P = config_.num_products, F = config_.feature_dim, H = config_.hidden;
+  const int H2 = config_.hidden_layers == 2 ? H : 0;
   float* p = params;
   auto untranspose = [&](int out, int k_in, const float* src, int ldw) {
     for (int o = 0; o < out; ++o) {
@@ -239,9 +247,9 @@ Status AppearanceMlp::GetParams(float* params, size_t count) const {
   untranspose(H, in_dim_, weights_ + o_w1_, hid_pad_);
   std::memcpy(p, weights_ + o_b1_, H * sizeof(float));
   p += H;
-  untranspose(H, H, weights_ + o_w2_, hid_pad_);
-  std::memcpy(p, weights_ + o_b2_, H * sizeof(float));
-  p += H;
+  untranspose(H2, H2, weights_ + o_w2_, hid_pad_);
+  std::memcpy(p, weights_ + o_b2_, H2 * sizeof(float));
+  p += H2;
   untranspose(3, H, weights_ + o_w3_, kOutPad);
   std::memcpy(p, weights_ + o_b3_, 3 * sizeof(float));
   return Status::Ok();
@@ -343,10 +351,14 @@ uint64_t AppearanceMlp::Infer(int rows, const float* products, size_t products_s
     }
     GemmRows(gemm8_, n8, in, in_stride_, in_dim_, false, weights_ + o_w1_, hid_pad_,
              weights_ + o_b1_, true, h1, hid_pad_);
-    GemmRows(gemm8_, n8, h1, hid_pad_, H, true, weights_ + o_w2_, hid_pad_, weights_ + o_b2_, true,
-             h2, hid_pad_);
-    GemmRows(gemm8_, n8, h2, hid_pad_, H, true, weights_ + o_w3_, kOutPad, weights_ + o_b3_, false,
-             out, kOutPad);
+    const float* last = h1;  // what W3 reads
+    if (config_.hidden_layers == 2) {
+      GemmRows(gemm8_, n8, h1, hid_pad_, H, true, weights_ + o_w2_, hid_pad_, weights_ + o_b2_,
+               true, h2, hid_pad_);
+      last = h2;
+    }
+    GemmRows(gemm8_, n8, last, hid_pad_, H, true, weights_ + o_w3_, kOutPad, weights_ + o_b3_,
+             false, out, kOutPad);
     for (int r = 0; r < n; ++r) {
       for (int c = 0; c < 3; ++c) {
         rgb[static_cast<size_t>(r0 + r) * 3 + c] =

@@ -3,7 +3,8 @@
 //
 // products (P) -> basis [F x P, no bias] -> features (F)
 // -> input [features F, viewdir 3, PE(features, Ff), PE(viewdir, Fv)]
-// -> Linear(hidden) ReLU -> Linear(hidden) ReLU -> Linear(3) -> sigmoid;
+// -> Linear(hidden) ReLU -> Linear(hidden) ReLU (absent with one hidden layer) -> Linear(3)
+// -> sigmoid;
 // with hidden 0, features = spherical-harmonics coefficients -> + b3 -> sigmoid (SPEC.md 7.6.2).
 // PE(x, Fr): arguments x_c * 2^f ordered c-major, then all sines, then all cosines.
 // Widths come from MlpConfig (read from the scene), not constants.
@@ -32,6 +33,9 @@ struct MlpConfig {
   int feature_pe_freqs = 2;
   int viewdir_pe_freqs = 2;
   int hidden = 128;
+  // 2: TensoRF's Linear(hidden) ReLU Linear(hidden) ReLU; 1: one Linear(hidden) ReLU, whose
+  // output W3 reads (the MLPW layers field, SPEC.md 6.6, bitstream 1.8).
+  int hidden_layers = 2;
   // hidden 0: no MLP, the features are spherical-harmonics coefficients (SPEC.md 7.6.2) of this
   // degree (-1: feature_dim fits none).
   int sh_degree() const { return ShDegreeForFeatureDim(feature_dim); }
@@ -65,7 +69,8 @@ class AppearanceMlp {
   const MlpConfig& config() const { return config_; }
 
   // Number of floats in the trainer's flat layout (trainer/model/appearance_head.h): basis [F x P],
-  // W1 [H x in], b1 [H], W2 [H x H], b2 [H], W3 [3 x H], b3 [3]; row-major (out x in).
+  // W1 [H x in], b1 [H], W2 [H x H], b2 [H], W3 [3 x H], b3 [3]; row-major (out x in); no W2, b2
+  // with one hidden layer.
   size_t num_params() const;
   // Loads weights from that layout (count must equal num_params()); rejects non-finite values.
   Status SetParams(const float* params, size_t count);

@@ -68,7 +68,8 @@ inline SampleCosts HeadSampleCosts(HeadKind kind, const MlpConfig& m, int densit
   const uint64_t pe = 8 * 2 *
                       (F * static_cast<uint64_t>(m.feature_pe_freqs) +
                        3 * static_cast<uint64_t>(m.viewdir_pe_freqs));
-  const uint64_t head = F * P + pe + in * H + H * H + 3 * H + 256;
+  const uint64_t second_layer = m.hidden_layers == 2 ? H * H : 0;
+  const uint64_t head = F * P + pe + in * H + second_layer + 3 * H + 256;
   if (kind == HeadKind::kDeferred) {
     c.color = kRank * P + P;
     c.ray_head = head;

@@ -296,29 +296,9 @@ Status DecodeOccupancyChunk(const ChunkView& chunk, int version_minor, MemoryBud
 Status DecodeMlpChunk(const ChunkView& chunk, const SceneHeader& h, MemoryBudget* budget,
                       WorkBudget* work, int version_minor, SceneField* scene, SceneInfo* info) {
   ByteReader r(chunk.data, chunk.size);
-  uint8_t precision = 0, head = 0, reserved[2] = {0, 0};
-  ECRF_RETURN_IF_ERROR(r.ReadU8(&precision, "MLPW precision"));
-  ECRF_RETURN_IF_ERROR(r.ReadU8(&head, "MLPW head"));
-  for (uint8_t& b : reserved) ECRF_RETURN_IF_ERROR(r.ReadU8(&b, "MLPW reserved"));
-  ECRF_CHECK_OR_RETURN(reserved[0] == 0 && reserved[1] == 0, kErrCorrupt,
-                       "MLPW: reserved bytes must be 0");
-  ECRF_CHECK_OR_RETURN(precision <= kMlpPrecisionQuantized, kErrUnsupported,
-                       "MLPW: precision %u (0 = float16, 1 = float32, 2 = quantized)", precision);
-  ECRF_CHECK_OR_RETURN(
-      precision != kMlpPrecisionQuantized || version_minor >= kQuantizedMlpMinVersionMinor,
-      kErrCorrupt,
-      "MLPW: precision 2 (quantized) needs version_minor >= %d, the stream says %d (SPEC.md 2.1)",
-      kQuantizedMlpMinVersionMinor, version_minor);
-  ECRF_CHECK_OR_RETURN(head < kNumHeadKinds, kErrUnsupported,
-                       "MLPW: head %u is unknown (this decoder knows 0, per-sample MLP, and 1, "
-                       "deferred; the stream needs a newer decoder)",
-                       head);
-  ECRF_CHECK_OR_RETURN(
-      version_minor >= kHeadKindMinVersionMinor[head], kErrCorrupt,
-      "MLPW: head %u (%s) needs version_minor >= %d, the stream says %d (SPEC.md 2.1; the byte "
-      "was reserved, 0, before 1.6)",
-      head, HeadKindName(static_cast<HeadKind>(head)), kHeadKindMinVersionMinor[head],
-      version_minor);
+  MlpChunkHeader mh;
+  ECRF_RETURN_IF_ERROR(ReadMlpChunkHeader(&r, version_minor, h.hidden, &mh));
+  const uint8_t precision = mh.precision, head = mh.head;
   scene->head = static_cast<HeadKind>(head);
   MlpConfig config;
   config.num_products = h.total_rank(1);
@@ -326,11 +306,13 @@ Status DecodeMlpChunk(const ChunkView& chunk, const SceneHeader& h, MemoryBudget
   config.feature_pe_freqs = h.feature_pe_freqs;
   config.viewdir_pe_freqs = h.viewdir_pe_freqs;
   config.hidden = h.hidden;
+  config.hidden_layers = MlpHiddenLayers(mh.layers);
   {
     // The decoded parameters and the renderer's padded, transposed copy (at most 2x with padding).
     const uint64_t F = h.feature_dim, P = config.num_products, H = h.hidden;
     const uint64_t in = F + 3 + 2 * F * h.feature_pe_freqs + 6 * uint64_t{h.viewdir_pe_freqs};
-    const uint64_t count = F * P + H * in + H * H + 5 * H + 3;
+    const uint64_t H2 = config.hidden_layers == 2 ? H : 0;
+    const uint64_t count = F * P + H * in + H2 * H2 + 5 * H + 3;
     ECRF_RETURN_IF_ERROR(budget->Take(count * 4 * 3, "MLPW: the MLP parameters"));
     // A quantized weight is at least one symbol; binary16 and binary32 ones are read in bulk.
     if (!work->Take(precision == kMlpPrecisionQuantized ? count : count / 8)) {
@@ -342,8 +324,9 @@ Status DecodeMlpChunk(const ChunkView& chunk, const SceneHeader& h, MemoryBudget
   HeapArray<float> params;
   ECRF_RETURN_IF_ERROR(params.Allocate(count));
   if (precision == kMlpPrecisionQuantized) {
-    const MlpLayout layout = MakeMlpLayout(h.feature_dim, config.num_products, h.hidden,
-                                           h.feature_pe_freqs, h.viewdir_pe_freqs);
+    const MlpLayout layout =
+        MakeMlpLayout(h.feature_dim, config.num_products, h.hidden, h.feature_pe_freqs,
+                      h.viewdir_pe_freqs, config.hidden_layers);
     const Status q = DecodeQuantizedMlp(layout, r.current(), r.remaining(), params.data());
     if (!q.ok()) return Status::Error(q.code(), "MLPW: %s", q.message());
   } else {
@@ -368,6 +351,7 @@ Status DecodeMlpChunk(const ChunkView& chunk, const SceneHeader& h, MemoryBudget
   info->mlp_bytes = chunk.size;
   info->mlp_precision = precision;
   info->head = static_cast<HeadKind>(head);
+  info->mlp_hidden_layers = config.hidden_layers;
   info->mlp_precision_bits = precision == kMlpPrecisionFloat16   ? 16
                              : precision == kMlpPrecisionFloat32 ? 32
                                                                  : 0;

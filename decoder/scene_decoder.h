@@ -68,6 +68,7 @@ struct SceneInfo {
   int mlp_precision = 0;                 // MLPW precision field: 0 float16, 1 float32, 2 quantized
   int mlp_precision_bits = 0;            // 16 or 32 for floating weights, 0 for quantized
   HeadKind head = HeadKind::kPerSample;  // MLPW head field (1.6)
+  int mlp_hidden_layers = 2;             // MLPW layers field: 1 or 2 (1.8)
   int occupancy_res[3] = {0, 0, 0};
   size_t occupied_voxels = 0;
   uint8_t occupancy_contexts = 0;  // the OCCU contexts field: 0 narrow, 1 wide (1.5)

@@ -37,6 +37,7 @@ struct SceneDescription {
   // The basis [feature_dim x total appearance rank], then the MLP in the MLPW order (SPEC.md 6.6).
   std::vector<float> head_params;
   HeadKind head = HeadKind::kPerSample;  // where the MLP runs (the MLPW head byte, SPEC.md 6.6)
+  int mlp_hidden_layers = 2;             // 1 or 2 (the MLPW layers byte; 1 needs bitstream 1.8)
   std::optional<OccupancyDescription> mask;
 };
 

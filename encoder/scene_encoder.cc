@@ -40,8 +40,12 @@ void CheckDescription(const SceneDescription& s) {
       }
     }
   }
+  if (s.mlp_hidden_layers != 2 && (s.mlp_hidden_layers != 1 || h.hidden == 0)) {
+    throw std::invalid_argument("EncodeScene: " + std::to_string(s.mlp_hidden_layers) +
+                                " hidden layers (2, or 1 with a hidden width above 0)");
+  }
   const MlpLayout mlp = MakeMlpLayout(h.feature_dim, h.total_rank(1), h.hidden, h.feature_pe_freqs,
-                                      h.viewdir_pe_freqs);
+                                      h.viewdir_pe_freqs, s.mlp_hidden_layers);
   if (s.head_params.size() != MlpParamCount(mlp)) {
     throw std::invalid_argument("EncodeScene: " + std::to_string(s.head_params.size()) +
                                 " head parameters, the header's head has " +
@@ -104,12 +108,13 @@ SceneDescription DropComponents(const SceneDescription& in, const std::vector<ui
 }
 
 // The lowest minor version of the features used, wide contexts aside: 1.1 for the quantized MLP,
-// 1.2 unbounded, 1.3 forward-facing, 1.6 deferred, 1.7 spherical harmonics.
+// 1.2 unbounded, 1.3 forward-facing, 1.6 deferred, 1.7 spherical harmonics, 1.8 one hidden layer.
 uint8_t FeatureVersionMinor(const SceneDescription& s, const EncodeOptions& o) {
   return std::max({o.mlp_max_level > 0 ? kQuantizedMlpMinVersionMinor : uint8_t{0},
                    kSceneModelMinVersionMinor[s.header.scene_model],
                    kHeadKindMinVersionMinor[static_cast<int>(s.head)],
-                   s.header.hidden == 0 ? kShColourMinVersionMinor : uint8_t{0}});
+                   s.header.hidden == 0 ? kShColourMinVersionMinor : uint8_t{0},
+                   s.mlp_hidden_layers == 1 ? kOneHiddenLayerMinVersionMinor : uint8_t{0}});
 }
 
 // The shortest of the codes of `sets` (in order; the first wins ties) whose minimum version the
@@ -214,18 +219,18 @@ std::vector<uint8_t> EncodeOccupancyChunk(const OccupancyDescription& mask, int 
   return std::move(w.bytes());
 }
 
-std::vector<uint8_t> EncodeMlpChunk(const SceneHeader& h, HeadKind head,
+std::vector<uint8_t> EncodeMlpChunk(const SceneHeader& h, HeadKind head, int hidden_layers,
                                     const std::vector<float>& params, bool float32, int max_level) {
   ByteWriter w;
   w.U8(max_level > 0 ? kMlpPrecisionQuantized
        : float32     ? kMlpPrecisionFloat32
                      : kMlpPrecisionFloat16);
   w.U8(static_cast<uint8_t>(head));
-  w.U8(0);
+  w.U8(hidden_layers == 1 ? kMlpOneHiddenLayer : kMlpTwoHiddenLayers);
   w.U8(0);
   if (max_level > 0) {
     const MlpLayout layout = MakeMlpLayout(h.feature_dim, h.total_rank(1), h.hidden,
-                                           h.feature_pe_freqs, h.viewdir_pe_freqs);
+                                           h.feature_pe_freqs, h.viewdir_pe_freqs, hidden_layers);
     w.Bytes(EncodeQuantizedMlp(layout, params.data(), max_level, nullptr));
     return std::move(w.bytes());
   }
@@ -301,7 +306,7 @@ std::vector<uint8_t> Assemble(const SceneDescription& s, const std::vector<float
     }
   }
   const std::vector<uint8_t> mlp =
-      EncodeMlpChunk(h, s.head, s.head_params, o.mlp_float32, o.mlp_max_level);
+      EncodeMlpChunk(h, s.head, s.mlp_hidden_layers, s.head_params, o.mlp_float32, o.mlp_max_level);
   writer.AddChunk(kChunkMlpWeights, mlp);
   report->mlp_bytes = mlp.size();
   ++chunks;

@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "format/byte_io.h"
 #include "format/entropy/range_coder.h"
 #include "format/status.h"
 
@@ -47,6 +48,17 @@ inline const char* HeadKindName(HeadKind k) {
   return i < kNumHeadKinds ? kHeadKindNames[i] : "unknown";
 }
 
+// The MLPW `layers` byte (SPEC.md 6.6): how many hidden layers the MLP has. 0 stands for two
+// (TensoRF's, every stream before 1.8, when the byte was reserved); 1 for one, without W2 and b2:
+// about half the multiply-adds of a head of the same width (7.6).
+constexpr uint8_t kMlpTwoHiddenLayers = 0;
+constexpr uint8_t kMlpOneHiddenLayer = 1;
+constexpr uint8_t kOneHiddenLayerMinVersionMinor = 8;
+// The number of hidden layers a `layers` byte stands for (the byte is checked before).
+inline int MlpHiddenLayers(uint8_t layers_byte) {
+  return layers_byte == kMlpOneHiddenLayer ? 1 : 2;
+}
+
 // The head as tools name it (ecrf train --head, info, eval, metrics.json): with HEAD hidden 0 the
 // colour is spherical harmonics (SPEC.md 7.6.2), "sh" once per ray as --head sh trains it.
 constexpr const char* kShHeadName = "sh";
@@ -67,13 +79,14 @@ constexpr int32_t kMlpMaxLevel = (1 << 24) - 1;
 constexpr int kMlpContextGroups = 7;  // B, W1 x 4 input kinds, W2, W3
 
 // The flat parameter array of 6.6: B [F][P], W1 [H][In], b1 [H], W2 [H][H], b2 [H], W3 [3][H], b3
-// [3].
+// [3]; W2 and b2 only with two hidden layers.
 struct MlpLayout {
   int feature_dim = 0;       // F
   int num_products = 0;      // P
   int hidden = 0;            // H
   int input_dim = 0;         // In = F + 3 + feature_pe_width + 2 * 3 * Fv
   int feature_pe_width = 0;  // 2 * F * Ff
+  int hidden_layers = 2;     // 1: no W2, b2 (they have no row)
 };
 
 struct MlpMatrixSpan {
@@ -83,11 +96,12 @@ struct MlpMatrixSpan {
 };
 
 // The layout of a head with these widths and positional-encoding frequencies (feature PE width
-// 2*F*Ff, input width F + 3 + 2*F*Ff + 2*3*Fv).
+// 2*F*Ff, input width F + 3 + 2*F*Ff + 2*3*Fv) and 1 or 2 hidden layers.
 MlpLayout MakeMlpLayout(int feature_dim, int num_products, int hidden, int feature_pe_freqs,
-                        int viewdir_pe_freqs);
+                        int viewdir_pe_freqs, int hidden_layers = 2);
 
-// The four matrices (B, W1, W2, W3) and the three bias vectors (b1, b2, b3), in stream order.
+// The four matrices (B, W1, W2, W3) and the three bias vectors (b1, b2, b3), in stream order;
+// with one hidden layer W2 and b2 are empty (0 rows, 0 columns) and W3 reads the first layer.
 void MlpMatrices(const MlpLayout& layout, MlpMatrixSpan matrices[4], MlpMatrixSpan biases[3]);
 size_t MlpParamCount(const MlpLayout& layout);
 
@@ -114,6 +128,17 @@ inline int MlpLevelClass(uint32_t magnitude) {
 // will reconstruct are written to `reconstructed` when it is not null.
 std::vector<uint8_t> EncodeQuantizedMlp(const MlpLayout& layout, const float* params, int max_level,
                                         std::vector<float>* reconstructed);
+
+// The four bytes that open an MLPW payload (SPEC.md 6.6).
+struct MlpChunkHeader {
+  uint8_t precision = kMlpPrecisionFloat16;
+  uint8_t head = 0;    // HeadKind
+  uint8_t layers = 0;  // kMlpTwoHiddenLayers or kMlpOneHiddenLayer
+};
+// Reads them and checks them in the order of 6.6: the reserved byte, then each field's value
+// (unsupported when unknown) and the version it needs (corrupt before it); one hidden layer
+// needs an MLP (hidden > 0).
+Status ReadMlpChunkHeader(ByteReader* r, int version_minor, int hidden, MlpChunkHeader* out);
 
 // Decodes that payload into params_out (MlpParamCount values). Every step and bias must be a
 // finite binary16; the level stream must end exactly where the payload ends.

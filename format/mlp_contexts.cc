@@ -5,6 +5,8 @@ namespace ecrf {
 void MlpMatrices(const MlpLayout& l, MlpMatrixSpan matrices[4], MlpMatrixSpan biases[3]) {
   const size_t F = static_cast<size_t>(l.feature_dim), P = static_cast<size_t>(l.num_products);
   const size_t H = static_cast<size_t>(l.hidden), In = static_cast<size_t>(l.input_dim);
+  const int h2 = l.hidden_layers == 2 ? l.hidden : 0;  // W2's rows and columns
+  const size_t H2 = static_cast<size_t>(h2);
   size_t at = 0;
   matrices[0] = {at, l.feature_dim, l.num_products};
   at += F * P;
@@ -12,18 +14,19 @@ void MlpMatrices(const MlpLayout& l, MlpMatrixSpan matrices[4], MlpMatrixSpan bi
   at += H * In;
   biases[0] = {at, 1, l.hidden};
   at += H;
-  matrices[2] = {at, l.hidden, l.hidden};
-  at += H * H;
-  biases[1] = {at, 1, l.hidden};
-  at += H;
+  matrices[2] = {at, h2, h2};
+  at += H2 * H2;
+  biases[1] = {at, 1, h2};
+  at += H2;
   matrices[3] = {at, 3, l.hidden};
   at += 3 * H;
   biases[2] = {at, 1, 3};
 }
 
 MlpLayout MakeMlpLayout(int feature_dim, int num_products, int hidden, int feature_pe_freqs,
-                        int viewdir_pe_freqs) {
+                        int viewdir_pe_freqs, int hidden_layers) {
   MlpLayout l;
+  l.hidden_layers = hidden_layers;
   l.feature_dim = feature_dim;
   l.num_products = num_products;
   l.hidden = hidden;
@@ -35,7 +38,8 @@ MlpLayout MakeMlpLayout(int feature_dim, int num_products, int hidden, int featu
 size_t MlpParamCount(const MlpLayout& l) {
   const size_t F = static_cast<size_t>(l.feature_dim), P = static_cast<size_t>(l.num_products);
   const size_t H = static_cast<size_t>(l.hidden), In = static_cast<size_t>(l.input_dim);
-  return F * P + H * In + H + H * H + H + 3 * H + 3;
+  const size_t H2 = l.hidden_layers == 2 ? H : 0;
+  return F * P + H * In + H + H2 * H2 + H2 + 3 * H + 3;
 }
 
 int MlpContextGroup(const MlpLayout& l, int matrix, int col) {

@@ -3,6 +3,48 @@
 #include "format/mlp_coder.h"
 
 namespace ecrf {
+
+Status ReadMlpChunkHeader(ByteReader* r, int version_minor, int hidden, MlpChunkHeader* out) {
+  uint8_t precision = 0, head = 0, layers = 0, reserved = 0;
+  ECRF_RETURN_IF_ERROR(r->ReadU8(&precision, "MLPW precision"));
+  ECRF_RETURN_IF_ERROR(r->ReadU8(&head, "MLPW head"));
+  ECRF_RETURN_IF_ERROR(r->ReadU8(&layers, "MLPW layers"));
+  ECRF_RETURN_IF_ERROR(r->ReadU8(&reserved, "MLPW reserved"));
+  ECRF_CHECK_OR_RETURN(reserved == 0, kErrCorrupt, "MLPW: the reserved byte must be 0");
+  ECRF_CHECK_OR_RETURN(precision <= kMlpPrecisionQuantized, kErrUnsupported,
+                       "MLPW: precision %u (0 = float16, 1 = float32, 2 = quantized)", precision);
+  ECRF_CHECK_OR_RETURN(
+      precision != kMlpPrecisionQuantized || version_minor >= kQuantizedMlpMinVersionMinor,
+      kErrCorrupt,
+      "MLPW: precision 2 (quantized) needs version_minor >= %d, the stream says %d (SPEC.md 2.1)",
+      kQuantizedMlpMinVersionMinor, version_minor);
+  ECRF_CHECK_OR_RETURN(head < kNumHeadKinds, kErrUnsupported,
+                       "MLPW: head %u is unknown (this decoder knows 0, per-sample MLP, and 1, "
+                       "deferred; the stream needs a newer decoder)",
+                       head);
+  ECRF_CHECK_OR_RETURN(
+      version_minor >= kHeadKindMinVersionMinor[head], kErrCorrupt,
+      "MLPW: head %u (%s) needs version_minor >= %d, the stream says %d (SPEC.md 2.1; the byte "
+      "was reserved, 0, before 1.6)",
+      head, HeadKindName(static_cast<HeadKind>(head)), kHeadKindMinVersionMinor[head],
+      version_minor);
+  ECRF_CHECK_OR_RETURN(layers <= kMlpOneHiddenLayer, kErrUnsupported,
+                       "MLPW: layers %u is unknown (this decoder knows 0, two hidden layers, and "
+                       "1, one; the stream needs a newer decoder)",
+                       layers);
+  ECRF_CHECK_OR_RETURN(
+      layers == kMlpTwoHiddenLayers || version_minor >= kOneHiddenLayerMinVersionMinor, kErrCorrupt,
+      "MLPW: layers 1 (one hidden layer) needs version_minor >= %d, the stream says %d (SPEC.md "
+      "2.1; the byte was reserved, 0, before 1.8)",
+      kOneHiddenLayerMinVersionMinor, version_minor);
+  ECRF_CHECK_OR_RETURN(layers == kMlpTwoHiddenLayers || hidden > 0, kErrCorrupt,
+                       "MLPW: layers 1 (one hidden layer) with HEAD hidden 0, which has no MLP");
+  out->precision = precision;
+  out->head = head;
+  out->layers = layers;
+  return Status::Ok();
+}
+
 Status DecodeQuantizedMlp(const MlpLayout& layout, const uint8_t* data, size_t size,
                           float* params_out) {
   MlpMatrixSpan matrices[4], biases[3];

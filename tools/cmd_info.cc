@@ -113,9 +113,11 @@ int RunInfo(int argc, char** argv) {
   // spherical harmonics in place of the MLP (hidden 0, 7.6.2).
   const std::string sh_degree =
       h.hidden == 0 ? " (degree " + std::to_string(ShDegreeForFeatureDim(h.feature_dim)) + ")" : "";
-  std::printf("mlp      %s head%s, features %u, PE %u/%u, hidden %u, %s\n",
+  // One hidden layer (MLPW layers 1, SPEC.md 6.6) is named; two are TensoRF's, the default.
+  const char* layers = h.hidden != 0 && in.mlp_hidden_layers == 1 ? " x 1 layer" : "";
+  std::printf("mlp      %s head%s, features %u, PE %u/%u, hidden %u%s, %s\n",
               AppearanceName(in.head, h.hidden), sh_degree.c_str(), h.feature_dim,
-              h.feature_pe_freqs, h.viewdir_pe_freqs, h.hidden,
+              h.feature_pe_freqs, h.viewdir_pe_freqs, h.hidden, layers,
               in.mlp_precision_bits == 16   ? "float16"
               : in.mlp_precision_bits == 32 ? "float32"
                                             : "quantized (levels x row steps)");

@@ -271,6 +271,7 @@ nlohmann::json TrainingMetrics(const trainer::TrainOptions& o, const trainer::Tr
   m["density_ranks"] = model.density().ranks();
   m["appearance_ranks"] = model.appearance().ranks();
   m["mlp_hidden"] = model.head().config().hidden;
+  m["mlp_layers"] = model.head().config().hidden_layers;
   if (r.head_choice.iteration >= 0) {  // --head auto: what it predicted and chose
     const trainer::HeadChoiceReport& h = r.head_choice;
     nlohmann::json candidates = nlohmann::json::array();

@@ -50,9 +50,13 @@
   // straddle a block; a run is a stretch of chunks in one block, looped over by the shader.
   function packMlp(field, params, aRanks, aGroupOff, P4, capVec4) {
     const {features: F, products: P, hidden: H, featureFreqs: Ff, viewdirFreqs: Fv, inputs: In} = field.mlp;
+    // Hidden layers (SPEC 6.6): with one, W2 and b2 are absent and W3 reads the first layer.
+    const L = field.mlp.layers || 2;
+    if (L !== 1 && L !== 2) throw new Error(`MLP: ${L} hidden layers, not 1 or 2`);
+    const H2 = L === 2 ? H : 0;
     if (In !== F + 3 + 2 * F * Ff + 6 * Fv) throw new Error(`MLP: ${In} inputs do not match F=${F}, Ff=${Ff}, Fv=${Fv}`);
     if (P !== aRanks[0] + aRanks[1] + aRanks[2]) throw new Error(`MLP: ${P} products, appearance ranks sum to ${aRanks[0] + aRanks[1] + aRanks[2]}`);
-    const expect = F * P + H * In + H + H * H + H + 3 * H + 3;
+    const expect = F * P + H * In + H + H2 * H2 + H2 + 3 * H + 3;
     if (params.length !== expect) throw new Error(`MLP: ${params.length} parameters, expected ${expect}`);
     const F4 = groups(F), H4 = groups(H), IN4 = F4 + 1 + 2 * Ff * F4 + 2 * Fv;
     // Lane of the shader's padded input -> column of the stored matrix (-1: padding, weight 0).
@@ -77,7 +81,7 @@
     }
     let p = 0;
     const take = (n) => { const a = params.subarray(p, p + n); p += n; return a; };
-    const B = take(F * P), W1 = take(H * In), b1 = take(H), W2 = take(H * H), b2 = take(H);
+    const B = take(F * P), W1 = take(H * In), b1 = take(H), W2 = take(H2 * H2), b2 = take(H2);
     const W3 = take(3 * H), b3 = take(3);
     const blocks = [];  // arrays of numbers (floats), 4 per vec4
     const layer = (rows, cols, W, colMap, len4) => {
@@ -101,9 +105,9 @@
       return {runs, rows};
     };
     const layers = {basis: layer(F, P, B, prodCol, P4), w1: layer(H, In, W1, inCol, IN4),
-                    w2: layer(H, H, W2, null, H4), w3: layer(3, H, W3, null, H4)};
+                    w2: layer(H2, H2, W2, null, H4), w3: layer(3, H, W3, null, H4)};
     const padBias = (b, n4) => { const o = new Float32Array(4 * n4); o.set(b); return o; };
-    return {F4, H4, IN4, FF: Ff, FV: Fv, layers, blocks: blocks.map((b) => new Float32Array(b)),
+    return {F4, H4, IN4, FF: Ff, FV: Fv, hiddenLayers: L, layers, blocks: blocks.map((b) => new Float32Array(b)),
             b1: padBias(b1, Math.max(H4, 1)), b2: padBias(b2, Math.max(H4, 1)), b3: padBias(b3, 1)};
   }
 
@@ -344,7 +348,7 @@
       }
       gl.bindBuffer(gl.UNIFORM_BUFFER, null);
       s.cfg = {dGroups, aGroups, aGroupOff, dLineRow: dl.rowsOf, aLineRow: al.rowsOf, P4,
-               F4: mlp.F4, H4: mlp.H4, IN4: mlp.IN4, FF: mlp.FF, FV: mlp.FV, features: field.mlp.features, occupancy: !!occupancy, model, head,
+               F4: mlp.F4, H4: mlp.H4, IN4: mlp.IN4, FF: mlp.FF, FV: mlp.FV, hiddenLayers: mlp.hiddenLayers, features: field.mlp.features, occupancy: !!occupancy, model, head,
                blockLevels: BLOCK_LEVELS, weightTexture, blockSizes: mlp.blocks.map((b) => b.length / 4), layers: mlp.layers};
       s.mlp = mlp;
       s.info = info;

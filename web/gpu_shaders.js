@@ -75,8 +75,10 @@ void main() {
       for (let q = 0; q < FV; ++q) s += `  x[${k++}] = vec4(${fn}(d * ${f(2 ** q)}), 0.0);\n`;
     }
     s += emitLayer(cfg.layers.w1, IN4, (j) => `x[${j}]`, 'h', 'uB1', true, cfg.weightTexture);
-    s += emitLayer(cfg.layers.w2, H4, (j) => `h[${j}]`, 'g', 'uB2', true, cfg.weightTexture);
-    s += emitLayer(cfg.layers.w3, H4, (j) => `g[${j}]`, 'o', 'uB3', false, cfg.weightTexture);
+    // One hidden layer (SPEC 6.6 layers 1): W3 reads the first layer's output.
+    const last = cfg.hiddenLayers === 1 ? 'h' : 'g';
+    if (last === 'g') s += emitLayer(cfg.layers.w2, H4, (j) => `h[${j}]`, 'g', 'uB2', true, cfg.weightTexture);
+    s += emitLayer(cfg.layers.w3, H4, (j) => `${last}[${j}]`, 'o', 'uB3', false, cfg.weightTexture);
     return s + `  rgb = 1.0 / (1.0 + exp(-o[0].xyz));\n`;
   }
 
@@ -113,7 +115,8 @@ void main() {
   // cfg: {dGroups[3], aGroups[3] (rank groups of 4 per mode), aGroupOff[3], dLineRow[3], aLineRow[3]
   //       (first row of each mode in the line textures), P4, F4, H4, IN4 (vec4 counts), FF, FV,
   //       occupancy, blockLevels [2] (mask cells per block edge), weightTexture, blockSizes[]
-  //       (vec4s per UBO), layers: {basis, w1, w2, w3} ({runs, rows}), deferred, slots,
+  //       (vec4s per UBO), layers: {basis, w1, w2, w3} ({runs, rows}), hiddenLayers (1: no w2),
+  //       deferred, slots,
   //       model (HEAD scene_model: 0 object, 1 unbounded, 2 forward-facing), head (the MLPW head:
   //       1 deferred, whose MLP sees the weighted sum itself, not the deferred option's average),
   //       skip (false: no empty-space skipping, the samples tested one by one)}

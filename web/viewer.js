@@ -230,7 +230,8 @@
           occupancyMin: f(FIELD.occupancy_min, 3), occupancyMax: f(FIELD.occupancy_max, 3),
           mlp: {features: i(FIELD.mlp_features), products: i(FIELD.mlp_products),
                 hidden: i(FIELD.mlp_hidden), featureFreqs: i(FIELD.mlp_feature_freqs),
-                viewdirFreqs: i(FIELD.mlp_viewdir_freqs), inputs: i(FIELD.mlp_inputs)},
+                viewdirFreqs: i(FIELD.mlp_viewdir_freqs), inputs: i(FIELD.mlp_inputs),
+                layers: m._ecrf_scene_mlp_layers(this.scene)},
         };
         const mlpCount = m.HEAP32[(scratch + FIELD.mlp_params) >> 2] >>> 0;
         const grid = (g) => {

@@ -182,6 +182,12 @@ ECRF_API int ecrf_scene_model(const ecrf_scene* scene);
 #define ECRF_HEAD_DEFERRED 1
 ECRF_API int ecrf_scene_head(const ecrf_scene* scene);
 
+/* Hidden layers of the scene's MLP (the MLPW layers field, SPEC.md 6.6 and 7.6): 2, TensoRF's
+ * Linear(H) ReLU Linear(H) ReLU before Linear(3); 1, one Linear(H) ReLU whose output W3 reads, and
+ * ecrf_scene_mlp_params holds no W2 and b2 (bitstream 1.8). 2 for a stream without an MLP
+ * (mlp_hidden 0). ECRF_ERR_INVALID_ARGUMENT before a decode. */
+ECRF_API int ecrf_scene_mlp_layers(const ecrf_scene* scene);
+
 /* The bitstream version the decoded stream states (its file header, SPEC.md 2.1), as
  * (major << 8) | minor: 0x0106 is 1.6. Print it as major.minor, as `ecrf info` does.
  * ECRF_ERR_INVALID_ARGUMENT before a decode. */

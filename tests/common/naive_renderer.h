@@ -191,8 +191,9 @@ inline bool RefMaskKeeps(const OccupancyMask& mask, const float p[3]) {
 inline void NaiveMlp(const MlpConfig& cfg, const std::vector<float>& params,
                      const std::vector<double>& prod, const float* vd, double rgb[3]) {
   const int P = cfg.num_products, F = cfg.feature_dim, H = cfg.hidden, in_dim = cfg.input_dim();
+  const size_t H2 = cfg.hidden_layers == 2 ? size_t(H) : 0;  // no W2, b2 with one hidden layer
   const size_t o_w1 = size_t(F) * P, o_b1 = o_w1 + size_t(H) * in_dim, o_w2 = o_b1 + H,
-               o_b2 = o_w2 + size_t(H) * H, o_w3 = o_b2 + H, o_b3 = o_w3 + 3 * size_t(H);
+               o_b2 = o_w2 + H2 * H2, o_w3 = o_b2 + H2, o_b3 = o_w3 + 3 * size_t(H);
   std::vector<double> feat(F, 0.0);
   for (int j = 0; j < F; ++j)
     for (int k = 0; k < P; ++k) feat[j] += double(params[size_t(j) * P + k]) * prod[k];
@@ -245,8 +246,9 @@ inline void NaiveMlp(const MlpConfig& cfg, const std::vector<float>& params,
     }
     return y;
   };
-  const std::vector<double> z =
-      layer(layer(layer(x, o_w1, o_b1, H, true), o_w2, o_b2, H, true), o_w3, o_b3, 3, false);
+  std::vector<double> h = layer(x, o_w1, o_b1, H, true);
+  if (cfg.hidden_layers == 2) h = layer(h, o_w2, o_b2, H, true);
+  const std::vector<double> z = layer(h, o_w3, o_b3, 3, false);
   for (int c = 0; c < 3; ++c) rgb[c] = 1.0 / (1.0 + std::exp(-z[c]));
 }
 

@@ -53,8 +53,9 @@ inline trainer::TensorfConfig SmallTensorfConfig() {
 // (weight threshold 0: no sample switches on or off under a perturbation), grids initialised on a
 // 16^3 grid (seed 5), and a head 6x steeper than a fresh one, so that colours depend on the
 // features as a trained head's do.
-inline trainer::TensorfModel DenseSmallModel() {
+inline trainer::TensorfModel DenseSmallModel(int hidden_layers = 2) {
   trainer::TensorfConfig c = SmallTensorfConfig();
+  c.head.hidden_layers = hidden_layers;
   c.density_ranks = {4, 4, 4};
   c.app_ranks = {4, 4, 4};
   c.density_shift = 1.f;

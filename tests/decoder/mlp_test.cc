@@ -110,6 +110,21 @@ TEST(MlpTest, OtherWidthsMatchNaive) {
   CheckAgainstNaive(cfg, 5, 3);
 }
 
+// One hidden layer (MLPW layers 1, SPEC.md 6.6): W3 reads the first layer.
+TEST(MlpTest, OneHiddenLayerMatchesNaive) {
+  MlpConfig cfg;
+  cfg.num_products = 144;
+  cfg.hidden_layers = 1;
+  CheckAgainstNaive(cfg, 45, 9);
+  cfg.hidden = 20;
+  cfg.feature_pe_freqs = 0;
+  CheckAgainstNaive(cfg, 17, 10);
+  AppearanceMlp mlp;
+  ASSERT_TRUE(mlp.Init(cfg).ok());
+  const size_t F = 27, P = 144, H = 20, in = cfg.input_dim();
+  EXPECT_EQ(mlp.num_params(), F * P + H * in + H + 3 * H + 3);
+}
+
 TEST(MlpTest, ZeroProducts) {
   MlpConfig cfg;
   cfg.num_products = 0;
@@ -167,12 +182,13 @@ TEST(MlpTest, EveryGemmKernelGivesThePortableKernelsBits) {
 void ScalarReferenceMlp(const MlpConfig& cfg, const std::vector<float>& params, const float* prod,
                         const float* vd, float rgb[3]) {
   const int P = cfg.num_products, F = cfg.feature_dim, H = cfg.hidden, in = cfg.input_dim();
+  const int H2 = cfg.hidden_layers == 2 ? H : 0;
   const float* basis = params.data();
   const float* w1 = basis + static_cast<size_t>(F) * P;
   const float* b1 = w1 + static_cast<size_t>(H) * in;
   const float* w2 = b1 + H;
-  const float* b2 = w2 + static_cast<size_t>(H) * H;
-  const float* w3 = b2 + H;
+  const float* b2 = w2 + static_cast<size_t>(H2) * H2;
+  const float* w3 = b2 + H2;
   const float* b3 = w3 + 3 * H;
   std::vector<float> x;
   std::vector<float> feat(F);
@@ -200,11 +216,12 @@ void ScalarReferenceMlp(const MlpConfig& cfg, const std::vector<float>& params, 
     for (int k = 0; k < in; ++k) s += w1[o * in + k] * x[k];
     h1[o] = s > 0.f ? s : 0.f;
   }
-  for (int o = 0; o < H; ++o) {
+  for (int o = 0; o < H2; ++o) {
     float s = b2[o];
     for (int k = 0; k < H; ++k) s += w2[o * H + k] * h1[k];
     h2[o] = s > 0.f ? s : 0.f;
   }
+  if (H2 == 0) h2 = h1;  // one hidden layer: W3 reads the first
   for (int c = 0; c < 3; ++c) {
     float s = b3[c];
     for (int k = 0; k < H; ++k) s += w3[c * H + k] * h2[k];
@@ -215,41 +232,48 @@ void ScalarReferenceMlp(const MlpConfig& cfg, const std::vector<float>& params, 
 // The hidden layers skip the inputs that are zero in all 8 rows of a block (decoder/mlp.cc). With
 // biases that switch off most units (and some units dead in every row) the output must still be
 // the reference's bits, on every kernel, for batches of any size.
-TEST(MlpTest, SkippingZeroActivationsGivesTheReferenceBits) {
-  for (const int hidden : {20, 128}) {
-    MlpConfig cfg;
-    cfg.num_products = 48;
-    cfg.hidden = hidden;
-    AppearanceMlp mlp;
-    ASSERT_TRUE(mlp.Init(cfg).ok());
-    std::vector<float> params = RandomParams(mlp, 21 + hidden, 0.3f);
-    const int F = cfg.feature_dim, P = cfg.num_products, H = hidden, in = cfg.input_dim();
-    float* b1 = params.data() + static_cast<size_t>(F) * P + static_cast<size_t>(H) * in;
-    float* b2 = b1 + H + static_cast<size_t>(H) * H;
-    for (int o = 0; o < H; ++o) {
-      b1[o] = o % 3 == 0 ? -100.f : b1[o] - 0.6f;  // every third unit dead, the rest mostly off
-      b2[o] = o % 4 == 0 ? -100.f : b2[o] - 0.3f;
+void CheckSkippingZerosGivesTheReferenceBits(int hidden, int layers) {
+  MlpConfig cfg;
+  cfg.num_products = 48;
+  cfg.hidden = hidden;
+  cfg.hidden_layers = layers;
+  AppearanceMlp mlp;
+  ASSERT_TRUE(mlp.Init(cfg).ok());
+  std::vector<float> params = RandomParams(mlp, 21 + hidden, 0.3f);
+  const int F = cfg.feature_dim, P = cfg.num_products, H = hidden, in = cfg.input_dim();
+  float* b1 = params.data() + static_cast<size_t>(F) * P + static_cast<size_t>(H) * in;
+  float* b2 = b1 + H + static_cast<size_t>(H) * H;  // two hidden layers only
+  for (int o = 0; o < H; ++o) {
+    b1[o] = o % 3 == 0 ? -100.f : b1[o] - 0.6f;  // every third unit dead, the rest mostly off
+    if (layers == 2) b2[o] = o % 4 == 0 ? -100.f : b2[o] - 0.3f;
+  }
+  ASSERT_TRUE(mlp.SetParams(params.data(), params.size()).ok());
+  std::vector<float> prod, vd;
+  const int rows = 77;
+  RandomInputs(rows, P, 8, &prod, &vd);
+  std::vector<float> ref(rows * 3);
+  for (int r = 0; r < rows; ++r)
+    ScalarReferenceMlp(cfg, params, prod.data() + r * P, vd.data() + r * 3, &ref[r * 3]);
+  for (const GemmKernel kernel : {GemmKernel::kPortable, GemmKernel::kAvx2, GemmKernel::kAvx512}) {
+    if (!GemmKernelAvailable(kernel)) continue;
+    SCOPED_TRACE(std::string(GemmKernelName(kernel)) + " hidden " + std::to_string(hidden));
+    ASSERT_TRUE(mlp.UseGemmKernel(kernel).ok());
+    std::vector<float> rgb(rows * 3, -1.f), scratch(mlp.ScratchFloats());
+    mlp.Infer(rows, prod.data(), P, vd.data(), rgb.data(), scratch.data());
+    EXPECT_EQ(std::memcmp(rgb.data(), ref.data(), rgb.size() * sizeof(float)), 0);
+    for (int r = 0; r < rows; r += 5) {
+      float one[3];
+      mlp.Infer(1, prod.data() + r * P, P, vd.data() + r * 3, one, scratch.data());
+      EXPECT_EQ(std::memcmp(one, &ref[r * 3], sizeof(one)), 0) << "row " << r;
     }
-    ASSERT_TRUE(mlp.SetParams(params.data(), params.size()).ok());
-    std::vector<float> prod, vd;
-    const int rows = 77;
-    RandomInputs(rows, P, 8, &prod, &vd);
-    std::vector<float> ref(rows * 3);
-    for (int r = 0; r < rows; ++r)
-      ScalarReferenceMlp(cfg, params, prod.data() + r * P, vd.data() + r * 3, &ref[r * 3]);
-    for (const GemmKernel kernel :
-         {GemmKernel::kPortable, GemmKernel::kAvx2, GemmKernel::kAvx512}) {
-      if (!GemmKernelAvailable(kernel)) continue;
-      SCOPED_TRACE(std::string(GemmKernelName(kernel)) + " hidden " + std::to_string(hidden));
-      ASSERT_TRUE(mlp.UseGemmKernel(kernel).ok());
-      std::vector<float> rgb(rows * 3, -1.f), scratch(mlp.ScratchFloats());
-      mlp.Infer(rows, prod.data(), P, vd.data(), rgb.data(), scratch.data());
-      EXPECT_EQ(std::memcmp(rgb.data(), ref.data(), rgb.size() * sizeof(float)), 0);
-      for (int r = 0; r < rows; r += 5) {
-        float one[3];
-        mlp.Infer(1, prod.data() + r * P, P, vd.data() + r * 3, one, scratch.data());
-        EXPECT_EQ(std::memcmp(one, &ref[r * 3], sizeof(one)), 0) << "row " << r;
-      }
+  }
+}
+
+TEST(MlpTest, SkippingZeroActivationsGivesTheReferenceBits) {
+  for (const int layers : {2, 1}) {
+    for (const int hidden : {20, 128}) {
+      SCOPED_TRACE(std::to_string(layers) + " hidden layers");
+      CheckSkippingZerosGivesTheReferenceBits(hidden, layers);
     }
   }
 }
@@ -288,6 +312,11 @@ TEST(MlpTest, RejectsBadConfigAndParams) {
   cfg.num_products = -1;
   EXPECT_EQ(mlp.Init(cfg).code(), kErrLimit);
   cfg.num_products = 10;
+  for (const int layers : {0, 3}) {
+    cfg.hidden_layers = layers;
+    EXPECT_EQ(mlp.Init(cfg).code(), kErrInvalidArgument) << layers << " hidden layers";
+  }
+  cfg.hidden_layers = 2;
   ASSERT_TRUE(mlp.Init(cfg).ok());
   std::vector<float> p(mlp.num_params(), 0.f);
   EXPECT_EQ(mlp.SetParams(p.data(), p.size() - 1).code(), kErrInvalidArgument);

@@ -496,6 +496,7 @@ TEST(SceneDecoder, CApiExposesTheFieldOccupancyAndMlpOfTheReferenceRenderer) {
     ecrf_scene_field f;
     EXPECT_EQ(ecrf_scene_get_field(scene, &f), ECRF_ERR_INVALID_ARGUMENT);  // nothing decoded
     EXPECT_EQ(ecrf_scene_version(scene), ECRF_ERR_INVALID_ARGUMENT);
+    EXPECT_EQ(ecrf_scene_mlp_layers(scene), ECRF_ERR_INVALID_ARGUMENT);
     ASSERT_EQ(ecrf_scene_decode(scene, bytes.data(), bytes.size(), ECRF_STORAGE_FLOAT32), ECRF_OK);
     ASSERT_EQ(ecrf_scene_get_field(scene, &f), ECRF_OK);
     EXPECT_EQ(ecrf_scene_model(scene), static_cast<int>(field.scene_model));
@@ -503,6 +504,11 @@ TEST(SceneDecoder, CApiExposesTheFieldOccupancyAndMlpOfTheReferenceRenderer) {
     EXPECT_EQ(ecrf_scene_version(scene), (info.version_major << 8) | info.version_minor);
     if (std::string(name) == "scene_unbounded.ecrf") EXPECT_EQ(ecrf_scene_version(scene), 0x0102);
     if (std::string(name) == "scene_forward.ecrf") EXPECT_EQ(ecrf_scene_version(scene), 0x0103);
+    // One hidden layer needs 1.8 (SPEC.md 6.6).
+    EXPECT_EQ(ecrf_scene_mlp_layers(scene),
+              std::string(name) == "scene_one_hidden_layer.ecrf" ? 1 : 2);
+    if (std::string(name) == "scene_one_hidden_layer.ecrf")
+      EXPECT_EQ(ecrf_scene_version(scene), 0x0108);
     EXPECT_EQ(ecrf_scene_model(scene) == ECRF_SCENE_UNBOUNDED,
               std::string(name) == "scene_unbounded.ecrf");
     EXPECT_EQ(ecrf_scene_model(scene) == ECRF_SCENE_FORWARD,

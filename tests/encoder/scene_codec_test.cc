@@ -264,6 +264,40 @@ TEST(SceneCodec, RejectsImpossibleOptions) {
   EXPECT_EQ(DecodeOrDie(EncodeScene(model, o)).appearance.total_rank(), 12);
 }
 
+// One hidden layer (MLPW layers 1): a 1.8 stream whose MLP holds exactly the model's parameters
+// (binary32) and colours as the trainer's head does; refused when an older version is asked for.
+TEST(SceneCodec, OneHiddenLayerHeadIsVersion18AndDecodesToTheModel) {
+  TensorfConfig c = SmallModel(3).config();
+  c.head.hidden_layers = 1;
+  TensorfModel model(c);
+  model.Initialize({21, 18, 13}, 11);
+  encoder::EncodeOptions o;
+  o.mlp_float32 = true;
+  o.mlp_max_level = 0;
+  const std::vector<uint8_t> bytes = EncodeScene(model, o);
+  EXPECT_EQ(bytes[5], kOneHiddenLayerMinVersionMinor);  // the file header's minor version
+  const dec::SceneField field = DecodeOrDie(bytes);
+  ASSERT_EQ(field.mlp.config().hidden_layers, 1);
+  std::vector<float> params(field.mlp.num_params());
+  ASSERT_TRUE(field.mlp.GetParams(params.data(), params.size()).ok());
+  EXPECT_EQ(params, model.head().params());
+  const int n = 40, P = model.head().config().num_products;
+  std::vector<float> prod(size_t(n) * P), vd(3 * n), want(3 * n), got(3 * n);
+  for (size_t i = 0; i < prod.size(); ++i) prod[i] = std::sin(0.37f * float(i));
+  for (int r = 0; r < n; ++r) {
+    const float a = 0.3f * float(r);
+    vd[3 * r] = std::cos(a) * 0.6f;
+    vd[3 * r + 1] = std::sin(a) * 0.6f;
+    vd[3 * r + 2] = 0.8f;
+  }
+  model.head().Infer(n, prod.data(), vd.data(), want.data());
+  std::vector<float> scratch(field.mlp.ScratchFloats());
+  field.mlp.Infer(n, prod.data(), P, vd.data(), got.data(), scratch.data());
+  for (int i = 0; i < 3 * n; ++i) EXPECT_NEAR(got[i], want[i], 2e-6f) << i;
+  o.max_version_minor = kOneHiddenLayerMinVersionMinor - 1;
+  EXPECT_THROW(EncodeScene(model, o), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace trainer
 }  // namespace ecrf

@@ -11,7 +11,9 @@
 namespace ecrf {
 namespace {
 
-MlpLayout Layout(int F, int P, int H, int Ff, int Fv) { return MakeMlpLayout(F, P, H, Ff, Fv); }
+MlpLayout Layout(int F, int P, int H, int Ff, int Fv, int layers = 2) {
+  return MakeMlpLayout(F, P, H, Ff, Fv, layers);
+}
 
 // Gaussian weights whose rows differ in scale by up to 2^12, a zero row, and one row whose
 // values are below binary16's smallest step.
@@ -45,9 +47,53 @@ TEST(MlpCoder, LayoutCoversEveryParameterOnce) {
   EXPECT_EQ(MlpContextGroup(l, 3, 0), 6);
 }
 
+// One hidden layer (MLPW layers 1): W2 and b2 hold no value, W3 follows b1.
+TEST(MlpCoder, OneHiddenLayerHasNoSecondLayer) {
+  const MlpLayout l = Layout(27, 144, 128, 2, 2, 1);
+  MlpMatrixSpan m[4], b[3];
+  MlpMatrices(l, m, b);
+  EXPECT_EQ(MlpParamCount(l), size_t(27 * 144 + 128 * 150 + 128 + 3 * 128 + 3));
+  EXPECT_EQ(m[2].rows * m[2].cols + b[1].cols, 0);
+  EXPECT_EQ(m[3].offset, b[0].offset + 128);
+  EXPECT_EQ(b[2].offset + 3, MlpParamCount(l));
+}
+
+// The four header bytes in the order of SPEC.md 6.6: the reserved byte, then each field's value
+// (unsupported when unknown) and its version (corrupt before it).
+TEST(MlpCoder, ChunkHeaderFieldsAndTheirVersions) {
+  struct Case {
+    uint8_t bytes[4];
+    int version_minor, hidden;
+    ErrorCode code;
+  };
+  const Case cases[] = {{{2, 1, 1, 0}, 8, 128, kOk},  // quantized, deferred, one hidden layer
+                        {{0, 0, 0, 0}, 0, 128, kOk},  // a 1.0 stream
+                        {{2, 1, 1, 0}, 7, 128, kErrCorrupt},       // one layer before 1.8
+                        {{2, 1, 2, 0}, 8, 128, kErrUnsupported},   // a later layers value
+                        {{2, 1, 1, 0}, 8, 0, kErrCorrupt},         // one layer without an MLP
+                        {{2, 1, 0, 1}, 8, 128, kErrCorrupt},       // the reserved byte
+                        {{3, 1, 1, 1}, 8, 128, kErrCorrupt},       // the reserved byte first
+                        {{3, 0, 0, 0}, 8, 128, kErrUnsupported},   // precision
+                        {{2, 0, 0, 0}, 0, 128, kErrCorrupt},       // quantized before 1.1
+                        {{0, 1, 0, 0}, 5, 128, kErrCorrupt},       // deferred before 1.6
+                        {{0, 2, 0, 0}, 8, 128, kErrUnsupported}};  // head
+  for (const Case& c : cases) {
+    ByteReader r(c.bytes, 4);
+    MlpChunkHeader h;
+    const Status s = ReadMlpChunkHeader(&r, c.version_minor, c.hidden, &h);
+    EXPECT_EQ(s.code(), c.code) << int(c.bytes[0]) << int(c.bytes[1]) << int(c.bytes[2])
+                                << int(c.bytes[3]) << " in 1." << c.version_minor << ": "
+                                << s.message();
+    if (s.ok()) EXPECT_EQ(MlpHiddenLayers(h.layers), c.bytes[2] == 1 ? 1 : 2);
+  }
+  ByteReader short_payload(cases[0].bytes, 3);
+  MlpChunkHeader h;
+  EXPECT_EQ(ReadMlpChunkHeader(&short_payload, 8, 128, &h).code(), kErrTruncated);
+}
+
 TEST(MlpCoder, RoundTripIsWhatTheEncoderPredictsAndErrorIsHalfAStep) {
   for (int max_level : {1, 15, 127, 20000, 1 << 20}) {
-    const MlpLayout l = Layout(6, 10, 16, 1, 2);
+    const MlpLayout l = Layout(6, 10, 16, 1, 2, max_level == 127 ? 1 : 2);
     const std::vector<float> w = Weights(l, 3 + max_level);
     std::vector<float> predicted;
     const std::vector<uint8_t> payload = EncodeQuantizedMlp(l, w.data(), max_level, &predicted);

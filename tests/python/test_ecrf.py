@@ -169,7 +169,7 @@ class RenderTest(unittest.TestCase):
         # one with the deferred head (7.6).
         for name, model in (("scene_builtin", "object"), ("scene_unbounded", "unbounded"),
                             ("scene_forward", "forward"), ("scene_deferred_head", "object"),
-                            ("scene_sh_deferred", "object")):
+                            ("scene_sh_deferred", "object"), ("scene_one_hidden_layer", "object")):
             with self.subTest(name):
                 _, c2w, (fx, fy, cx, cy), width, height = manifest_camera(name + ".ecrf")
                 reference = read_png(os.path.join(CONFORMANCE, name + ".png"))[:, :, :3].astype(int)
@@ -180,11 +180,13 @@ class RenderTest(unittest.TestCase):
                                                    "scene_forward") else "deferred")
                 # Hidden width 0: spherical-harmonics colour, no MLP (SPEC.md 7.6.2).
                 self.assertEqual(scene.field["mlp_hidden"] == 0, name == "scene_sh_deferred")
+                # One hidden layer (SPEC.md 6.6 layers 1, bitstream 1.8).
+                self.assertEqual(scene.field["mlp_layers"], 1 if name == "scene_one_hidden_layer" else 2)
                 # The file header's version (SPEC.md 2.1), as `ecrf info` prints it.
                 self.assertEqual(scene.info["version"],
                                  {"scene_builtin": "1.0", "scene_unbounded": "1.2",
                                   "scene_forward": "1.3", "scene_deferred_head": "1.6",
-                                  "scene_sh_deferred": "1.7"}[name])
+                                  "scene_sh_deferred": "1.7", "scene_one_hidden_layer": "1.8"}[name])
                 self.assertEqual("ndc_near_plane" in scene.info, model == "forward")
                 if model == "forward":
                     self.assertEqual(scene.info["ndc_near_plane"], 1.5)  # the vector's NDCP chunk

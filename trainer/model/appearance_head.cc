@@ -62,6 +62,7 @@ void ReluBackwardColSum(float* __restrict d, const float* __restrict h, int m, i
 
 struct Dims {
   int p, f, h, in, ff, fv;
+  int h2;  // the second hidden layer's width: h, or 0 with one hidden layer
   int pe_feat_offset() const { return f + kViewDim; }
   int pe_view_offset() const { return f + kViewDim + 2 * f * ff; }
   // Per-row floats of the chunk temporaries: PE tmp, then Backward's dz3, da, db, dx, dfeat.
@@ -76,6 +77,7 @@ Dims DimsOf(const AppearanceHeadConfig& c) {
   d.p = c.num_products;
   d.f = c.feature_dim;
   d.h = c.hidden;
+  d.h2 = c.hidden_layers == 2 ? c.hidden : 0;
   d.ff = c.feature_pe_freqs;
   d.fv = c.viewdir_pe_freqs;
   d.in = d.f + kViewDim + 2 * d.f * d.ff + 2 * kViewDim * d.fv;
@@ -116,12 +118,12 @@ struct TransposedWeights {
 // Fills `storage` with basis^T, W1^T, W2^T, W3^T and returns pointers into it.
 TransposedWeights TransposeWeights(const Dims& d, const Params& w, std::vector<float>* storage) {
   const size_t sizes[4] = {static_cast<size_t>(d.p) * d.f, static_cast<size_t>(d.in) * d.h,
-                           static_cast<size_t>(d.h) * d.h, static_cast<size_t>(d.h) * kRgb};
+                           static_cast<size_t>(d.h2) * d.h2, static_cast<size_t>(d.h) * kRgb};
   storage->resize(sizes[0] + sizes[1] + sizes[2] + sizes[3]);
   float* out = storage->data();
   const float* src[4] = {w.basis, w.w1, w.w2, w.w3};
-  const int rows[4] = {d.f, d.h, d.h, kRgb};  // out
-  const int cols[4] = {d.p, d.in, d.h, d.h};  // in
+  const int rows[4] = {d.f, d.h, d.h2, kRgb};  // out
+  const int cols[4] = {d.p, d.in, d.h2, d.h};  // in
   const float* dst[4];
   for (int t = 0; t < 4; ++t) {
     MapM(out, cols[t], rows[t]) = CMapM(src[t], rows[t], cols[t]).transpose();
@@ -160,8 +162,8 @@ void ShBackwardRows(const Dims& d, int m, const float* x, const float* dz, float
   }
 }
 
-// Runs the forward pass of rows [0, m) of a chunk. x: m x in (written), h1/h2: m x h (written),
-// rgb: m x 3 (written). pe_tmp: pe_tmp_per_row() * m floats.
+// Runs the forward pass of rows [0, m) of a chunk. x: m x in (written), h1/h2: m x h (written;
+// h2 unused with one hidden layer), rgb: m x 3 (written). pe_tmp: pe_tmp_per_row() * m floats.
 void ForwardChunk(const Dims& d, const Params& w, const TransposedWeights& wt, int m,
                   const float* products, const float* viewdirs, float* x, float* h1, float* h2,
                   float* rgb, float* pe_tmp) {
@@ -183,9 +185,13 @@ void ForwardChunk(const Dims& d, const Params& w, const TransposedWeights& wt, i
 
   SmallGemm(m, d.h, d.in, x, d.in, 1, wt.w1, d.h, h1, d.h, false);
   BiasRelu(h1, w.b1, m, d.h);
-  SmallGemm(m, d.h, d.h, h1, d.h, 1, wt.w2, d.h, h2, d.h, false);
-  BiasRelu(h2, w.b2, m, d.h);
-  SmallGemm(m, kRgb, d.h, h2, d.h, 1, wt.w3, kRgb, rgb, kRgb, false);
+  const float* last = h1;  // what W3 reads
+  if (d.h2 > 0) {
+    SmallGemm(m, d.h, d.h, h1, d.h, 1, wt.w2, d.h, h2, d.h, false);
+    BiasRelu(h2, w.b2, m, d.h);
+    last = h2;
+  }
+  SmallGemm(m, kRgb, d.h, last, d.h, 1, wt.w3, kRgb, rgb, kRgb, false);
   // Sigmoid, element by element: Eigen's vectorised exp would give a row different bits
   // depending on the buffer's alignment, and the training step promises the same gradients for
   // any thread count.
@@ -211,6 +217,9 @@ AppearanceHead::AppearanceHead(const AppearanceHeadConfig& config) : config_(con
   if (config.num_products <= 0 || config.feature_dim <= 0 || config.hidden < 0 ||
       config.feature_pe_freqs < 0 || config.viewdir_pe_freqs < 0) {
     throw std::invalid_argument("AppearanceHead: bad config");
+  }
+  if (config.hidden_layers != 2 && (config.hidden_layers != 1 || config.hidden == 0)) {
+    throw std::invalid_argument("AppearanceHead: 2 hidden layers, or 1 with a width above 0");
   }
   if (config.hidden == 0 && (ShDegreeForFeatureDim(config.feature_dim) < 0 ||
                              config.feature_pe_freqs != 0 || config.viewdir_pe_freqs != 0)) {
@@ -255,7 +264,8 @@ std::vector<size_t> AppearanceHead::KeptHiddenIndices(const std::vector<uint8_t>
   const int h = config_.hidden, in = mlp_input_dim();
   if (keep1.size() != size_t(h) || keep2.size() != size_t(h) ||
       std::count(keep1.begin(), keep1.end(), 0) != std::count(keep2.begin(), keep2.end(), 0) ||
-      std::count(keep1.begin(), keep1.end(), 0) == h) {
+      std::count(keep1.begin(), keep1.end(), 0) == h ||
+      (config_.hidden_layers == 1 && keep1 != keep2)) {
     throw std::invalid_argument(
         "AppearanceHead::KeptHiddenIndices: one flag per unit of each layer, as many kept in "
         "both, at least one");
@@ -269,13 +279,14 @@ std::vector<size_t> AppearanceHead::KeptHiddenIndices(const std::vector<uint8_t>
   for (int i = 0; i < h; ++i) {
     if (keep1[i]) idx.push_back(b1_offset() + i);
   }
-  for (int j = 0; j < h; ++j) {
+  const int h2 = config_.hidden_layers == 2 ? h : 0;
+  for (int j = 0; j < h2; ++j) {
     if (!keep2[j]) continue;
     for (int i = 0; i < h; ++i) {
       if (keep1[i]) idx.push_back(w2_offset() + size_t(j) * h + i);
     }
   }
-  for (int j = 0; j < h; ++j) {
+  for (int j = 0; j < h2; ++j) {
     if (keep2[j]) idx.push_back(b2_offset() + j);
   }
   for (int c = 0; c < kRgb; ++c) {
@@ -309,9 +320,12 @@ size_t AppearanceHead::b1_offset() const {
 }
 size_t AppearanceHead::w2_offset() const { return b1_offset() + config_.hidden; }
 size_t AppearanceHead::b2_offset() const {
-  return w2_offset() + static_cast<size_t>(config_.hidden) * config_.hidden;
+  const size_t h2 = config_.hidden_layers == 2 ? config_.hidden : 0;
+  return w2_offset() + h2 * h2;
 }
-size_t AppearanceHead::w3_offset() const { return b2_offset() + config_.hidden; }
+size_t AppearanceHead::w3_offset() const {
+  return b2_offset() + (config_.hidden_layers == 2 ? config_.hidden : 0);
+}
 size_t AppearanceHead::b3_offset() const {
   return w3_offset() + static_cast<size_t>(kRgb) * config_.hidden;
 }
@@ -326,8 +340,8 @@ void AppearanceHead::Initialize(uint32_t seed) {
   FillUniform(rng, bound_basis, p + basis_offset(), static_cast<size_t>(d.f) * d.p);
   FillUniform(rng, bound_in, p + w1_offset(), static_cast<size_t>(d.h) * d.in);
   FillUniform(rng, bound_in, p + b1_offset(), d.h);
-  FillUniform(rng, bound_h, p + w2_offset(), static_cast<size_t>(d.h) * d.h);
-  FillUniform(rng, bound_h, p + b2_offset(), d.h);
+  FillUniform(rng, bound_h, p + w2_offset(), static_cast<size_t>(d.h2) * d.h2);
+  FillUniform(rng, bound_h, p + b2_offset(), d.h2);
   FillUniform(rng, bound_h, p + w3_offset(), static_cast<size_t>(kRgb) * d.h);
   std::fill(p + b3_offset(), p + b3_offset() + kRgb, 0.0f);  // TensoRF: last bias = 0
 }
@@ -475,13 +489,17 @@ void AppearanceHead::Backward(int n, const float* dl_drgb, float* dl_dproducts) 
       ShBackwardRows(d, m, x, dz3, dfeat);
     } else {
       // Weight gradients are (dL/dout)^T @ in: SmallGemm reads the transpose through a_row = 1.
-      SmallGemm(kRgb, d.h, m, dz3, 1, kRgb, h2, d.h, g_w3, d.h, true);
-      // Layer 2.
-      SmallGemm(m, d.h, kRgb, dz3, kRgb, 1, w3, d.h, da, d.h, false);
-      ReluBackwardColSum(da, h2, m, d.h, g_b2);
-      SmallGemm(d.h, d.h, m, da, 1, d.h, h1, d.h, g_w2, d.h, true);
+      const float* last = d.h2 > 0 ? h2 : h1;  // what W3 read
+      SmallGemm(kRgb, d.h, m, dz3, 1, kRgb, last, d.h, g_w3, d.h, true);
+      if (d.h2 > 0) {  // layer 2
+        SmallGemm(m, d.h, kRgb, dz3, kRgb, 1, w3, d.h, da, d.h, false);
+        ReluBackwardColSum(da, h2, m, d.h, g_b2);
+        SmallGemm(d.h, d.h, m, da, 1, d.h, h1, d.h, g_w2, d.h, true);
+        SmallGemm(m, d.h, d.h, da, d.h, 1, w2, d.h, db, d.h, false);
+      } else {
+        SmallGemm(m, d.h, kRgb, dz3, kRgb, 1, w3, d.h, db, d.h, false);
+      }
       // Layer 1.
-      SmallGemm(m, d.h, d.h, da, d.h, 1, w2, d.h, db, d.h, false);
       ReluBackwardColSum(db, h1, m, d.h, g_b1);
       SmallGemm(d.h, d.in, m, db, 1, d.h, x, d.in, g_w1, d.in, true);
       // dL/dx only for the columns that depend on the features (the view-direction PE columns

@@ -2,7 +2,8 @@
 //
 // products (P = total appearance rank, 144 for VM-192) -> basis matrix (P x 27, no bias)
 // -> [features 27, viewdir 3, PE(features, 2 freqs), PE(viewdir, 2 freqs)] = 150
-// -> Linear 128 -> ReLU -> Linear 128 -> ReLU -> Linear 3 -> sigmoid.
+// -> Linear 128 -> ReLU -> Linear 128 -> ReLU -> Linear 3 -> sigmoid (hidden_layers 1: without the
+// second Linear 128 -> ReLU).
 // PE(x, F) follows TensoRF's positional_encoding: for each input channel c and frequency f the
 // argument x_c * 2^f (c-major), then all sines followed by all cosines.
 //
@@ -25,6 +26,9 @@ struct AppearanceHeadConfig {
   int feature_pe_freqs = 2;
   int viewdir_pe_freqs = 2;
   int hidden = 128;
+  // 2: TensoRF's two hidden layers; 1: one (no W2, b2; W3 reads the first layer), about half the
+  // multiply-adds (the MLPW layers byte, SPEC.md 6.6, bitstream 1.8).
+  int hidden_layers = 2;
   // kPerSample: Forward sees one row per coloured sample; kDeferred: one row per ray, the sum of
   // its coloured samples' products weighted by their weights (SPEC.md 7.6; volume_render.cc).
   // The head's arithmetic is the same; only what its rows are differs.
@@ -35,6 +39,7 @@ struct AppearanceHeadConfig {
 // features, no positional encoding, no MLP; `base` gives the products and the kind.
 inline AppearanceHeadConfig ShHeadConfig(AppearanceHeadConfig base, int degree) {
   base.hidden = 0;
+  base.hidden_layers = 2;  // no MLP; 2 is the stream's value for that (SPEC.md 6.6)
   base.feature_dim = 3 * (degree + 1) * (degree + 1);
   base.feature_pe_freqs = 0;
   base.viewdir_pe_freqs = 0;
@@ -43,7 +48,7 @@ inline AppearanceHeadConfig ShHeadConfig(AppearanceHeadConfig base, int degree) 
 
 // All parameters in one flat float array so Adam and checkpoints treat them uniformly.
 // Layout (row-major, out x in): basis [feature_dim x P], W1 [hidden x in], b1 [hidden],
-// W2 [hidden x hidden], b2 [hidden], W3 [3 x hidden], b3 [3].
+// W2 [hidden x hidden], b2 [hidden], W3 [3 x hidden], b3 [3]; W2 and b2 empty with one layer.
 class AppearanceHead {
  public:
   explicit AppearanceHead(const AppearanceHeadConfig& config);
@@ -91,7 +96,8 @@ class AppearanceHead {
   void KeepProducts(const std::vector<uint8_t>& keep);
   // The same for hidden units: keep1[i] for unit i of the first hidden layer (its row of W1 and
   // b1, its column of W2), keep2[j] for unit j of the second (its row of W2 and b2, its column
-  // of W3). The stream has one width for both layers (SPEC.md 6.2), so both keep as many.
+  // of W3). The stream has one width for both layers (SPEC.md 6.2), so both keep as many. With one
+  // hidden layer keep2 must equal keep1 (W3's columns are the first layer's units).
   std::vector<size_t> KeptHiddenIndices(const std::vector<uint8_t>& keep1,
                                         const std::vector<uint8_t>& keep2) const;
   void KeepHidden(const std::vector<uint8_t>& keep1, const std::vector<uint8_t>& keep2);

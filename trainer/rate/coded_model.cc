@@ -41,6 +41,7 @@ encoder::SceneDescription DescribeModel(const TensorfModel& model) {
   h.hidden = static_cast<uint16_t>(hc.hidden);
   s.head_params = model.head().params();
   s.head = model.config().head.kind;
+  s.mlp_hidden_layers = hc.hidden_layers;
   if (const AlphaMask* mask = model.alpha_mask()) {
     encoder::OccupancyDescription& occupancy = s.mask.emplace();
     occupancy.aabb_min = mask->aabb().min;

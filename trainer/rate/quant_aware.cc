@@ -73,7 +73,7 @@ void ReconstructQuantizedGrid(const VmGrid& grid, const float* steps,
 
 MlpLayout HeadMlpLayout(const AppearanceHeadConfig& h) {
   return MakeMlpLayout(h.feature_dim, h.num_products, h.hidden, h.feature_pe_freqs,
-                       h.viewdir_pe_freqs);
+                       h.viewdir_pe_freqs, h.hidden_layers);
 }
 
 void ReconstructQuantizedHead(const TensorfModel& model, int max_level, std::vector<float>* out) {

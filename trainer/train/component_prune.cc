@@ -73,7 +73,8 @@ HiddenDecision TestHiddenUnits(const TensorfModel& model, int mlp_levels, double
   TensorfModel work = model;
   d.mse = RenderMse(work, n, origins, dirs, rgb, ray_gain);
   std::vector<float> saved;
-  for (int layer = 1; layer <= 2; ++layer) {
+  const int layers = model.head().config().hidden_layers;
+  for (int layer = 1; layer <= layers; ++layer) {
     std::vector<double>& dmse = layer == 1 ? d.dmse1 : d.dmse2;
     dmse.resize(h);
     for (int u = 0; u < h; ++u) {
@@ -84,11 +85,16 @@ HiddenDecision TestHiddenUnits(const TensorfModel& model, int mlp_levels, double
   }
   std::vector<int> order1(h), order2(h);
   std::iota(order1.begin(), order1.end(), 0);
-  std::iota(order2.begin(), order2.end(), 0);
   std::stable_sort(order1.begin(), order1.end(),
                    [&](int a, int b) { return d.dmse1[a] < d.dmse1[b]; });
-  std::stable_sort(order2.begin(), order2.end(),
-                   [&](int a, int b) { return d.dmse2[a] < d.dmse2[b]; });
+  if (layers == 1) {  // W3 reads the first layer: a unit is one "pair", counted once
+    d.dmse2.assign(h, 0.0);
+    order2 = order1;
+  } else {
+    std::iota(order2.begin(), order2.end(), 0);
+    std::stable_sort(order2.begin(), order2.end(),
+                     [&](int a, int b) { return d.dmse2[a] < d.dmse2[b]; });
+  }
   // The bits the first k pairs save, from the coded head without them.
   const double full_bits = HeadBits(model.head(), mlp_levels);
   auto keep_for = [&](int k, std::vector<uint8_t>* k1, std::vector<uint8_t>* k2) {
@@ -119,7 +125,7 @@ HiddenDecision TestHiddenUnits(const TensorfModel& model, int mlp_levels, double
     TensorfModel trial = model;
     for (int p = 0; p < k; ++p) {
       SetHiddenUnit(&trial.head(), 1, order1[p], &saved, false);
-      SetHiddenUnit(&trial.head(), 2, order2[p], &saved, false);
+      if (layers == 2) SetHiddenUnit(&trial.head(), 2, order2[p], &saved, false);
     }
     return RenderMse(trial, n, origins, dirs, rgb, ray_gain) - d.mse < lambda_e * bits_saved(k);
   };

@@ -52,6 +52,7 @@ std::vector<double> PredictHeadWork(const TensorfModel& model, const RayWorkCoun
   m.feature_pe_freqs = h.feature_pe_freqs;
   m.viewdir_pe_freqs = h.viewdir_pe_freqs;
   m.hidden = h.hidden;
+  m.hidden_layers = h.hidden_layers;
   std::vector<double> work;
   for (int k = 0; k < kNumHeadKinds; ++k) {
     const dec::SampleCosts costs = dec::HeadSampleCosts(

@@ -52,11 +52,10 @@ void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int itera
     j["render"]["ndc_scale"] = std::vector<float>(c.ndc.scale, c.ndc.scale + 2);
     j["render"]["ndc_near_plane"] = c.ndc.near_plane;
   }
-  j["head"] = {{"feature_dim", c.head.feature_dim},
-               {"feature_pe_freqs", c.head.feature_pe_freqs},
-               {"viewdir_pe_freqs", c.head.viewdir_pe_freqs},
-               {"hidden", c.head.hidden},
-               {"kind", HeadKindName(c.head.kind)}};
+  j["head"] = {
+      {"feature_dim", c.head.feature_dim},           {"feature_pe_freqs", c.head.feature_pe_freqs},
+      {"viewdir_pe_freqs", c.head.viewdir_pe_freqs}, {"hidden", c.head.hidden},
+      {"hidden_layers", c.head.hidden_layers},       {"kind", HeadKindName(c.head.kind)}};
   if (const AlphaMask* mask = model.alpha_mask()) {
     j["mask_res"] = mask->res();
     j["mask_aabb_min"] = mask->aabb().min;
@@ -318,6 +317,11 @@ TensorfModel LoadModelFromCheckpoint(const std::string& path, RateState* rate) {
     c.head.feature_pe_freqs = head.value("feature_pe_freqs", c.head.feature_pe_freqs);
     c.head.viewdir_pe_freqs = head.value("viewdir_pe_freqs", c.head.viewdir_pe_freqs);
     c.head.hidden = head.value("hidden", c.head.hidden);
+    c.head.hidden_layers = head.value("hidden_layers", 2);  // checkpoints before 1.8 had two
+    if (c.head.hidden_layers != 1 && c.head.hidden_layers != 2) {
+      throw std::runtime_error(path + ": checkpoint head has " +
+                               std::to_string(c.head.hidden_layers) + " hidden layers, not 1 or 2");
+    }
     c.head.kind = ChoiceFromName<HeadKind>(head.value("kind", std::string(kHeadKindNames[0])),
                                            path + ": head");
     c.head.num_products = c.app_ranks[0] + c.app_ranks[1] + c.app_ranks[2];

@@ -44,6 +44,7 @@ TensorfConfig ConfigFor(const TrainOptions& o, const Dataset& data, const SceneF
   c.app_ranks = {o.appearance_rank, o.appearance_rank, o.appearance_rank};
   c.head.num_products = 3 * o.appearance_rank;
   c.head.hidden = o.mlp_hidden;
+  c.head.hidden_layers = o.mlp_layers;
   c.step_ratio = o.step_ratio;
   // auto starts with the per-sample head and may switch once the grid is final (head_choice.h).
   c.head.kind = o.head == HeadChoice::kDeferred || o.head == HeadChoice::kSh ? HeadKind::kDeferred

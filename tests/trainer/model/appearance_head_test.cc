@@ -75,7 +75,7 @@ struct Reference {
       return z;
     };
     const std::vector<double> h1 = layer(in, o_w1, o_b1, H, true);
-    const std::vector<double> h2 = layer(h1, o_w2, o_b2, H, true);
+    const std::vector<double> h2 = cfg.hidden_layers == 2 ? layer(h1, o_w2, o_b2, H, true) : h1;
     const std::vector<double> z3 = layer(h2, o_w3, o_b3, 3, false);
     for (int c = 0; c < 3; ++c) rgb[c] = 1.0 / (1.0 + std::exp(-z3[c]));
   }
@@ -443,16 +443,19 @@ TEST(AppearanceHeadTest, ThreadCountAndBorrowingDoNotChangeResults) {
   EXPECT_EQ(g2, g3);
 }
 
-TEST(AppearanceHeadTest, SmallConfigGradients) {
-  // Non-default widths and frequencies (odd feature PE count, no view PE).
+// Non-default widths and frequencies (odd feature PE count, no view PE), every parameter checked.
+void CheckSmallConfigGradients(int hidden_layers) {
   AppearanceHeadConfig cfg;
   cfg.num_products = 10;
   cfg.feature_dim = 5;
   cfg.feature_pe_freqs = 3;
   cfg.viewdir_pe_freqs = 0;
   cfg.hidden = 16;
+  cfg.hidden_layers = hidden_layers;
   AppearanceHead head(cfg);
   EXPECT_EQ(head.mlp_input_dim(), 5 + 3 + 2 * 3 * 5);
+  const size_t second_layer = hidden_layers == 2 ? 16 * 16 + 16 : 0;
+  EXPECT_EQ(head.num_params(), size_t(5 * 10 + 16 * 38 + 16) + second_layer + 3 * 16 + 3);
   head.Initialize(6);
   ScaleParams(&head, 2.0f);
   const int n = 9;
@@ -496,6 +499,42 @@ TEST(AppearanceHeadTest, SmallConfigGradients) {
     ++checked;
   }
   EXPECT_GT(checked, static_cast<int>(0.95 * (ref.params.size() + prod.size())));
+}
+
+TEST(AppearanceHeadTest, SmallConfigGradients) { CheckSmallConfigGradients(2); }
+
+// One hidden layer (bitstream 1.8): W3 reads the first layer; no W2, b2.
+TEST(AppearanceHeadTest, OneHiddenLayerGradients) { CheckSmallConfigGradients(1); }
+
+// Pruning units of a one-layer head keeps their W1 rows, b1 entries and W3 columns, and the head
+// computes what the full head computes with those units' weights zeroed.
+TEST(AppearanceHeadTest, OneHiddenLayerKeepsUnits) {
+  AppearanceHeadConfig cfg;
+  cfg.num_products = 6;
+  cfg.feature_dim = 4;
+  cfg.hidden = 8;
+  cfg.hidden_layers = 1;
+  AppearanceHead head(cfg);
+  head.Initialize(3);
+  std::vector<uint8_t> keep(8, 1);
+  keep[2] = keep[5] = 0;
+  std::vector<uint8_t> other = keep;
+  other[0] = 0;
+  other[2] = 1;
+  EXPECT_THROW(head.KeepHidden(keep, other), std::invalid_argument);  // one layer: the same units
+  AppearanceHead zeroed = head;
+  for (int u : {2, 5}) {
+    const int in = head.mlp_input_dim();
+    std::fill_n(zeroed.params().begin() + head.w1_offset() + size_t(u) * in, in, 0.f);
+    zeroed.params()[head.b1_offset() + u] = 0.f;
+  }
+  head.KeepHidden(keep, keep);
+  EXPECT_EQ(head.config().hidden, 6);
+  const Batch b = RandomBatch(7, 6, 4);
+  std::vector<float> a(21), z(21);
+  head.Infer(7, b.products.data(), b.viewdirs.data(), a.data());
+  zeroed.Infer(7, b.products.data(), b.viewdirs.data(), z.data());
+  for (int i = 0; i < 21; ++i) EXPECT_NEAR(a[i], z[i], 1e-6) << i;
 }
 
 }  // namespace

@@ -338,6 +338,34 @@ TEST(TestHiddenUnits, RemovesTheUnitTheTargetLacksWhenItPays) {
   EXPECT_NEAR(RenderMse(model, kRays, rays.o.data(), rays.d.data(), target.data()), joint, 1e-7);
 }
 
+// One hidden layer: a unit is its W1 row, b1 entry and W3 column, judged once.
+TEST(TestHiddenUnits, OneHiddenLayerRemovesTheUnitTheTargetLacks) {
+  const Rays rays;
+  TensorfModel model = DenseSmallModel(1);
+  TensorfModel target_model = model;
+  ZeroHiddenUnit(&target_model, 1, 7);
+  const std::vector<float> target = Render(target_model, rays);
+  const HiddenDecision d =
+      TestHiddenUnits(model, 15, 1e-12, kRays, rays.o.data(), rays.d.data(), target.data(), 0.25);
+  EXPECT_NEAR(d.dmse1[7], -d.mse, 1e-9);
+  EXPECT_GE(d.dropped, 1);
+  EXPECT_EQ(d.keep1[7], 0);
+  EXPECT_EQ(d.keep1, d.keep2);
+  TensorfModel zeroed = model;
+  for (int u = 0; u < 16; ++u) {
+    if (!d.keep1[u]) ZeroHiddenUnit(&zeroed, 1, u);
+  }
+  const double joint = RenderMse(zeroed, kRays, rays.o.data(), rays.d.data(), target.data());
+  Optimizers opt;
+  opt.Reset(model);
+  const size_t before = model.head().params().size();
+  PruneHidden(d, &model, &opt);
+  EXPECT_EQ(before - model.head().params().size(),
+            size_t(d.dropped) * (model.head().mlp_input_dim() + 1 + 3));
+  EXPECT_EQ(opt.head.size(), model.head().params().size());
+  EXPECT_NEAR(RenderMse(model, kRays, rays.o.data(), rays.d.data(), target.data()), joint, 1e-7);
+}
+
 TEST(TestHiddenUnits, DropsTheShareWhenBitsAreDearAndNothingWhenTheyAreFree) {
   const Rays rays;
   const TensorfModel model = DenseSmallModel();
