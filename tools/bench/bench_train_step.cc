@@ -141,6 +141,7 @@ struct TrainStepBenchFlags {
   float early = 0.f, blob_peak = 14.f, rdoq = 0.f;
   std::string threads = "1,2", json_path;
   std::string head = kHeadKindNames[0];  // where the MLP runs (SPEC.md 7.6)
+  int mlp_layers = 2;                    // its hidden layers (ecrf train --mlp-layers)
 };
 
 void AddTrainStepBenchFlags(CLI::App* app, TrainStepBenchFlags* f) {
@@ -181,6 +182,11 @@ void AddTrainStepBenchFlags(CLI::App* app, TrainStepBenchFlags* f) {
       ->check(CLI::IsMember(
           std::vector<std::string>{kHeadKindNames[0], kHeadKindNames[1], kShHeadName}))
       ->capture_default_str();
+  app->add_option("--mlp-layers", f->mlp_layers,
+                  "hidden layers of the MLP (mlp and deferred heads), as ecrf train --mlp-layers")
+      ->type_name("N")
+      ->check(CLI::Range(1, 2))
+      ->capture_default_str();
   app->add_option("--early-stop", f->early, "early_stop_transmittance of the ray marching")
       ->type_name("T")
       ->check(CLI::Range(0.0f, 1.0f))
@@ -219,6 +225,7 @@ TensorfConfig BenchModelConfig(const TrainStepBenchFlags& f) {
   for (int k = 0; k < kNumHeadKinds; ++k) {
     if (f.head == kHeadKindNames[k]) config.head.kind = static_cast<HeadKind>(k);
   }
+  config.head.hidden_layers = f.mlp_layers;
   if (f.head == kShHeadName) {  // as ecrf train --head sh at its default degree: deferred, no MLP
     config.head.kind = HeadKind::kDeferred;
     config.head = trainer::ShHeadConfig(config.head, trainer::TrainOptions().sh_degree);
@@ -434,9 +441,9 @@ int RunTrainStepBench(int argc, char** argv) {
   const TensorfModel& model = bench.model;
   std::printf(
       "train-step bench: res %d^3 (after shrink %dx%dx%d), %d rays, %d samples/ray, mask %d, "
-      "early stop %g, blob peak %g, %s head, %s, rdoq %g\n",
+      "early stop %g, blob peak %g, %s head (%d hidden layers), %s, rdoq %g\n",
       f.res, model.res()[0], model.res()[1], model.res()[2], f.rays, model.n_samples(), f.mask,
-      f.early, f.blob_peak, f.head.c_str(),
+      f.early, f.blob_peak, f.head.c_str(), model.head().config().hidden_layers,
       f.rate_phase ? "rate phase (lambda_e 3e-11, quantization-aware)" : "plain TensoRF", f.rdoq);
   const std::array<double, kNumPhases> phase_bytes = PhaseBytes(model, f.rate_phase);
   std::vector<ThreadCountResult> results;

@@ -29,9 +29,10 @@ namespace ecrf {
 namespace trainer {
 namespace {
 
-TensorfModel SmallDeferredModel(uint64_t seed) {
+TensorfModel SmallDeferredModel(uint64_t seed, int hidden_layers = 2) {
   TensorfConfig c = testing_models::SmallTensorfConfig();
   c.head.kind = HeadKind::kDeferred;
+  c.head.hidden_layers = hidden_layers;
   c.white_background = true;
   TensorfModel model(c);
   model.Initialize({12, 11, 10}, seed);
@@ -174,17 +175,21 @@ TEST(DeferredHead, DecoderChargesTheMlpOncePerColouredRay) {
   EXPECT_LE(coloured_rays, n);
 }
 
+// The head's kind and hidden layers (one: bitstream 1.8) come back with its weights.
 TEST(DeferredHead, CheckpointKeepsTheHead) {
-  TensorfModel model = SmallDeferredModel(8);
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("ecrf_deferred_ckpt_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  const std::string path = (dir / "model.ckpt").string();
-  SaveModelCheckpoint(path, model, 3, TrainOptions());
-  const TensorfModel back = LoadModelFromCheckpoint(path);
-  EXPECT_EQ(back.config().head.kind, HeadKind::kDeferred);
-  EXPECT_EQ(back.head().params(), model.head().params());
-  std::filesystem::remove_all(dir);
+  for (const int layers : {2, 1}) {
+    TensorfModel model = SmallDeferredModel(8, layers);
+    const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                      ("ecrf_deferred_ckpt_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    const std::string path = (dir / "model.ckpt").string();
+    SaveModelCheckpoint(path, model, 3, TrainOptions());
+    const TensorfModel back = LoadModelFromCheckpoint(path);
+    EXPECT_EQ(back.config().head.kind, HeadKind::kDeferred);
+    EXPECT_EQ(back.config().head.hidden_layers, layers);
+    EXPECT_EQ(back.head().params(), model.head().params());
+    std::filesystem::remove_all(dir);
+  }
 }
 
 // A short run of the built-in scene (the tiny preset), --head auto with this render budget.
