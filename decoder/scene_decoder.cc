@@ -312,7 +312,7 @@ Status DecodeMlpChunk(const ChunkView& chunk, const SceneHeader& h, MemoryBudget
     const uint64_t F = h.feature_dim, P = config.num_products, H = h.hidden;
     const uint64_t in = F + 3 + 2 * F * h.feature_pe_freqs + 6 * uint64_t{h.viewdir_pe_freqs};
     const uint64_t H2 = config.hidden_layers == 2 ? H : 0;
-    const uint64_t count = F * P + H * in + H2 * H2 + 5 * H + 3;
+    const uint64_t count = F * P + H * in + H + H2 * H2 + H2 + 3 * H + 3;  // NumParams of 6.6
     ECRF_RETURN_IF_ERROR(budget->Take(count * 4 * 3, "MLPW: the MLP parameters"));
     // A quantized weight is at least one symbol; binary16 and binary32 ones are read in bulk.
     if (!work->Take(precision == kMlpPrecisionQuantized ? count : count / 8)) {
