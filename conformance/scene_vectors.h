@@ -472,9 +472,9 @@ inline bool AddSceneVectorCoefficientChunk(const SceneVector& v, const SceneHead
 inline std::vector<uint8_t> SceneVectorMlpChunk(const SceneVector& v, const SceneHeader& h,
                                                 Lcg& rng) {
   const int F = h.feature_dim, H = h.hidden, P = h.total_rank(1);
-  const int in = F + 3 + 2 * F * h.feature_pe_freqs + 2 * 3 * h.viewdir_pe_freqs;
-  const size_t H2 = v.hidden_layers == 2 ? size_t(H) : 0;  // no W2, b2 with one hidden layer
-  const size_t count = size_t(F) * P + size_t(H) * in + H + H2 * H2 + H2 + 3 * size_t(H) + 3;
+  const MlpLayout layout =
+      MakeMlpLayout(F, P, H, h.feature_pe_freqs, h.viewdir_pe_freqs, v.hidden_layers);
+  const size_t count = MlpParamCount(layout);
   ByteWriter mlp;
   mlp.U8(uint8_t(v.mlp_precision));
   mlp.U8(static_cast<uint8_t>(v.head));
@@ -492,8 +492,6 @@ inline std::vector<uint8_t> SceneVectorMlpChunk(const SceneVector& v, const Scen
       const float sign = (rng.Next() & 1) ? -1.f : 1.f;
       w[i] = sign * std::ldexp(m, 1 - int(i % 25));
     }
-    const MlpLayout layout =
-        MakeMlpLayout(F, P, H, h.feature_pe_freqs, h.viewdir_pe_freqs, v.hidden_layers);
     mlp.Bytes(EncodeQuantizedMlp(layout, w.data(), kMlpMaxLevel, nullptr));
   } else if (v.mlp_precision == kMlpPrecisionQuantized) {
     // Rows of very different scale (one step each); 20000 levels per row reach class 15.
@@ -501,8 +499,6 @@ inline std::vector<uint8_t> SceneVectorMlpChunk(const SceneVector& v, const Scen
     for (size_t i = 0; i < count; ++i) {
       w[i] = std::ldexp(float(int(rng.Below(257)) - 128) / 256.f, int(i / 7 % 7) - 3);
     }
-    const MlpLayout layout =
-        MakeMlpLayout(F, P, H, h.feature_pe_freqs, h.viewdir_pe_freqs, v.hidden_layers);
     mlp.Bytes(EncodeQuantizedMlp(layout, w.data(), 20000, nullptr));
   }
   for (size_t i = 0; i < count && v.mlp_precision != kMlpPrecisionQuantized; ++i) {

@@ -2,6 +2,7 @@
 #include "decoder/fast_sincos.h"
 #include "decoder/mlp_gemm.h"
 #include "decoder/sh_basis.h"
+#include "format/mlp_coder.h"
 
 #include <cmath>
 #include <cstring>
@@ -195,9 +196,9 @@ Status AppearanceMlp::UseGemmKernel(GemmKernel kernel) {
 }
 
 size_t AppearanceMlp::num_params() const {
-  const size_t P = config_.num_products, F = config_.feature_dim, H = config_.hidden;
-  const size_t H2 = config_.hidden_layers == 2 ? H : 0;
-  return F * P + H * static_cast<size_t>(in_dim_) + H + H2 * H2 + H2 + 3 * H + 3;
+  return MlpParamCount(MakeMlpLayout(config_.feature_dim, config_.num_products, config_.hidden,
+                                     config_.feature_pe_freqs, config_.viewdir_pe_freqs,
+                                     config_.hidden_layers));
 }
 
 Status AppearanceMlp::SetParams(const float* params, size_t count) {

@@ -307,12 +307,13 @@ Status DecodeMlpChunk(const ChunkView& chunk, const SceneHeader& h, MemoryBudget
   config.viewdir_pe_freqs = h.viewdir_pe_freqs;
   config.hidden = h.hidden;
   config.hidden_layers = MlpHiddenLayers(mh.layers);
+  const MlpLayout layout =
+      MakeMlpLayout(h.feature_dim, config.num_products, h.hidden, h.feature_pe_freqs,
+                    h.viewdir_pe_freqs, config.hidden_layers);
   {
     // The decoded parameters and the renderer's padded, transposed copy (at most 2x with padding).
-    const uint64_t F = h.feature_dim, P = config.num_products, H = h.hidden;
-    const uint64_t in = F + 3 + 2 * F * h.feature_pe_freqs + 6 * uint64_t{h.viewdir_pe_freqs};
-    const uint64_t H2 = config.hidden_layers == 2 ? H : 0;
-    const uint64_t count = F * P + H * in + H + H2 * H2 + H2 + 3 * H + 3;  // NumParams of 6.6
+    // NumParams of 6.6: under 2^24 within the header's limits.
+    const uint64_t count = MlpParamCount(layout);
     ECRF_RETURN_IF_ERROR(budget->Take(count * 4 * 3, "MLPW: the MLP parameters"));
     // A quantized weight is at least one symbol; binary16 and binary32 ones are read in bulk.
     if (!work->Take(precision == kMlpPrecisionQuantized ? count : count / 8)) {
@@ -324,9 +325,6 @@ Status DecodeMlpChunk(const ChunkView& chunk, const SceneHeader& h, MemoryBudget
   HeapArray<float> params;
   ECRF_RETURN_IF_ERROR(params.Allocate(count));
   if (precision == kMlpPrecisionQuantized) {
-    const MlpLayout layout =
-        MakeMlpLayout(h.feature_dim, config.num_products, h.hidden, h.feature_pe_freqs,
-                      h.viewdir_pe_freqs, config.hidden_layers);
     const Status q = DecodeQuantizedMlp(layout, r.current(), r.remaining(), params.data());
     if (!q.ok()) return Status::Error(q.code(), "MLPW: %s", q.message());
   } else {
