@@ -106,6 +106,19 @@ TEST(TrainFlags, StepRatioSetsTheModelsSampleSpacing) {
   }
 }
 
+TEST(TrainFlags, EarlyStopSetsWhereATrainingRayStops) {
+  EXPECT_EQ(trainer::ConfigFor(Parse({}), trainer::Dataset(), trainer::SceneFit())
+                .early_stop_transmittance,
+            Parse({}).early_stop);
+  const trainer::TrainOptions o = Parse({"--early-stop", "1e-3"});
+  EXPECT_EQ(o.early_stop, 1e-3f);
+  const trainer::TensorfConfig c = trainer::ConfigFor(o, trainer::Dataset(), trainer::SceneFit());
+  EXPECT_EQ(c.early_stop_transmittance, 1e-3f);
+  for (const char* bad : {"-1e-4", "0.6", "x"}) {
+    EXPECT_THROW(Parse({"--early-stop", bad}), std::invalid_argument) << bad;
+  }
+}
+
 TEST(TrainFlags, FinalGridSetsWhereUpsamplingEnds) {
   const trainer::TrainOptions o = Parse({"--final-grid", "150"});
   EXPECT_EQ(o.voxels_final, 150L * 150 * 150);

@@ -138,7 +138,7 @@ const char* const kPhaseKeys[kNumPhases] = {"zero", "qat_refresh", "qat_apply", 
 // The settings of `ecrf bench train`, as its command line gives them.
 struct TrainStepBenchFlags {
   int res = 128, rays = 4096, reps = 5, mask = 0, rate_phase = 1;
-  float early = 0.f, blob_peak = 14.f, rdoq = 0.f;
+  float early = trainer::TrainOptions().early_stop, blob_peak = 14.f, rdoq = 0.f;
   std::string threads = "1,2", json_path;
   std::string head = kHeadKindNames[0];  // where the MLP runs (SPEC.md 7.6)
   int mlp_layers = 2;                    // its hidden layers (ecrf train --mlp-layers)
@@ -187,7 +187,8 @@ void AddTrainStepBenchFlags(CLI::App* app, TrainStepBenchFlags* f) {
       ->type_name("N")
       ->check(CLI::Range(1, 2))
       ->capture_default_str();
-  app->add_option("--early-stop", f->early, "early_stop_transmittance of the ray marching")
+  app->add_option("--early-stop", f->early,
+                  "stop a ray once its transmittance is below T, as ecrf train --early-stop")
       ->type_name("T")
       ->check(CLI::Range(0.0f, 1.0f))
       ->capture_default_str();

@@ -54,6 +54,7 @@ TensorfConfig ConfigFor(const TrainOptions& o, const Dataset& data, const SceneF
   c.far = float(data.far);
   c.white_background = data.white_background;
   c.max_samples = o.max_samples_per_ray;
+  c.early_stop_transmittance = o.early_stop;
   for (int a = 0; a < 3; ++a) {
     c.aabb.min[a] = float(data.scene_aabb[0][a]);
     c.aabb.max[a] = float(data.scene_aabb[1][a]);
