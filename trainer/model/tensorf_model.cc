@@ -82,7 +82,7 @@ void TensorfModel::UpdateStepSize() {
     inv_aabb_size_[a] = 2.0f / size;
     units_[a] = size / static_cast<float>(res_[a] - 1);
   }
-  step_size_ = StepSizeAt(config_.step_ratio);
+  step_size_ = (units_[0] + units_[1] + units_[2]) / 3.f * config_.step_ratio;
 }
 
 void TensorfModel::Initialize(const std::array<int, 3>& res, uint64_t seed) {
@@ -116,38 +116,13 @@ void TensorfModel::SetGeometry(const Aabb& aabb, const std::array<int, 3>& res) 
   if (n_samples_ == 0) n_samples_ = std::min(config_.max_samples, DefaultSamples());
 }
 
-namespace {
-void CheckStepRatio(float step_ratio, const char* where) {
-  if (!(step_ratio > 0.f) || !std::isfinite(step_ratio))
-    throw std::invalid_argument(std::string(where) + ": step ratio must be positive");
-}
-}  // namespace
-
-float TensorfModel::StepSizeAt(float step_ratio) const {
-  return (units_[0] + units_[1] + units_[2]) / 3.f * step_ratio;
-}
-
-int TensorfModel::SamplesAt(float step_ratio) const {
-  const double n = std::ceil(double(n_samples_) * config_.step_ratio / step_ratio);
-  return static_cast<int>(std::max(1.0, std::min<double>(config_.max_samples, n)));
-}
-
 void TensorfModel::SetStepRatio(float step_ratio) {
-  CheckStepRatio(step_ratio, "TensorfModel::SetStepRatio");
-  n_samples_ = SamplesAt(step_ratio);
+  if (!(step_ratio > 0.f) || !std::isfinite(step_ratio))
+    throw std::invalid_argument("TensorfModel::SetStepRatio: step ratio must be positive");
+  const double n = std::ceil(double(n_samples_) * config_.step_ratio / step_ratio);
+  n_samples_ = static_cast<int>(std::max(1.0, std::min<double>(config_.max_samples, n)));
   config_.step_ratio = step_ratio;
   UpdateStepSize();
-}
-
-void TensorfModel::DeclareFileStepRatio(float step_ratio) {
-  CheckStepRatio(step_ratio, "TensorfModel::DeclareFileStepRatio");
-  config_.file_step_ratio = step_ratio == config_.step_ratio ? 0.f : step_ratio;
-}
-
-void TensorfModel::ApplyFileStepRatio() {
-  const float r = FileStepRatio();
-  config_.file_step_ratio = 0.f;
-  if (r != config_.step_ratio) SetStepRatio(r);
 }
 
 void TensorfModel::set_n_samples(int n) {

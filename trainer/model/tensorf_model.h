@@ -27,15 +27,10 @@ namespace trainer {
 struct TensorfConfig {
   std::array<int, 3> density_ranks{{16, 16, 16}};
   std::array<int, 3> app_ranks{{48, 48, 48}};
-  float init_scale = 0.1f;      // grids init: init_scale * N(0,1)
-  float density_shift = -10.f;  // sigma = softplus(feature + density_shift)
-  float distance_scale = 25.f;  // alpha = 1 - exp(-sigma * dist * distance_scale)
-  float step_ratio = 0.5f;      // step = mean(aabb_size / (res - 1)) * step_ratio
-  // The spacing the run's file declares where it differs from the trained one (--head auto's
-  // candidates at twice the spacing, train/head_choice.h); 0: step_ratio. Training keeps
-  // step_ratio, so that the file is the field auto weighed (training at the coarser spacing
-  // thickens the surfaces: more samples a ray than predicted).
-  float file_step_ratio = 0.f;
+  float init_scale = 0.1f;         // grids init: init_scale * N(0,1)
+  float density_shift = -10.f;     // sigma = softplus(feature + density_shift)
+  float distance_scale = 25.f;     // alpha = 1 - exp(-sigma * dist * distance_scale)
+  float step_ratio = 0.5f;         // step = mean(aabb_size / (res - 1)) * step_ratio
   float weight_threshold = 1e-4f;  // rayMarch_weight_thres: colour only where weight > this
   float alpha_mask_threshold = 1e-4f;
   // UpdateAlphaMask computes alpha = 1 - exp(-sigma * step * alpha_mask_length_scale). The
@@ -143,15 +138,6 @@ class TensorfModel {
   // Sample spacing step_ratio cells from now on; n_samples scales so that a ray covers the same
   // length (--head auto, train/head_choice.h).
   void SetStepRatio(float step_ratio);
-  // SetStepRatio's spacing and samples per ray at step_ratio, the model unchanged.
-  float StepSizeAt(float step_ratio) const;
-  int SamplesAt(float step_ratio) const;
-  // The spacing the file declares (TensorfConfig::file_step_ratio); Apply makes it the model's.
-  void DeclareFileStepRatio(float step_ratio);
-  float FileStepRatio() const {
-    return config_.file_step_ratio > 0.f ? config_.file_step_ratio : config_.step_ratio;
-  }
-  void ApplyFileStepRatio();
   // A new head of this config, initialised from seed (--head auto switching to spherical
   // harmonics, train/head_choice.h); its products must be the appearance grid's.
   void ReplaceHead(const AppearanceHeadConfig& head, uint32_t seed);

@@ -28,8 +28,8 @@ encoder::SceneDescription DescribeModel(const TensorfModel& model) {
   }
   h.density_shift = c.density_shift;
   h.distance_scale = c.distance_scale;
-  h.step_size = model.StepSizeAt(model.FileStepRatio());
-  h.num_samples = static_cast<uint32_t>(model.SamplesAt(model.FileStepRatio()));
+  h.step_size = model.step_size();
+  h.num_samples = static_cast<uint32_t>(std::max(1, model.n_samples()));
   h.weight_threshold = c.weight_threshold;
   h.near_far[0] = c.near;
   h.near_far[1] = c.far;

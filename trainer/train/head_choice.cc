@@ -164,7 +164,7 @@ void ChooseHeadIfAuto(TrainSession& s, int it) {
     s.opt.head.Reset(s.model->head().params().size());
   }
   s.model->SetHeadKind(c.head);
-  s.model->DeclareFileStepRatio(c.step_ratio);  // training goes on at its own spacing
+  if (c.step_ratio != s.model->config().step_ratio) s.model->SetStepRatio(c.step_ratio);
   std::string predicted;
   for (const RenderCandidate& k : r.candidates) {
     char line[160];

@@ -6,15 +6,10 @@
 // render budget (--render-budget, --device-class): the per-sample head, the deferred head, the
 // deferred head at twice the spacing (--step-ratio), then the deferred head with
 // spherical-harmonics colour (--sh-degree) at the spacing and at twice it; the cheapest when none
-// is. A candidate at twice the spacing is declared in the file (the model's file_step_ratio)
-// and training goes on at the trained spacing: the file is then the field whose samples auto
-// counted (chair, the phone class: trained at twice the spacing from the choice on, 4.7 samples a
-// ray on the test views and 106-108 ms a view; trained at the spacing and rendered at twice it,
-// 3.9 and 94-96 ms, docs/results.md). The deferred head's MLP starts from the per-sample one's
-// weights (for an opaque surface the weighted sum of the products is about the surface's products,
-// the per-sample head's input); the harmonics start afresh (no MLP to start from) and train on with
-// the grids. Without a budget auto keeps the per-sample head: on chair it has the better
-// rate-distortion (docs/results.md).
+// is. The deferred head's MLP starts from the per-sample one's weights (for an opaque surface the
+// weighted sum of the products is about the surface's products, the per-sample head's input);
+// the harmonics start afresh (no MLP to start from) and train on with the grids. Without a budget
+// auto keeps the per-sample head: on chair it has the better rate-distortion (docs/results.md).
 #ifndef ECRF_TRAINER_TRAIN_HEAD_CHOICE_H_
 #define ECRF_TRAINER_TRAIN_HEAD_CHOICE_H_
 

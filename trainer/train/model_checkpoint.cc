@@ -42,7 +42,6 @@ void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int itera
                  {"density_shift", c.density_shift},
                  {"distance_scale", c.distance_scale},
                  {"step_ratio", c.step_ratio},
-                 {"file_step_ratio", c.file_step_ratio},
                  {"weight_threshold", c.weight_threshold},
                  {"scene_model", static_cast<int>(c.scene_model)},
                  {"roi_min", c.roi.min},
@@ -149,12 +148,10 @@ void ShapeModelAsCheckpoint(const std::string& path, const Checkpoint& ck, const
     *model = TensorfModel(c);
   }
   model->SetGeometry(box, res);
-  // The spacing the run trains at and the one its file declares (--head auto's) are the
-  // checkpoint's; then its samples per ray.
+  // The sample spacing is the checkpoint's (--head auto may have doubled it), then its samples
+  // per ray: a resumed run marches as the one it continues.
   const nlohmann::json render = j.value("render", nlohmann::json::object());
   model->SetStepRatio(render.value("step_ratio", model->config().step_ratio));
-  const float file_step_ratio = render.value("file_step_ratio", 0.f);
-  if (file_step_ratio > 0.f) model->DeclareFileStepRatio(file_step_ratio);
   model->set_n_samples(j.at("n_samples").get<int>());
   // --head auto may have switched the head during the run: the checkpoint's head wins too.
   const nlohmann::json head = j.value("head", nlohmann::json::object());
@@ -291,9 +288,6 @@ TensorfModel LoadModelFromCheckpoint(const std::string& path, RateState* rate) {
     c.density_shift = render.value("density_shift", c.density_shift);
     c.distance_scale = render.value("distance_scale", c.distance_scale);
     c.step_ratio = render.value("step_ratio", c.step_ratio);
-    c.file_step_ratio = render.value("file_step_ratio", c.file_step_ratio);
-    if (!(c.file_step_ratio >= 0.f) || !std::isfinite(c.file_step_ratio))
-      throw std::runtime_error(path + ": checkpoint file_step_ratio is negative or not finite");
     c.weight_threshold = render.value("weight_threshold", c.weight_threshold);
     const int scene_model = render.value("scene_model", 0);
     if (scene_model < 0 || scene_model >= kNumSceneModels) {

@@ -111,7 +111,6 @@ TrainResult FinishTraining(TrainSession& s) {
   result.iterations = o.iters;
   result.final_lambda_e = s.live.lambda_e;
   result.train_seconds = s.TrainSeconds();
-  model->ApplyFileStepRatio();  // the spacing --head auto chose, trained at the run's own
   CheckModelFinite(*model, o.iters - 1, s.checkpoint_path);
   if (!s.checkpoint_path.empty()) {
     try {

@@ -303,46 +303,24 @@ TEST(HeadChoice, CandidatesRestoreTheSpacingAndSetStepRatioKeepsTheRayLength) {
   EXPECT_THROW(model.SetStepRatio(0.f), std::invalid_argument);
 }
 
-// --head auto's coarser spacing is the file's: the model trains on at its own, the file (and a
-// checkpoint, for `ecrf encode RUN`) declares the other, and applying it at the end writes the
-// same bytes.
-TEST(HeadChoice, TheFileDeclaresTheChosenSpacingAndTrainingKeepsItsOwn) {
+// A run that --head auto moved to twice the spacing resumes at it: the checkpoint's spacing and
+// samples per ray replace the options' (which still say the spacing the run started with).
+TEST(HeadChoice, ResumeKeepsTheSpacingAutoChose) {
   TensorfModel model = SmallDeferredModel(4);
-  const float ratio = model.config().step_ratio, step = model.step_size();
-  const int n_samples = model.n_samples();
-  EXPECT_EQ(model.FileStepRatio(), ratio);
-  model.DeclareFileStepRatio(2.f * ratio);
-  EXPECT_EQ(model.step_size(), step);
-  EXPECT_EQ(model.n_samples(), n_samples);
-  const std::vector<uint8_t> declared = EncodeScene(model, FloatMlpOptions());
-  const dec::SceneField field = DecodeOrDie(declared);
-  EXPECT_EQ(field.step_size, model.StepSizeAt(2.f * ratio));
-  EXPECT_FLOAT_EQ(field.step_size, 2.f * step);
-  EXPECT_EQ(field.n_samples, (n_samples + 1) / 2);
-
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("ecrf_file_spacing_" + std::to_string(::getpid()));
+  const float ratio = model.config().step_ratio;
+  model.SetStepRatio(2.f * ratio);
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("ecrf_resume_spacing_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const std::string path = (dir / "model.ckpt").string();
   SaveModelCheckpoint(path, model, 3, TrainOptions());
-  TensorfModel back = LoadModelFromCheckpoint(path);
   TensorfModel resumed(SmallDeferredModel(4).config());  // --resume: the options' model first
   LoadModelCheckpoint(path, &resumed, nullptr, nullptr);
   std::filesystem::remove_all(dir);
-  for (const TensorfModel* m : {&back, &resumed}) {
-    EXPECT_EQ(m->config().step_ratio, ratio);
-    EXPECT_EQ(m->step_size(), step);
-    EXPECT_EQ(m->FileStepRatio(), 2.f * ratio);
-    EXPECT_EQ(EncodeScene(*m, FloatMlpOptions()), declared);
-  }
-
-  model.ApplyFileStepRatio();
-  EXPECT_EQ(model.config().step_ratio, 2.f * ratio);
-  EXPECT_EQ(model.config().file_step_ratio, 0.f);
-  EXPECT_EQ(EncodeScene(model, FloatMlpOptions()), declared);
-  model.DeclareFileStepRatio(model.config().step_ratio);  // the trained spacing: nothing declared
-  EXPECT_EQ(model.config().file_step_ratio, 0.f);
-  EXPECT_THROW(model.DeclareFileStepRatio(-1.f), std::invalid_argument);
+  EXPECT_EQ(resumed.config().step_ratio, 2.f * ratio);
+  EXPECT_EQ(resumed.step_size(), model.step_size());
+  EXPECT_EQ(resumed.n_samples(), model.n_samples());
+  EXPECT_EQ(EncodeScene(resumed, FloatMlpOptions()), EncodeScene(model, FloatMlpOptions()));
 }
 
 TEST(HeadChoice, TheBudgetComesFromTheFlagOrTheDeviceClass) {
