@@ -175,20 +175,29 @@ TEST(DeferredHead, DecoderChargesTheMlpOncePerColouredRay) {
   EXPECT_LE(coloured_rays, n);
 }
 
+// Saves the model as a checkpoint in a temporary directory of its own, runs load(path) on it and
+// removes the directory.
+template <typename Load>
+void WithCheckpointOf(TensorfModel& model, const Load& load) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("ecrf_deferred_ckpt_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "model.ckpt").string();
+  SaveModelCheckpoint(path, model, 3, TrainOptions());
+  load(path);
+  std::filesystem::remove_all(dir);
+}
+
 // The head's kind and hidden layers (one: bitstream 1.8) come back with its weights.
 TEST(DeferredHead, CheckpointKeepsTheHead) {
   for (const int layers : {2, 1}) {
     TensorfModel model = SmallDeferredModel(8, layers);
-    const std::filesystem::path dir = std::filesystem::temp_directory_path() /
-                                      ("ecrf_deferred_ckpt_" + std::to_string(::getpid()));
-    std::filesystem::create_directories(dir);
-    const std::string path = (dir / "model.ckpt").string();
-    SaveModelCheckpoint(path, model, 3, TrainOptions());
-    const TensorfModel back = LoadModelFromCheckpoint(path);
-    EXPECT_EQ(back.config().head.kind, HeadKind::kDeferred);
-    EXPECT_EQ(back.config().head.hidden_layers, layers);
-    EXPECT_EQ(back.head().params(), model.head().params());
-    std::filesystem::remove_all(dir);
+    WithCheckpointOf(model, [&](const std::string& path) {
+      const TensorfModel back = LoadModelFromCheckpoint(path);
+      EXPECT_EQ(back.config().head.kind, HeadKind::kDeferred);
+      EXPECT_EQ(back.config().head.hidden_layers, layers);
+      EXPECT_EQ(back.head().params(), model.head().params());
+    });
   }
 }
 
@@ -309,14 +318,10 @@ TEST(HeadChoice, ResumeKeepsTheSpacingAutoChose) {
   TensorfModel model = SmallDeferredModel(4);
   const float ratio = model.config().step_ratio;
   model.SetStepRatio(2.f * ratio);
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
-                                    ("ecrf_resume_spacing_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  const std::string path = (dir / "model.ckpt").string();
-  SaveModelCheckpoint(path, model, 3, TrainOptions());
   TensorfModel resumed(SmallDeferredModel(4).config());  // --resume: the options' model first
-  LoadModelCheckpoint(path, &resumed, nullptr, nullptr);
-  std::filesystem::remove_all(dir);
+  WithCheckpointOf(model, [&](const std::string& path) {
+    LoadModelCheckpoint(path, &resumed, nullptr, nullptr);
+  });
   EXPECT_EQ(resumed.config().step_ratio, 2.f * ratio);
   EXPECT_EQ(resumed.step_size(), model.step_size());
   EXPECT_EQ(resumed.n_samples(), model.n_samples());
