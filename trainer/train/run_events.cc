@@ -103,6 +103,8 @@ TrainResult FinishTraining(TrainSession& s) {
   TrainResult& result = s.result;
   if (isatty(2)) std::fprintf(stderr, "\n");
   if (s.exposure_on) ReportExposureCodes(s);
+  // Before the held-out cameras are aligned to the field: the file's field has this mask.
+  RefreshAlphaMask(s);
   if (s.schedule.cameras.on) {
     result.train_cameras = s.progress.cameras;
     result.test_cameras = AlignHeldOutCameras(*model, s.train, s.test, s.progress.cameras,

@@ -43,6 +43,9 @@ void ChooseHeadIfAuto(TrainSession& s, int it);
 // (not for an unbounded scene), switches the density L1 weight to its later value and resets
 // the optimizers; the second filters the training rays through the mask (an object scene only).
 void UpdateAlphaMask(TrainSession& s, int it);
+// When training ends (unless --keep-last-mask): the alpha mask from the trained density, on the
+// last update's points (grid_events.cc).
+void RefreshAlphaMask(TrainSession& s);
 // TensoRF's coarse-to-fine upsampling to the next voxel count; resets the optimizers.
 void UpsampleGrids(TrainSession& s, int it);
 // --refine-cameras: one round of refining the training cameras against the field.

@@ -19,6 +19,7 @@
 #include "format/vm_modes.h"
 #include "tests/common/scoped_temp_dir.h"
 #include "tests/common/tiny_run.h"
+#include "trainer/model/alpha_mask.h"
 #include "trainer/rate/train_rate_control.h"
 #include "trainer/train/trainer.h"
 
@@ -159,6 +160,52 @@ TEST(TrainEvents, FirstAlphaMaskUpdateShrinksTheBoxTheSecondFiltersTheRays) {
   EXPECT_GT(s.rays.size(), size_t(s.o.batch_rays));
   EXPECT_EQ(s.opt.density.step_count(), 1);
   EXPECT_EQ(Volume(s.model->aabb()), Volume(shrunk));
+}
+
+// When training ends the mask comes from the trained density, on the last update's points (or,
+// with --mask-downscale, on the coarsened grid's as every update): a density that has contracted
+// since that update leaves the space it gave up unmasked.
+TEST(TrainEvents, TheFinalAlphaMaskComesFromTheTrainedDensity) {
+  struct Case {
+    bool keep_last;
+    int downscale;
+  };
+  for (const Case c : {Case{false, 1}, Case{true, 1}, Case{false, 2}}) {
+    SCOPED_TRACE(std::string(c.keep_last ? "kept" : "refreshed") + ", downscale " +
+                 std::to_string(c.downscale));
+    TrainOptions o = TinyRun();
+    o.keep_last_mask = c.keep_last;
+    o.mask_downscale = c.downscale;
+    TinySession r(o);
+    TrainSession& s = r.s;
+    r.RunUntil(1);
+    MakeDensityCube(s.model);
+    UpdateAlphaMask(s, 24);  // shrinks the box to the cube
+    UpdateAlphaMask(s, 56);  // a mask of the shrunk box, nearly full
+    UpsampleGrids(s, 32);
+    MakeDensityCube(s.model);  // the density now holds the middle half of the shrunk box
+    const AlphaMask last = *s.model->alpha_mask();
+    RefreshAlphaMask(s);
+    const AlphaMask& mask = *s.model->alpha_mask();
+    if (c.keep_last) {
+      EXPECT_EQ(mask.occupancy(), last.occupancy());
+      continue;
+    }
+    EXPECT_EQ(mask.res(), c.downscale == 1 ? last.res() : AlphaMaskRes(s.model->res(), 2));
+    EXPECT_LT(double(mask.count()) / double(mask.occupancy().size()),
+              0.5 * double(last.count()) / double(last.occupancy().size()));
+    const Aabb& b = s.model->aabb();
+    auto point = [&b](float f) {  // f of the way along each axis of the box
+      std::array<float, 3> p;
+      for (int a = 0; a < 3; ++a) p[a] = b.min[a] + f * (b.max[a] - b.min[a]);
+      return p;
+    };
+    for (float f : {0.3f, 0.5f, 0.7f}) EXPECT_TRUE(mask.Occupied(point(f).data())) << f;
+    for (float f : {0.02f, 0.98f}) {
+      EXPECT_TRUE(last.Occupied(point(f).data())) << f;
+      EXPECT_FALSE(mask.Occupied(point(f).data())) << f;
+    }
+  }
 }
 
 TEST(TrainEvents, UpsampleReachesTheNextVoxelCountAndResetsTheOptimizers) {
