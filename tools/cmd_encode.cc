@@ -31,7 +31,7 @@ struct EncodeFlags {
   int coef_bits = encoder::EncodeOptions().coef_bits, mlp_levels = 0;
   float rounding_offset = encoder::EncodeOptions().rounding_offset;
   float rdoq_lambda = encoder::EncodeOptions().rdoq_lambda;
-  bool mlp_f32 = false, no_drop = false, no_occupancy = false;
+  bool mlp_f32 = false, no_drop = false, no_occupancy = false, refresh_mask = false;
 };
 
 void AddEncodeFlags(CLI::App* app, EncodeFlags* f) {
@@ -76,6 +76,9 @@ void AddEncodeFlags(CLI::App* app, EncodeFlags* f) {
       ->type_name("1.N");
   app->add_flag("--no-drop", f->no_drop, "keep rank components that decode to zero");
   app->add_flag("--no-occupancy", f->no_occupancy, "leave the alpha mask out");
+  app->add_flag("--refresh-mask", f->refresh_mask,
+                "the alpha mask from the checkpoint's density, on the points of its mask (what "
+                "training does when it ends; for the checkpoints of runs trained before it did)");
   app->add_option("--dct-block", f->dct_block,
                   "plane blocks of a run without a trained rate (default 16x16x16)")
       ->type_name("CxHxW");
@@ -206,7 +209,17 @@ int RunEncode(int argc, char** argv) {
   const std::string ckpt = IsDirectory(f.input) ? f.input + "/checkpoint.ckpt" : f.input;
   const trainer::CheckpointRunInfo info = trainer::ReadCheckpointRunInfo(ckpt);
   trainer::RateState rate;
-  const trainer::TensorfModel model = trainer::LoadModelFromCheckpoint(ckpt, &rate);
+  trainer::TensorfModel model = trainer::LoadModelFromCheckpoint(ckpt, &rate);
+  if (f.refresh_mask) {
+    const size_t before = model.alpha_mask() ? model.alpha_mask()->count() : 0;
+    if (!model.RefreshAlphaMask(info.has_config ? info.config.mask_downscale : 1)) {
+      std::fprintf(stderr, "ecrf encode: error: --refresh-mask: %s has no alpha mask\n",
+                   ckpt.c_str());
+      return 2;
+    }
+    std::printf("alpha mask from the checkpoint's density: %zu points occupied (its own: %zu)\n",
+                model.alpha_mask()->count(), before);
+  }
   EncodeJob job = info.has_config ? JobFromRunConfig(info, rate, *app, f, target_flag)
                                   : JobFromFlags(ckpt, rate, *app, f, target_flag);
   ApplyStreamFlags(*app, f, rate, ckpt, &job.options);

@@ -1,5 +1,6 @@
 // One resolved configuration per run: `ecrf encode RUN` rebuilds the file `ecrf train` wrote,
-// --lambda-e at the default's value is the default run, a sweep point is the `ecrf train` run of
+// --lambda-e at the default's value is the default run, --refresh-mask the mask a run computes
+// when it ends, a sweep point is the `ecrf train` run of
 // its settings, --resume refuses changed settings, and --help shows each rate point's values.
 // Small runs of the built-in scene (a few seconds each); every comparison is byte for byte.
 #include <gtest/gtest.h>
@@ -70,6 +71,19 @@ TEST_F(RunConfigTest, EncodeRunRebuildsTheFileTrainWroteForEveryRatePoint) {
   const std::string low = root_ + "/low";
   ASSERT_EQ(Invoke(RunEncode, {"encode", low, "-o", low + "/f16.ecrf", "--mlp-levels", "0"}), 0);
   EXPECT_GT(Bytes(low + "/f16.ecrf").size(), Bytes(low + "/scene.ecrf").size());
+}
+
+// A run trained with --keep-last-mask is the default run up to its last step; `ecrf encode
+// --refresh-mask` computes the mask the default run computes when it ends: the same bytes.
+TEST_F(RunConfigTest, EncodeRefreshMaskWritesTheFileOfARunThatRefreshedIt) {
+  // 300 iterations: kSmallRun's 100 leave no density for a mask.
+  const std::string plain = Train("default", {"--iters", "300"});
+  const std::string kept = Train("kept", {"--iters", "300", "--keep-last-mask"});
+  EXPECT_NE(Bytes(kept + "/scene.ecrf"), Bytes(plain + "/scene.ecrf"));
+  ASSERT_EQ(Invoke(RunEncode, {"encode", kept, "-o", kept + "/again.ecrf"}), 0);
+  EXPECT_EQ(Bytes(kept + "/again.ecrf"), Bytes(kept + "/scene.ecrf"));
+  ASSERT_EQ(Invoke(RunEncode, {"encode", kept, "--refresh-mask", "-o", kept + "/fresh.ecrf"}), 0);
+  EXPECT_EQ(Bytes(kept + "/fresh.ecrf"), Bytes(plain + "/scene.ecrf"));
 }
 
 TEST_F(RunConfigTest, LambdaEAtTheDefaultValueWritesTheDefaultRunsBytes) {

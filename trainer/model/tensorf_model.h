@@ -116,6 +116,11 @@ class TensorfModel {
   // new mask (over the current aabb) and returns the bounding box of the occupied grid points;
   // if nothing is occupied the mask is empty and the current aabb is returned.
   Aabb UpdateAlphaMask(const std::array<int, 3>& mask_res);
+  // One more UpdateAlphaMask from the current density, without a shrink: on the current mask's
+  // points (at most the grid's), or with mask_downscale > 1 on the grid's points coarsened by it
+  // (CoarsenAlphaMask), as the updates of a run with --mask-downscale. What training does when it
+  // ends. False (nothing changed) without a mask.
+  bool RefreshAlphaMask(int mask_downscale);
   // TensoRF shrink: crops the grids to the vertices covering new_aabb and sets the aabb (snapped
   // to the kept vertices when there is no mask or the mask resolution differs from res).
   // Updates the step size; n_samples is unchanged (as in train.py).

@@ -60,19 +60,7 @@ void RefreshAlphaMask(TrainSession& s) {
   // the dilation where density lies in the last mask's margin).
   if (s.o.keep_last_mask || model->alpha_mask() == nullptr || s.first_iter >= s.o.iters) return;
   const size_t before = model->alpha_mask()->count();
-  if (s.o.mask_downscale > 1) {
-    // As the updates coarsen theirs: every point the grid's mask keeps stays kept.
-    model->UpdateAlphaMask(model->res());
-    model->SetAlphaMask(CoarsenAlphaMask(*model->alpha_mask(), s.o.mask_downscale));
-  } else {
-    // One more of TensoRF's updates (alpha at the mask's points, then a one-point dilation) on
-    // the last update's points, which were the grid's before its last upsamplings: the OCCU
-    // chunk costs what it did. At the grid's points the shell is thinner, for 1.6x its bytes
-    // (chair: 8.3 samples a ray either way; 595,373 B against 606,328 B; docs/results.md).
-    std::array<int, 3> res = model->alpha_mask()->res();
-    for (int a = 0; a < 3; ++a) res[a] = std::min(res[a], model->res()[a]);
-    model->UpdateAlphaMask(res);
-  }
+  model->RefreshAlphaMask(s.o.mask_downscale);
   const std::array<int, 3>& res = model->alpha_mask()->res();
   std::fprintf(stderr,
                "alpha mask from the trained density: %zu of %zu points occupied (the last "
