@@ -4,10 +4,8 @@
 // training: tests/trainer/model/volume_render_test.cc.)
 #include <gtest/gtest.h>
 
-#include <unistd.h>
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -17,6 +15,7 @@
 #include "encoder/scene_encoder.h"
 #include "tests/common/decode_or_die.h"
 #include "tests/common/renderer_agreement.h"
+#include "tests/common/scoped_temp_dir.h"
 #include "tests/common/small_model.h"
 #include "trainer/data/camera.h"
 #include "trainer/model/volume_render.h"
@@ -175,17 +174,13 @@ TEST(DeferredHead, DecoderChargesTheMlpOncePerColouredRay) {
   EXPECT_LE(coloured_rays, n);
 }
 
-// Saves the model as a checkpoint in a temporary directory of its own, runs load(path) on it and
-// removes the directory.
+// Saves the model as a checkpoint in a temporary directory of its own and runs load(path) on it.
 template <typename Load>
 void WithCheckpointOf(TensorfModel& model, const Load& load) {
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("ecrf_deferred_ckpt_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  const std::string path = (dir / "model.ckpt").string();
+  const testing_util::ScopedTempDir dir("ecrf_deferred_ckpt");
+  const std::string path = dir.path() + "/model.ckpt";
   SaveModelCheckpoint(path, model, 3, TrainOptions());
   load(path);
-  std::filesystem::remove_all(dir);
 }
 
 // The head's kind and hidden layers (one: bitstream 1.8) come back with its weights.
