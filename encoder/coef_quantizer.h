@@ -16,9 +16,16 @@ namespace encoder {
 
 inline constexpr float kRoundToNearest = 0.5f;
 
+// std::round exactly (floor(x + 0.5) differs for the double just below 0.5), written with trunc,
+// which compilers inline and vectorize, where std::round is a library call: q - trunc(q) is
+// exact, and NaN and infinities pass through.
+inline double RoundHalfAwayFromZero(double q) {
+  const double whole = std::trunc(q);
+  return std::fabs(q - whole) >= 0.5 ? whole + std::copysign(1.0, q) : whole;
+}
+
 inline double QuantizeLevel(double coefficient, double step, double offset) {
-  // std::round exactly (floor(x + 0.5) differs for the double just below 0.5).
-  if (offset == 0.5) return std::round(coefficient / step);
+  if (offset == 0.5) return RoundHalfAwayFromZero(coefficient / step);
   const double magnitude = std::floor(std::fabs(coefficient) / step + offset);
   return coefficient < 0.0 ? -magnitude : magnitude;
 }

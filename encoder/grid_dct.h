@@ -60,6 +60,13 @@ void BackwardBlocks(const float* dl_dcoeffs, const GridBlockLayout& layout, floa
 // positions are dropped).
 void InverseBlocks(const float* coeffs, const GridBlockLayout& layout, float* tensor);
 
+// out = crop(DCT^-1(Q(DCT(pad(tensor))))), Q the encoder's quantizer (coef_quantizer.h) with
+// this step: what the file's grid decodes to before the integer transform's rounding, as
+// quantization-aware training needs it. ForwardBlocks, QuantizeLevel * step and InverseBlocks
+// give the same values; this runs them block by block. out may not alias tensor.
+void QuantizeBlocks(const float* tensor, const GridBlockLayout& layout, double step,
+                    double rounding_offset, float* out);
+
 // Subset versions: block_ids[0..count) (distinct ids in [0, num_blocks())); coeffs holds
 // count * block_volume() values in list order.
 void ForwardBlockList(const float* tensor, const GridBlockLayout& layout, const int* block_ids,

@@ -19,11 +19,13 @@
 #include "format/container.h"
 #include "tests/common/invoke.h"
 #include "tests/common/scoped_temp_dir.h"
+#include "tests/common/small_model.h"
 #include "tools/bench/benches.h"
 #include "tools/cli.h"
 #include "tools/commands.h"
 #include "tools/report/report.h"
 #include "trainer/train/train_options.h"
+#include "trainer/train/trainer.h"
 
 namespace ecrf {
 namespace tools {
@@ -181,6 +183,29 @@ TEST(Cli, OtherCommandsHelpExitsZeroWithTheirFlags) {
   const Output train = Capture(RunBench, {"bench", "train", "--help"});
   ExpectFlag(train.out, "--threads", "1,2");
   ExpectFlag(train.out, "--res", "128");
+}
+
+// --run times the step on a run's own model and settings (its grid, head and early stop), not
+// on the synthetic blob: a real scene's grid is what the refresh and Adam pay for.
+TEST(Cli, BenchTrainRunTimesTheRunsOwnModel) {
+  testing_util::ScopedTempDir dir("bench_train_run");
+  trainer::TensorfModel model = testing_models::DenseSmallModel();
+  trainer::TrainOptions o = trainer::PresetOptions(trainer::Preset::kFast);
+  trainer::ApplyRatePoint(trainer::RatePoint::kMedium, &o);
+  o.early_stop = 0.25f;  // the checkpoint's model takes its render settings from the run's
+  trainer::SaveModelCheckpoint(dir.path() + "/checkpoint.ckpt", model, 10, o, nullptr, nullptr, &o);
+  const Output r = Capture(RunBench, {"bench", "train", "--run", dir.path(), "--threads", "1",
+                                      "--reps", "1", "--rays", "256"});
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.out.find("grid 16x16x16"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("early stop 0.25"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("lambda_e 3e-11"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("blob"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("qat refresh"), std::string::npos) << r.out;
+  const Output blob = Capture(RunBench, {"bench", "train", "--res", "24", "--threads", "1",
+                                         "--reps", "1", "--rays", "256"});
+  ASSERT_EQ(blob.rc, 0) << blob.err;
+  EXPECT_NE(blob.out.find("blob, res 24^3, grid 24x24x24"), std::string::npos) << blob.out;
 }
 
 TEST(Cli, SelfcheckHelpDoesNotRunTheCheck) {

@@ -2,7 +2,9 @@
 // phase by phase (zero the gradients, quantization-aware refresh and apply, TrainStep = march,
 // head, composite and scatter, density L1, the rate term, Adam on grids and head) on a synthetic
 // Blender-like scene: aabb [-1.5,1.5]^3, cameras on a sphere of radius 4, an opaque soft blob in
-// the middle of a randomly initialised VM-192 field, at each thread count asked for. It then
+// the middle of a randomly initialised VM-192 field, or (--run RUN) a trained run's own model and
+// settings, whose grid and mask a real scene's step pays for, with the same rays; at each thread
+// count asked for. It then
 // prints the scaling table: per phase the measured times, the fitted serial fraction and the
 // predicted times at 8-64 threads with what bounds each (scaling_model.h), so the same command
 // gives the figure on any machine. Flags and their defaults: `ecrf bench train --help`.
@@ -20,12 +22,14 @@
 
 #include "tools/bench/bench_json.h"
 #include "tools/bench/scaling_model.h"
+#include "tools/cli_args.h"
 #include "trainer/model/tensorf_model.h"
 #include "trainer/model/volume_render.h"
 #include "trainer/rate/quant_aware.h"
 #include "trainer/train/adam.h"
 #include "trainer/train/rate_state.h"
 #include "trainer/train/train_options.h"
+#include "trainer/train/trainer.h"
 
 namespace ecrf {
 namespace tools {
@@ -139,7 +143,7 @@ const char* const kPhaseKeys[kNumPhases] = {"zero", "qat_refresh", "qat_apply", 
 struct TrainStepBenchFlags {
   int res = 128, rays = 4096, reps = 5, mask = 0, rate_phase = 1;
   float early = trainer::TrainOptions().early_stop, blob_peak = 14.f, rdoq = 0.f;
-  std::string threads = "1,2", json_path;
+  std::string threads = "1,2", json_path, run;
   std::string head = kHeadKindNames[0];  // where the MLP runs (SPEC.md 7.6)
   int mlp_layers = 2;                    // its hidden layers (ecrf train --mlp-layers)
 };
@@ -200,22 +204,28 @@ void AddTrainStepBenchFlags(CLI::App* app, TrainStepBenchFlags* f) {
       ->type_name("F")
       ->check(CLI::Range(0.0f, 1000.0f))
       ->capture_default_str();
+  app->add_option("--run", f->run,
+                  "time the step on a run's trained model (RUN/checkpoint.ckpt: its grids, mask, "
+                  "head, settings and rate state) instead of the synthetic blob; --res, --mask, "
+                  "--head, --mlp-layers, --early-stop and --blob-peak then do not apply")
+      ->type_name("RUN");
   app->add_option("--json", f->json_path,
                   "also write the figures (per phase and thread count, and the predictions) as "
                   "JSON")
       ->type_name("FILE");
 }
 
-// What one timed iteration works on: the synthetic scene's model, the rays, and the optimizer and
-// rate state the trainer holds in its rate phase; and the field every step starts from.
+// What one timed iteration works on: the synthetic scene's model (or a run's), the rays, and the
+// optimizer and rate state the trainer holds in its rate phase; and the field every step starts
+// from.
 struct StepBench {
   explicit StepBench(const TrainStepBenchFlags& f);
 
+  trainer::RateState rate;  // before the model, which --run loads together with it
   TensorfModel model;
   std::vector<float> o, d, rgb;
   trainer::Adam adam_density, adam_app, adam_head;
   trainer::TrainOptions options;
-  trainer::RateState rate;
   trainer::QuantAwareModel qat;
   std::vector<float> density0, app0, head0;
 };
@@ -234,21 +244,43 @@ TensorfConfig BenchModelConfig(const TrainStepBenchFlags& f) {
   return config;
 }
 
-StepBench::StepBench(const TrainStepBenchFlags& f) : model(BenchModelConfig(f)) {
+// The synthetic scene: the blob in a random field, masked and shrunk as the trainer does.
+TensorfModel BlobModel(const TrainStepBenchFlags& f) {
+  TensorfModel model(BenchModelConfig(f));
   model.Initialize({f.res, f.res, f.res}, 1);
   AddBlob(model, f.blob_peak);  // feature up to blob_peak: sigma up to softplus(peak - 10)
   if (f.mask) {
     const trainer::Aabb box = model.UpdateAlphaMask({f.res, f.res, f.res});
     model.Shrink(box);
   }
+  return model;
+}
+
+std::string RunCheckpoint(const std::string& run) {
+  return IsDirectory(run) ? run + "/checkpoint.ckpt" : run;
+}
+
+StepBench::StepBench(const TrainStepBenchFlags& f)
+    : model(f.run.empty() ? BlobModel(f)
+                          : trainer::LoadModelFromCheckpoint(RunCheckpoint(f.run), &rate)) {
   MakeRays(f.rays, 7, &o, &d, &rgb);
   // The trainer's optimizers (trainer.cc): grids at lr 0.02, head at 1e-3.
   adam_density = trainer::Adam(model.density().params().size(), trainer::AdamConfig{});
   adam_app = trainer::Adam(model.appearance().params().size(), trainer::AdamConfig{});
   adam_head = trainer::Adam(model.head().params().size(), trainer::AdamConfig{});
-  options.lambda_e = 3e-11f;  // the medium rate point's
-  options.rdoq_lambda = f.rdoq;
-  if (f.rate_phase) rate.Activate(model, options);
+  if (!f.run.empty()) {
+    // The run's own settings, and the lambda_e and steps its rate phase ended with.
+    const trainer::CheckpointRunInfo info = trainer::ReadCheckpointRunInfo(RunCheckpoint(f.run));
+    if (info.has_config) {
+      options = info.config;
+      model.SetEarlyStop(options.early_stop);
+    }
+    if (rate.checkpoint_lambda_e > 0.f) options.lambda_e = rate.checkpoint_lambda_e;
+  } else {
+    options.lambda_e = 3e-11f;  // the medium rate point's
+    options.rdoq_lambda = f.rdoq;
+  }
+  if (f.rate_phase && !rate.active) rate.Activate(model, options);
   density0 = model.density().params();
   app0 = model.appearance().params();
   head0 = model.head().params();
@@ -440,12 +472,16 @@ int RunTrainStepBench(int argc, char** argv) {
   const std::vector<int> thread_counts = ThreadCounts(f.threads);
   StepBench bench(f);
   const TensorfModel& model = bench.model;
+  const trainer::TensorfConfig& c = model.config();
   std::printf(
-      "train-step bench: res %d^3 (after shrink %dx%dx%d), %d rays, %d samples/ray, mask %d, "
-      "early stop %g, blob peak %g, %s head (%d hidden layers), %s, rdoq %g\n",
-      f.res, model.res()[0], model.res()[1], model.res()[2], f.rays, model.n_samples(), f.mask,
-      f.early, f.blob_peak, f.head.c_str(), model.head().config().hidden_layers,
-      f.rate_phase ? "rate phase (lambda_e 3e-11, quantization-aware)" : "plain TensoRF", f.rdoq);
+      "train-step bench: %s, grid %dx%dx%d, %d rays, %d samples/ray, mask %s, early stop %g, %s "
+      "head (%d hidden layers), %s (lambda_e %g), rdoq %g\n",
+      f.run.empty() ? ("blob, res " + std::to_string(f.res) + "^3").c_str() : f.run.c_str(),
+      model.res()[0], model.res()[1], model.res()[2], f.rays, model.n_samples(),
+      model.alpha_mask() ? "yes" : "no", c.early_stop_transmittance,
+      kHeadKindNames[static_cast<int>(c.head.kind)], c.head.hidden_layers,
+      f.rate_phase ? "rate phase, quantization-aware" : "plain TensoRF",
+      f.rate_phase ? bench.options.lambda_e : 0.f, bench.options.rdoq_lambda);
   const std::array<double, kNumPhases> phase_bytes = PhaseBytes(model, f.rate_phase);
   std::vector<ThreadCountResult> results;
   BenchReport report;

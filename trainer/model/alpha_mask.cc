@@ -34,6 +34,15 @@ AlphaMask::AlphaMask(const Aabb& aabb, const std::array<int, 3>& res,
           any |= occ_[((z + (c >> 2)) * Y + y + ((c >> 1) & 1)) * X + x + (c & 1)];
         cell_any_[(z * (Y - 1) + y) * (X - 1) + x] = any;
       }
+  for (int a = 0; a < 3; ++a) blocks_[a] = ((res[a] - 1) >> kBlockShift) + 1;
+  block_any_.assign(size_t(blocks_[0]) * blocks_[1] * blocks_[2], 0);
+  for (size_t z = 0; z + 1 < Z; ++z)
+    for (size_t y = 0; y + 1 < Y; ++y)
+      for (size_t x = 0; x + 1 < X; ++x) {
+        if (!cell_any_[(z * (Y - 1) + y) * (X - 1) + x]) continue;
+        block_any_[((z >> kBlockShift) * blocks_[1] + (y >> kBlockShift)) * blocks_[0] +
+                   (x >> kBlockShift)] = 1;
+      }
 }
 
 float AlphaMask::Sample(const float xyz[3]) const {
@@ -85,6 +94,10 @@ bool AlphaMask::Occupied(const float xyz[3]) const {
     if (static_cast<float>(i0[a]) == idx[a]) interior = false;
   }
   if (!interior) return OccupiedSlow(idx);
+  if (!block_any_[((size_t(i0[2]) >> kBlockShift) * blocks_[1] + (i0[1] >> kBlockShift)) *
+                      blocks_[0] +
+                  (i0[0] >> kBlockShift)])
+    return false;
   return cell_any_[(static_cast<size_t>(i0[2]) * (res_[1] - 1) + i0[1]) * (res_[0] - 1) + i0[0]] !=
          0;
 }

@@ -140,6 +140,9 @@ class TensorfModel {
     config_.head.kind = kind;
     head_.set_kind(kind);
   }
+  // Rays stop once their transmittance is below this (a training setting, not in the
+  // checkpoint's render settings: `ecrf bench train --run` restores the run's).
+  void SetEarlyStop(float transmittance) { config_.early_stop_transmittance = transmittance; }
   // Sample spacing step_ratio cells from now on; n_samples scales so that a ray covers the same
   // length (--head auto, train/head_choice.h).
   void SetStepRatio(float step_ratio);

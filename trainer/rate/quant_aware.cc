@@ -47,27 +47,16 @@ void ReconstructRdoqGrid(const VmGrid& grid, const float* steps, const encoder::
 void ReconstructQuantizedGrid(const VmGrid& grid, const float* steps,
                               const encoder::RateConfig& config, std::vector<float>* out,
                               float rounding_offset, float rdoq_lambda) {
-  // The six tensors tile params() and InverseBlocks writes every element of each: no copy.
+  // The six tensors tile params() and QuantizeBlocks writes every element of each: no copy.
   out->resize(grid.params().size());
   if (rdoq_lambda > 0.f) {
     ReconstructRdoqGrid(grid, steps, config, out, rounding_offset, rdoq_lambda);
     return;
   }
-  std::vector<float> coeffs;
   for (int t = 0; t < encoder::kTensorsPerGrid; ++t) {
-    const encoder::GridBlockLayout layout = RateTensorLayout(grid, t, config);
-    coeffs.resize(layout.num_coeffs());
-    encoder::ForwardBlocks(RateTensorData(grid, t), layout, coeffs.data());
-    const float step = steps[t];
-    const long n = static_cast<long>(coeffs.size());
-#pragma omp parallel for schedule(static) if (n > 65536)
-    for (long i = 0; i < n; ++i) {
-      // The encoder's quantizer, on the double quotient.
-      coeffs[i] = static_cast<float>(
-          encoder::QuantizeLevel(static_cast<double>(coeffs[i]), step, rounding_offset) * step);
-    }
     const size_t offset = static_cast<size_t>(RateTensorData(grid, t) - grid.params().data());
-    encoder::InverseBlocks(coeffs.data(), layout, out->data() + offset);
+    encoder::QuantizeBlocks(RateTensorData(grid, t), RateTensorLayout(grid, t, config), steps[t],
+                            rounding_offset, out->data() + offset);
   }
 }
 

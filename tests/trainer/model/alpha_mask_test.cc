@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <random>
@@ -36,6 +37,31 @@ std::array<float, 3> At(const AlphaMask& mask, const double f[3]) {
     p[a] = float(mask.aabb().min[a] * (1.0 - t) + mask.aabb().max[a] * t);
   }
   return p;
+}
+
+// Occupied is Sample() > 0 (TensoRF's rule) at random points, on cell corners, faces and
+// edges, and outside the box, for masks from nearly empty to half full: its shortcuts (the
+// per-cell and per-block tables) only ever answer what the interpolation would.
+TEST(AlphaMask, OccupiedIsPositiveInterpolatedOccupancy) {
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> u(-0.1, 1.1);
+  for (const double share : {0.0005, 0.02, 0.5}) {
+    const AlphaMask mask = RandomMask({37, 22, 29}, share, 4);
+    int occupied = 0;
+    for (int i = 0; i < 200000; ++i) {
+      double f[3];
+      for (int a = 0; a < 3; ++a) {
+        f[a] = u(rng) * (mask.res()[a] - 1);
+        if (i % 3 == 0) f[a] = std::round(f[a]);  // on grid points, edges and faces
+      }
+      const std::array<float, 3> p = At(mask, f);
+      const bool want = mask.Sample(p.data()) > 0.f;
+      ASSERT_EQ(mask.Occupied(p.data()), want) << f[0] << " " << f[1] << " " << f[2];
+      occupied += want;
+    }
+    EXPECT_GT(occupied, 0) << share;
+    EXPECT_LT(occupied, 200000) << share;
+  }
 }
 
 TEST(AlphaMaskRes, MaskPointsAtMostDownscaleCellsApart) {

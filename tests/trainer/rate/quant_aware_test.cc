@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 #include <utility>
 #include <vector>
@@ -106,6 +107,40 @@ TEST(CoefRdoq, EncodedSceneShrinksWithLambda) {
     o.rdoq_lambda = bad;
     EXPECT_THROW(EncodeScene(model, o), std::invalid_argument) << bad;
   }
+}
+
+// Rounding to nearest is std::round to the bit (half away from zero), written without it: on
+// halves, on the doubles either side of them, on huge and tiny values, signed zeros, infinities
+// and NaN, and on a million random quotients.
+TEST(CoefQuantizer, RoundingIsStdRound) {
+  std::vector<double> values = {0.0,
+                                -0.0,
+                                0.5,
+                                -0.5,
+                                1.5,
+                                -2.5,
+                                4503599627370495.5,
+                                4503599627370497.0,
+                                1e300,
+                                -1e300,
+                                5e-324,
+                                std::numeric_limits<double>::infinity(),
+                                -std::numeric_limits<double>::infinity()};
+  for (double h = 0.5; h < 1e6; h = h * 3 + 0.5) {
+    values.push_back(std::nextafter(h, 0.0));
+    values.push_back(std::nextafter(h, 1e9));
+    values.push_back(-std::nextafter(h, 0.0));
+  }
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-300.0, 300.0);
+  for (int i = 0; i < 1000000; ++i) values.push_back(u(rng));
+  for (double v : values) {
+    const double got = encoder::QuantizeLevel(v, 1.0, 0.5), want = std::round(v);
+    ASSERT_EQ(std::signbit(got), std::signbit(want)) << v;
+    ASSERT_EQ(got, want) << v;
+  }
+  EXPECT_TRUE(std::isnan(encoder::QuantizeLevel(std::nan(""), 1.0, 0.5)));
+  EXPECT_EQ(encoder::QuantizeLevel(7.5, 2.5, 0.5), 3.0);
 }
 
 // The dead zone: levels move toward zero by 0.5 - offset, so the file shrinks.
