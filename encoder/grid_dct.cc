@@ -220,7 +220,20 @@ struct alignas(64) BlockBuffers {
   float b[kMaxBlockVolume];
 };
 
-enum class Op { kForward, kBackward, kInverse };
+// kQuantize: forward, the quantizer, inverse, with the coefficients kept in the block buffers.
+enum class Op { kForward, kBackward, kInverse, kQuantize };
+
+// QuantizeLevel(c, step, offset) * step for each of n coefficients, the test on the offset
+// taken out of the loop so that it vectorizes.
+inline void QuantizeInPlace(float* c, int n, double step, double rounding_offset) {
+  if (rounding_offset == 0.5) {
+    for (int i = 0; i < n; ++i)
+      c[i] = static_cast<float>(RoundHalfAwayFromZero(double(c[i]) / step) * step);
+  } else {
+    for (int i = 0; i < n; ++i)
+      c[i] = static_cast<float>(QuantizeLevel(double(c[i]), step, rounding_offset) * step);
+  }
+}
 
 // buf[i1][i2][i0] = the block's elements, edge-replicated where it passes the tensor's end.
 inline void GatherBlock(const float* src, const int n[3], const long off[3][kMaxBlockLength],
@@ -269,7 +282,8 @@ inline void BufferFromCoefficients(const float* c, const int n[3], float* b) {
 }
 
 template <Op kOp>
-void RunBlocks(const float* src, const GridBlockLayout& L, const int* ids, int count, float* dst) {
+void RunBlocks(const float* src, const GridBlockLayout& L, const int* ids, int count, float* dst,
+               double step = 0.0, double rounding_offset = 0.5) {
   const int* n = L.block;
   const int vol = L.block_volume();
   // Small jobs run serially: a parallel region costs more than a few blocks' transforms.
@@ -286,6 +300,12 @@ void RunBlocks(const float* src, const GridBlockLayout& L, const int* ids, int c
         GatherBlock(src, n, off, buf.a);
         CoefficientsFromBuffer(TransformBlock(buf.a, buf.b, n, false), n,
                                dst + static_cast<size_t>(j) * vol);
+      } else if (kOp == Op::kQuantize) {
+        GatherBlock(src, n, off, buf.a);
+        float* c = TransformBlock(buf.a, buf.b, n, false);
+        QuantizeInPlace(c, vol, step, rounding_offset);
+        StoreBlock<false>(TransformBlock(c, c == buf.a ? buf.b : buf.a, n, true), n, off, valid,
+                          dst);
       } else {
         BufferFromCoefficients(src + static_cast<size_t>(j) * vol, n, buf.a);
         const float* r = TransformBlock(buf.a, buf.b, n, true);
@@ -362,33 +382,10 @@ void BackwardBlockList(const float* dl_dcoeffs, const GridBlockLayout& layout, c
 
 void QuantizeBlocks(const float* tensor, const GridBlockLayout& layout, double step,
                     double rounding_offset, float* out) {
-  const int* n = layout.block;
-  const int vol = layout.block_volume();
-  const int count = layout.num_blocks();
   // Block by block, so that the coefficients never leave the cache: this runs on every grid
   // at every quantization-aware training step.
-#pragma omp parallel if (static_cast <long>(count) * vol > 32768)
-  {
-    BlockBuffers buf;
-    long off[3][kMaxBlockLength];
-    int valid[3];
-#pragma omp for schedule(dynamic, 4)
-    for (int id = 0; id < count; ++id) {
-      BlockOffsets(layout, id, off, valid);
-      GatherBlock(tensor, n, off, buf.a);
-      float* c = TransformBlock(buf.a, buf.b, n, false);
-      // QuantizeLevel, with its test on the offset taken out of the loop so that it vectorizes.
-      if (rounding_offset == 0.5) {
-        for (int i = 0; i < vol; ++i)
-          c[i] = static_cast<float>(RoundHalfAwayFromZero(double(c[i]) / step) * step);
-      } else {
-        for (int i = 0; i < vol; ++i)
-          c[i] = static_cast<float>(QuantizeLevel(double(c[i]), step, rounding_offset) * step);
-      }
-      float* other = c == buf.a ? buf.b : buf.a;
-      StoreBlock<false>(TransformBlock(c, other, n, true), n, off, valid, out);
-    }
-  }
+  RunBlocks<Op::kQuantize>(tensor, layout, nullptr, layout.num_blocks(), out, step,
+                           rounding_offset);
 }
 
 }  // namespace encoder
