@@ -4,10 +4,10 @@
 // Blender-like scene: aabb [-1.5,1.5]^3, cameras on a sphere of radius 4, an opaque soft blob in
 // the middle of a randomly initialised VM-192 field, or (--run RUN) a trained run's own model and
 // settings, whose grid and mask a real scene's step pays for, with the same rays; at each thread
-// count asked for. It then
-// prints the scaling table: per phase the measured times, the fitted serial fraction and the
-// predicted times at 8-64 threads with what bounds each (scaling_model.h), so the same command
-// gives the figure on any machine. Flags and their defaults: `ecrf bench train --help`.
+// count asked for. It then prints the scaling table: per phase the measured times, the fitted
+// serial fraction and the predicted times at 8-64 threads with what bounds each (scaling_model.h),
+// so the same command gives the figure on any machine. Flags and their defaults: `ecrf bench train
+// --help`.
 #include <omp.h>
 #include <sys/resource.h>
 

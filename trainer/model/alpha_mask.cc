@@ -34,7 +34,7 @@ AlphaMask::AlphaMask(const Aabb& aabb, const std::array<int, 3>& res,
           any |= occ_[((z + (c >> 2)) * Y + y + ((c >> 1) & 1)) * X + x + (c & 1)];
         cell_any_[(z * (Y - 1) + y) * (X - 1) + x] = any;
       }
-  for (int a = 0; a < 3; ++a) blocks_[a] = ((res[a] - 1) >> kBlockShift) + 1;
+  for (int a = 0; a < 3; ++a) blocks_[a] = ((res[a] - 2) >> kBlockShift) + 1;  // ceil(cells / 4)
   block_any_.assign(size_t(blocks_[0]) * blocks_[1] * blocks_[2], 0);
   for (size_t z = 0; z + 1 < Z; ++z)
     for (size_t y = 0; y + 1 < Y; ++y)

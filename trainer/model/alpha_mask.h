@@ -40,9 +40,9 @@ class AlphaMask {
   std::array<float, 3> inv_size_{{0.f, 0.f, 0.f}};  // 2 / (max - min)
   std::vector<uint8_t> occ_;
   std::vector<uint8_t> cell_any_;  // per cell (res-1 per axis): any of its 8 corners occupied
-  // Per block of kBlockCells^3 cells: any of them in cell_any_. Training marches most of its
-  // points through empty space, and this table, 1/64 of cell_any_'s size, stays in the cache
-  // where cell_any_ (a byte per cell: 10 MB at 220^3) does not.
+  // Per block of 4x4x4 cells (1 << kBlockShift a side): any of them in cell_any_. Training marches
+  // most of its points through empty space, and this table, 1/64 of cell_any_'s size, stays in the
+  // cache where cell_any_ (a byte per cell: 10 MB at 220^3) does not.
   static constexpr int kBlockShift = 2;
   std::array<int, 3> blocks_{{0, 0, 0}};
   std::vector<uint8_t> block_any_;
