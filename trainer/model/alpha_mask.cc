@@ -25,6 +25,8 @@ AlphaMask::AlphaMask(const Aabb& aabb, const std::array<int, 3>& res,
     if (v > 1) throw std::runtime_error("AlphaMask: occupancy must be 0/1");
     count_ += v;
   }
+  for (int a = 0; a < 3; ++a) blocks_[a] = ((res[a] - 2) >> kBlockShift) + 1;  // ceil(cells / 4)
+  block_any_.assign(size_t(blocks_[0]) * blocks_[1] * blocks_[2], 0);
   cell_any_.assign((X - 1) * (Y - 1) * (Z - 1), 0);
   for (size_t z = 0; z + 1 < Z; ++z)
     for (size_t y = 0; y + 1 < Y; ++y)
@@ -33,15 +35,8 @@ AlphaMask::AlphaMask(const Aabb& aabb, const std::array<int, 3>& res,
         for (int c = 0; c < 8; ++c)
           any |= occ_[((z + (c >> 2)) * Y + y + ((c >> 1) & 1)) * X + x + (c & 1)];
         cell_any_[(z * (Y - 1) + y) * (X - 1) + x] = any;
-      }
-  for (int a = 0; a < 3; ++a) blocks_[a] = ((res[a] - 2) >> kBlockShift) + 1;  // ceil(cells / 4)
-  block_any_.assign(size_t(blocks_[0]) * blocks_[1] * blocks_[2], 0);
-  for (size_t z = 0; z + 1 < Z; ++z)
-    for (size_t y = 0; y + 1 < Y; ++y)
-      for (size_t x = 0; x + 1 < X; ++x) {
-        if (!cell_any_[(z * (Y - 1) + y) * (X - 1) + x]) continue;
         block_any_[((z >> kBlockShift) * blocks_[1] + (y >> kBlockShift)) * blocks_[0] +
-                   (x >> kBlockShift)] = 1;
+                   (x >> kBlockShift)] |= any;
       }
 }
 
