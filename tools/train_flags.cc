@@ -178,8 +178,8 @@ trainer::TrainOptions FinishTrainFlags(const CLI::App& app, TrainFlags* f) {
   settings_given.step_scale = rate || given("--quant-step-scale");
   settings_given.mlp_levels = rate || given("--mlp-levels");
   settings_given.ranks = rate || given("--ranks");
-  settings_given.schedule =
-      rate || given("--final-grid") || given("--upsample-at") || given("--rate-start");
+  settings_given.schedule = rate || given("--final-grid") || given("--upsample-at");
+  settings_given.rate_start = rate || given("--rate-start");
   settings_given.iters = rate || given("--iters");
   trainer::ApplyTargetSizeDefaults(&o, settings_given);
   // Stopping on purpose keeps the work: a checkpoint is written at the stop.

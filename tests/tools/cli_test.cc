@@ -202,6 +202,8 @@ TEST(Cli, BenchTrainRunTimesTheRunsOwnModel) {
   EXPECT_NE(r.out.find("lambda_e 3e-11"), std::string::npos) << r.out;
   EXPECT_EQ(r.out.find("blob"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("qat refresh"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("against the measured peaks"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("head 0 rows"), std::string::npos) << r.out;
   const Output blob = Capture(RunBench, {"bench", "train", "--res", "24", "--threads", "1",
                                          "--reps", "1", "--rays", "256"});
   ASSERT_EQ(blob.rc, 0) << blob.err;

@@ -17,6 +17,7 @@
 #include "decoder/mlp.h"
 #include "tools/bench/bench_json.h"
 #include "tools/bench/cpu_peak.h"
+#include "tools/bench/work_counts.h"
 #include "trainer/data/file_io.h"
 #include "trainer/model/appearance_head.h"
 #include "trainer/model/small_gemm.h"
@@ -77,23 +78,6 @@ void AddMlpBenchFlags(CLI::App* app, MlpBenchFlags* f) {
   app->add_flag("--best", g_use_best,
                 "report the fastest run instead of the median (steadier on a shared machine)");
   app->add_option("--json", f->json_path, "also write the figures as JSON")->type_name("FILE");
-}
-
-// Floating-point operations of one forward and one backward over n rows.
-struct MlpFlops {
-  double forward = 0.0, backward = 0.0;
-};
-
-MlpFlops HeadFlops(const trainer::AppearanceHeadConfig& cfg, const trainer::AppearanceHead& head,
-                   int n) {
-  const int P = cfg.num_products, F = cfg.feature_dim, H = cfg.hidden, in = head.mlp_input_dim();
-  MlpFlops flops;
-  flops.forward = 2.0 * n * (double(P) * F + double(in) * H + double(H) * H + H * 3.0);
-  // Backward computes dL/dx only for the columns that reach the features (not the view PE).
-  const double in_grad = in - 2.0 * 3 * cfg.viewdir_pe_freqs;
-  flops.backward =
-      2.0 * n * (2.0 * H * 3 + 2.0 * H * H + (double(in) + in_grad) * H + 2.0 * double(F) * P);
-  return flops;
 }
 
 // The rows the MLPs run on: random products, unit view directions (off the z = 0 plane) and the

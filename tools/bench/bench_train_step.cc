@@ -21,7 +21,9 @@
 #include <vector>
 
 #include "tools/bench/bench_json.h"
+#include "tools/bench/cpu_peak.h"
 #include "tools/bench/scaling_model.h"
+#include "tools/bench/work_counts.h"
 #include "tools/cli_args.h"
 #include "trainer/model/tensorf_model.h"
 #include "trainer/model/volume_render.h"
@@ -353,13 +355,43 @@ TrainStepStats TimeOneStep(StepBench& b, bool rate_phase, int rays, int rep, dou
   return stats;
 }
 
-// What one thread count measured: the median seconds of each phase and of the whole step, and
-// the triad bandwidth.
+// What one thread count measured: the median seconds of each phase and of the whole step, the
+// triad bandwidth and the FMA peak.
 struct ThreadCountResult {
   std::array<double, kNumPhases> phase_medians{};
   double step_median = 0.0;
   double bandwidth = 0.0;
+  double fma_peak_gflops = 0.0;
 };
+
+int RankSum(const VmGrid& grid) { return grid.ranks()[0] + grid.ranks()[1] + grid.ranks()[2]; }
+
+// The head's and the scatter's arithmetic rate against this thread count's measured FMA peak, and
+// the scatter's traffic against the triad bandwidth (work_counts.h: what each count includes).
+void PrintPeakShares(const StepBench& b, const TrainStepStats& last, const ThreadCountResult& r,
+                     int nthreads, BenchReport* report) {
+  const MlpFlops head = HeadFlops(b.model.head().config(), b.model.head(), last.head_rows);
+  const ScatterWork scatter = ScatterCounts(last.density_samples, RankSum(b.model.density()),
+                                            last.appearance_samples, RankSum(b.model.appearance()));
+  auto gflops = [](double flops, double s) { return s > 0.0 ? flops / s * 1e-9 : 0.0; };
+  const double head_gflops = gflops(head.forward + head.backward, r.phase_medians[kHead]);
+  const double scatter_gflops = gflops(scatter.flops, r.phase_medians[kScatter]);
+  const double scatter_gbs = gflops(scatter.bytes, r.phase_medians[kScatter]);
+  std::printf(
+      "  against the measured peaks (%s FMA loop %.1f GFLOP/s, triad %.1f GB/s): head %ld rows, "
+      "%.1f GFLOP/s (%.1f %%); scatter %.1f GFLOP/s (%.1f %%), %.1f GB/s of gradient entries "
+      "(%.0f %% of triad)\n",
+      FmaPeakIsa(), r.fma_peak_gflops, r.bandwidth / 1e9, last.head_rows, head_gflops,
+      100.0 * head_gflops / r.fma_peak_gflops, scatter_gflops,
+      100.0 * scatter_gflops / r.fma_peak_gflops, scatter_gbs,
+      100.0 * scatter_gbs * 1e9 / r.bandwidth);
+  const std::string prefix = "threads_" + std::to_string(nthreads) + "_";
+  report->Record(prefix + "fma_peak_gflops", r.fma_peak_gflops);
+  report->Record(prefix + "head_rows", static_cast<double>(last.head_rows));
+  report->Record(prefix + "head_gflops", head_gflops);
+  report->Record(prefix + "scatter_gflops", scatter_gflops);
+  report->Record(prefix + "scatter_entry_gb_per_s", scatter_gbs);
+}
 
 // Times a warm-up step and `reps` steps on `nthreads` threads, prints the thread count's line
 // and records its figures.
@@ -386,6 +418,7 @@ ThreadCountResult TimeThreadCount(StepBench& b, const TrainStepBenchFlags& f, in
   for (int k = 0; k < kNumPhases; ++k) r.phase_medians[k] = Median(phase_times[k]);
   r.step_median = Median(times);
   r.bandwidth = MeasureTriadBandwidth(nthreads);
+  r.fma_peak_gflops = MeasureFmaPeakGflops(nthreads);
   std::sort(times.begin(), times.end());
   // cpu / (threads * wall) < 1 means other processes competed for the cores.
   std::printf(
@@ -398,6 +431,7 @@ ThreadCountResult TimeThreadCount(StepBench& b, const TrainStepBenchFlags& f, in
   report->Record(prefix + "step_median", r.step_median);
   for (int k = 0; k < kNumPhases; ++k) report->Record(prefix + kPhaseKeys[k], r.phase_medians[k]);
   report->Record(prefix + "triad_gb_per_s", r.bandwidth / 1e9);
+  PrintPeakShares(b, last, r, nthreads, report);
   return r;
 }
 

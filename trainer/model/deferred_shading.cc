@@ -120,6 +120,7 @@ void DeferredChunk(const RayLoss& loss, AppearanceHead& head, Workspace& ws, con
   EnsureSize(ws.ray_dl_drgb, static_cast<size_t>(rows) * 3);
   EnsureSize(ws.ray_dl_dproducts, static_cast<size_t>(rows) * P);
   stats.t_march += lap();
+  stats.head_rows += rows;
   if (rows > 0)
     head.Forward(rows, ws.ray_products.data(), ws.ray_viewdirs.data(), ws.ray_rgb.data());
   stats.t_head += lap();

@@ -316,6 +316,7 @@ TrainStepStats TrainStep(TensorfModel& model, int n_rays, const float* origins, 
     EnsureSize(ws.rgb, static_cast<size_t>(rows) * 3);
     EnsureSize(ws.dl_drgb, static_cast<size_t>(rows) * 3);
     stats.t_march += lap();
+    stats.head_rows += rows;
     if (rows > 0)
       head.Forward(static_cast<int>(rows), ws.products.data(), ws.viewdirs.data(), ws.rgb.data());
     stats.t_head += lap();

@@ -48,6 +48,7 @@ struct TrainStepStats {
   long rays = 0;
   long density_samples = 0;     // samples whose density was evaluated (inside aabb and mask)
   long appearance_samples = 0;  // samples sent through the appearance head (w > threshold)
+  long head_rows = 0;  // rows the head ran on: appearance samples, or rays with the deferred head
   // Wall-clock seconds of the phases (for benchmarks).
   double t_march = 0.0;      // ray sampling, mask, density forward, appearance products
   double t_head = 0.0;       // head forward + backward

@@ -26,7 +26,8 @@ void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int itera
   j["iteration"] = iteration;
   j["preset"] = NameOf(o.preset);
   j["iters"] = o.iters;
-  j["lambda_e"] = o.lambda_e;                // the live value under rate control
+  j["lambda_e"] = o.lambda_e;  // the live value under rate control
+  j["rate_control_last_bytes"] = rate ? rate->rate_control_last_bytes : 0;
   j["rounding_offset"] = o.rounding_offset;  // the quantizer the run trained through
   j["rdoq_lambda"] = o.rdoq_lambda;
   j["res"] = model.res();
@@ -227,6 +228,7 @@ void LoadRateState(const std::string& path, const Checkpoint& ck, nlohmann::json
   rate->adam.Reset(rate->entropy.params().size());
   rate->active = true;
   rate->checkpoint_lambda_e = j.value("lambda_e", 0.0f);
+  rate->rate_control_last_bytes = j.value("rate_control_last_bytes", size_t(0));
   rate->rounding_offset = j.value("rounding_offset", 0.5f);
   if (!(rate->rounding_offset > 0.f && rate->rounding_offset <= 0.5f)) {
     throw std::runtime_error(path + ": checkpoint holds a rounding offset of " +

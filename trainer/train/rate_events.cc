@@ -40,6 +40,7 @@ void ControlRate(TrainSession& s, int it) {
   const size_t bytes = EncodeScene(*s.model, RunEncodeOptions(s.o, s.rate)).size();
   const float before = s.live.lambda_e;
   s.live.lambda_e = s.controller->Update(bytes);
+  s.rate.rate_control_last_bytes = s.controller->last_bytes();
   std::fprintf(
       stderr,
       "%srate control at iteration %d: file %zu bytes for a target of %zu, lambda_e %g -> %g\n",

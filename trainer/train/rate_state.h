@@ -24,6 +24,8 @@ struct RateState {
   Adam adam;
   // The lambda_e a checkpointed run last trained with (rate control moves it); 0 when unknown.
   float checkpoint_lambda_e = 0.f;
+  // The file --target-size's controller measured last (0: none yet), checkpointed with lambda_e.
+  size_t rate_control_last_bytes = 0;
   // The coefficient quantizer's rounding offset a checkpointed run trained through.
   float rounding_offset = 0.5f;
   float rdoq_lambda = 0.f;  // ... and its RDOQ lambda (0: none)

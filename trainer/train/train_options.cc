@@ -152,7 +152,11 @@ void ApplyTargetSizeDefaults(TrainOptions* o, const TargetSizeFlagsGiven& given)
   // peak step) when training ends below the target.
   if (!given.step_scale) o->quant_step_scale = share < 0.016 ? 4.0f : share < 0.03 ? 3.0f : 2.0f;
   if (share >= 0.03) return;
-  if (!given.schedule) ApplyFineGridSchedule(o);
+  if (!given.schedule) {
+    const float rate_start = o->rate_start;
+    ApplyFineGridSchedule(o);
+    if (given.rate_start) o->rate_start = rate_start;
+  }
   if (!given.iters && o->fine_grid_at_rate_points) o->iters = RatePointIters(*o);
   if (!given.mlp_levels) o->mlp_levels = share < 0.016 ? kLowRateMlpLevels : kMediumRateMlpLevels;
   if (share >= 0.016) return;

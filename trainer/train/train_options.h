@@ -126,7 +126,8 @@ struct TargetSizeFlagsGiven {
   bool step_scale = false;  // --quant-step-scale or --rate
   bool mlp_levels = false;  // --mlp-levels or --rate
   bool ranks = false;       // --ranks or --rate
-  bool schedule = false;    // --final-grid, --upsample-at, --rate-start or --rate
+  bool schedule = false;    // --final-grid, --upsample-at or --rate
+  bool rate_start = false;  // --rate-start (or --rate): kept when the schedule is --target-size's
   bool iters = false;       // --iters or --rate
 };
 

@@ -103,7 +103,8 @@ TrainSession::TrainSession(const TrainOptions& options, const Dataset& train_vie
       rays(train_views.views) {
   if (start.resumed_lambda_e > 0.f) {
     live.lambda_e = start.resumed_lambda_e;
-    controller = std::make_unique<LambdaController>(o.target_bytes, live.lambda_e);
+    controller = std::make_unique<LambdaController>(o.target_bytes, live.lambda_e,
+                                                    rate.rate_control_last_bytes);
   }
   opt.Reset(*model);
   exposure_on = ExposureCodesOn(o, *model);

@@ -90,6 +90,14 @@ TEST_P(VolumeRenderHeadTest, RenderMatchesTrainStepForward) {
   const TrainStepStats s = TrainStep(copy, 50, o.data(), d.data(), rgb.data(), 7);
   EXPECT_LT(s.mse, 1e-2);
   EXPECT_GT(s.density_samples, 50);
+  // The head's rows (the benchmarks' work count): a row per coloured sample, or per coloured ray.
+  EXPECT_GT(s.head_rows, 0);
+  if (GetParam() == HeadKind::kPerSample) {
+    EXPECT_EQ(s.head_rows, s.appearance_samples);
+  } else {
+    EXPECT_LE(s.head_rows, 50);
+    EXPECT_LT(s.head_rows, s.appearance_samples);
+  }
 }
 
 struct FdSetup {
