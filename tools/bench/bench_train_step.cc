@@ -373,10 +373,13 @@ void PrintPeakShares(const StepBench& b, const TrainStepStats& last, const Threa
   const MlpFlops head = HeadFlops(b.model.head().config(), b.model.head(), last.head_rows);
   const ScatterWork scatter = ScatterCounts(last.density_samples, RankSum(b.model.density()),
                                             last.appearance_samples, RankSum(b.model.appearance()));
-  auto gflops = [](double flops, double s) { return s > 0.0 ? flops / s * 1e-9 : 0.0; };
-  const double head_gflops = gflops(head.forward + head.backward, r.phase_medians[kHead]);
-  const double scatter_gflops = gflops(scatter.flops, r.phase_medians[kScatter]);
-  const double scatter_gbs = gflops(scatter.bytes, r.phase_medians[kScatter]);
+  auto billions_per_second = [](double count, double s) {
+    return s > 0.0 ? count / s * 1e-9 : 0.0;
+  };
+  const double head_gflops =
+      billions_per_second(head.forward + head.backward, r.phase_medians[kHead]);
+  const double scatter_gflops = billions_per_second(scatter.flops, r.phase_medians[kScatter]);
+  const double scatter_gbs = billions_per_second(scatter.bytes, r.phase_medians[kScatter]);
   std::printf(
       "  against the measured peaks (%s FMA loop %.1f GFLOP/s, triad %.1f GB/s): head %ld rows, "
       "%.1f GFLOP/s (%.1f %%); scatter %.1f GFLOP/s (%.1f %%), %.1f GB/s of gradient entries "

@@ -22,10 +22,10 @@ LambdaController::LambdaController(size_t target_bytes, float lambda_e, size_t l
 }
 
 float LambdaController::Update(size_t file_bytes) {
-  const double bytes = double(std::max<size_t>(file_bytes, 1));
-  double log_error = std::log(bytes / double(target_));
-  if (last_bytes_ > 0) log_error += kTrendHorizon * std::log(bytes / double(last_bytes_));
-  last_bytes_ = size_t(bytes);
+  const size_t bytes = std::max<size_t>(file_bytes, 1);
+  double log_error = std::log(double(bytes) / double(target_));
+  if (last_bytes_ > 0) log_error += kTrendHorizon * std::log(double(bytes) / double(last_bytes_));
+  last_bytes_ = bytes;
   const double factor = std::clamp(std::exp(kGain * log_error), 1.0 / 3.0, 3.0);
   lambda_ = float(std::clamp(double(lambda_) * factor, 1e-14, 1e-6));
   return lambda_;
