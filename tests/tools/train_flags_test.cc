@@ -6,11 +6,13 @@
 #include <string>
 #include <vector>
 
+#include "decoder/ray_marcher.h"
 #include "tools/train_flags.h"
 #include "trainer/data/dataset.h"
 #include "trainer/data/scene_fit.h"
 #include "trainer/train/rate_state.h"
 #include "trainer/train/train_config.h"
+#include "trainer/train/train_schedule.h"
 #include "trainer/train/trainer.h"
 
 namespace ecrf {
@@ -107,14 +109,15 @@ TEST(TrainFlags, StepRatioSetsTheModelsSampleSpacing) {
 }
 
 TEST(TrainFlags, EarlyStopSetsWhereATrainingRayStops) {
+  // The default is auto; an object with its cameras kept stops where the renders do.
   EXPECT_EQ(trainer::ConfigFor(Parse({}), trainer::Dataset(), trainer::SceneFit())
                 .early_stop_transmittance,
-            Parse({}).early_stop);
+            trainer::kAutoEarlyStop);
   const trainer::TrainOptions o = Parse({"--early-stop", "1e-3"});
   EXPECT_EQ(o.early_stop, 1e-3f);
   const trainer::TensorfConfig c = trainer::ConfigFor(o, trainer::Dataset(), trainer::SceneFit());
   EXPECT_EQ(c.early_stop_transmittance, 1e-3f);
-  for (const char* bad : {"-1e-4", "0.6", "x"}) {
+  for (const char* bad : {"0.6", "x"}) {
     EXPECT_THROW(Parse({"--early-stop", bad}), std::invalid_argument) << bad;
   }
 }
@@ -205,6 +208,58 @@ TEST(TrainFlags, LambdaEAloneAdjustsTheDefaultPointAndZeroIsPlainTensorf) {
       trainer::ChangedSettings(target, Parse({"--target-size", "600KB", "--rate-start", "0.75"}));
   ASSERT_EQ(late.size(), 1u);
   EXPECT_EQ(late[0].rfind("rate_start:", 0), 0u) << late[0];
+}
+
+// `long` is chair-800's 45-minute command written once: the same run as the flags it replaced
+// (docs/results.md), setting for setting where the settings mean the same, milestone for
+// milestone where a preset states them for its own run length.
+TEST(TrainFlags, TheLongPresetIsTheFortyFiveMinuteRunsFlags) {
+  for (const char* target : {"500KB", "250KB"}) {
+    const trainer::TrainOptions preset = Parse({"--preset", "long", "--target-size", target});
+    const trainer::TrainOptions flags =
+        Parse({"--head", "deferred", "--early-stop", "1e-4", "--iters", "30000", "--rate-start",
+               "0.75", "--target-size", target});
+    EXPECT_EQ(trainer::ScaledMilestones(preset.upsample_iters, preset),
+              trainer::ScaledMilestones(flags.upsample_iters, flags));
+    EXPECT_EQ(trainer::ScaledMilestones(preset.alpha_mask_iters, preset),
+              trainer::ScaledMilestones(flags.alpha_mask_iters, flags));
+    EXPECT_EQ(trainer::UpsampleVoxelCounts(preset), trainer::UpsampleVoxelCounts(flags));
+    EXPECT_EQ(trainer::RateStartIteration(preset), 22500);
+    EXPECT_EQ(trainer::RateStartIteration(flags), 22500);
+    EXPECT_EQ(trainer::GridFinalIteration(preset), trainer::GridFinalIteration(flags));
+    // Early stop is auto in the preset: 1e-4 on chair (an object with its cameras kept).
+    const std::vector<std::string> expected = {"early_stop", "fine_grid_rate_start", "preset",
+                                               "rate_point_iters"};
+    std::vector<std::string> names;
+    for (const std::string& line : trainer::ChangedSettings(flags, preset)) {
+      names.push_back(line.substr(0, line.find(':')));
+    }
+    EXPECT_EQ(names, expected) << target;
+    EXPECT_LT(preset.early_stop, 0.f);
+  }
+  // Without a rate point the preset is its plain 20,000 iterations at the coarser grid.
+  const trainer::TrainOptions plain = Parse({"--preset", "long", "--rate", "none"});
+  EXPECT_EQ(plain.iters, 20000);
+  EXPECT_EQ(plain.voxels_final, 180L * 180 * 180);
+  // The default rate point is the 30,000-iteration schedule too.
+  EXPECT_EQ(trainer::RateStartIteration(Parse({"--preset", "long"})), 22500);
+}
+
+// Auto early stop: where the renders stop (SPEC.md 7.8) for objects with fixed cameras, the
+// whole ray where cameras move or the scene is not an object (not measured there).
+TEST(TrainFlags, EarlyStopIsAutoForObjectsWithFixedCameras) {
+  EXPECT_EQ(trainer::kAutoEarlyStop, dec::RenderOptions().early_stop_transmittance);
+  auto resolved = [](const std::vector<std::string>& args) {
+    const trainer::TrainOptions o = Parse(args);
+    const trainer::Dataset data = trainer::LoadTrainingViews(o, "train");
+    return trainer::ConfigFor(o, data).early_stop_transmittance;
+  };
+  EXPECT_EQ(resolved({"--scene", "builtin"}), trainer::kAutoEarlyStop);
+  EXPECT_EQ(resolved({"--scene", "builtin", "--refine-cameras", "on"}), 0.f);
+  EXPECT_EQ(resolved({"--scene", "forward"}), 0.f);
+  EXPECT_EQ(resolved({"--scene", "builtin", "--early-stop", "0"}), 0.f);
+  EXPECT_EQ(resolved({"--scene", "forward", "--early-stop", "1e-3"}), 1e-3f);
+  EXPECT_LT(Parse({"--early-stop", "auto"}).early_stop, 0.f);
 }
 
 TEST(TrainFlags, PruneAtIsAListOfIncreasingSharesThatRoundTrips) {

@@ -144,7 +144,8 @@ const char* const kPhaseKeys[kNumPhases] = {"zero", "qat_refresh", "qat_apply", 
 // The settings of `ecrf bench train`, as its command line gives them.
 struct TrainStepBenchFlags {
   int res = 128, rays = 4096, reps = 5, mask = 0, rate_phase = 1;
-  float early = trainer::TrainOptions().early_stop, blob_peak = 14.f, rdoq = 0.f;
+  // The blob is an object scene with fixed cameras: ecrf train's auto early stop for it.
+  float early = trainer::kAutoEarlyStop, blob_peak = 14.f, rdoq = 0.f;
   std::string threads = "1,2", json_path, run;
   std::string head = kHeadKindNames[0];  // where the MLP runs (SPEC.md 7.6)
   int mlp_layers = 2;                    // its hidden layers (ecrf train --mlp-layers)
@@ -275,7 +276,8 @@ StepBench::StepBench(const TrainStepBenchFlags& f)
     const trainer::CheckpointRunInfo info = trainer::ReadCheckpointRunInfo(RunCheckpoint(f.run));
     if (info.has_config) {
       options = info.config;
-      model.SetEarlyStop(options.early_stop);
+      // auto (< 0): the checkpoint's model holds what the run resolved it to.
+      if (options.early_stop >= 0.f) model.SetEarlyStop(options.early_stop);
     }
     if (rate.checkpoint_lambda_e > 0.f) options.lambda_e = rate.checkpoint_lambda_e;
   } else {

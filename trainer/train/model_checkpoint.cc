@@ -44,6 +44,7 @@ void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int itera
                  {"distance_scale", c.distance_scale},
                  {"step_ratio", c.step_ratio},
                  {"weight_threshold", c.weight_threshold},
+                 {"early_stop", c.early_stop_transmittance},
                  {"scene_model", static_cast<int>(c.scene_model)},
                  {"roi_min", c.roi.min},
                  {"roi_max", c.roi.max}};
@@ -291,6 +292,7 @@ TensorfModel LoadModelFromCheckpoint(const std::string& path, RateState* rate) {
     c.distance_scale = render.value("distance_scale", c.distance_scale);
     c.step_ratio = render.value("step_ratio", c.step_ratio);
     c.weight_threshold = render.value("weight_threshold", c.weight_threshold);
+    c.early_stop_transmittance = render.value("early_stop", c.early_stop_transmittance);
     const int scene_model = render.value("scene_model", 0);
     if (scene_model < 0 || scene_model >= kNumSceneModels) {
       throw std::runtime_error(path + ": checkpoint has unknown scene model " +

@@ -38,6 +38,11 @@ TensorfConfig ConfigFor(const TrainOptions& o, const Dataset& data) {
   return ConfigFor(o, data, FitScene(o.scene_type, data));
 }
 
+float EarlyStopFor(const TrainOptions& o, const Dataset& data, const SceneFit& fit) {
+  if (o.early_stop >= 0.f) return o.early_stop;
+  return fit.model == SceneModel::kObject && !RefineCamerasOn(o, data) ? kAutoEarlyStop : 0.f;
+}
+
 TensorfConfig ConfigFor(const TrainOptions& o, const Dataset& data, const SceneFit& fit) {
   TensorfConfig c;
   c.density_ranks = {o.density_rank, o.density_rank, o.density_rank};
@@ -54,7 +59,7 @@ TensorfConfig ConfigFor(const TrainOptions& o, const Dataset& data, const SceneF
   c.far = float(data.far);
   c.white_background = data.white_background;
   c.max_samples = o.max_samples_per_ray;
-  c.early_stop_transmittance = o.early_stop;
+  c.early_stop_transmittance = EarlyStopFor(o, data, fit);
   for (int a = 0; a < 3; ++a) {
     c.aabb.min[a] = float(data.scene_aabb[0][a]);
     c.aabb.max[a] = float(data.scene_aabb[1][a]);

@@ -52,6 +52,9 @@ Dataset LoadTrainingViews(const TrainOptions& options, const std::string& split)
 // Model configuration for a dataset (its box, near/far, background), the options' ranks and the
 // scene model of `fit` (unbounded: the grids span the contracted cube around fit.roi).
 TensorfConfig ConfigFor(const TrainOptions& options, const Dataset& data, const SceneFit& fit);
+// The transmittance at which training rays stop: options.early_stop, or for auto (< 0)
+// kAutoEarlyStop in object scenes whose cameras are kept and 0 in the others.
+float EarlyStopFor(const TrainOptions& options, const Dataset& data, const SceneFit& fit);
 // The same with FitScene(options.scene_type, data).
 TensorfConfig ConfigFor(const TrainOptions& options, const Dataset& data);
 

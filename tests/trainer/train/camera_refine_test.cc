@@ -44,6 +44,9 @@ struct TrainedField {
     o.batch_rays = 1024;
     o.progress_every = 1000;
     o.mlp_hidden = 32;
+    // The field of a run that refines its cameras: auto early stop is off there (train_fields.def
+    // says what a field trained with it leaves to this test's refinement).
+    o.early_stop = 0.f;
     return o;
   }
   static const TrainedField& Get() {
