@@ -77,13 +77,15 @@ constexpr int kLowRateMaxAppearanceRank = 32;
 // the two together gain about 0.3 dB at equal size at the low point, each alone 0.08-0.11 dB;
 // at the medium point the file grows from 550 KB to 644 KB and the decoded PSNR from 34.94 to
 // 35.43 dB, above the lambda = 0 float model (docs/results.md).
-void ApplyFineGridSchedule(TrainOptions* o) {
+// keep_rate_start: --rate-start was given, so the schedule leaves the rate phase where it is.
+void ApplyFineGridSchedule(TrainOptions* o, bool keep_rate_start = false) {
   if (!o->fine_grid_at_rate_points) return;
   constexpr double kGridScale = 11.0 / 9.0;
   o->voxels_final =
       long(std::lround(double(o->voxels_final) * kGridScale * kGridScale * kGridScale));
   for (int& at : o->upsample_iters) at = std::max(1, int(std::lround(at * 2.0 / 3.0)));
-  o->rate_start = o->fine_grid_rate_start;  // 0: right after the last upsampling and mask update
+  // 0: right after the last upsampling and mask update.
+  if (!keep_rate_start) o->rate_start = o->fine_grid_rate_start;
 }
 // The low and medium points train 1.5x the preset's iterations (fast: 4500; every milestone
 // scales with them). On chair the longer schedule lifts the whole curve: low 224,826 B at
@@ -164,11 +166,7 @@ void ApplyTargetSizeDefaults(TrainOptions* o, const TargetSizeFlagsGiven& given)
   // peak step) when training ends below the target.
   if (!given.step_scale) o->quant_step_scale = share < 0.016 ? 4.0f : share < 0.03 ? 3.0f : 2.0f;
   if (share >= 0.03) return;
-  if (!given.schedule) {
-    const float rate_start = o->rate_start;
-    ApplyFineGridSchedule(o);
-    if (given.rate_start) o->rate_start = rate_start;
-  }
+  if (!given.schedule) ApplyFineGridSchedule(o, given.rate_start);
   if (!given.iters && o->fine_grid_at_rate_points) o->iters = RatePointIters(*o);
   if (!given.mlp_levels) o->mlp_levels = share < 0.016 ? kLowRateMlpLevels : kMediumRateMlpLevels;
   if (share >= 0.016) return;
