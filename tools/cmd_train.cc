@@ -22,7 +22,8 @@ int RunTrain(int argc, char** argv) {
       "usage: ecrf train (--data DIR | --scene NAME) [options] -o RUN_DIR\n"
       "The defaults below are those of this command line's --preset and --rate.");
   TrainFlags flags;
-  flags.options = BaseTrainOptions(std::vector<std::string>(argv + 1, argv + argc));
+  std::string preset_reason;
+  flags.options = BaseTrainOptions(std::vector<std::string>(argv + 1, argv + argc), &preset_reason);
   AddTrainFlags(app.get(), &flags);
   bool print_config = false;
   app->add_option("-o,--out", flags.options.out_dir, "run directory (created with its parents)")
@@ -39,6 +40,7 @@ int RunTrain(int argc, char** argv) {
     std::fprintf(stderr, "ecrf train: error: -o RUN_DIR is required; see 'ecrf train --help'\n");
     return 2;
   }
+  if (!preset_reason.empty()) std::printf("%s\n", preset_reason.c_str());
   try {
     TrainEncodeEvaluate(o);
   } catch (const trainer::TrainingStopped& e) {

@@ -2,7 +2,7 @@
 //
 // A command line resolves in three layers, each overriding the one before wherever the flags
 // stand on the line:
-//   1. the preset (--preset; `tiny` for procedural scenes),
+//   1. the preset (--preset; `tiny` for procedural scenes, else by the data: PresetForData),
 //   2. the rate point, a base of settings (--rate low|medium|high|none; without --rate the
 //      `medium` point, or `none` = plain TensoRF for --lambda-e 0; --target-size picks settings
 //      by the target's share of the grid instead, trainer::ApplyTargetSizeDefaults),
@@ -23,8 +23,11 @@
 namespace ecrf {
 namespace tools {
 
-// Layers 1 and 2 of a command line (arguments without the command's name).
-trainer::TrainOptions BaseTrainOptions(const std::vector<std::string>& args);
+// Layers 1 and 2 of a command line (arguments without the command's name). Without --preset:
+// `tiny` for --scene, else the preset of --data's size and kind (trainer::PresetForData), whose
+// reason goes to *preset_reason when given.
+trainer::TrainOptions BaseTrainOptions(const std::vector<std::string>& args,
+                                       std::string* preset_reason = nullptr);
 
 // The flags' text until FinishTrainFlags converts it into options.
 struct TrainFlags {

@@ -2,11 +2,15 @@
 // ranges, unknown flags and sizes without units.
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "decoder/ray_marcher.h"
+#include "tests/common/scoped_temp_dir.h"
 #include "tools/train_flags.h"
 #include "trainer/data/dataset.h"
 #include "trainer/data/scene_fit.h"
@@ -243,6 +247,54 @@ TEST(TrainFlags, TheLongPresetIsTheFortyFiveMinuteRunsFlags) {
   EXPECT_EQ(plain.voxels_final, 180L * 180 * 180);
   // The default rate point is the 30,000-iteration schedule too.
   EXPECT_EQ(trainer::RateStartIteration(Parse({"--preset", "long"})), 22500);
+}
+
+// Without --preset a dataset trains with `fast` unless it is an object dataset with given
+// cameras whose training pixels outnumber the rays `fast`'s default run draws.
+TEST(TrainFlags, TheDefaultPresetFollowsTheDatasetsSizeAndKind) {
+  EXPECT_EQ(trainer::FastRunRays(), int64_t{4500} * 4096);
+  const int64_t rays = trainer::FastRunRays();
+  EXPECT_EQ(trainer::PresetForData(rays, true).preset, trainer::Preset::kFast);
+  EXPECT_EQ(trainer::PresetForData(rays + 1, true).preset, trainer::Preset::kLong);
+  EXPECT_EQ(trainer::PresetForData(rays + 1, false).preset, trainer::Preset::kFast);
+
+  // Blender layouts with the image size in the JSON: the manifest needs no image.
+  testing_util::ScopedTempDir dir("default_preset");
+  auto write = [&](const std::string& file, int edge) {
+    nlohmann::json root;
+    root["camera_angle_x"] = 0.69;
+    root["w"] = edge;
+    root["h"] = edge;
+    for (int i = 0; i < 100; ++i) {
+      root["frames"].push_back(
+          {{"file_path", "./r_" + std::to_string(i) + ".png"},
+           {"transform_matrix", {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 4.0 + i}, {0, 0, 0, 1}}}});
+    }
+    std::ofstream(dir.path() + "/" + file) << root.dump();
+  };
+  auto preset = [&](std::vector<std::string> args) {
+    args.insert(args.begin(), {"--data", dir.path()});
+    return Parse(args).preset;
+  };
+  write("transforms_train.json", 800);  // 64 M pixels: chair at 800x800
+  EXPECT_EQ(preset({}), trainer::Preset::kLong);
+  EXPECT_EQ(preset({"--downscale", "2"}), trainer::Preset::kFast);  // 16 M: chair at 400x400
+  EXPECT_EQ(preset({"--preset", "fast"}), trainer::Preset::kFast);
+  std::string reason;
+  BaseTrainOptions({"--data", dir.path()}, &reason);
+  EXPECT_EQ(reason,
+            "preset long: 64.0 M training pixels, more than the 18.4 M rays of fast "
+            "(--preset fast: a shorter run)");
+  write("transforms_train.json", 400);
+  EXPECT_EQ(preset({}), trainer::Preset::kFast);
+  // Not an object dataset with given cameras: the Instant-NGP layout of a capture.
+  std::filesystem::remove(dir.path() + "/transforms_train.json");
+  write("transforms.json", 800);
+  for (int i = 0; i < 100; ++i) std::ofstream(dir.path() + "/r_" + std::to_string(i) + ".png");
+  BaseTrainOptions({"--data", dir.path()}, &reason);
+  EXPECT_EQ(reason, "preset fast: not an object dataset with given cameras");
+  // A folder that is no dataset keeps fast; loading it says why.
+  EXPECT_EQ(Parse({"--data", dir.path() + "/missing"}).preset, trainer::Preset::kFast);
 }
 
 // Auto early stop: where the renders stop (SPEC.md 7.8) for objects with fixed cameras, the

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 #include "trainer/train/train_config.h"
@@ -171,6 +172,30 @@ void ApplyTargetSizeDefaults(TrainOptions* o, const TargetSizeFlagsGiven& given)
   if (!given.mlp_levels) o->mlp_levels = share < 0.016 ? kLowRateMlpLevels : kMediumRateMlpLevels;
   if (share >= 0.016) return;
   if (!given.ranks) o->appearance_rank = std::min(o->appearance_rank, kLowRateMaxAppearanceRank);
+}
+
+int64_t FastRunRays() {
+  TrainOptions o = PresetOptions(Preset::kFast);
+  ApplyRatePoint(RatePoint::kMedium, &o);
+  return int64_t{o.iters} * o.batch_rays;
+}
+
+PresetChoice PresetForData(int64_t training_pixels, bool object_with_given_cameras) {
+  const int64_t rays = FastRunRays();
+  char megapixels[64];
+  std::snprintf(megapixels, sizeof(megapixels), "%.1f M training pixels, %s %.1f M rays of fast",
+                double(training_pixels) * 1e-6, training_pixels > rays ? "more than the" : "within",
+                double(rays) * 1e-6);
+  PresetChoice c;
+  if (!object_with_given_cameras) {
+    c.reason = "preset fast: not an object dataset with given cameras";
+  } else if (training_pixels > rays) {
+    c.preset = Preset::kLong;
+    c.reason = std::string("preset long: ") + megapixels + " (--preset fast: a shorter run)";
+  } else {
+    c.reason = std::string("preset fast: ") + megapixels;
+  }
+  return c;
 }
 
 int ScaleMilestone(int milestone, int iters, int reference_iters) {

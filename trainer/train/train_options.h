@@ -106,6 +106,20 @@ int ScoredTestViewStride(const TrainOptions& options, size_t views);
 TrainOptions PresetOptions(Preset preset);
 TrainOptions PresetOptions(const std::string& name);
 
+// The preset a dataset trains with when the command line names none: `long` for an object
+// dataset with given cameras (white background, poses not estimated) whose training views hold
+// more pixels than `fast`'s default run draws rays (FastRunRays(): 4,500 iterations of 4,096
+// rays), which would leave pixels unseen; `fast` otherwise. Chair at 400x400 (16.0 M pixels)
+// stays `fast`; at 800x800 (64.0 M) `long` gives 33.59 dB at 0.5 MB in 45 min where `fast`
+// gave 32.63 dB at 0.74 MB in 42 (docs/results.md). Real captures keep `fast`: `long` is not
+// measured on them. reason: one line for the run's log.
+struct PresetChoice {
+  Preset preset = Preset::kFast;
+  std::string reason;
+};
+int64_t FastRunRays();
+PresetChoice PresetForData(int64_t training_pixels, bool object_with_given_cameras);
+
 // The named rate points set lambda_e and the step scale (with quantization-aware training on):
 //   "low"    lambda_e 2e-10, steps x4, 15 MLP levels, at most 32 appearance components, a
 //            final grid (11/9)^3 times the preset's reached at 2/3 of its upsampling iterations:
