@@ -1,6 +1,7 @@
 #include "encoder/grid_dct.h"
 
 #include <algorithm>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
@@ -14,26 +15,14 @@ namespace ecrf {
 namespace encoder {
 namespace {
 
-int Log2(int n) {
-  int l = 0;
-  while ((1 << l) < n) ++l;
-  return l;
-}
-
-// Float copies of the orthonormal DCT matrices: m[level][k*n + j] = M[k][j] and its transpose.
+// Float copies of the orthonormal DCT matrices: m[level][k*n + j] = M[k][j].
 struct FloatDctTables {
   float m[6][kMaxBlockLength * kMaxBlockLength];
-  float mt[6][kMaxBlockLength * kMaxBlockLength];
   FloatDctTables() {
     for (int level = 0; level < 6; ++level) {
       const int n = 1 << level;
       const double* d = DctMatrix(n);
-      for (int k = 0; k < n; ++k) {
-        for (int j = 0; j < n; ++j) {
-          m[level][k * n + j] = static_cast<float>(d[k * n + j]);
-          mt[level][j * n + k] = static_cast<float>(d[k * n + j]);
-        }
-      }
+      for (int i = 0; i < n * n; ++i) m[level][i] = static_cast<float>(d[i]);
     }
   }
 };
@@ -43,157 +32,210 @@ const FloatDctTables& Tables() {
   return tables;
 }
 
-// out = A in along one axis of an n0 x n1 x n2 block. a[k*n + j] = A[k][j], at = A^T.
-// Every output is one chain, whatever the kernel: the product with j = 0, then the products
-// for j = 1, ..., N-1 added in that order, each rounded on its own (this file is compiled
-// without fused multiply-add, encoder/CMakeLists.txt), so every kernel shape, vector width and
-// CPU gives the same bits. The tiles keep several chains in registers at once: a chain's adds
-// depend on each other, and an accumulator kept in memory waits on a store per add.
+// One axis of the transform by even-odd butterflies (the partial butterfly of video codecs'
+// transforms): row k of M is symmetric about the middle of its axis when k is even and
+// antisymmetric when k is odd, so y[k odd] = sum_{j<N/2} M[k][j] (x[j] - x[N-1-j]), and the even
+// outputs are the same problem on the N/2 sums x[j] + x[N-1-j] with the rows k = 2, 6, 10, ...
+// antisymmetric about N/4, and so on down to y[0] = M[0][0] * (the sum of all). For N = 16 that is
+// 86 products instead of 256 (the quantization-aware refresh transforms every grid twice at every
+// rate-phase step; a 300^3 appearance grid's forward and backward transforms take 112 ms on one
+// core against 186 ms as matrix products, GridDctTest.SpeedFullAppearanceGrid300). The inverse
+// (M^T) runs the same levels from the bottom up.
+//
+// Each kernel works on lanes (contiguous values of the axis's inner run) side by side, and every
+// lane does the same scalar operations in the same order: this file is compiled without fused
+// multiply-add (encoder/CMakeLists.txt), so every tile width, vector width and CPU gives the same
+// bits, whatever the thread count.
 
-// The contiguous axis: out[r][k] = sum_j in[r][j] at[j][k], kRows rows at a time.
-template <int N>
-__attribute__((always_inline)) inline void PassContiguous(const float* __restrict in,
-                                                          float* __restrict out, int rows,
-                                                          const float* __restrict at) {
-  constexpr int kRows = N >= 16 ? 4 : 8;
-  int r = 0;
-  for (; r + kRows <= rows; r += kRows) {
-    const float* x = in + r * N;
-    float acc[kRows][N];
-    for (int q = 0; q < kRows; ++q)
-      for (int k = 0; k < N; ++k) acc[q][k] = x[q * N] * at[k];
-    for (int j = 1; j < N; ++j) {
-      const float* row = at + j * N;
-      for (int q = 0; q < kRows; ++q) {
-        const float xj = x[q * N + j];
-        for (int k = 0; k < N; ++k) acc[q][k] += xj * row[k];
-      }
-    }
-    for (int q = 0; q < kRows; ++q)
-      for (int k = 0; k < N; ++k) out[(r + q) * N + k] = acc[q][k];
+// Lanes: 8 floats as a GCC/Clang vector type (element-wise operations, each lane its own scalar
+// arithmetic), or one float. The levels are templates and their loops fully unrolled, so that
+// every index is a constant and the values stay in registers.
+typedef float Lanes8 __attribute__((vector_size(32)));
+
+// (By pointer: a vector passed by value would be an ABI question without AVX, -Wpsabi.)
+template <class L>
+__attribute__((always_inline)) inline void LoadLanes(const float* p, L* v) {
+  std::memcpy(v, p, sizeof(L));
+}
+
+template <class L>
+__attribute__((always_inline)) inline void StoreLanes(float* p, const L* v) {
+  std::memcpy(p, v, sizeof(L));
+}
+
+// One forward level over e[0..n): the outputs k = step, 3 step, 5 step, ... (antisymmetric rows
+// over these n values) from the differences, then the next level on the sums.
+template <int N, int n, int step, class L>
+__attribute__((always_inline)) inline void ForwardLevel(L* e, float* __restrict y, int inner,
+                                                        const float* __restrict m) {
+  constexpr int h = n / 2;
+  L o[h];
+#pragma GCC unroll 32
+  for (int j = 0; j < h; ++j) {
+    const L a = e[j], b = e[n - 1 - j];
+    e[j] = a + b;
+    o[j] = a - b;
   }
-  for (; r < rows; ++r) {
-    const float* x = in + r * N;
-    float acc[N];
-    for (int k = 0; k < N; ++k) acc[k] = x[0] * at[k];
-    for (int j = 1; j < N; ++j) {
-      const float xj = x[j];
-      const float* row = at + j * N;
-      for (int k = 0; k < N; ++k) acc[k] += xj * row[k];
-    }
-    for (int k = 0; k < N; ++k) out[r * N + k] = acc[k];
+#pragma GCC unroll 32
+  for (int k = step; k < N; k += 2 * step) {
+    L acc = o[0] * m[k * N];
+#pragma GCC unroll 32
+    for (int j = 1; j < h; ++j) acc += o[j] * m[k * N + j];
+    StoreLanes(y + k * inner, &acc);
+  }
+  if constexpr (h > 1) {
+    ForwardLevel<N, h, 2 * step>(e, y, inner, m);
+  } else {
+    const L dc = e[0] * m[0];
+    StoreLanes(y, &dc);
   }
 }
 
-// kOuts outputs k0..k0+kOuts-1 of one slab over a tile of kTile contiguous inner positions.
-template <int N, int kOuts, int kTile>
-__attribute__((always_inline)) inline void StridedTile(const float* __restrict x,
-                                                       float* __restrict y, int inner, int k0,
-                                                       const float* __restrict a) {
-  float acc[kOuts][kTile];
-  for (int q = 0; q < kOuts; ++q) {
-    const float a0 = a[(k0 + q) * N];
-    for (int i = 0; i < kTile; ++i) acc[q][i] = a0 * x[i];
-  }
-  for (int j = 1; j < N; ++j) {
-    const float* xj = x + j * inner;
-    for (int q = 0; q < kOuts; ++q) {
-      const float akj = a[(k0 + q) * N + j];
-      for (int i = 0; i < kTile; ++i) acc[q][i] += akj * xj[i];
-    }
-  }
-  for (int q = 0; q < kOuts; ++q)
-    for (int i = 0; i < kTile; ++i) y[(k0 + q) * inner + i] = acc[q][i];
+// y[k] = sum_j M[k][j] x[j], x[j] at x + j * inner, y[k] at y + k * inner.
+template <int N, class L>
+__attribute__((always_inline)) inline void ForwardTile(const float* __restrict x,
+                                                       float* __restrict y, int inner,
+                                                       const float* __restrict m) {
+  L e[N];
+#pragma GCC unroll 32
+  for (int j = 0; j < N; ++j) LoadLanes(x + j * inner, &e[j]);
+  ForwardLevel<N, N, 1>(e, y, inner, m);
 }
 
-// Axis with `outer` independent slabs, length N, inner contiguous run `inner`:
-// out[o][k][i] = sum_j a[k][j] in[o][j][i].
-template <int N>
-__attribute__((always_inline)) inline void PassStrided(const float* __restrict in,
-                                                       float* __restrict out, int outer, int inner,
-                                                       const float* __restrict a) {
-  constexpr int kOuts = N >= 4 ? 4 : N;
+// One inverse level: e[0..n/2) holds the even part of length n/2; adds the odd part of the rows
+// k = step, 3 step, ... and unfolds e to length n; then the next level up.
+template <int N, int n, class L>
+__attribute__((always_inline)) inline void InverseLevel(const L* c, L* e, float* __restrict x,
+                                                        int inner, const float* __restrict m) {
+  constexpr int h = n / 2, step = N / n;
+  L o[h];
+#pragma GCC unroll 32
+  for (int j = 0; j < h; ++j) {
+    L acc = c[step] * m[step * N + j];
+#pragma GCC unroll 32
+    for (int k = 3 * step; k < N; k += 2 * step) acc += c[k] * m[k * N + j];
+    o[j] = acc;
+  }
+#pragma GCC unroll 32
+  for (int j = 0; j < h; ++j) {
+    const L a = e[j], b = o[j];
+    e[j] = a + b;
+    e[n - 1 - j] = a - b;
+  }
+  if constexpr (n < N) {
+    InverseLevel<N, 2 * n>(c, e, x, inner, m);
+  } else {
+#pragma GCC unroll 32
+    for (int j = 0; j < N; ++j) StoreLanes(x + j * inner, &e[j]);
+  }
+}
+
+// x[j] = sum_k M[k][j] y[k]: the levels of ForwardTile from the bottom up.
+template <int N, class L>
+__attribute__((always_inline)) inline void InverseTile(const float* __restrict y,
+                                                       float* __restrict x, int inner,
+                                                       const float* __restrict m) {
+  L c[N], e[N];
+#pragma GCC unroll 32
+  for (int k = 0; k < N; ++k) LoadLanes(y + k * inner, &c[k]);
+  e[0] = c[0] * m[0];
+  InverseLevel<N, 2>(c, e, x, inner, m);
+}
+
+template <int N, class L, bool kInverse>
+__attribute__((always_inline)) inline void Tile(const float* in, float* out, int inner,
+                                                const float* m) {
+  if (kInverse) {
+    InverseTile<N, L>(in, out, inner, m);
+  } else {
+    ForwardTile<N, L>(in, out, inner, m);
+  }
+}
+
+// `outer` independent slabs of N x inner values: out[o][k][i] = sum_j M[k][j] in[o][j][i]
+// (kInverse: M^T), 8 lanes at a time, then one.
+template <int N, bool kInverse>
+__attribute__((always_inline)) inline void PassAxis(const float* __restrict in,
+                                                    float* __restrict out, int outer, int inner,
+                                                    const float* __restrict m) {
   for (int o = 0; o < outer; ++o) {
     const float* x = in + static_cast<size_t>(o) * N * inner;
     float* y = out + static_cast<size_t>(o) * N * inner;
-    if (inner % 16 == 0) {
-      for (int i = 0; i < inner; i += 16)
-        for (int k = 0; k < N; k += kOuts) StridedTile<N, kOuts, 16>(x + i, y + i, inner, k, a);
-      continue;
-    }
-    if (inner % 8 == 0) {
-      for (int i = 0; i < inner; i += 8)
-        for (int k = 0; k < N; k += kOuts) StridedTile<N, kOuts, 8>(x + i, y + i, inner, k, a);
-      continue;
-    }
-    for (int k = 0; k < N; ++k) {
-      float* yk = y + k * inner;
-      const float a0 = a[k * N];
-      for (int i = 0; i < inner; ++i) yk[i] = a0 * x[i];
-      for (int j = 1; j < N; ++j) {
-        const float akj = a[k * N + j];
-        const float* xj = x + j * inner;
-        for (int i = 0; i < inner; ++i) yk[i] += akj * xj[i];
-      }
-    }
+    int i = 0;
+    for (; i + 8 <= inner; i += 8) Tile<N, Lanes8, kInverse>(x + i, y + i, inner, m);
+    for (; i < inner; ++i) Tile<N, float, kInverse>(x + i, y + i, inner, m);
   }
 }
 
-__attribute__((always_inline)) inline void DispatchContiguous(const float* in, float* out, int rows,
-                                                              int n, const float* at) {
-  switch (n) {
-    case 2:
-      return PassContiguous<2>(in, out, rows, at);
-    case 4:
-      return PassContiguous<4>(in, out, rows, at);
-    case 8:
-      return PassContiguous<8>(in, out, rows, at);
-    case 16:
-      return PassContiguous<16>(in, out, rows, at);
-    case 32:
-      return PassContiguous<32>(in, out, rows, at);
-  }
-}
-
-__attribute__((always_inline)) inline void DispatchStrided(const float* in, float* out, int outer,
-                                                           int n, int inner, const float* a) {
-  switch (n) {
-    case 2:
-      return PassStrided<2>(in, out, outer, inner, a);
-    case 4:
-      return PassStrided<4>(in, out, outer, inner, a);
-    case 8:
-      return PassStrided<8>(in, out, outer, inner, a);
-    case 16:
-      return PassStrided<16>(in, out, outer, inner, a);
-    case 32:
-      return PassStrided<32>(in, out, outer, inner, a);
-  }
-}
-
-// Separable transform of one block held as buf[i1][i2][i0] (the block's own axis order is i0,
-// i1, i2: i0 innermost here because a plane's channel axis is contiguous in the grid, so that
-// gathering and storing a block copy runs of memory instead of transposing them). The passes
-// run along axis 2, then 1, then 0, as the coefficients are defined; `inverse` selects M^T.
-// Result in one of buf0/buf1, returned.
-ECRF_MULTIVERSION
-float* TransformBlock(float* buf0, float* buf1, const int n[3], bool inverse) {
+template <bool kInverse>
+__attribute__((always_inline)) inline void DispatchAxis(const float* in, float* out, int outer,
+                                                        int n, int inner) {
   const FloatDctTables& t = Tables();
+  switch (n) {
+    case 2:
+      return PassAxis<2, kInverse>(in, out, outer, inner, t.m[1]);
+    case 4:
+      return PassAxis<4, kInverse>(in, out, outer, inner, t.m[2]);
+    case 8:
+      return PassAxis<8, kInverse>(in, out, outer, inner, t.m[3]);
+    case 16:
+      return PassAxis<16, kInverse>(in, out, outer, inner, t.m[4]);
+    case 32:
+      return PassAxis<32, kInverse>(in, out, outer, inner, t.m[5]);
+  }
+}
+
+// out[c][r] = in[r][c] for rows x cols values.
+inline void Transpose(const float* __restrict in, int rows, int cols, float* __restrict out) {
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c) out[c * rows + r] = in[r * cols + c];
+}
+
+// A block is gathered as buf[i1][i2][i0] (i0 innermost, because a plane's channel axis is
+// contiguous in the grid, so that gathering and storing a block copy runs of memory) and its
+// coefficients are stored as c[i0][i1][i2]. The forward transform runs along axis 2, then 1 in
+// the gathered layout, transposes, and runs along axis 0 into `coeffs`; buf0 and buf1 are
+// scratch (buf0 holds the block on entry).
+ECRF_MULTIVERSION
+void ForwardBlock(float* buf0, float* buf1, const int n[3], float* coeffs) {
   float* cur = buf0;
   float* other = buf1;
+  const int n12 = n[1] * n[2];
   if (n[2] > 1) {
-    const int l = Log2(n[2]);
-    DispatchStrided(cur, other, n[1], n[2], n[0], inverse ? t.mt[l] : t.m[l]);
+    DispatchAxis<false>(cur, other, n[1], n[2], n[0]);
     std::swap(cur, other);
   }
   if (n[1] > 1) {
-    const int l = Log2(n[1]);
-    DispatchStrided(cur, other, 1, n[1], n[2] * n[0], inverse ? t.mt[l] : t.m[l]);
+    DispatchAxis<false>(cur, other, 1, n[1], n[2] * n[0]);
     std::swap(cur, other);
   }
   if (n[0] > 1) {
-    const int l = Log2(n[0]);
-    DispatchContiguous(cur, other, n[1] * n[2], n[0], inverse ? t.m[l] : t.mt[l]);
+    Transpose(cur, n12, n[0], other);
+    DispatchAxis<false>(other, coeffs, 1, n[0], n12);
+  } else {
+    std::copy(cur, cur + n12, coeffs);
+  }
+}
+
+// The inverse of ForwardBlock: coefficients c[i0][i1][i2] -> the block as buf[i1][i2][i0], in
+// one of buf0/buf1 (returned). Axis 0 first, then the transposition, then axes 2 and 1.
+ECRF_MULTIVERSION
+float* InverseBlock(const float* coeffs, const int n[3], float* buf0, float* buf1) {
+  float* cur = buf0;
+  float* other = buf1;
+  const int n12 = n[1] * n[2];
+  if (n[0] > 1) {
+    DispatchAxis<true>(coeffs, other, 1, n[0], n12);
+    Transpose(other, n[0], n12, cur);
+  } else {
+    std::copy(coeffs, coeffs + n12, cur);
+  }
+  if (n[2] > 1) {
+    DispatchAxis<true>(cur, other, n[1], n[2], n[0]);
+    std::swap(cur, other);
+  }
+  if (n[1] > 1) {
+    DispatchAxis<true>(cur, other, 1, n[1], n[2] * n[0]);
     std::swap(cur, other);
   }
   return cur;
@@ -218,6 +260,7 @@ void BlockOffsets(const GridBlockLayout& L, int id, long off[3][kMaxBlockLength]
 struct alignas(64) BlockBuffers {
   float a[kMaxBlockVolume];
   float b[kMaxBlockVolume];
+  float c[kMaxBlockVolume];
 };
 
 // kQuantize: forward, the quantizer, inverse, with the coefficients kept in the block buffers.
@@ -235,14 +278,29 @@ inline void QuantizeInPlace(float* c, int n, double step, double rounding_offset
   }
 }
 
+// Whether the first count offsets are consecutive elements (no edge replication, stride 1).
+inline bool UnitRun(const long off[kMaxBlockLength], int count) {
+  for (int i = 1; i < count; ++i) {
+    if (off[i] != off[0] + i) return false;
+  }
+  return true;
+}
+
 // buf[i1][i2][i0] = the block's elements, edge-replicated where it passes the tensor's end.
 inline void GatherBlock(const float* src, const int n[3], const long off[3][kMaxBlockLength],
                         float* buf) {
+  // Inside the tensor a plane block's channels are one run of memory: copied as such (the
+  // general path's indexed loads cost as much as the block's transform).
+  const bool run = UnitRun(off[0], n[0]);
   for (int i1 = 0; i1 < n[1]; ++i1) {
     for (int i2 = 0; i2 < n[2]; ++i2) {
       const float* base = src + off[1][i1] + off[2][i2];
       float* q = buf + (i1 * n[2] + i2) * n[0];
-      for (int i0 = 0; i0 < n[0]; ++i0) q[i0] = base[off[0][i0]];
+      if (run) {
+        std::copy(base + off[0][0], base + off[0][0] + n[0], q);
+      } else {
+        for (int i0 = 0; i0 < n[0]; ++i0) q[i0] = base[off[0][i0]];
+      }
     }
   }
 }
@@ -253,10 +311,22 @@ template <bool kAdd>
 inline void StoreBlock(const float* r, const int n[3], const long off[3][kMaxBlockLength],
                        const int valid[3], float* dst) {
   const int m1 = kAdd ? n[1] : valid[1], m2 = kAdd ? n[2] : valid[2], m0 = kAdd ? n[0] : valid[0];
+  const bool run = UnitRun(off[0], m0);
   for (int i1 = 0; i1 < m1; ++i1) {
     for (int i2 = 0; i2 < m2; ++i2) {
       float* base = dst + off[1][i1] + off[2][i2];
       const float* q = r + (i1 * n[2] + i2) * n[0];
+      if (run) {
+        float* p = base + off[0][0];
+        for (int i0 = 0; i0 < m0; ++i0) {
+          if (kAdd) {
+            p[i0] += q[i0];
+          } else {
+            p[i0] = q[i0];
+          }
+        }
+        continue;
+      }
       for (int i0 = 0; i0 < m0; ++i0) {
         if (kAdd) {
           base[off[0][i0]] += q[i0];
@@ -266,19 +336,6 @@ inline void StoreBlock(const float* r, const int n[3], const long off[3][kMaxBlo
       }
     }
   }
-}
-
-// Coefficients in their stored order c[i0][i1][i2] from or to a block buffer b[i1][i2][i0].
-inline void CoefficientsFromBuffer(const float* b, const int n[3], float* c) {
-  const int n12 = n[1] * n[2];
-  for (int i12 = 0; i12 < n12; ++i12)
-    for (int i0 = 0; i0 < n[0]; ++i0) c[i0 * n12 + i12] = b[i12 * n[0] + i0];
-}
-
-inline void BufferFromCoefficients(const float* c, const int n[3], float* b) {
-  const int n12 = n[1] * n[2];
-  for (int i12 = 0; i12 < n12; ++i12)
-    for (int i0 = 0; i0 < n[0]; ++i0) b[i12 * n[0] + i0] = c[i0 * n12 + i12];
 }
 
 template <Op kOp>
@@ -298,17 +355,14 @@ void RunBlocks(const float* src, const GridBlockLayout& L, const int* ids, int c
       BlockOffsets(L, id, off, valid);
       if (kOp == Op::kForward) {
         GatherBlock(src, n, off, buf.a);
-        CoefficientsFromBuffer(TransformBlock(buf.a, buf.b, n, false), n,
-                               dst + static_cast<size_t>(j) * vol);
+        ForwardBlock(buf.a, buf.b, n, dst + static_cast<size_t>(j) * vol);
       } else if (kOp == Op::kQuantize) {
         GatherBlock(src, n, off, buf.a);
-        float* c = TransformBlock(buf.a, buf.b, n, false);
-        QuantizeInPlace(c, vol, step, rounding_offset);
-        StoreBlock<false>(TransformBlock(c, c == buf.a ? buf.b : buf.a, n, true), n, off, valid,
-                          dst);
+        ForwardBlock(buf.a, buf.b, n, buf.c);
+        QuantizeInPlace(buf.c, vol, step, rounding_offset);
+        StoreBlock<false>(InverseBlock(buf.c, n, buf.a, buf.b), n, off, valid, dst);
       } else {
-        BufferFromCoefficients(src + static_cast<size_t>(j) * vol, n, buf.a);
-        const float* r = TransformBlock(buf.a, buf.b, n, true);
+        const float* r = InverseBlock(src + static_cast<size_t>(j) * vol, n, buf.a, buf.b);
         StoreBlock<kOp == Op::kBackward>(r, n, off, valid, dst);
       }
     }

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Builds the embeddable decoder (the decoder halves of format/ + decoder/, nothing else) to WebAssembly with Emscripten:
 # build-wasm/ecrf_decoder.js + build-wasm/ecrf_decoder.wasm, for web/ (the viewer and its
-# node smoke test). Optional: not part of scripts/build.sh, the CMake build or CI.
+# node smoke test). Not part of scripts/build.sh or the CMake build; scripts/test.sh (CI) runs it.
 #
 #   apt-get install -y emscripten      # Debian's emscripten 3.1.6
 #   bash scripts/build-wasm.sh         # ECRF_WASM_OPT=-O2 to change the optimisation level
