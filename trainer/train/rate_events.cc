@@ -37,14 +37,17 @@ void StartRatePhase(TrainSession& s, int it) {
 
 void ControlRate(TrainSession& s, int it) {
   if (!s.controller || !s.rate.active || !s.schedule.RateControlDue(it)) return;
+  const auto start = TrainClock::now();
   const size_t bytes = EncodeScene(*s.model, RunEncodeOptions(s.o, s.rate)).size();
+  const double seconds = SecondsSince(start);
   const float before = s.live.lambda_e;
   s.live.lambda_e = s.controller->Update(bytes);
   s.rate.rate_control_last_bytes = s.controller->last_bytes();
-  std::fprintf(
-      stderr,
-      "%srate control at iteration %d: file %zu bytes for a target of %zu, lambda_e %g -> %g\n",
-      isatty(2) ? "\n" : "", it, bytes, s.o.target_bytes, before, s.live.lambda_e);
+  std::fprintf(stderr,
+               "%srate control at iteration %d: file %zu bytes (encoded in %.2f s) for a target of "
+               "%zu, lambda_e %g -> %g\n",
+               isatty(2) ? "\n" : "", it, bytes, seconds, s.o.target_bytes, before,
+               s.live.lambda_e);
 }
 
 void QuantizeGrids(TrainSession& s, int it) {
