@@ -283,7 +283,7 @@ TEST(TrainFlags, TheDefaultPresetFollowsTheDatasetsSizeAndKind) {
   std::string reason;
   BaseTrainOptions({"--data", dir.path()}, &reason);
   EXPECT_EQ(reason,
-            "preset long: 64.0 M training pixels, more than the 18.4 M rays of fast "
+            "preset long: 64.0 M training pixels, more than the 18.4 M rays of fast's run "
             "(--preset fast: a shorter run)");
   write("transforms_train.json", 400);
   EXPECT_EQ(preset({}), trainer::Preset::kFast);
