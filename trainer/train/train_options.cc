@@ -182,7 +182,7 @@ int64_t FastRunRays() {
 
 PresetChoice PresetForData(int64_t training_pixels, bool object_with_given_cameras) {
   const int64_t rays = FastRunRays();
-  char megapixels[64];
+  char megapixels[128];
   std::snprintf(megapixels, sizeof(megapixels),
                 "%.1f M training pixels, %s the %.1f M rays of fast's run",
                 double(training_pixels) * 1e-6, training_pixels > rays ? "more than" : "within",
