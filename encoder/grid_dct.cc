@@ -37,10 +37,10 @@ const FloatDctTables& Tables() {
 // antisymmetric when k is odd, so y[k odd] = sum_{j<N/2} M[k][j] (x[j] - x[N-1-j]), and the even
 // outputs are the same problem on the N/2 sums x[j] + x[N-1-j] with the rows k = 2, 6, 10, ...
 // antisymmetric about N/4, and so on down to y[0] = M[0][0] * (the sum of all). For N = 16 that is
-// 86 products instead of 256 (the quantization-aware refresh transforms every grid twice at every
-// rate-phase step; a 300^3 appearance grid's forward and backward transforms take 112 ms on one
-// core against 186 ms as matrix products, GridDctTest.SpeedFullAppearanceGrid300). The inverse
-// (M^T) runs the same levels from the bottom up.
+// 86 products instead of 256. The quantization-aware refresh transforms every grid twice at every
+// rate-phase step: on chair-800's final model it takes 22 ms on 2 threads against 44 ms as matrix
+// products (`ecrf bench train --run`, docs/results.md). The inverse (M^T) runs the same levels
+// from the bottom up.
 //
 // Each kernel works on lanes (contiguous values of the axis's inner run) side by side, and every
 // lane does the same scalar operations in the same order: this file is compiled without fused
