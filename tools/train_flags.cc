@@ -63,10 +63,8 @@ trainer::PresetChoice DataPreset(const LayerFlags& f) {
   try {
     const trainer::DatasetManifest m =
         trainer::ReadDatasetManifest(f.data, "train", int(downscale));
-    int64_t pixels = 0;
-    const int64_t factor = std::max(1L, downscale / m.prescaled);  // as LoadDataset scales
-    for (const trainer::ViewSource& v : m.views)
-      pixels += (int64_t{v.camera.width} / factor) * (v.camera.height / factor);
+    const int64_t pixels =
+        trainer::LoadedPixels(m.views, trainer::ImageDownscale(m, int(downscale)));
     return trainer::PresetForData(pixels, m.white_background && !m.estimated_poses);
   } catch (const std::exception&) {
     return {};

@@ -327,14 +327,23 @@ View LoadView(const ViewSource& source, int downscale, bool* had_alpha) {
   return view;
 }
 
+}  // namespace
+
+int64_t LoadedPixels(const std::vector<ViewSource>& views, int image_downscale) {
+  int64_t pixels = 0;
+  for (const ViewSource& view : views) {
+    pixels += int64_t{view.camera.width / image_downscale} * (view.camera.height / image_downscale);
+  }
+  return pixels;
+}
+
+namespace {
+
 std::vector<View> LoadViewsImpl(const std::vector<ViewSource>& sources, int downscale,
                                 bool* any_alpha) {
   if (downscale < 1)
     throw std::runtime_error("downscale must be >= 1, got " + std::to_string(downscale));
-  int64_t pixels = 0;
-  for (const ViewSource& source : sources) {
-    pixels += int64_t{source.camera.width / downscale} * (source.camera.height / downscale);
-  }
+  const int64_t pixels = LoadedPixels(sources, downscale);
   if (pixels > kMaxDatasetPixels) {
     throw std::runtime_error(std::to_string(sources.size()) + " views of " +
                              std::to_string(sources.front().camera.width) + "x" +
@@ -500,7 +509,7 @@ Dataset LoadDataset(const std::string& dir, const std::string& split, int downsc
   DatasetManifest manifest = ReadDatasetManifest(dir, split, downscale);
   Dataset dataset;
   bool any_alpha = false;
-  dataset.views = LoadViewsImpl(manifest.views, downscale / manifest.prescaled, &any_alpha);
+  dataset.views = LoadViewsImpl(manifest.views, ImageDownscale(manifest, downscale), &any_alpha);
   std::copy(&manifest.scene_aabb[0][0], &manifest.scene_aabb[0][0] + 6, &dataset.scene_aabb[0][0]);
   dataset.near = manifest.near;
   dataset.far = manifest.far;

@@ -79,13 +79,23 @@ DatasetManifest ReadDatasetManifest(const std::string& dir, const std::string& s
 std::vector<Camera> ReadTransformsCameras(const std::string& json_path, int default_width,
                                           int default_height);
 
-// Decodes the images in parallel (OpenMP), composites them on white and downscales them with
-// DownscaleArea; the cameras are scaled to match. Throws the first failing view's error
-// (by view order, so the message does not depend on thread timing).
 // The pixels a dataset may hold once loaded and downscaled, over all its views: 2^30 (12 GiB as
 // float RGB), checked from the cameras' sizes before any image is read.
 inline constexpr int64_t kMaxDatasetPixels = int64_t{1} << 30;
 
+// The pixels `views` hold once their images are shrunk by `image_downscale` (each side rounded
+// down, as DownscaleArea does): what LoadViews checks against kMaxDatasetPixels.
+int64_t LoadedPixels(const std::vector<ViewSource>& views, int image_downscale);
+
+// How much LoadDataset shrinks the images of `manifest` for a run's `downscale`: what the
+// folder's own copies (LLFF images_N, `prescaled`) have not done already.
+inline int ImageDownscale(const DatasetManifest& manifest, int downscale) {
+  return downscale / manifest.prescaled;
+}
+
+// Decodes the images in parallel (OpenMP), composites them on white and downscales them with
+// DownscaleArea; the cameras are scaled to match. Throws the first failing view's error
+// (by view order, so the message does not depend on thread timing).
 std::vector<View> LoadViews(const std::vector<ViewSource>& sources, int downscale);
 
 // Instant-NGP maps the NeRF world into its unit cube as p * scale + offset, defaulting to
