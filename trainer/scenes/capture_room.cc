@@ -17,48 +17,57 @@ constexpr double kLine = 0.045;
 double Fract(double v) { return v - std::floor(v); }
 Vec3 Mix(Vec3 a, Vec3 b, double t) { return a + (b - a) * t; }
 
-// A cheap integer hash to [0, 1) for per-plank and per-brick tone variation.
-double Hash(int a, int b) {
-  uint32_t h = uint32_t(a) * 0x8da6b343u ^ uint32_t(b) * 0xd8163841u;
-  h ^= h >> 13;
-  h *= 0x5bd1e995u;
-  h ^= h >> 15;
-  return (h & 0xffffu) / 65536.0;
-}
-
 bool OnLine(double coordinate, double period) {
   return Fract(coordinate / period) * period < kLine;
 }
 
+// Planks run along x in segments of 1.8 m whose joints sit at a random place per plank; each
+// segment has its own shade, grain phase and, most of the time, a dark knot.
 Vec3 Floor(Vec3 p) {
-  // Planks 0.25 m wide along x, each a shade of oak with a wavy grain.
-  const double plank = std::floor(p.y / 0.25);
-  const double tone = Hash(int(plank), 7);
-  if (OnLine(p.y, 0.25) || OnLine(p.x + 0.9 * plank, 1.8)) return {0.22, 0.14, 0.08};
-  const double grain = 0.5 + 0.5 * std::sin(p.x * 7.0 + 1.7 * plank + 1.5 * std::sin(p.y * 9.0));
+  const int plank = int(std::floor(p.y / 0.25));
+  const double along = p.x + 1.8 * LatticeHash(plank, 3);
+  const int segment = int(std::floor(along / 1.8));
+  if (OnLine(p.y, 0.25) || OnLine(along, 1.8)) return {0.22, 0.14, 0.08};
+  const double tone = LatticeHash(plank, segment);
+  const double knot_x = 1.8 * (segment + 0.15 + 0.7 * LatticeHash(segment, plank + 101));
+  const double knot_y = 0.25 * (plank + 0.3 + 0.4 * LatticeHash(plank + 57, segment));
+  const double kx = (along - knot_x) / 0.07, ky = (p.y - knot_y) / 0.03;
+  if (LatticeHash(segment + 13, plank) < 0.7 && kx * kx + ky * ky < 1) return {0.30, 0.18, 0.09};
+  const double grain = 0.5 + 0.5 * std::sin(p.x * 7.0 + 6.3 * LatticeHash(plank, segment + 29) +
+                                            1.5 * std::sin(p.y * 9.0));
   const Vec3 light{0.72, 0.52, 0.32}, dark{0.50, 0.33, 0.18};
   return Mix(Mix(light, dark, tone), dark, 0.35 * grain);
 }
 
 Vec3 Ceiling(Vec3 p) {
   if (OnLine(p.x, 0.6) || OnLine(p.y, 0.6)) return {0.62, 0.62, 0.60};
-  // A lamp's glow fades out from the middle of the ceiling.
+  // A lamp's glow fades out from the middle of the ceiling; tiles differ a little in shade.
   const double glow = std::exp(-(p.x * p.x + p.y * p.y) / 1.5);
-  return Mix(Vec3{0.80, 0.80, 0.78}, Vec3{1.0, 0.97, 0.88}, glow);
+  const double tile = LatticeHash(int(std::floor(p.x / 0.6)) + 31, int(std::floor(p.y / 0.6)));
+  return Mix(Vec3{0.80, 0.80, 0.78}, Vec3{1.0, 0.97, 0.88}, glow) * (0.88 + 0.12 * tile);
 }
 
 Vec3 StripedWallpaper(double u, double v) {  // wall at +x
   const double stripe = Fract(u / 0.3);
-  if (stripe < 0.2) return {0.85, 0.82, 0.62};
-  return Mix(Vec3{0.45, 0.60, 0.45}, Vec3{0.35, 0.50, 0.38}, 0.5 + 0.5 * std::sin(v * 5.0));
+  const double shade = 0.8 + 0.2 * LatticeHash(int(std::floor(u / 0.3)), 41);
+  if (stripe < 0.2) return Vec3{0.85, 0.82, 0.62} * shade;
+  const Vec3 paper =
+      Mix(Vec3{0.45, 0.60, 0.45}, Vec3{0.35, 0.50, 0.38}, 0.5 + 0.5 * std::sin(v * 5.0));
+  return paper * shade;
 }
 
+// Bricks of 0.4 m give or take 0.08, each row shifted by its own random amount.
 Vec3 Brick(double u, double v) {  // wall at -y
-  const double row = std::floor(v / 0.18);
-  const double shifted = u + (int(row) & 1) * 0.2;
-  if (OnLine(v, 0.18) || OnLine(shifted, 0.4)) return {0.80, 0.78, 0.72};
-  const double tone = Hash(int(std::floor(shifted / 0.4)), int(row));
-  return Mix(Vec3{0.66, 0.30, 0.20}, Vec3{0.48, 0.22, 0.16}, tone);
+  const int row = int(std::floor(v / 0.18));
+  const double shifted = u + 0.4 * LatticeHash(row, 17);
+  auto joint = [&](int k) { return 0.4 * k + 0.16 * (LatticeHash(k, row + 211) - 0.5); };
+  int brick = int(std::floor(shifted / 0.4));
+  if (shifted < joint(brick)) --brick;
+  if (shifted >= joint(brick + 1)) ++brick;
+  if (OnLine(v, 0.18) || shifted - joint(brick) < kLine) return {0.80, 0.78, 0.72};
+  const double tone = LatticeHash(brick, row);
+  const Vec3 red = Mix(Vec3{0.70, 0.32, 0.20}, Vec3{0.42, 0.19, 0.14}, tone);
+  return red;
 }
 
 Vec3 WindowWall(double u, double v) {  // wall at +y: a window and a picture beside it
@@ -77,10 +86,13 @@ Vec3 WindowWall(double u, double v) {  // wall at +y: a window and a picture bes
   return {0.72, 0.76, 0.82};
 }
 
-Vec3 Diamonds(double u, double v) {  // wall at -x
-  const double a = Fract((u + v) / 0.5), b = Fract((u - v) / 0.5);
-  const bool inside = (a < 0.5) != (b < 0.5);
-  return inside ? Vec3{0.85, 0.55, 0.42} : Vec3{0.93, 0.80, 0.66};
+Vec3 Diamonds(double u, double v) {  // wall at -x; each diamond a shade of its own
+  const double a = (u + v) / 0.5, b = (u - v) / 0.5;
+  const bool inside = (Fract(a) < 0.5) != (Fract(b) < 0.5);
+  const double shade =
+      0.75 + 0.25 * LatticeHash(int(std::floor(2 * a)), int(std::floor(2 * b)) + 5);
+  const Vec3 colour = inside ? Vec3{0.85, 0.55, 0.42} * shade : Vec3{0.93, 0.80, 0.66};
+  return colour;
 }
 
 Vec3 Wall(int axis, bool positive, Vec3 p, double floor_z) {

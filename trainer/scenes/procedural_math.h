@@ -34,6 +34,35 @@ inline void Rotate(Vec3* a, Vec3* b, double angle) {
   *b = rb;
 }
 
+// A cheap integer hash of a lattice point to [0, 1): shades, joints and knots that differ from
+// tile to tile.
+inline double LatticeHash(int a, int b, int c = 0) {
+  uint32_t h = uint32_t(a) * 0x8da6b343u ^ uint32_t(b) * 0xd8163841u ^ uint32_t(c) * 0xcb1ab31fu;
+  h ^= h >> 13;
+  h *= 0x5bd1e995u;
+  h ^= h >> 15;
+  return (h & 0xffffu) / 65536.0;
+}
+
+// Smooth value noise in [0, 1) on the unit lattice: LatticeHash at the corners, blended with
+// smoothstep weights.
+inline double ValueNoise(Vec3 p) {
+  const double fx = std::floor(p.x), fy = std::floor(p.y), fz = std::floor(p.z);
+  const int ix = int(fx), iy = int(fy), iz = int(fz);
+  auto smooth = [](double t) { return t * t * (3 - 2 * t); };
+  const double w[3] = {smooth(p.x - fx), smooth(p.y - fy), smooth(p.z - fz)};
+  double layer[2];
+  for (int dz = 0; dz < 2; ++dz) {
+    double row[2];
+    for (int dy = 0; dy < 2; ++dy) {
+      const double a = LatticeHash(ix, iy + dy, iz + dz), b = LatticeHash(ix + 1, iy + dy, iz + dz);
+      row[dy] = a + (b - a) * w[0];
+    }
+    layer[dz] = row[0] + (row[1] - row[0]) * w[1];
+  }
+  return layer[0] + (layer[1] - layer[0]) * w[2];
+}
+
 // Camera-to-world (OpenGL: looks down -z, +y up) of a hand-held camera at `position` aimed at
 // `target` with the horizon level (z up), then turned by the hand's pitch, yaw and roll.
 inline void LookAtPose(Vec3 position, Vec3 target, double roll, double pitch, double yaw,
