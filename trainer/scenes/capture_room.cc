@@ -21,8 +21,8 @@ bool OnLine(double coordinate, double period) {
   return Fract(coordinate / period) * period < kLine;
 }
 
-// Planks run along x in segments of 1.8 m whose joints sit at a random place per plank; each
-// segment has its own shade, grain phase and, most of the time, a dark knot.
+// Planks 0.25 m wide run along x in segments of 1.8 m whose joints sit at a random place per
+// plank; each segment has its own shade of oak, grain phase and, most of the time, a dark knot.
 Vec3 Floor(Vec3 p) {
   const int plank = int(std::floor(p.y / 0.25));
   const double along = p.x + 1.8 * LatticeHash(plank, 3);
