@@ -121,8 +121,9 @@ TEST(CaptureScene, TheRoomFillsEveryViewAndTheObjectIsInIt) {
         colour = procedural::ShadeRoom(kCaptureRoomMin, kCaptureRoomMax, o, d);
         const float r = view.rgb.at(x, y, 0), g = view.rgb.at(x, y, 1), b = view.rgb.at(x, y, 2);
         ASSERT_TRUE(IsWornShade(r, g, b, colour)) << view.name << " at " << x << "," << y;
-        least_wear = std::min(least_wear, WearOf(r, g, b, colour));
-        most_wear = std::max(most_wear, WearOf(r, g, b, colour));
+        const double wear = WearOf(r, g, b, colour);
+        least_wear = std::min(least_wear, wear);
+        most_wear = std::max(most_wear, wear);
         ASSERT_FALSE(r == 1 && g == 1 && b == 1)
             << view.name << " shows background at " << x << "," << y;
         ++room;
