@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "encoder/grid_dct.h"
+#include "trainer/rate/coded_model.h"
 
 namespace ecrf {
 namespace trainer {
@@ -12,6 +13,18 @@ void RateState::Configure(const TrainOptions& o) {
   for (int a = 0; a < 3; ++a) {
     config.plane_block[a] = o.plane_block[a];
     config.line_block[a] = o.line_block[a];
+  }
+}
+
+void FloorNearlyDeadSteps(const std::vector<float>& peaks, std::vector<float>* steps) {
+  // Tensors 0..2 planes, 3..5 lines of the density grid, 6..8 and 9..11 the appearance grid's.
+  // An all-zero tensor (peak 0) keeps its placeholder step and sets no floor.
+  for (size_t first = 0; first + 3 <= steps->size() && first + 3 <= peaks.size(); first += 3) {
+    float largest = 0.f;
+    for (size_t t = first; t < first + 3; ++t)
+      if (peaks[t] > 0.f) largest = std::max(largest, (*steps)[t]);
+    for (size_t t = first; t < first + 3; ++t)
+      if (peaks[t] > 0.f) (*steps)[t] = std::max((*steps)[t], largest / kStepFloorRatio);
   }
 }
 
@@ -24,6 +37,7 @@ void RateState::Activate(const TensorfModel& model, const TrainOptions& o) {
   // Tensors 0..5 are the density grid's (coded_tensors.h).
   for (int t = 0; t < 6 && t < static_cast<int>(steps.size()); ++t)
     steps[t] *= o.density_step_factor;
+  FloorNearlyDeadSteps(encoder::PeakCoefficients(DescribeModel(model), config), &steps);
   entropy.Init(NumRateModels(2), o.seed ^ 0x5eedULL);
   adam.Reset(entropy.params().size());
   active = true;

@@ -16,6 +16,18 @@
 namespace ecrf {
 namespace trainer {
 
+// A tensor nearly dead when the rate terms switch on (LLFF flower's y-z density plane with
+// TensoRF's LLFF ranks 16,4,4: a peak 11,000x under the x-y plane's) froze a step of its
+// peak / 127; its coefficients then regrew past 127 steps, were clamped, and cost 903 KB of a
+// 1 MB file at 6.7 bits each while rate control raised lambda_e 2,800x. So no frozen step is
+// finer than the largest step of its three siblings (the same grid's planes, or lines) over this
+// ratio. With it the same run's file stayed under 0.53 MB at lambda_e 0 before the encoder's
+// step search filled the target.
+inline constexpr float kStepFloorRatio = 64.f;
+// Raises each step to at least the largest of its group of three over kStepFloorRatio; tensors of
+// peak 0 (peaks: encoder::PeakCoefficients) neither set nor get the floor.
+void FloorNearlyDeadSteps(const std::vector<float>& peaks, std::vector<float>* steps);
+
 struct RateState {
   bool active = false;
   encoder::RateConfig config;

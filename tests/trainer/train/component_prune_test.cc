@@ -54,6 +54,29 @@ RateState ActiveRate(const TensorfModel& model) {
   return rate;
 }
 
+// A tensor nearly dead when the rate terms switch on gets no step finer than 1/64 of its
+// siblings' largest (rate_state.h); live tensors keep their own, a dead one its placeholder.
+TEST(RateSteps, ANearlyDeadTensorGetsNoStepFinerThanItsSiblingsOverTheFloorRatio) {
+  TensorfModel model = DenseSmallModel();
+  const std::vector<float> own = ActiveRate(model).steps;
+  VmGrid& density = model.density();
+  for (size_t i = 0; i < density.plane_size(2); ++i) density.plane(2)[i] *= 1e-5f;
+  const std::vector<float> floored = ActiveRate(model).steps;
+  ASSERT_EQ(floored.size(), own.size());
+  const float largest = std::max(own[0], own[1]);
+  EXPECT_LT(own[2] * 1e-5f, largest / kStepFloorRatio);  // what the peak alone would give
+  EXPECT_FLOAT_EQ(floored[2], largest / kStepFloorRatio);
+  for (size_t t = 0; t < own.size(); ++t) {
+    if (t != 2) EXPECT_EQ(floored[t], own[t]) << t;
+  }
+  std::vector<float> steps = {1.f, 1e-4f, 0.5f, 2.f, 2.f, 2.f};
+  FloorNearlyDeadSteps({3.f, 0.f, 1.f, 1.f, 1.f, 1.f}, &steps);
+  EXPECT_EQ(steps, (std::vector<float>{1.f, 1e-4f, 0.5f, 2.f, 2.f, 2.f}));  // peak 0: untouched
+  steps = {1.f, 1e-4f, 0.5f};
+  FloorNearlyDeadSteps({3.f, 1e-5f, 1.f}, &steps);
+  EXPECT_EQ(steps, (std::vector<float>{1.f, 1.f / 64, 0.5f}));
+}
+
 TEST(KeepComponents, RendersWhatZeroingTheComponentRendered) {
   const Rays rays;
   for (int g = 0; g < 2; ++g) {
