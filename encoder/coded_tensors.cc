@@ -37,13 +37,16 @@ std::vector<float> PeakCoefficients(const SceneDescription& scene, const RateCon
   return peaks;
 }
 
+std::vector<float> StepsFromPeaks(std::vector<float> peaks, int coef_bits) {
+  const float max_level = coef_bits == 16 ? 32767.f : 127.f;
+  // An all-zero tensor still needs a positive step; any value codes it as zeros.
+  for (float& s : peaks) s = s > 0.f ? s / max_level : 1.f;
+  return peaks;
+}
+
 std::vector<float> ChooseQuantSteps(const SceneDescription& scene, const RateConfig& config,
                                     int coef_bits) {
-  const float max_level = coef_bits == 16 ? 32767.f : 127.f;
-  std::vector<float> steps = PeakCoefficients(scene, config);
-  // An all-zero tensor still needs a positive step; any value codes it as zeros.
-  for (float& s : steps) s = s > 0.f ? s / max_level : 1.f;
-  return steps;
+  return StepsFromPeaks(PeakCoefficients(scene, config), coef_bits);
 }
 
 }  // namespace encoder

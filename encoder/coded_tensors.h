@@ -35,6 +35,8 @@ std::vector<float> ChooseQuantSteps(const SceneDescription& scene, const RateCon
 // The largest block-DCT coefficient magnitude of each tensor (0 for an all-zero tensor), in the
 // order of ChooseQuantSteps.
 std::vector<float> PeakCoefficients(const SceneDescription& scene, const RateConfig& config);
+// ChooseQuantSteps' rule applied to peaks already computed: peak / max level, 1 for a zero peak.
+std::vector<float> StepsFromPeaks(std::vector<float> peaks, int coef_bits);
 
 // Name of tensor index t (0..11) as in checkpoints: "density.plane.0" ... "appearance.line.2".
 const char* RateTensorName(int t);

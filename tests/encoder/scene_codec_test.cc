@@ -43,6 +43,26 @@ const float* DecodedTensor(const dec::SceneField& f, int g, int t) {
   return t < 3 ? grid.plane_f32[t].data() : grid.line_f32[t - 3].data();
 }
 
+// Each tensor's step maps its largest block-DCT coefficient to the largest level (127 for 8 bits,
+// 32767 for 16), whether computed from the model or from peaks already at hand; a zero peak gets 1.
+TEST(SceneCodec, QuantStepsMapEachTensorsPeakToTheLargestLevel) {
+  const TensorfModel model = SmallModel(3);
+  encoder::RateConfig blocks;
+  const std::vector<float> peaks = encoder::PeakCoefficients(DescribeModel(model), blocks);
+  for (int coef_bits : {8, 16}) {
+    const float max_level = coef_bits == 8 ? 127.f : 32767.f;
+    const std::vector<float> steps = ChooseQuantSteps(model, blocks, coef_bits);
+    ASSERT_EQ(steps.size(), 12u);
+    EXPECT_EQ(steps, encoder::StepsFromPeaks(peaks, coef_bits));
+    for (size_t t = 0; t < steps.size(); ++t) {
+      ASSERT_GT(peaks[t], 0.f) << t;
+      EXPECT_FLOAT_EQ(steps[t] * max_level, peaks[t]) << coef_bits << "-bit tensor " << t;
+    }
+  }
+  EXPECT_EQ(encoder::StepsFromPeaks({0.f, 254.f, 32767.f}, 8),
+            (std::vector<float>{1.f, 2.f, 32767.f / 127.f}));
+}
+
 // The decoded tensor equals crop(IDCT(round(DCT(G) / step) * step)) within one output unit
 // (step / 2^P) plus float rounding: the integer IDCT is the float one up to its final rounding.
 TEST(SceneCodec, DecodedGridsAreTheQuantizedModel) {

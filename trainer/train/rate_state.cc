@@ -30,14 +30,16 @@ void FloorNearlyDeadSteps(const std::vector<float>& peaks, std::vector<float>* s
 
 void RateState::Activate(const TensorfModel& model, const TrainOptions& o) {
   Configure(o);
-  steps = ChooseQuantSteps(model, config, o.coef_bits);
+  // One block DCT of every tensor gives both the steps and the floor's peaks.
+  const std::vector<float> peaks = encoder::PeakCoefficients(DescribeModel(model), config);
+  steps = encoder::StepsFromPeaks(peaks, o.coef_bits);
   if (o.quant_step_scale > 0.f) {
     for (float& s : steps) s *= o.quant_step_scale;
   }
   // Tensors 0..5 are the density grid's (coded_tensors.h).
   for (int t = 0; t < 6 && t < static_cast<int>(steps.size()); ++t)
     steps[t] *= o.density_step_factor;
-  FloorNearlyDeadSteps(encoder::PeakCoefficients(DescribeModel(model), config), &steps);
+  FloorNearlyDeadSteps(peaks, &steps);
   entropy.Init(NumRateModels(2), o.seed ^ 0x5eedULL);
   adam.Reset(entropy.params().size());
   active = true;
