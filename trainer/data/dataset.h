@@ -66,7 +66,7 @@ struct DatasetManifest {
 //    and every 8th (index % 8 == 0) is held out as "test" (and "val"), the rest is "train",
 //    the LLFF convention. Frames whose image is missing are skipped with a warning on stderr.
 //  * otherwise dir/poses_bounds.npy with dir/images (LLFF; see trainer/data/llff.h), which picks
-//    dir/images_<downscale> when it exists and then sets `prescaled`.
+//    dir/images_<k> for the largest factor k of downscale that is there, and sets `prescaled`.
 // Throws std::runtime_error naming the file and the problem for anything malformed.
 DatasetManifest ReadDatasetManifest(const std::string& dir, const std::string& split,
                                     int downscale = 1);

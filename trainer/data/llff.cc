@@ -150,12 +150,19 @@ DatasetManifest ReadLlffManifest(const std::string& dir, const std::string& spli
     }
   }
 
+  // The least shrinking on load: images_<downscale>, else the images_<k> of the largest factor k
+  // of downscale that is there (the published LLFF sets ship images_4 and images_8 but not
+  // always the full-size images), shrunk by downscale / k on load.
   *prescaled = 1;
   fs::path folder = root / "images";
   std::error_code error;
-  if (downscale > 1 && fs::is_directory(root / ("images_" + std::to_string(downscale)), error)) {
-    folder = root / ("images_" + std::to_string(downscale));
-    *prescaled = downscale;
+  for (int k = downscale; k > 1; --k) {
+    const fs::path copies = root / ("images_" + std::to_string(k));
+    if (downscale % k == 0 && fs::is_directory(copies, error)) {
+      folder = copies;
+      *prescaled = k;
+      break;
+    }
   }
   if (!fs::is_directory(folder, error))
     throw std::runtime_error(folder.string() + ": no such directory (LLFF images)");

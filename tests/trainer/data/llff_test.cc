@@ -231,6 +231,16 @@ TEST_F(LlffTest, DownscaleUsesImagesNOrShrinksOnLoad) {
   EXPECT_DOUBLE_EQ(prescaled.views[0].camera.fx, kFocal / 4);
   EXPECT_NEAR(prescaled.views[0].rgb.at(3, 3, 1), 0.75f, 1e-2) << "images_2 was not used";
   EXPECT_NEAR(prescaled.views[1].rgb.at(3, 3, 0), 8 / 16.0f, 1e-2) << "test view 1 is img_08";
+
+  // --downscale 4 with images_2 but no images_4: images_2 shrunk by 2 on load, not the originals.
+  const Dataset quarter = LoadDataset(Dir(), "test", 4);
+  EXPECT_EQ(quarter.views[0].rgb.width, 8);
+  EXPECT_EQ(quarter.views[0].camera.width, 8);
+  EXPECT_DOUBLE_EQ(quarter.views[0].camera.fx, kFocal / 8);
+  EXPECT_NEAR(quarter.views[0].rgb.at(1, 1, 1), 0.75f, 1e-2) << "images_2 was not used";
+  // A factor that images_2 does not divide falls back to the originals.
+  const Dataset third = LoadDataset(Dir(), "test", 3);
+  EXPECT_NEAR(third.views[0].rgb.at(1, 1, 1), 0.25f, 1e-2) << "images_2 used for --downscale 3";
 }
 
 TEST_F(LlffTest, ErrorsNameTheFileAndTheProblem) {
