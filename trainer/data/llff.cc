@@ -128,6 +128,22 @@ void GrowByFrustum(const Camera& camera, double near, double far, double box[2][
   }
 }
 
+// The least shrinking on load: images_<downscale>, else the images_<k> of the largest factor k
+// of downscale that is there (the published LLFF sets ship images_4 and images_8 but not always
+// the full-size images), shrunk by downscale / k on load; else the full-size images.
+fs::path ImagesFolder(const fs::path& root, int downscale, int* prescaled) {
+  std::error_code error;
+  for (int k = downscale; k > 1; --k) {
+    const fs::path copies = root / ("images_" + std::to_string(k));
+    if (downscale % k == 0 && fs::is_directory(copies, error)) {
+      *prescaled = k;
+      return copies;
+    }
+  }
+  *prescaled = 1;
+  return root / "images";
+}
+
 }  // namespace
 
 DatasetManifest ReadLlffManifest(const std::string& dir, const std::string& split, int downscale,
@@ -150,20 +166,8 @@ DatasetManifest ReadLlffManifest(const std::string& dir, const std::string& spli
     }
   }
 
-  // The least shrinking on load: images_<downscale>, else the images_<k> of the largest factor k
-  // of downscale that is there (the published LLFF sets ship images_4 and images_8 but not
-  // always the full-size images), shrunk by downscale / k on load.
-  *prescaled = 1;
-  fs::path folder = root / "images";
+  const fs::path folder = ImagesFolder(root, downscale, prescaled);
   std::error_code error;
-  for (int k = downscale; k > 1; --k) {
-    const fs::path copies = root / ("images_" + std::to_string(k));
-    if (downscale % k == 0 && fs::is_directory(copies, error)) {
-      folder = copies;
-      *prescaled = k;
-      break;
-    }
-  }
   if (!fs::is_directory(folder, error))
     throw std::runtime_error(folder.string() + ": no such directory (LLFF images)");
   const std::vector<fs::path> images = SortedImages(folder);

@@ -29,8 +29,15 @@ inline constexpr float kUnboundedWeightThreshold = 3e-3f;
 // The auto early stop of training rays in object scenes whose cameras are kept
 // (TrainOptions::early_stop): the transmittance at which the decoder's renders stop (SPEC.md 7.8).
 inline constexpr float kAutoEarlyStop = 1e-4f;
-// The auto plane total variation of unbounded scenes (TrainOptions::tv_weight_density/app).
-inline constexpr float kUnboundedTvWeight = 1.f;
+// The auto plane total variation of unbounded and forward-facing scenes
+// (TrainOptions::tv_weight_density/app): TensoRF's LLFF weight. Real captures' held-out views
+// gain from it (docs/real-captures.md; LLFF flower, docs/results.md); objects get none.
+inline constexpr float kCaptureTvWeight = 1.f;
+// The weight of plane total variation a run uses: `weight` when given (>= 0), else auto.
+inline float TvWeightFor(float weight, SceneModel scene) {
+  if (weight >= 0.f) return weight;
+  return scene == SceneModel::kObject ? 0.f : kCaptureTvWeight;
+}
 
 // The stretch of a run in which cameras are refined (shares of the iterations): from early coarse
 // grids (a wide basin) to before the last steps, which then settle the field on final cameras.

@@ -116,10 +116,8 @@ TrainSession::TrainSession(const TrainOptions& options, const Dataset& train_vie
     for (const View& v : train.views) progress.cameras.push_back(v.camera);
     rays.UseCameras(&progress.cameras);
   }
-  tv_density = o.tv_weight_density >= 0.f ? o.tv_weight_density
-               : model->unbounded()       ? kUnboundedTvWeight
-                                          : 0.f;
-  tv_app = o.tv_weight_app >= 0.f ? o.tv_weight_app : model->unbounded() ? kUnboundedTvWeight : 0.f;
+  tv_density = TvWeightFor(o.tv_weight_density, model->config().scene_model);
+  tv_app = TvWeightFor(o.tv_weight_app, model->config().scene_model);
   progress.rng.seed(o.seed);
   progress.l1_weight = o.l1_weight_initial;
   lr_factor = std::pow(o.lr_decay_ratio, 1.0f / float(o.iters));

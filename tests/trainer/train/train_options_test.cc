@@ -18,6 +18,22 @@ TEST(TrainOptions, MilestonesScaleWithTheRunLength) {
   EXPECT_EQ(ScaleMilestone(7000, 3000, 30000), 700);
 }
 
+// Plane TV on auto: TensoRF's LLFF weight for real captures, unbounded or forward-facing, none for
+// objects (TensoRF's Blender setting); a weight given, 0 included, is kept for every scene.
+TEST(TrainOptions, AutoPlaneTvIsOnForCapturesOnly) {
+  const TrainOptions o;
+  ASSERT_LT(o.tv_weight_density, 0.f);
+  ASSERT_LT(o.tv_weight_app, 0.f);
+  EXPECT_EQ(TvWeightFor(o.tv_weight_density, SceneModel::kObject), 0.f);
+  EXPECT_EQ(TvWeightFor(o.tv_weight_density, SceneModel::kUnbounded), kCaptureTvWeight);
+  EXPECT_EQ(TvWeightFor(o.tv_weight_app, SceneModel::kForward), kCaptureTvWeight);
+  EXPECT_EQ(kCaptureTvWeight, 1.f);
+  for (SceneModel m : {SceneModel::kObject, SceneModel::kUnbounded, SceneModel::kForward}) {
+    EXPECT_EQ(TvWeightFor(0.f, m), 0.f);
+    EXPECT_EQ(TvWeightFor(0.25f, m), 0.25f);
+  }
+}
+
 TEST(TrainOptions, UpsampleCountsAreLogSpacedAndEndAtTheFinalGrid) {
   const TrainOptions o = PresetOptions("paper");
   const auto counts = UpsampleVoxelCounts(o);
