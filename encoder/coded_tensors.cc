@@ -38,7 +38,7 @@ std::vector<float> PeakCoefficients(const SceneDescription& scene, const RateCon
 }
 
 std::vector<float> StepsFromPeaks(std::vector<float> peaks, int coef_bits) {
-  const float max_level = coef_bits == 16 ? 32767.f : 127.f;
+  const float max_level = static_cast<float>(MaxCoefficientLevel(coef_bits));
   // An all-zero tensor still needs a positive step; any value codes it as zeros.
   for (float& s : peaks) s = s > 0.f ? s / max_level : 1.f;
   return peaks;

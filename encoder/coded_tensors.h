@@ -6,6 +6,7 @@
 #ifndef ECRF_ENCODER_CODED_TENSORS_H_
 #define ECRF_ENCODER_CODED_TENSORS_H_
 
+#include <cstdint>
 #include <vector>
 
 #include "encoder/grid_dct.h"
@@ -26,6 +27,10 @@ struct RateConfig {
 // Block layout of tensor t (0..5) of grid g with the header's resolution and ranks.
 GridBlockLayout CodedTensorLayout(const SceneHeader& header, int g, int t,
                                   const RateConfig& config);
+
+// The largest quantization level of a coefficient coded in coef_bits bits (8 or 16; SPEC.md's
+// coefficient range): 127 or 32767.
+inline int32_t MaxCoefficientLevel(int coef_bits) { return coef_bits == 16 ? 32767 : 127; }
 
 // Quantization step of each tensor for coef_bits-bit coefficients: the largest magnitude of its
 // block-DCT coefficients maps to the largest level (127 for 8 bits), so nothing clips. The

@@ -31,7 +31,7 @@ Encoded EncodeWithScale(const SceneDescription& scene, EncodeOptions o,
 
 double FinestStepScale(const SceneDescription& scene, const EncodeOptions& options,
                        const std::vector<float>& base) {
-  const double max_level = options.coef_bits == 16 ? 32767.0 : 127.0;
+  const double max_level = MaxCoefficientLevel(options.coef_bits);
   const std::vector<float> peaks = PeakCoefficients(scene, options.blocks);
   double finest = 0.0;
   for (size_t t = 0; t < base.size() && t < peaks.size(); ++t) {

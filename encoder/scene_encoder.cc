@@ -155,7 +155,7 @@ std::vector<uint8_t> EncodeCoefficients(const SceneDescription& s, int g, int t,
   const GridBlockLayout layout = CodedTensorLayout(s.header, g, t, o.blocks);
   std::vector<float> coeffs(layout.num_coeffs());
   ForwardBlocks(s.tensors[g][t].data(), layout, coeffs.data());
-  const int32_t max_abs = o.coef_bits == 16 ? 32767 : 127;
+  const int32_t max_abs = MaxCoefficientLevel(o.coef_bits);
   const int volume = layout.block_volume();
   std::vector<int32_t> levels(coeffs.size(), 0);
   const int index = g * 6 + t;
