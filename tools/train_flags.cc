@@ -22,7 +22,7 @@ namespace {
 // absent), read by CLI11 before the other flags are declared, so that --help can show the
 // defaults of that preset and rate point. The full parse that follows reports every error.
 struct LayerFlags {
-  std::string preset, scene, rate, lambda_e, target_size, data, downscale;
+  std::string preset, scene, rate, lambda_e, target_size, data, downscale, scene_type;
 };
 
 LayerFlags ReadLayerFlags(const std::vector<std::string>& args) {
@@ -38,6 +38,7 @@ LayerFlags ReadLayerFlags(const std::vector<std::string>& args) {
   app.add_option("--target-size", f.target_size);
   app.add_option("--data", f.data);
   app.add_option("--downscale", f.downscale);
+  app.add_option("--scene-type", f.scene_type);
   try {
     app.parse(std::vector<std::string>(args.rbegin(), args.rend()));  // CLI11 takes it reversed
   } catch (const CLI::ParseError&) {
@@ -56,6 +57,20 @@ int FinalGridEdge(const trainer::TrainOptions& o) {
   return int(std::lround(std::cbrt(double(o.voxels_final))));
 }
 
+// The layout's kind as FitScene will see it (--scene-type forces the forward-facing model or
+// another).
+trainer::DataKind DataKindOf(const trainer::DatasetManifest& m, const std::string& scene_type) {
+  std::vector<trainer::Camera> cameras;
+  for (const trainer::ViewSource& v : m.views) cameras.push_back(v.camera);
+  const bool auto_type = scene_type.empty() || scene_type == "auto";
+  if (scene_type == "forward" ||
+      (auto_type && !m.white_background && trainer::CamerasFaceOneWay(cameras))) {
+    return trainer::DataKind::kForwardFacing;
+  }
+  return m.white_background && !m.estimated_poses ? trainer::DataKind::kObjectWithGivenCameras
+                                                  : trainer::DataKind::kOther;
+}
+
 // The default preset of --data: the cameras and image sizes are read (headers only; a few
 // milliseconds for 100 PNGs). A dataset that cannot be read keeps `fast`: loading it reports why.
 trainer::PresetChoice DataPreset(const LayerFlags& f) {
@@ -65,7 +80,7 @@ trainer::PresetChoice DataPreset(const LayerFlags& f) {
         trainer::ReadDatasetManifest(f.data, "train", int(downscale));
     const int64_t pixels =
         trainer::LoadedPixels(m.views, trainer::ImageDownscale(m, int(downscale)));
-    return trainer::PresetForData(pixels, m.white_background && !m.estimated_poses);
+    return trainer::PresetForData(pixels, DataKindOf(m, f.scene_type));
   } catch (const std::exception&) {
     return {};
   }

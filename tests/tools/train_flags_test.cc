@@ -249,14 +249,42 @@ TEST(TrainFlags, TheLongPresetIsTheFortyFiveMinuteRunsFlags) {
   EXPECT_EQ(trainer::RateStartIteration(Parse({"--preset", "long"})), 22500);
 }
 
-// Without --preset a dataset trains with `fast` unless it is an object dataset with given
-// cameras whose training pixels outnumber the rays `fast`'s default run draws.
+// `forward` is flower's 45-minute command (docs/real-captures.md) written once: fast's run at
+// the medium rate point with these flags, milestone for milestone.
+TEST(TrainFlags, TheForwardPresetIsFlowersFortyFiveMinuteFlags) {
+  const trainer::TrainOptions preset = Parse({"--preset", "forward"});
+  const trainer::TrainOptions flags =
+      Parse({"--head", "deferred", "--refine-cameras", "off", "--iters", "7500"});
+  EXPECT_EQ(trainer::ScaledMilestones(preset.upsample_iters, preset),
+            trainer::ScaledMilestones(flags.upsample_iters, flags));
+  EXPECT_EQ(trainer::ScaledMilestones(preset.alpha_mask_iters, preset),
+            trainer::ScaledMilestones(flags.alpha_mask_iters, flags));
+  EXPECT_EQ(trainer::UpsampleVoxelCounts(preset), trainer::UpsampleVoxelCounts(flags));
+  EXPECT_EQ(trainer::RateStartIteration(preset), trainer::RateStartIteration(flags));
+  std::vector<std::string> names;
+  for (const std::string& line : trainer::ChangedSettings(flags, preset)) {
+    names.push_back(line.substr(0, line.find(':')));
+  }
+  EXPECT_EQ(names, (std::vector<std::string>{"preset", "rate_point_iters"}));
+  // Without a rate point: 6,000 iterations at fast's grid.
+  const trainer::TrainOptions plain = Parse({"--preset", "forward", "--rate", "none"});
+  EXPECT_EQ(plain.iters, 6000);
+  EXPECT_EQ(plain.voxels_final, 180L * 180 * 180);
+}
+
+// Without --preset a dataset trains with `fast` unless it is forward-facing (`forward`) or an
+// object dataset with given cameras whose training pixels outnumber the rays `fast`'s default
+// run draws (`long`).
 TEST(TrainFlags, TheDefaultPresetFollowsTheDatasetsSizeAndKind) {
   EXPECT_EQ(trainer::FastRunRays(), int64_t{4500} * 4096);
   const int64_t rays = trainer::FastRunRays();
-  EXPECT_EQ(trainer::PresetForData(rays, true).preset, trainer::Preset::kFast);
-  EXPECT_EQ(trainer::PresetForData(rays + 1, true).preset, trainer::Preset::kLong);
-  EXPECT_EQ(trainer::PresetForData(rays + 1, false).preset, trainer::Preset::kFast);
+  using trainer::DataKind;
+  EXPECT_EQ(trainer::PresetForData(rays, DataKind::kObjectWithGivenCameras).preset,
+            trainer::Preset::kFast);
+  EXPECT_EQ(trainer::PresetForData(rays + 1, DataKind::kObjectWithGivenCameras).preset,
+            trainer::Preset::kLong);
+  EXPECT_EQ(trainer::PresetForData(rays + 1, DataKind::kOther).preset, trainer::Preset::kFast);
+  EXPECT_EQ(trainer::PresetForData(1, DataKind::kForwardFacing).preset, trainer::Preset::kForward);
 
   // Blender layouts with the image size in the JSON: the manifest needs no image.
   testing_util::ScopedTempDir dir("default_preset");
@@ -287,11 +315,16 @@ TEST(TrainFlags, TheDefaultPresetFollowsTheDatasetsSizeAndKind) {
             "(--preset fast: a shorter run)");
   write("transforms_train.json", 400);
   EXPECT_EQ(preset({}), trainer::Preset::kFast);
-  // Not an object dataset with given cameras: the Instant-NGP layout of a capture.
+  // The Instant-NGP layout of a capture whose cameras all look down -z: forward-facing, unless
+  // --scene-type says otherwise (then not an object dataset with given cameras either).
   std::filesystem::remove(dir.path() + "/transforms_train.json");
   write("transforms.json", 800);
   for (int i = 0; i < 100; ++i) std::ofstream(dir.path() + "/r_" + std::to_string(i) + ".png");
+  EXPECT_EQ(preset({}), trainer::Preset::kForward);
   BaseTrainOptions({"--data", dir.path()}, &reason);
+  EXPECT_EQ(reason, "preset forward: every camera looks one way (--preset fast: a shorter run)");
+  EXPECT_EQ(preset({"--scene-type", "unbounded"}), trainer::Preset::kFast);
+  BaseTrainOptions({"--data", dir.path(), "--scene-type", "unbounded"}, &reason);
   EXPECT_EQ(reason, "preset fast: not an object dataset with given cameras");
   // A folder that is no dataset keeps fast; loading it says why.
   EXPECT_EQ(Parse({"--data", dir.path() + "/missing"}).preset, trainer::Preset::kFast);

@@ -72,11 +72,11 @@ struct ChoiceNames<DeviceClassChoice> {
 };
 
 // The named presets (PresetOptions), rate points (ApplyRatePoint) and procedural scenes.
-enum class Preset { kPaper, kFast, kTiny, kLong };
+enum class Preset { kPaper, kFast, kTiny, kLong, kForward };
 template <>
 struct ChoiceNames<Preset> {
   static constexpr const char* what = "preset";
-  static constexpr const char* names[] = {"paper", "fast", "tiny", "long"};
+  static constexpr const char* names[] = {"paper", "fast", "tiny", "long", "forward"};
 };
 enum class RatePoint { kNone, kLow, kMedium, kHigh };
 template <>
@@ -108,24 +108,31 @@ int ScoredTestViewStride(const TrainOptions& options, size_t views);
 
 // "paper": the reference TensoRF VM-192 schedule. "fast": what a CPU user should run.
 // "tiny": the built-in scene in CI. "long": TensoRF's 30,000 iterations at a CPU's step cost,
-// for the published tables at 800x800 (45 minutes on 2 cores). The name form throws
+// for the published tables at 800x800 (45 minutes on 2 cores). "forward": forward-facing
+// captures (LLFF) in 45 minutes on 2 cores at 1008x756. The name form throws
 // std::invalid_argument for unknown names.
 TrainOptions PresetOptions(Preset preset);
 TrainOptions PresetOptions(const std::string& name);
 
-// The preset a dataset trains with when the command line names none: `long` for an object
-// dataset with given cameras (white background, poses not estimated) whose training views hold
-// more pixels than `fast`'s default run draws rays (FastRunRays(): 4,500 iterations of 4,096
-// rays), which would leave pixels unseen; `fast` otherwise. Chair at 400x400 (16.0 M pixels)
-// stays `fast`; at 800x800 (64.0 M) `long` gives 33.59 dB at 0.5 MB in 45 min where `fast`
-// gave 32.63 dB at 0.74 MB in 42 (docs/results.md). Real captures keep `fast`: `long` is not
-// measured on them. reason: one line for the run's log.
+// What the default preset goes by: the dataset's cameras and background (tools/train_flags.cc).
+enum class DataKind {
+  kObjectWithGivenCameras,  // white background, poses not estimated (the Blender layout)
+  kForwardFacing,           // every camera looks one way (CamerasFaceOneWay; LLFF)
+  kOther,
+};
+
+// The preset a dataset trains with when the command line names none: `forward` for a
+// forward-facing capture; `long` for an object dataset with given cameras whose training views
+// hold more pixels than `fast`'s default run draws rays (FastRunRays(): 4,500 iterations of
+// 4,096 rays), which would leave pixels unseen; `fast` otherwise. Chair at 400x400 (16.0 M
+// pixels) stays `fast`; at 800x800 (64.0 M) `long` gives 33.59 dB at 0.5 MB in 45 min where
+// `fast` gave 32.63 dB at 0.74 MB in 42 (docs/results.md). reason: one line for the run's log.
 struct PresetChoice {
   Preset preset = Preset::kFast;
   std::string reason;
 };
 int64_t FastRunRays();
-PresetChoice PresetForData(int64_t training_pixels, bool object_with_given_cameras);
+PresetChoice PresetForData(int64_t training_pixels, DataKind kind);
 
 // The named rate points set lambda_e and the step scale (with quantization-aware training on):
 //   "low"    lambda_e 2e-10, steps x4, 15 MLP levels, at most 32 appearance components, a

@@ -50,6 +50,8 @@ TensorfConfig ConfigFor(const TrainOptions& o, const Dataset& data, const SceneF
   c.head.num_products = 3 * o.appearance_rank;
   c.head.hidden = o.mlp_hidden;
   c.head.hidden_layers = o.mlp_layers;
+  c.head.feature_pe_freqs = o.feature_pe_freqs;
+  c.head.viewdir_pe_freqs = o.viewdir_pe_freqs;
   c.step_ratio = o.step_ratio;
   // auto starts with the per-sample head and may switch once the grid is final (head_choice.h).
   c.head.kind = o.head == HeadChoice::kDeferred || o.head == HeadChoice::kSh ? HeadKind::kDeferred

@@ -34,6 +34,24 @@ TEST(TrainOptions, AutoPlaneTvIsOnForCapturesOnly) {
   }
 }
 
+// --feature-pe and --view-pe reach the head (and through it the file's MLPW header); the sh
+// head, which has no MLP, encodes nothing whatever they say.
+TEST(TrainOptions, PositionalEncodingFlagsReachTheHead) {
+  const Dataset data = MakeBuiltinScene("train", 8, 8, 4, 1);
+  TrainOptions o = PresetOptions("tiny");
+  EXPECT_EQ(ConfigFor(o, data).head.feature_pe_freqs, 2);  // TensoRF's Blender setting
+  EXPECT_EQ(ConfigFor(o, data).head.viewdir_pe_freqs, 2);
+  o.feature_pe_freqs = 0;
+  o.viewdir_pe_freqs = 5;
+  const TensorfConfig mlp = ConfigFor(o, data);
+  EXPECT_EQ(mlp.head.feature_pe_freqs, 0);
+  EXPECT_EQ(mlp.head.viewdir_pe_freqs, 5);
+  o.head = HeadChoice::kSh;
+  const TensorfConfig sh = ConfigFor(o, data);
+  EXPECT_EQ(sh.head.feature_pe_freqs, 0);
+  EXPECT_EQ(sh.head.viewdir_pe_freqs, 0);
+}
+
 TEST(TrainOptions, UpsampleCountsAreLogSpacedAndEndAtTheFinalGrid) {
   const TrainOptions o = PresetOptions("paper");
   const auto counts = UpsampleVoxelCounts(o);
