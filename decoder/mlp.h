@@ -46,9 +46,9 @@ struct MlpConfig {
 
 // Limits checked by Init.
 inline constexpr int kMaxMlpProducts = 3 * 1024;
-inline constexpr int kMaxMlpFeatureDim = 256;
-inline constexpr int kMaxMlpPeFreqs = 16;
-inline constexpr int kMaxMlpHidden = 1024;
+inline constexpr int kMaxMlpFeatureDim = kMaxSceneFeatureDim;
+inline constexpr int kMaxMlpPeFreqs = kMaxScenePeFreqs;
+inline constexpr int kMaxMlpHidden = kMaxSceneHidden;
 
 class AppearanceMlp {
  public:

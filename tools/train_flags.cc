@@ -62,9 +62,10 @@ int FinalGridEdge(const trainer::TrainOptions& o) {
 trainer::DataKind DataKindOf(const trainer::DatasetManifest& m, const std::string& scene_type) {
   std::vector<trainer::Camera> cameras;
   for (const trainer::ViewSource& v : m.views) cameras.push_back(v.camera);
-  const bool auto_type = scene_type.empty() || scene_type == "auto";
-  if (scene_type == "forward" ||
-      (auto_type && !m.white_background && trainer::CamerasFaceOneWay(cameras))) {
+  const trainer::SceneType type =
+      scene_type.empty() ? trainer::SceneType::kAuto
+                         : trainer::ChoiceFromName<trainer::SceneType>(scene_type, "--scene-type");
+  if (trainer::ModelsForwardFacing(type, m.white_background, cameras)) {
     return trainer::DataKind::kForwardFacing;
   }
   return m.white_background && !m.estimated_poses ? trainer::DataKind::kObjectWithGivenCameras

@@ -219,6 +219,12 @@ Aabb FitNdcBox(const std::vector<Camera>& cameras, const NdcFrame& frame) {
   return box;
 }
 
+bool ModelsForwardFacing(SceneType scene_type, bool white_background,
+                         const std::vector<Camera>& cameras) {
+  return scene_type == SceneType::kForward ||
+         (scene_type == SceneType::kAuto && !white_background && CamerasFaceOneWay(cameras));
+}
+
 SceneFit FitScene(SceneType scene_type, const Dataset& data) {
   std::vector<Camera> cameras;
   cameras.reserve(data.views.size());
@@ -235,15 +241,14 @@ SceneFit FitScene(SceneType scene_type, const Dataset& data) {
   } else if (scene_type == SceneType::kUnbounded) {
     fit.model = SceneModel::kUnbounded;
     fit.reason = "--scene-type unbounded";
-  } else if (scene_type == SceneType::kForward) {
+  } else if (ModelsForwardFacing(scene_type, data.white_background, cameras)) {
     fit.model = SceneModel::kForward;
-    fit.reason = "--scene-type forward";
+    fit.reason = scene_type == SceneType::kForward
+                     ? "--scene-type forward"
+                     : "every camera looks within 35 degrees of their mean direction";
   } else if (data.white_background) {
     fit.model = SceneModel::kObject;
     fit.reason = "white background: an object dataset";
-  } else if (fit.forward_facing) {
-    fit.model = SceneModel::kForward;
-    fit.reason = "every camera looks within 35 degrees of their mean direction";
   } else if (fit.roi_share >= kObjectRoiShare) {
     fit.model = SceneModel::kObject;
     fit.reason = "the views fill the dataset box";

@@ -58,6 +58,12 @@ struct ChoiceNames<SceneType> {
   static constexpr const char* names[] = {"auto", "object", "unbounded", "forward"};
 };
 
+// Whether a run asking for `scene_type` models its scene as forward-facing (NDC): when asked to,
+// or under kAuto when the background is not white and every camera looks one way
+// (CamerasFaceOneWay). FitScene and the choice of the default preset both ask this.
+bool ModelsForwardFacing(SceneType scene_type, bool white_background,
+                         const std::vector<Camera>& cameras);
+
 struct SceneFit {
   SceneModel model = SceneModel::kObject;
   NdcFrame ndc;            // forward: the reference camera; roi is then the NDC box

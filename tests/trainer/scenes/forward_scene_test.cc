@@ -94,6 +94,14 @@ TEST(ForwardScene, CamerasFaceOneWayFromASmallPatch) {
     loop.push_back(view.camera);
   EXPECT_FALSE(CamerasFaceOneWay(loop));
 
+  // What the scene is modelled as: auto follows the layout unless the background is white (an
+  // object dataset); an explicit type is obeyed whatever the layout.
+  EXPECT_TRUE(ModelsForwardFacing(SceneType::kAuto, false, cameras));
+  EXPECT_FALSE(ModelsForwardFacing(SceneType::kAuto, true, cameras));
+  EXPECT_FALSE(ModelsForwardFacing(SceneType::kAuto, false, loop));
+  EXPECT_FALSE(ModelsForwardFacing(SceneType::kUnbounded, false, cameras));
+  EXPECT_TRUE(ModelsForwardFacing(SceneType::kForward, true, loop));
+
   const Vec3 target{kForwardTarget[0], kForwardTarget[1], kForwardTarget[2]};
   Vec3 lo{1e9, 1e9, 1e9}, hi{-1e9, -1e9, -1e9};
   for (const Camera& camera : cameras) {
