@@ -127,9 +127,10 @@ inline std::vector<uint8_t> BuildCostlyStream(const CostlyScene& cs) {
   h.scene_model = static_cast<uint8_t>(cs.unbounded ? SceneModel::kUnbounded : SceneModel::kObject);
   const float extent = cs.unbounded ? 2.f : 1.f;  // the box the grids and the mask span
   // The quantized MLP is a 1.1 feature, the unbounded model 1.2, the neighbour contexts 1.5.
-  ContainerWriter writer(cs.neighbour ? 5 : (cs.unbounded ? 2 : 1));
+  const uint8_t version_minor = cs.neighbour ? 5 : (cs.unbounded ? 2 : 1);
+  ContainerWriter writer(version_minor);
   ByteWriter head;
-  WriteSceneHeader(h, &head);
+  WriteSceneHeader(h, version_minor, &head);
   writer.AddChunk(kChunkHead, head.bytes());
   if (cs.occupancy != 0) {
     ByteWriter occ;

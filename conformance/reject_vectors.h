@@ -129,7 +129,7 @@ inline std::vector<RejectVector> RejectVectors() {
     SceneHeader big = h;
     big.res[0] = 4097;
     ByteWriter head;
-    WriteSceneHeader(big, &head);
+    WriteSceneHeader(big, SceneVectorVersionMinor(Named("scene_2d_blocks")), &head);
     Chunks c = chunks;
     c[FirstChunk(c, FourCC("HEAD"))].second = head.bytes();
     add("reject_grid_resolution", "decode", kErrLimit, false,
@@ -205,6 +205,20 @@ inline std::vector<RejectVector> RejectVectors() {
     }
     add("reject_unknown_mlp_layers", "decode", kErrUnsupported, false,
         "an MLPW layers byte of 2, unknown to this version (6.6)", Join(c, d[5]));
+  }
+  {
+    // A 1.9 stream's HEAD carries a 91st byte; labelled 1.8 its HEAD is one byte too long.
+    const std::vector<uint8_t> d = BuildSceneVector(Named("scene_relu_density"));
+    add("reject_relu_density_in_1_8", "decode", kErrCorrupt, false,
+        "ReLU density (the HEAD density_activation byte, 1.9) in a stream labelled 1.8: a HEAD "
+        "payload of 91 bytes instead of 90 (2.1, 6.2)",
+        Join(Split(d), 8));
+    Chunks c = Split(d);
+    for (auto& [type, payload] : c) {
+      if (type == kChunkHead) payload[kSceneHeaderBytes] = kNumDensityActivations;
+    }
+    add("reject_unknown_density_activation", "decode", kErrUnsupported, false,
+        "a HEAD density_activation of 2, unknown to this version (6.2)", Join(c, d[5]));
   }
   {
     const std::vector<uint8_t> d = BuildSceneVector(Named("scene_sh_deferred"));

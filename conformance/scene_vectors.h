@@ -60,6 +60,8 @@ struct SceneVector {
   // 0..3: the spherical-harmonics colour of this degree (HEAD hidden 0, a 1.7 stream, 7.6.2).
   int sh_degree = -1;
   int hidden_layers = 2;  // 1: the MLP with one hidden layer (MLPW layers 1, a 1.8 stream, 6.6)
+  // kRelu: HEAD density_activation 1, a 1.9 stream (6.2, 7.4).
+  DensityActivation density_activation = DensityActivation::kSoftplus;
 };
 
 inline const std::vector<SceneVector>& SceneVectors() {
@@ -279,6 +281,26 @@ inline const std::vector<SceneVector>& SceneVectors() {
        HeadKind::kDeferred,
        -1,
        1},
+      // Added with SPEC.md 1.10 (bitstream 1.9): ReLU density (HEAD density_activation 1) in a
+      // forward-facing scene, as TensoRF trains LLFF.
+      {"scene_relu_density",
+       {16, 16, 16},
+       {{2, 2, 2}, {2, 3, 2}},
+       {2, 4, 4},
+       {1, 2, 8},
+       8,
+       0,
+       OccupancyKind::kSphere,
+       28,
+       SceneModel::kForward,
+       false,
+       0,
+       false,
+       false,
+       HeadKind::kPerSample,
+       -1,
+       2,
+       DensityActivation::kRelu},
   };
   return v;
 }
@@ -315,6 +337,9 @@ inline SceneHeader SceneVectorHeader(const SceneVector& v) {
   }
   h.has_occupancy = v.occupancy == OccupancyKind::kNone ? 0 : 1;
   h.scene_model = static_cast<uint8_t>(v.scene_model);
+  h.density_activation = static_cast<uint8_t>(v.density_activation);
+  // ReLU as trained (unshifted) and with a shift of -0.25 for samples at exactly 0 as well.
+  if (v.density_activation == DensityActivation::kRelu) h.density_shift = -0.25f;
   if (v.scene_model == SceneModel::kUnbounded) {
     // The box is the region of interest; 12 / step_size samples cross the contracted cube.
     h.step_size = 0.05f;
@@ -393,7 +418,9 @@ inline uint8_t SceneVectorVersionMinor(const SceneVector& v) {
        v.mlp_precision == kMlpPrecisionQuantized ? kQuantizedMlpMinVersionMinor : uint8_t{0},
        kHeadKindMinVersionMinor[static_cast<int>(v.head)],
        v.sh_degree >= 0 ? kShColourMinVersionMinor : uint8_t{0},
-       v.hidden_layers == 1 ? kOneHiddenLayerMinVersionMinor : uint8_t{0}});
+       v.hidden_layers == 1 ? kOneHiddenLayerMinVersionMinor : uint8_t{0},
+       v.density_activation != DensityActivation::kSoftplus ? kDensityActivationMinVersionMinor
+                                                            : uint8_t{0}});
 }
 
 // The occupancy chunk: a 7x6x5 mask over the grid box, empty or a sphere.
@@ -518,9 +545,10 @@ inline std::vector<uint8_t> SceneVectorMlpChunk(const SceneVector& v, const Scen
 inline std::vector<uint8_t> BuildSceneVector(const SceneVector& v) {
   const SceneHeader h = SceneVectorHeader(v);
   Lcg rng(v.seed);
-  ContainerWriter writer(SceneVectorVersionMinor(v));
+  const uint8_t version_minor = SceneVectorVersionMinor(v);
+  ContainerWriter writer(version_minor);
   ByteWriter head;
-  WriteSceneHeader(h, &head);
+  WriteSceneHeader(h, version_minor, &head);
   writer.AddChunk(kChunkHead, head.bytes());
   if (v.scene_model == SceneModel::kForward) {
     ByteWriter ndc;

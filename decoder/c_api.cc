@@ -172,6 +172,14 @@ int ecrf_scene_mlp_layers(const ecrf_scene* scene) {
   return scene->field.mlp.config().hidden_layers;
 }
 
+int ecrf_scene_density_activation(const ecrf_scene* scene) {
+  if (!scene || !scene->decoded) return ECRF_ERR_INVALID_ARGUMENT;
+  static_assert(ECRF_DENSITY_SOFTPLUS == static_cast<int>(ecrf::DensityActivation::kSoftplus) &&
+                    ECRF_DENSITY_RELU == static_cast<int>(ecrf::DensityActivation::kRelu),
+                "C API density activations must equal the format's");
+  return static_cast<int>(scene->field.density_activation);
+}
+
 int ecrf_scene_version(const ecrf_scene* scene) {
   if (!scene || !scene->decoded) return ECRF_ERR_INVALID_ARGUMENT;
   return (static_cast<int>(scene->info.version_major) << 8) | scene->info.version_minor;

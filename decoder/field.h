@@ -255,7 +255,8 @@ struct SceneField {
   float aabb_min[3] = {-1.5f, -1.5f, -1.5f};
   float aabb_max[3] = {1.5f, 1.5f, 1.5f};
   int res[3] = {0, 0, 0};       // grid resolution (density and appearance)
-  float density_shift = -10.f;  // sigma = softplus(feature + density_shift)
+  float density_shift = -10.f;  // sigma = activation(feature + density_shift)
+  DensityActivation density_activation = DensityActivation::kSoftplus;
   float distance_scale = 25.f;  // alpha = 1 - exp(-sigma * dist * distance_scale)
   float step_ratio = 0.5f;
   float weight_threshold = 1e-4f;  // colour only where weight > this

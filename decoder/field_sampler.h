@@ -6,9 +6,9 @@
 
 #include <cstdint>
 
+#include "decoder/density_activation.h"
 #include "decoder/field.h"
 #include "decoder/grid_point.h"
-#include "decoder/softplus.h"
 
 namespace ecrf {
 namespace dec {

@@ -218,7 +218,7 @@ bool CompositeSample(const Ctx& c, RayMarcher::Workspace& ws, int slot, const fl
   for (int a = 0; a < 3; ++a) cn[a] = (p[a] - c.min[a]) * c.inv[a] - 1.f;
   GridPoint gp;
   LocateGridPoint(cn, c.s->res, &gp);
-  const float sigma = Softplus(DensityFeature(c.s->density, gp) + c.shift);
+  const float sigma = ActivateDensity(c.activation, DensityFeature(c.s->density, gp) + c.shift);
   const float alpha = 1.f - std::exp(-sigma * (dist * c.dscale));
   const float weight = alpha * *T;
   *T *= 1.f - alpha + 1e-10f;

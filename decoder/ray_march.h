@@ -68,6 +68,7 @@ struct Ctx {
   double inv_step;  // 1 / step: a positive float's reciprocal is finite and normal in double
   int n;
   float near, far;
+  DensityActivation activation;
   float shift, dscale, wthr, early;
   const OccupancyMask* mask;  // null: no mask
   bool skip;

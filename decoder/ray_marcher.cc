@@ -165,6 +165,7 @@ Status RayMarcher::Run(Job* job, uint64_t pixels, RenderStats* stats) {
   c.n = SamplesPerRay(s, options_);
   c.near = s.near_far[0];
   c.far = s.near_far[1];
+  c.activation = s.density_activation;
   c.shift = s.density_shift;
   c.dscale = s.distance_scale;
   c.wthr = options_.weight_threshold >= 0.f ? options_.weight_threshold : s.weight_threshold;

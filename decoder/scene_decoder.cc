@@ -365,6 +365,7 @@ void ApplyHeader(const SceneHeader& h, SceneField* scene) {
     scene->res[a] = h.res[a];
   }
   scene->density_shift = h.density_shift;
+  scene->density_activation = static_cast<DensityActivation>(h.density_activation);
   scene->distance_scale = h.distance_scale;
   scene->step_size = h.step_size;
   scene->n_samples = static_cast<int>(h.num_samples);
@@ -427,7 +428,7 @@ void RecordAncillaryChunk(const ChunkView& chunk, SceneInfo& info) {
 Status DecodeHeadChunk(const ChunkView& chunk, const DecodeOptions& options, MemoryBudget& budget,
                        SceneField* scene, SceneInfo& info) {
   SceneHeader& h = info.header;
-  ECRF_RETURN_IF_ERROR(ParseSceneHeader(chunk.data, chunk.size, &h));
+  ECRF_RETURN_IF_ERROR(ParseSceneHeader(chunk.data, chunk.size, info.version_minor, &h));
   // The version rule (SPEC.md 2.1): a feature of a later minor version than the stream's.
   // (ParseSceneHeader has refused unknown scene models.)
   const int model_minor = kSceneModelMinVersionMinor[h.scene_model];

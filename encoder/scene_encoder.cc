@@ -108,13 +108,16 @@ SceneDescription DropComponents(const SceneDescription& in, const std::vector<ui
 }
 
 // The lowest minor version of the features used, wide contexts aside: 1.1 for the quantized MLP,
-// 1.2 unbounded, 1.3 forward-facing, 1.6 deferred, 1.7 spherical harmonics, 1.8 one hidden layer.
+// 1.2 unbounded, 1.3 forward-facing, 1.6 deferred, 1.7 spherical harmonics, 1.8 one hidden layer,
+// 1.9 ReLU density.
 uint8_t FeatureVersionMinor(const SceneDescription& s, const EncodeOptions& o) {
-  return std::max({o.mlp_max_level > 0 ? kQuantizedMlpMinVersionMinor : uint8_t{0},
-                   kSceneModelMinVersionMinor[s.header.scene_model],
-                   kHeadKindMinVersionMinor[static_cast<int>(s.head)],
-                   s.header.hidden == 0 ? kShColourMinVersionMinor : uint8_t{0},
-                   s.mlp_hidden_layers == 1 ? kOneHiddenLayerMinVersionMinor : uint8_t{0}});
+  return std::max(
+      {o.mlp_max_level > 0 ? kQuantizedMlpMinVersionMinor : uint8_t{0},
+       kSceneModelMinVersionMinor[s.header.scene_model],
+       kHeadKindMinVersionMinor[static_cast<int>(s.head)],
+       s.header.hidden == 0 ? kShColourMinVersionMinor : uint8_t{0},
+       s.mlp_hidden_layers == 1 ? kOneHiddenLayerMinVersionMinor : uint8_t{0},
+       s.header.density_activation != 0 ? kDensityActivationMinVersionMinor : uint8_t{0}});
 }
 
 // The shortest of the codes of `sets` (in order; the first wins ties) whose minimum version the
@@ -253,8 +256,9 @@ std::vector<uint8_t> Assemble(const SceneDescription& s, const std::vector<float
     throw std::invalid_argument(
         "this scene needs stream version 1." + std::to_string(feature_minor) + " (" +
         SceneModelName(static_cast<SceneModel>(h.scene_model)) + " model, " + HeadKindName(s.head) +
-        " head, MLP levels " + std::to_string(o.mlp_max_level) + "), above the asked 1." +
-        std::to_string(o.max_version_minor));
+        " head, MLP levels " + std::to_string(o.mlp_max_level) + ", " +
+        DensityActivationName(static_cast<DensityActivation>(h.density_activation)) +
+        " density), above the asked 1." + std::to_string(o.max_version_minor));
   }
   std::vector<uint8_t> coef_chunks[2][6];
   uint8_t version_minor = feature_minor;
@@ -277,10 +281,11 @@ std::vector<uint8_t> Assemble(const SceneDescription& s, const std::vector<float
     }
   }
   // The lowest version of the features used: 1.4 for wide coefficient contexts, 1.5 for
-  // neighbour coefficient contexts and wide occupancy contexts.
+  // neighbour coefficient contexts and wide occupancy contexts. Final here: HEAD's length
+  // depends on it.
   ContainerWriter writer(version_minor);
   ByteWriter head;
-  WriteSceneHeader(h, &head);
+  WriteSceneHeader(h, version_minor, &head);
   writer.AddChunk(kChunkHead, head.bytes());
   report->head_bytes = head.size();
   size_t chunks = 2 + h.has_occupancy;  // HEAD, DONE, OCCU

@@ -22,9 +22,10 @@ constexpr uint8_t kVersionMajor = 1;
 // model; 1.3: the forward-facing scene model and its NDCP chunk; 1.4: the wide base-level contexts
 // of the coefficient coder, in any COEF chunk whose wide code is the shorter; 1.5: the neighbour
 // contexts likewise; 1.6: the deferred appearance head; 1.7: spherical-harmonics colour, HEAD
-// hidden 0; 1.8: the MLP with one hidden layer, MLPW layers 1; unless
+// hidden 0; 1.8: the MLP with one hidden layer, MLPW layers 1; 1.9: HEAD density_activation, ReLU
+// density; unless
 // EncodeOptions::max_version_minor asks for a stream older decoders read).
-constexpr uint8_t kVersionMinor = 8;
+constexpr uint8_t kVersionMinor = 9;
 constexpr size_t kFileHeaderBytes = 8;                // signature, major, minor, reserved u16
 constexpr size_t kChunkOverheadBytes = 12;            // type, length, crc
 constexpr uint32_t kMaxChunkPayloadBytes = 1u << 28;  // 256 MiB

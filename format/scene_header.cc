@@ -15,9 +15,19 @@ Status ReadFinite(ByteReader* r, float* v, const char* what) {
 
 }  // namespace
 
-Status ParseSceneHeader(const uint8_t* payload, size_t size, SceneHeader* h) {
-  ECRF_CHECK_OR_RETURN(size == kSceneHeaderBytes, kErrCorrupt,
-                       "HEAD: payload is %zu bytes, must be %zu", size, kSceneHeaderBytes);
+Status ParseSceneHeader(const uint8_t* payload, size_t size, int version_minor, SceneHeader* h) {
+  const size_t expected = SceneHeaderBytes(version_minor);
+  const bool newer = version_minor > kVersionMinor;  // its later fields: zero when unused
+  ECRF_CHECK_OR_RETURN(
+      size == expected || (newer && size > expected), kErrCorrupt,
+      "HEAD: payload is %zu bytes, must be %zu%s with version_minor %d (SPEC.md 6.2)", size,
+      expected, newer ? " or more" : "", version_minor);
+  for (size_t k = expected; k < size; ++k) {
+    ECRF_CHECK_OR_RETURN(payload[k] == 0, kErrUnsupported,
+                         "HEAD: byte %zu is %u, a field of a version after 1.%d (the stream says "
+                         "1.%d and needs a newer decoder)",
+                         k, payload[k], kVersionMinor, version_minor);
+  }
   ByteReader r(payload, size);
   for (float& v : h->aabb_min) ECRF_RETURN_IF_ERROR(ReadFinite(&r, &v, "aabb_min"));
   for (float& v : h->aabb_max) ECRF_RETURN_IF_ERROR(ReadFinite(&r, &v, "aabb_max"));
@@ -102,6 +112,14 @@ Status ParseSceneHeader(const uint8_t* payload, size_t size, SceneHeader* h) {
   ECRF_CHECK_OR_RETURN(
       h->scene_model != static_cast<uint8_t>(SceneModel::kUnbounded) || h->near_far[0] >= 0.f,
       kErrCorrupt, "HEAD: near is negative in an unbounded scene");
+  h->density_activation = static_cast<uint8_t>(DensityActivation::kSoftplus);
+  if (version_minor >= kDensityActivationMinVersionMinor) {
+    ECRF_RETURN_IF_ERROR(r.ReadU8(&h->density_activation, "density_activation"));
+    ECRF_CHECK_OR_RETURN(h->density_activation < kNumDensityActivations, kErrUnsupported,
+                         "HEAD: density activation %u is unknown (this decoder knows 0, softplus, "
+                         "and 1, relu; the stream needs a newer decoder)",
+                         h->density_activation);
+  }
   return Status::Ok();
 }
 

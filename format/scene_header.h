@@ -44,7 +44,31 @@ inline int ShDegreeForFeatureDim(int feature_dim) {
 constexpr int kNumSceneGrids = 2;        // 0: density, 1: appearance
 constexpr int kTensorsPerSceneGrid = 6;  // planes 0..2, then lines 0..2
 
+// HEAD is 90 bytes up to version 1.8; from 1.9 a 91st byte, density_activation, follows. A
+// stream of a minor version newer than this implementation's (kVersionMinor) may carry more bytes
+// after it, for its later features: zero where those features are unused (SPEC.md 6.2).
 constexpr size_t kSceneHeaderBytes = 90;
+constexpr uint8_t kDensityActivationMinVersionMinor = 9;
+inline size_t SceneHeaderBytes(int version_minor) {
+  return version_minor >= kDensityActivationMinVersionMinor ? kSceneHeaderBytes + 1
+                                                            : kSceneHeaderBytes;
+}
+
+// HEAD density_activation (SPEC.md 6.2, 7.4): how the density feature becomes sigma. TensoRF
+// trains its synthetic scenes with softplus (a shift of -10 starts them empty) and its LLFF
+// scenes with ReLU (no shift): on flower ReLU leaves 2.5x fewer coloured samples a ray for
+// +0.2 dB at the same iterations (docs/real-captures.md).
+enum class DensityActivation : uint8_t {
+  kSoftplus = 0,  // softplus(feature + density_shift); every stream before 1.9
+  kRelu = 1,      // max(feature + density_shift, 0); version 1.9
+};
+constexpr int kNumDensityActivations = 2;
+constexpr const char* kDensityActivationNames[kNumDensityActivations] = {"softplus", "relu"};
+// Its name; "unknown" for other values.
+inline const char* DensityActivationName(DensityActivation a) {
+  const int i = static_cast<int>(a);
+  return i < kNumDensityActivations ? kDensityActivationNames[i] : "unknown";
+}
 
 // HEAD scene_model (SPEC.md 6.2).
 enum class SceneModel : uint8_t {
@@ -84,13 +108,20 @@ struct SceneHeader {
   // contracted scene, SPEC.md 7.2.1; streams of version 1.2); 2: forward-facing (the box is in
   // the NDC of the NDCP chunk's reference camera, 7.2.2; version 1.3). ecrf::SceneModel names them.
   uint8_t scene_model = 0;
+  // A DensityActivation; written only from version 1.9 (kDensityActivationMinVersionMinor), 0
+  // (softplus) in every older stream.
+  uint8_t density_activation = 0;
 
   int total_rank(int grid) const { return ranks[grid][0] + ranks[grid][1] + ranks[grid][2]; }
 };
 
-void WriteSceneHeader(const SceneHeader& header, ByteWriter* out);
-// Parses and validates a HEAD payload (exactly kSceneHeaderBytes).
-Status ParseSceneHeader(const uint8_t* payload, size_t size, SceneHeader* header);
+// The HEAD payload of a stream of `version_minor`: SceneHeaderBytes(version_minor) bytes.
+void WriteSceneHeader(const SceneHeader& header, int version_minor, ByteWriter* out);
+// Parses and validates the HEAD payload of a stream of `version_minor`: exactly
+// SceneHeaderBytes(version_minor) bytes, or more, all zero past those, when version_minor is newer
+// than kVersionMinor.
+Status ParseSceneHeader(const uint8_t* payload, size_t size, int version_minor,
+                        SceneHeader* header);
 
 // Number of float32 values of all twelve tensors (SPEC.md 6.2 GridValues).
 uint64_t SceneGridValues(const SceneHeader& header);

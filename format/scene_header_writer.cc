@@ -3,7 +3,7 @@
 
 namespace ecrf {
 
-void WriteSceneHeader(const SceneHeader& h, ByteWriter* out) {
+void WriteSceneHeader(const SceneHeader& h, int version_minor, ByteWriter* out) {
   for (float v : h.aabb_min) out->F32(v);
   for (float v : h.aabb_max) out->F32(v);
   for (uint16_t v : h.res) out->U16(v);
@@ -24,6 +24,7 @@ void WriteSceneHeader(const SceneHeader& h, ByteWriter* out) {
   out->U16(h.hidden);
   out->U8(h.has_occupancy);
   out->U8(h.scene_model);
+  if (version_minor >= kDensityActivationMinVersionMinor) out->U8(h.density_activation);
 }
 
 }  // namespace ecrf

@@ -124,6 +124,9 @@ py::dict Field(Scene& s) {
   d["mlp_products"] = f.mlp_products;
   d["mlp_hidden"] = f.mlp_hidden;
   d["mlp_layers"] = ecrf_scene_mlp_layers(s.get());  // 1 or 2 hidden layers (SPEC.md 6.6)
+  // "softplus" or "relu" (SPEC.md 7.4)
+  d["density_activation"] =
+      ecrf_scene_density_activation(s.get()) == ECRF_DENSITY_RELU ? "relu" : "softplus";
   d["mlp_feature_freqs"] = f.mlp_feature_freqs;
   d["mlp_viewdir_freqs"] = f.mlp_viewdir_freqs;
   d["mlp_inputs"] = f.mlp_inputs;

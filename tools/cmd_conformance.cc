@@ -268,7 +268,7 @@ int RunConformance(int argc, char** argv) {
       throw std::runtime_error(dir + "/manifest.json: not a JSON object");
   }
   json manifest = {
-      {"spec", "SPEC.md 1.9"},
+      {"spec", "SPEC.md 1.10"},
       {"note",
        "written by `ecrf conformance --write`; checksums as in SPEC.md 6.5, cameras exact (7.1)"},
       {"coefficient_vectors", json::array()},

@@ -106,9 +106,11 @@ int RunInfo(int argc, char** argv) {
   std::printf("grid     %u x %u x %u; density ranks %u %u %u; appearance ranks %u %u %u\n",
               h.res[0], h.res[1], h.res[2], h.ranks[0][0], h.ranks[0][1], h.ranks[0][2],
               h.ranks[1][0], h.ranks[1][1], h.ranks[1][2]);
-  std::printf("render   %u samples/ray, step %g, near %g, far %g, background %g %g %g\n",
-              h.num_samples, h.step_size, h.near_far[0], h.near_far[1], h.background[0],
-              h.background[1], h.background[2]);
+  std::printf(
+      "render   %u samples/ray, step %g, near %g, far %g, background %g %g %g; density %s(x %+g)\n",
+      h.num_samples, h.step_size, h.near_far[0], h.near_far[1], h.background[0], h.background[1],
+      h.background[2], DensityActivationName(static_cast<DensityActivation>(h.density_activation)),
+      h.density_shift);
   // The head: where the MLP runs (SPEC.md 7.6), mlp per coloured sample, deferred per ray; sh
   // spherical harmonics in place of the MLP (hidden 0, 7.6.2).
   const std::string sh_degree =

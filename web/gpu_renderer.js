@@ -484,6 +484,7 @@
       gl.uniform1f(p.u('uStep'), step);
       gl.uniform1i(p.u('uN'), n);
       gl.uniform1f(p.u('uShift'), s.field.densityShift);
+      gl.uniform1i(p.u('uRelu'), s.field.densityRelu ? 1 : 0);
       gl.uniform1f(p.u('uDScale'), s.field.distanceScale);
       gl.uniform1f(p.u('uWthr'), wthr);
       gl.uniform1f(p.u('uEarly'), earlyStop);

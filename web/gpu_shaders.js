@@ -145,6 +145,7 @@ uniform ivec3 uRes;
 uniform vec3 uOMin, uOInv, uORes1, uOScale, uEps;
 uniform ivec3 uORes;
 uniform float uNear, uFar, uStep, uShift, uDScale, uWthr, uEarly, uOne;
+uniform bool uRelu;  // HEAD density_activation 1 (SPEC.md 7.4), else softplus
 uniform int uN;
 uniform vec3 uRMin, uRScale;                  // unbounded (7.2.1): HEAD box min, (1 / size) * 2
 uniform vec3 uNdcRo, uNdcA0, uNdcA1, uNdcA2;  // forward (7.2.2): A o + b, rows of A
@@ -342,7 +343,8 @@ bool ndcRay(vec3 d, out vec3 O, out vec3 u) {
     const composite = `      ivec3 i0;
       vec3 fr;
       locate(p, i0, fr);
-      float sigma = softplus(densityFeature(i0, fr) + uShift);
+      float densityIn = densityFeature(i0, fr) + uShift;
+      float sigma = uRelu ? max(densityIn, 0.0) : softplus(densityIn);
       float alpha = 1.0 - exp(-sigma * (dist * uDScale));
       float weight = alpha * T;
       T = T * ((1.0 - alpha) + 1e-10);

@@ -210,7 +210,8 @@
 
     // Everything a renderer of its own needs (SPEC.md section 7), copied out of the wasm heap
     // into fresh typed arrays that can be transferred to another thread:
-    // {info, field: {densityShift, distanceScale, weightThreshold, occupancyMin, occupancyMax,
+    // {info, field: {densityShift, densityRelu, distanceScale, weightThreshold, occupancyMin,
+    //   occupancyMax,
     //   mlp: {features, products, hidden, featureFreqs, viewdirFreqs, inputs}},
     //  density, appearance: {planes: [3], lines: [3]} of {data: Float32Array, shape},
     //  occupancy: {bits: Uint8Array (packed [z][y][x], x fastest, LSB first), res} or null,
@@ -226,6 +227,7 @@
         const i = (off) => m.HEAP32[(scratch + off) >> 2];
         const field = {
           densityShift: f(FIELD.density_shift, 1)[0], distanceScale: f(FIELD.distance_scale, 1)[0],
+          densityRelu: m._ecrf_scene_density_activation(this.scene) === 1,
           weightThreshold: f(FIELD.weight_threshold, 1)[0],
           occupancyMin: f(FIELD.occupancy_min, 3), occupancyMax: f(FIELD.occupancy_max, 3),
           mlp: {features: i(FIELD.mlp_features), products: i(FIELD.mlp_products),

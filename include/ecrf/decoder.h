@@ -147,7 +147,7 @@ ECRF_API int ecrf_scene_tensor(const ecrf_scene* scene, int grid, int tensor, co
 
 /* What a renderer of its own (a GPU shader, SPEC.md section 7) needs besides the tensors. */
 typedef struct ecrf_scene_field {
-  float density_shift;    /* sigma = softplus(density feature + density_shift) */
+  float density_shift;    /* sigma = activation(density feature + density_shift) */
   float distance_scale;   /* alpha = 1 - exp(-sigma * (dist * distance_scale)) */
   float weight_threshold; /* the colour of a sample counts when its weight is larger */
   float occupancy_min[3], occupancy_max[3]; /* the mask's own box (has_occupancy) */
@@ -187,6 +187,14 @@ ECRF_API int ecrf_scene_head(const ecrf_scene* scene);
  * ecrf_scene_mlp_params holds no W2 and b2 (bitstream 1.8). 2 for a stream without an MLP
  * (mlp_hidden 0). ECRF_ERR_INVALID_ARGUMENT before a decode. */
 ECRF_API int ecrf_scene_mlp_layers(const ecrf_scene* scene);
+
+/* How the density feature plus density_shift becomes sigma (the HEAD density_activation field,
+ * SPEC.md 6.2 and 7.4): ECRF_DENSITY_SOFTPLUS, PyTorch's softplus with threshold 20 (every
+ * stream before bitstream 1.9), or ECRF_DENSITY_RELU, max(x, 0) (1.9). ECRF_ERR_INVALID_ARGUMENT
+ * before a decode. */
+#define ECRF_DENSITY_SOFTPLUS 0
+#define ECRF_DENSITY_RELU 1
+ECRF_API int ecrf_scene_density_activation(const ecrf_scene* scene);
 
 /* The bitstream version the decoded stream states (its file header, SPEC.md 2.1), as
  * (major << 8) | minor: 0x0106 is 1.6. Print it as major.minor, as `ecrf info` does.

@@ -265,7 +265,9 @@ struct NaiveComposite {
       double feat = 0.0;
       for (double v : prod) feat += v;
       const double x = feat + s.density_shift;
-      sigma = x > 20.0 ? x : std::log1p(std::exp(x));
+      sigma = s.density_activation == DensityActivation::kRelu ? std::max(x, 0.0)
+              : x > 20.0                                       ? x
+                                                               : std::log1p(std::exp(x));
     }
     const double alpha = 1.0 - std::exp(-sigma * dist * s.distance_scale);
     const double w = alpha * T;

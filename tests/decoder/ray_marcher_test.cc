@@ -438,6 +438,32 @@ TEST(RayMarcherTest, RejectsSpeedKnobsOutOfRange) {
   }
 }
 
+// ReLU density (HEAD density_activation 1, SPEC.md 7.4): sigma is the shifted feature where it
+// is positive and exactly 0 elsewhere; the reference of 7.2 / 7.5 with that sigma, and not the
+// softplus image.
+TEST(RayMarcherTest, ReluDensityMatchesNaiveReference) {
+  SceneSpec spec;
+  spec.seed = 9;
+  TestScene ts;
+  BuildScene(spec, &ts);
+  ts.field.density_activation = DensityActivation::kRelu;
+  ts.field.density_shift = -1.f;
+  ExpectMatchesNaive(ts, Exact(), 14);
+  RenderOptions no_skip = Exact();
+  no_skip.skip_empty_space = false;
+  ExpectMatchesNaive(ts, no_skip, 15);
+
+  const Rays rays = MakeRays(ts.field, 16);
+  std::vector<float> relu_rgb, relu_acc, softplus_rgb, softplus_acc;
+  RenderWith(ts.field, Exact(), rays, &relu_rgb, &relu_acc);
+  ts.field.density_activation = DensityActivation::kSoftplus;
+  RenderWith(ts.field, Exact(), rays, &softplus_rgb, &softplus_acc);
+  double differ = 0.0;
+  for (size_t r = 0; r < rays.size(); ++r)
+    differ = std::max(differ, double(std::fabs(relu_acc[r] - softplus_acc[r])));
+  EXPECT_GT(differ, 0.05);
+}
+
 TEST(RayMarcherTest, EmptyDensityRendersBackground) {
   // Empty alpha mask: every sample is skipped, the image is exactly white with alpha 0.
   SceneSpec spec;

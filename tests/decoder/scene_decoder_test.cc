@@ -272,11 +272,9 @@ TEST(SceneDecoder, OccupancyContextSetIsCheckedAgainstTheVersion) {
 // version_minor is corrupt, whichever feature; a later minor version than the decoder knows is
 // accepted when the stream uses only known features.
 TEST(SceneDecoder, EveryFeatureNeedsItsMinorVersion) {
-  const std::map<std::string, int> feature_minor = {{"scene_quantized_mlp", 1},
-                                                    {"scene_unbounded", 2},
-                                                    {"scene_forward", 3},
-                                                    {"scene_wide_contexts", 4},
-                                                    {"scene_neighbour_contexts", 5}};
+  const std::map<std::string, int> feature_minor = {
+      {"scene_quantized_mlp", 1}, {"scene_unbounded", 2},          {"scene_forward", 3},
+      {"scene_wide_contexts", 4}, {"scene_neighbour_contexts", 5}, {"scene_relu_density", 9}};
   int checked = 0;
   for (const conformance::SceneVector& v : conformance::SceneVectors()) {
     const auto it = feature_minor.find(v.name);
@@ -284,9 +282,15 @@ TEST(SceneDecoder, EveryFeatureNeedsItsMinorVersion) {
     const std::vector<uint8_t> good = conformance::BuildSceneVector(v);
     ASSERT_EQ(good[5], it->second) << v.name;  // the encoder writes the lowest minor version
     const Chunks chunks = SplitChunks(good);
-    auto relabel = [&chunks](uint8_t minor) {
+    // The chunks under another version; from 1.9 HEAD has its density_activation byte, so a
+    // 90-byte one gets a 0 (softplus) appended, and `extra` more bytes for a newer version.
+    auto relabel = [&chunks](uint8_t minor, std::vector<uint8_t> extra = {}) {
       ContainerWriter w(minor);
-      for (const auto& [type, payload] : chunks) {
+      for (auto [type, payload] : chunks) {
+        if (type == kChunkHead) {
+          if (payload.size() < SceneHeaderBytes(minor)) payload.push_back(0);
+          payload.insert(payload.end(), extra.begin(), extra.end());
+        }
         if (type != kChunkDone) w.AddChunk(type, payload);
       }
       return w.Finish();
@@ -298,9 +302,14 @@ TEST(SceneDecoder, EveryFeatureNeedsItsMinorVersion) {
         << below.message();
     EXPECT_TRUE(Decode(relabel(static_cast<uint8_t>(it->second)), &field).ok()) << v.name;
     EXPECT_TRUE(Decode(relabel(200), &field).ok()) << v.name;
+    // A newer version's HEAD may be longer: its later fields, zero, are features it does not use;
+    // a set one needs a newer decoder. This version's own HEAD has no such bytes.
+    EXPECT_TRUE(Decode(relabel(200, {0, 0, 0}), &field).ok()) << v.name;
+    EXPECT_EQ(Decode(relabel(200, {0, 1}), &field).code(), kErrUnsupported) << v.name;
+    EXPECT_EQ(Decode(relabel(kVersionMinor, {0}), &field).code(), kErrCorrupt) << v.name;
     ++checked;
   }
-  EXPECT_EQ(checked, 5);
+  EXPECT_EQ(checked, 6);
 }
 
 // A stream of a few hundred bytes that claims what the format allows but a device cannot afford.
@@ -314,7 +323,7 @@ std::vector<uint8_t> HostileStream(const uint16_t res[3], int rank, const int oc
   h.step_size = 0.01f;
   h.num_samples = 600;
   ByteWriter head;
-  WriteSceneHeader(h, &head);
+  WriteSceneHeader(h, 0, &head);
   ContainerWriter w;
   w.AddChunk(kChunkHead, head.bytes());
   if (occ_res != nullptr) {
@@ -497,6 +506,7 @@ TEST(SceneDecoder, CApiExposesTheFieldOccupancyAndMlpOfTheReferenceRenderer) {
     EXPECT_EQ(ecrf_scene_get_field(scene, &f), ECRF_ERR_INVALID_ARGUMENT);  // nothing decoded
     EXPECT_EQ(ecrf_scene_version(scene), ECRF_ERR_INVALID_ARGUMENT);
     EXPECT_EQ(ecrf_scene_mlp_layers(scene), ECRF_ERR_INVALID_ARGUMENT);
+    EXPECT_EQ(ecrf_scene_density_activation(scene), ECRF_ERR_INVALID_ARGUMENT);
     ASSERT_EQ(ecrf_scene_decode(scene, bytes.data(), bytes.size(), ECRF_STORAGE_FLOAT32), ECRF_OK);
     ASSERT_EQ(ecrf_scene_get_field(scene, &f), ECRF_OK);
     EXPECT_EQ(ecrf_scene_model(scene), static_cast<int>(field.scene_model));
@@ -509,6 +519,11 @@ TEST(SceneDecoder, CApiExposesTheFieldOccupancyAndMlpOfTheReferenceRenderer) {
               std::string(name) == "scene_one_hidden_layer.ecrf" ? 1 : 2);
     if (std::string(name) == "scene_one_hidden_layer.ecrf")
       EXPECT_EQ(ecrf_scene_version(scene), 0x0108);
+    // ReLU density needs 1.9 (SPEC.md 6.2); every other vector has softplus.
+    const bool relu = std::string(name) == "scene_relu_density.ecrf";
+    EXPECT_EQ(ecrf_scene_density_activation(scene),
+              relu ? ECRF_DENSITY_RELU : ECRF_DENSITY_SOFTPLUS);
+    if (relu) EXPECT_EQ(ecrf_scene_version(scene), 0x0109);
     EXPECT_EQ(ecrf_scene_model(scene) == ECRF_SCENE_UNBOUNDED,
               std::string(name) == "scene_unbounded.ecrf");
     EXPECT_EQ(ecrf_scene_model(scene) == ECRF_SCENE_FORWARD,

@@ -80,12 +80,12 @@ SceneHeader SampleHeader() {
 TEST(SceneHeader, RoundTripsEveryField) {
   const SceneHeader h = SampleHeader();
   ByteWriter w;
-  WriteSceneHeader(h, &w);
+  WriteSceneHeader(h, 0, &w);
   ASSERT_EQ(w.size(), kSceneHeaderBytes);
   SceneHeader back;
-  ASSERT_TRUE(ParseSceneHeader(w.bytes().data(), w.size(), &back).ok());
+  ASSERT_TRUE(ParseSceneHeader(w.bytes().data(), w.size(), 0, &back).ok());
   ByteWriter again;
-  WriteSceneHeader(back, &again);
+  WriteSceneHeader(back, 0, &again);
   EXPECT_EQ(again.bytes(), w.bytes());
   EXPECT_EQ(back.aabb_min[0], -0.7f);
   EXPECT_EQ(back.res[2], 203);
@@ -102,6 +102,36 @@ TEST(SceneHeader, RoundTripsEveryField) {
   EXPECT_EQ(extent[0], 1);
   EXPECT_EQ(extent[1], 5);
   EXPECT_EQ(extent[2], 100);
+}
+
+// From version 1.9 HEAD carries a 91st byte, density_activation (6.2); older streams have 90 bytes
+// and softplus. The length follows the stream's version, whatever the byte holds.
+TEST(SceneHeader, TheDensityActivationByteFollowsTheVersion) {
+  SceneHeader h = SampleHeader();
+  h.density_activation = static_cast<uint8_t>(DensityActivation::kRelu);
+  ByteWriter w9;
+  WriteSceneHeader(h, kDensityActivationMinVersionMinor, &w9);
+  ASSERT_EQ(w9.size(), kSceneHeaderBytes + 1);
+  EXPECT_EQ(w9.bytes().back(), 1);
+  SceneHeader back;
+  ASSERT_TRUE(ParseSceneHeader(w9.bytes().data(), w9.size(), 9, &back).ok());
+  EXPECT_EQ(back.density_activation, 1);
+  // A 1.8 stream has no such byte: the 91-byte payload is damaged, the 90-byte one softplus.
+  EXPECT_EQ(ParseSceneHeader(w9.bytes().data(), w9.size(), 8, &back).code(), kErrCorrupt);
+  ByteWriter w8;
+  WriteSceneHeader(h, 8, &w8);
+  ASSERT_EQ(w8.size(), kSceneHeaderBytes);
+  EXPECT_EQ(std::vector<uint8_t>(w9.bytes().begin(), w9.bytes().end() - 1), w8.bytes());
+  ASSERT_TRUE(ParseSceneHeader(w8.bytes().data(), w8.size(), 8, &back).ok());
+  EXPECT_EQ(back.density_activation, 0);
+  EXPECT_EQ(ParseSceneHeader(w8.bytes().data(), w8.size(), 9, &back).code(), kErrCorrupt);
+  // Values this version does not know are for a newer decoder.
+  h.density_activation = kNumDensityActivations;
+  ByteWriter w2;
+  WriteSceneHeader(h, 9, &w2);
+  const Status s = ParseSceneHeader(w2.bytes().data(), w2.size(), 9, &back);
+  EXPECT_EQ(s.code(), kErrUnsupported) << s.message();
+  EXPECT_NE(std::strstr(s.message(), "density activation"), nullptr) << s.message();
 }
 
 // Each mutation breaks one rule; the parser must name it with the right category.
@@ -146,16 +176,16 @@ TEST(SceneHeader, RejectsInvalidFields) {
     SceneHeader h = SampleHeader();
     c.mutate(&h);
     ByteWriter w;
-    WriteSceneHeader(h, &w);
+    WriteSceneHeader(h, 0, &w);
     SceneHeader back;
-    const Status s = ParseSceneHeader(w.bytes().data(), w.size(), &back);
+    const Status s = ParseSceneHeader(w.bytes().data(), w.size(), 0, &back);
     EXPECT_EQ(s.code(), c.code) << c.what << ": " << s.message();
     EXPECT_NE(std::strstr(s.message(), "HEAD"), nullptr) << c.what;
   }
   ByteWriter w;
-  WriteSceneHeader(SampleHeader(), &w);
+  WriteSceneHeader(SampleHeader(), 0, &w);
   SceneHeader back;
-  EXPECT_EQ(ParseSceneHeader(w.bytes().data(), w.size() - 1, &back).code(), kErrCorrupt);
+  EXPECT_EQ(ParseSceneHeader(w.bytes().data(), w.size() - 1, 0, &back).code(), kErrCorrupt);
 }
 
 std::vector<uint8_t> DecodeVolume(const std::vector<uint8_t>& stream, const int res[3],

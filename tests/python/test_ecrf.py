@@ -165,11 +165,12 @@ class DecodeTest(unittest.TestCase):
 
 class RenderTest(unittest.TestCase):
     def test_matches_the_reference_render(self):
-        # An object scene, an unbounded one (SPEC.md 7.2.1), a forward-facing one (7.2.2) and
-        # one with the deferred head (7.6).
+        # An object scene, an unbounded one (SPEC.md 7.2.1), a forward-facing one (7.2.2), one
+        # with the deferred head (7.6) and one with ReLU density (7.4).
         for name, model in (("scene_builtin", "object"), ("scene_unbounded", "unbounded"),
                             ("scene_forward", "forward"), ("scene_deferred_head", "object"),
-                            ("scene_sh_deferred", "object"), ("scene_one_hidden_layer", "object")):
+                            ("scene_sh_deferred", "object"), ("scene_one_hidden_layer", "object"),
+                            ("scene_relu_density", "forward")):
             with self.subTest(name):
                 _, c2w, (fx, fy, cx, cy), width, height = manifest_camera(name + ".ecrf")
                 reference = read_png(os.path.join(CONFORMANCE, name + ".png"))[:, :, :3].astype(int)
@@ -177,16 +178,20 @@ class RenderTest(unittest.TestCase):
                 self.assertEqual(scene.info["scene_model"], model)
                 self.assertEqual(scene.info["head"],
                                  "mlp" if name in ("scene_builtin", "scene_unbounded",
-                                                   "scene_forward") else "deferred")
+                                                   "scene_forward", "scene_relu_density")
+                                 else "deferred")
                 # Hidden width 0: spherical-harmonics colour, no MLP (SPEC.md 7.6.2).
                 self.assertEqual(scene.field["mlp_hidden"] == 0, name == "scene_sh_deferred")
                 # One hidden layer (SPEC.md 6.6 layers 1, bitstream 1.8).
                 self.assertEqual(scene.field["mlp_layers"], 1 if name == "scene_one_hidden_layer" else 2)
+                self.assertEqual(scene.field["density_activation"],
+                                 "relu" if name == "scene_relu_density" else "softplus")
                 # The file header's version (SPEC.md 2.1), as `ecrf info` prints it.
                 self.assertEqual(scene.info["version"],
                                  {"scene_builtin": "1.0", "scene_unbounded": "1.2",
                                   "scene_forward": "1.3", "scene_deferred_head": "1.6",
-                                  "scene_sh_deferred": "1.7", "scene_one_hidden_layer": "1.8"}[name])
+                                  "scene_sh_deferred": "1.7", "scene_one_hidden_layer": "1.8",
+                                  "scene_relu_density": "1.9"}[name])
                 self.assertEqual("ndc_near_plane" in scene.info, model == "forward")
                 if model == "forward":
                     self.assertEqual(scene.info["ndc_near_plane"], 1.5)  # the vector's NDCP chunk

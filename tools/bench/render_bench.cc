@@ -124,7 +124,8 @@ Status MakeBlobScene(int res, GridStorage storage, bool with_mask, uint32_t seed
             cn[a] = static_cast<float>(ii[a]) / static_cast<float>(res - 1) * 2.f - 1.f;
           GridPoint gp;
           LocateGridPoint(cn, s.res, &gp);
-          const float sigma = Softplus(DensityFeature(s.density, gp) + s.density_shift);
+          const float sigma = ActivateDensity(s.density_activation,
+                                              DensityFeature(s.density, gp) + s.density_shift);
           const float alpha = 1.f - std::exp(-sigma * step);
           raw[(static_cast<size_t>(z) * res + y) * res + x] = alpha >= 1e-4f ? 1 : 0;
         }

@@ -104,7 +104,8 @@ struct RayLoss {
   const float* ray_gain;    // n_rays x 3, or null: all 1
   float* dl_dgain;          // n_rays x 3, or null: not wanted
   bool white;               // the background is white (else black)
-  float grad_scale;         // d(mean squared error)/d(diff) per unit diff: 2 / (3 n_rays)
+  DensityActivation activation;
+  float grad_scale;  // d(mean squared error)/d(diff) per unit diff: 2 / (3 n_rays)
   // The distortion loss (DistortionLoss, inlined into CompositeBackward): positions
   // m = s / n_samples, intervals 1 / n_samples.
   bool distortion_on;
@@ -183,7 +184,7 @@ inline double CompositeBackward(const RayLoss& loss, SampleRec* s, int count,
     const float dl_dalpha = e * sk.trans - suffix / f;
     suffix += e * w;
     const float dl_dsigma = dl_dalpha * (1.f - sk.alpha) * sk.dscale;
-    sk.feat = dl_dsigma * SoftplusGrad(sk.feat);
+    sk.feat = dl_dsigma * DensityActivationGrad(loss.activation, sk.feat);
   }
   return ray_distortion;
 }

@@ -102,6 +102,7 @@ MarchParams MakeMarchParams(const TensorfModel& model) {
   p.far = c.far;
   p.step = model.step_size();
   p.dscale = model.step_size() * c.distance_scale;
+  p.activation = c.density_activation;
   p.shift = c.density_shift;
   p.weight_threshold = c.weight_threshold;
   p.early_stop = c.early_stop_transmittance;
@@ -145,7 +146,7 @@ int MarchRay(const MarchParams& p, const float* o, const float* d, float jitter,
         !SameCell(cand[k + kPrefetchDistance].gp, cand[k + kPrefetchDistance - 1].gp))
       p.density->Prefetch(cand[k + kPrefetchDistance].gp);
     const float feat = p.density->Density(cand[k].gp) + p.shift;
-    const float sigma = Softplus(feat);
+    const float sigma = ActivateDensity(p.activation, feat);
     const float alpha = 1.f - std::exp(-sigma * cand[k].dscale);
     const float w = alpha * trans;
     SampleRec rec;
@@ -183,7 +184,7 @@ std::vector<RaySampleInfo> TraceRay(const TensorfModel& model, const float o[3],
   std::vector<RaySampleInfo> out(buf.size());
   for (size_t k = 0; k < buf.size(); ++k) {
     out[k].t = buf[k].t;
-    out[k].sigma = Softplus(buf[k].feat);
+    out[k].sigma = ActivateDensity(p.activation, buf[k].feat);
     out[k].alpha = buf[k].alpha;
     out[k].weight = buf[k].alpha * buf[k].trans;
     out[k].colour = buf[k].app >= 0;

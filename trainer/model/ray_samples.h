@@ -53,6 +53,7 @@ struct MarchParams {
   Aabb box;
   std::array<float, 3> inv_size;
   std::array<int, 3> res;
+  DensityActivation activation;
   float near, far, step, dscale, shift, weight_threshold, early_stop;
   int n_samples;
   const AlphaMask* mask;

@@ -153,7 +153,7 @@ float TensorfModel::Sigma(const float xyz[3]) const {
   Normalize(xyz, c);
   GridPoint gp;
   LocateGridPoint(c, res_, &gp);
-  return Softplus(density_.Density(gp) + config_.density_shift);
+  return ActivateDensity(config_.density_activation, density_.Density(gp) + config_.density_shift);
 }
 
 Aabb TensorfModel::UpdateAlphaMask(const std::array<int, 3>& mask_res) {

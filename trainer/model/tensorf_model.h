@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "decoder/softplus.h"
+#include "decoder/density_activation.h"
 #include "format/ndc_frame.h"
 #include "format/scene_header.h"
 #include "trainer/model/alpha_mask.h"
@@ -27,8 +27,9 @@ namespace trainer {
 struct TensorfConfig {
   std::array<int, 3> density_ranks{{16, 16, 16}};
   std::array<int, 3> app_ranks{{48, 48, 48}};
-  float init_scale = 0.1f;         // grids init: init_scale * N(0,1)
-  float density_shift = -10.f;     // sigma = softplus(feature + density_shift)
+  float init_scale = 0.1f;      // grids init: init_scale * N(0,1)
+  float density_shift = -10.f;  // sigma = activation(feature + density_shift)
+  DensityActivation density_activation = DensityActivation::kSoftplus;
   float distance_scale = 25.f;     // alpha = 1 - exp(-sigma * dist * distance_scale)
   float step_ratio = 0.5f;         // step = mean(aabb_size / (res - 1)) * step_ratio
   float weight_threshold = 1e-4f;  // rayMarch_weight_thres: colour only where weight > this
@@ -213,8 +214,10 @@ class TensorfModel {
   bool has_mask_ = false;
 };
 
-// softplus with PyTorch's threshold 20, and its derivative.
-inline float SoftplusGrad(float x) {
+// d sigma / d x of ActivateDensity(a, x): softplus with PyTorch's threshold 20, or ReLU's step
+// (0 at x = 0, as PyTorch's).
+inline float DensityActivationGrad(DensityActivation a, float x) {
+  if (a == DensityActivation::kRelu) return x > 0.f ? 1.f : 0.f;
   if (x > 20.f) return 1.f;
   const float z = std::exp(x);
   return z / (z + 1.f);

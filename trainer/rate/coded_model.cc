@@ -27,6 +27,7 @@ encoder::SceneDescription DescribeModel(const TensorfModel& model) {
     }
   }
   h.density_shift = c.density_shift;
+  h.density_activation = static_cast<uint8_t>(c.density_activation);
   h.distance_scale = c.distance_scale;
   h.step_size = model.step_size();
   h.num_samples = static_cast<uint32_t>(std::max(1, model.n_samples()));

@@ -41,6 +41,7 @@ void SaveModelCheckpoint(const std::string& path, TensorfModel& model, int itera
                  {"far", c.far},
                  {"white_background", c.white_background},
                  {"density_shift", c.density_shift},
+                 {"density_activation", DensityActivationName(c.density_activation)},
                  {"distance_scale", c.distance_scale},
                  {"step_ratio", c.step_ratio},
                  {"weight_threshold", c.weight_threshold},
@@ -289,6 +290,8 @@ TensorfModel LoadModelFromCheckpoint(const std::string& path, RateState* rate) {
     c.far = render.value("far", c.far);
     c.white_background = render.value("white_background", c.white_background);
     c.density_shift = render.value("density_shift", c.density_shift);
+    c.density_activation = ChoiceFromName<DensityActivation>(
+        render.value("density_activation", std::string("softplus")), path + ": density_activation");
     c.distance_scale = render.value("distance_scale", c.distance_scale);
     c.step_ratio = render.value("step_ratio", c.step_ratio);
     c.weight_threshold = render.value("weight_threshold", c.weight_threshold);

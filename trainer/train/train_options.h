@@ -52,6 +52,19 @@ struct ChoiceNames<HeadKind> {  // indexed by the MLPW head byte (format/mlp_cod
   static constexpr const char* what = "head";
   static constexpr const char* const (&names)[kNumHeadKinds] = kHeadKindNames;
 };
+template <>
+struct ChoiceNames<DensityActivation> {  // indexed by the HEAD byte (format/scene_header.h)
+  static constexpr const char* what = "density activation";
+  static constexpr const char* const (&names)[kNumDensityActivations] = kDensityActivationNames;
+};
+// --density-activation: one of the stream's, or auto (DensityActivationFor).
+enum class DensityActivationChoice { kSoftplus, kRelu, kAuto };
+template <>
+struct ChoiceNames<DensityActivationChoice> {
+  static constexpr const char* what = "density activation";
+  static constexpr const char* names[] = {kDensityActivationNames[0], kDensityActivationNames[1],
+                                          "auto"};
+};
 // --head: one of the stream's heads; sh, the deferred head with spherical-harmonics colour
 // (HEAD hidden 0, SPEC.md 7.6.2); or auto (trainer/train/head_choice.h).
 enum class HeadChoice { kMlp, kDeferred, kSh, kAuto };

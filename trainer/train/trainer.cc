@@ -43,6 +43,18 @@ float EarlyStopFor(const TrainOptions& o, const Dataset& data, const SceneFit& f
   return fit.model == SceneModel::kObject && !RefineCamerasOn(o, data) ? kAutoEarlyStop : 0.f;
 }
 
+DensityActivation DensityActivationFor(const TrainOptions& o, SceneModel model) {
+  switch (o.density_activation) {
+    case DensityActivationChoice::kSoftplus:
+      return DensityActivation::kSoftplus;
+    case DensityActivationChoice::kRelu:
+      return DensityActivation::kRelu;
+    case DensityActivationChoice::kAuto:
+      break;
+  }
+  return model == SceneModel::kForward ? DensityActivation::kRelu : DensityActivation::kSoftplus;
+}
+
 TensorfConfig ConfigFor(const TrainOptions& o, const Dataset& data, const SceneFit& fit) {
   TensorfConfig c;
   c.density_ranks = {o.density_rank, o.density_rank, o.density_rank};
@@ -67,6 +79,8 @@ TensorfConfig ConfigFor(const TrainOptions& o, const Dataset& data, const SceneF
     c.aabb.max[a] = float(data.scene_aabb[1][a]);
   }
   c.scene_model = fit.model;
+  c.density_activation = DensityActivationFor(o, fit.model);
+  if (c.density_activation == DensityActivation::kRelu) c.density_shift = 0.f;  // TensoRF's LLFF
   if (fit.model == SceneModel::kForward) {
     c.ndc = fit.ndc;
     c.aabb = fit.roi;  // the NDC box

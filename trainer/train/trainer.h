@@ -55,6 +55,9 @@ TensorfConfig ConfigFor(const TrainOptions& options, const Dataset& data, const 
 // The transmittance at which training rays stop: options.early_stop, or for auto (< 0)
 // kAutoEarlyStop in object scenes whose cameras are kept and 0 in the others.
 float EarlyStopFor(const TrainOptions& options, const Dataset& data, const SceneFit& fit);
+// The density activation of options.density_activation; auto: ReLU for the forward-facing model,
+// softplus for the others.
+DensityActivation DensityActivationFor(const TrainOptions& options, SceneModel model);
 // The same with FitScene(options.scene_type, data).
 TensorfConfig ConfigFor(const TrainOptions& options, const Dataset& data);
 

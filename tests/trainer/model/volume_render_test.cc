@@ -108,10 +108,13 @@ struct FdSetup {
   std::vector<float> gain;  // per-ray exposure gains (empty: none)
 };
 
-FdSetup MakeFdSetup(HeadKind head = HeadKind::kPerSample) {
+FdSetup MakeFdSetup(HeadKind head = HeadKind::kPerSample,
+                    DensityActivation activation = DensityActivation::kSoftplus) {
   TensorfConfig c = testing_models::TinyTensorfConfig();
   c.head.kind = head;
-  c.density_shift = -1.f;
+  c.density_activation = activation;
+  // ReLU: shifted so that few features lie within a finite difference of its kink at 0.
+  c.density_shift = activation == DensityActivation::kRelu ? 0.5f : -1.f;
   c.distance_scale = 1.f;
   c.init_scale = 0.4f;
   c.weight_threshold = 0.f;  // no colour-sample switching under perturbation
@@ -149,8 +152,9 @@ void CheckFd(FdSetup& s, std::vector<float>& params, const std::vector<float>& g
   EXPECT_GT(checked, static_cast<int>(idx.size()) / 4) << what;
 }
 
-void CheckTrainStepGradients(HeadKind head) {
-  FdSetup s = MakeFdSetup(head);
+void CheckTrainStepGradients(HeadKind head,
+                             DensityActivation activation = DensityActivation::kSoftplus) {
+  FdSetup s = MakeFdSetup(head, activation);
   s.model.ZeroGrads();
   const TrainStepStats st = TrainStep(s.model, s.n, s.o.data(), s.d.data(), s.target.data(), 99);
   EXPECT_GT(st.density_samples, 40);
@@ -204,6 +208,27 @@ TEST(VolumeRenderTest, TrainStepGradientsMatchFiniteDifferences) {
 // share of the summed products, each sample's products through the summed ones.
 TEST(VolumeRenderTest, DeferredHeadGradientsMatchFiniteDifferences) {
   CheckTrainStepGradients(HeadKind::kDeferred);
+}
+
+// ReLU density (TensoRF's LLFF setting): the gradient passes where the feature is positive and
+// stops where it is not.
+TEST(VolumeRenderTest, ReluDensityGradientsMatchFiniteDifferences) {
+  CheckTrainStepGradients(HeadKind::kDeferred, DensityActivation::kRelu);
+  // Every feature below 0: sigma is exactly 0, nothing is coloured, no gradient reaches the grids
+  // (softplus would still pass exp(x)).
+  TensorfConfig c = testing_models::TinyTensorfConfig();
+  c.density_activation = DensityActivation::kRelu;
+  c.density_shift = -100.f;
+  TensorfModel model(c);
+  model.Initialize({6, 6, 6}, 12);
+  std::vector<float> o, d;
+  testing_models::RaysFromSphere(8, 3, &o, &d);
+  const std::vector<float> target(3 * 8, 0.5f);
+  model.ZeroGrads();
+  const TrainStepStats st = TrainStep(model, 8, o.data(), d.data(), target.data(), 99);
+  EXPECT_GT(st.density_samples, 40);
+  EXPECT_EQ(st.appearance_samples, 0);
+  for (float g : model.density().grads()) ASSERT_EQ(g, 0.f);
 }
 
 TEST(VolumeRenderTest, DistortionLossMatchesPairSumAndFiniteDifferences) {

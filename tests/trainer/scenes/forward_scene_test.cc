@@ -254,6 +254,18 @@ TEST(ForwardScene, TheTrainerLoadsItAsSceneForward) {
             MakeForwardScene("test", 20, 15, 17, o.seed).views[2].rgb.pixels);
   EXPECT_TRUE(FitScene(SceneType::kAuto, test).forward_facing);
   EXPECT_THROW(ChoiceFromName<ProceduralScene>("sideways", "--scene"), std::invalid_argument);
+  // Forward-facing scenes train with ReLU density, unshifted (TensoRF's LLFF setting); asked for,
+  // softplus keeps its shift of -10, as every other scene model has it.
+  const TensorfConfig relu = ConfigFor(o, test);
+  EXPECT_EQ(relu.density_activation, DensityActivation::kRelu);
+  EXPECT_EQ(relu.density_shift, 0.f);
+  o.density_activation = DensityActivationChoice::kSoftplus;
+  const TensorfConfig softplus = ConfigFor(o, test);
+  EXPECT_EQ(softplus.density_activation, DensityActivation::kSoftplus);
+  EXPECT_EQ(softplus.density_shift, -10.f);
+  o.density_activation = DensityActivationChoice::kAuto;
+  o.scene_type = SceneType::kUnbounded;
+  EXPECT_EQ(ConfigFor(o, test).density_activation, DensityActivation::kSoftplus);
 }
 
 TEST(ForwardScene, IsFastAndRejectsBadArguments) {

@@ -172,8 +172,10 @@ TEST(NdcFit, ReferenceCameraIsTheAveragePoseAndTheBoxHoldsEveryPixelRay) {
   EXPECT_LT(box.max[1] - box.min[1], 3.f);
 }
 
-TensorfModel SmallForwardModel(uint64_t seed) {
+TensorfModel SmallForwardModel(uint64_t seed,
+                               DensityActivation activation = DensityActivation::kSoftplus) {
   TensorfConfig c;
+  c.density_activation = activation;
   c.density_ranks = {2, 3, 2};
   c.app_ranks = {3, 2, 3};
   c.head.num_products = 8;
@@ -186,7 +188,7 @@ TensorfModel SmallForwardModel(uint64_t seed) {
   c.near = 0.f;
   c.far = 10.f;
   c.white_background = false;
-  c.density_shift = -3.f;
+  c.density_shift = activation == DensityActivation::kRelu ? -0.05f : -3.f;
   TensorfModel model(c);
   model.Initialize({17, 15, 16}, seed);
   return model;
@@ -268,6 +270,31 @@ TEST(ForwardScene, StreamIsVersion13WithAnNdcpChunkAndTheDecoderRendersWhatTheTr
   ASSERT_TRUE(marcher.RenderRays(1, back_o, back_d, rgb, &alpha, nullptr).ok());
   EXPECT_EQ(alpha, 0.f);
   for (float v : rgb) EXPECT_EQ(v, 0.f);
+}
+
+// ReLU density is a 1.9 feature: HEAD grows by its density_activation byte, and the decoder's
+// sigma is the trainer's.
+TEST(ForwardScene, ReluDensityIsVersion19AndTheDecoderRendersWhatTheTrainerRenders) {
+  TensorfModel model = SmallForwardModel(6, DensityActivation::kRelu);
+  model.UpdateAlphaMask({9, 8, 9});
+  const std::vector<uint8_t> bytes = EncodeForward(model);
+  EXPECT_EQ(bytes[5], kDensityActivationMinVersionMinor);
+  EXPECT_EQ(std::string(bytes.begin() + 8 + 12 + kSceneHeaderBytes + 1,
+                        bytes.begin() + 8 + 12 + kSceneHeaderBytes + 5),
+            "NDCP");
+  EXPECT_THROW(EncodeForward(model, 8), std::invalid_argument);  // 1.8 cannot say it
+  const dec::SceneField field = DecodeOrDie(bytes);
+  EXPECT_EQ(field.density_activation, DensityActivation::kRelu);
+  EXPECT_EQ(field.density_shift, -0.05f);
+  std::vector<float> origins, dirs;
+  ForwardRays(&origins, &dirs);
+  TensorfModel decoded_model = SmallForwardModel(6, DensityActivation::kRelu);
+  decoded_model.UpdateAlphaMask({9, 8, 9});
+  LoadDecodedGrids(field, &decoded_model);
+  const RendererAgreement r = RenderBothWays(decoded_model, field, origins, dirs);
+  EXPECT_LT(r.worst, 2e-3f);
+  EXPECT_GT(r.spread, 0.01f);
+  EXPECT_GT(r.decoder_samples, origins.size() / 3 * 5);
 }
 
 // The stream re-framed with the payload of chunk `name` dropped (empty patch) or with `patch`

@@ -259,9 +259,9 @@ TEST(UnboundedScene, HeaderRefusesUnknownSceneModelsAndNegativeNear) {
   for (uint8_t model : {uint8_t(0), uint8_t(1), uint8_t(2), uint8_t(255)}) {
     h.scene_model = model;
     ByteWriter w;
-    WriteSceneHeader(h, &w);
+    WriteSceneHeader(h, 0, &w);
     SceneHeader parsed;
-    const Status s = ParseSceneHeader(w.bytes().data(), w.bytes().size(), &parsed);
+    const Status s = ParseSceneHeader(w.bytes().data(), w.bytes().size(), 0, &parsed);
     if (model < kNumSceneModels) {
       EXPECT_TRUE(s.ok()) << s.message();
       EXPECT_EQ(parsed.scene_model, model);
@@ -272,13 +272,13 @@ TEST(UnboundedScene, HeaderRefusesUnknownSceneModelsAndNegativeNear) {
   h.scene_model = 1;
   h.near_far[0] = -0.5f;
   ByteWriter w;
-  WriteSceneHeader(h, &w);
+  WriteSceneHeader(h, 0, &w);
   SceneHeader parsed;
-  EXPECT_EQ(ParseSceneHeader(w.bytes().data(), w.bytes().size(), &parsed).code(), kErrCorrupt);
+  EXPECT_EQ(ParseSceneHeader(w.bytes().data(), w.bytes().size(), 0, &parsed).code(), kErrCorrupt);
   h.scene_model = 0;  // an object scene may start before its camera, as TensoRF's near allows
   ByteWriter w0;
-  WriteSceneHeader(h, &w0);
-  EXPECT_TRUE(ParseSceneHeader(w0.bytes().data(), w0.bytes().size(), &parsed).ok());
+  WriteSceneHeader(h, 0, &w0);
+  EXPECT_TRUE(ParseSceneHeader(w0.bytes().data(), w0.bytes().size(), 0, &parsed).ok());
 }
 
 }  // namespace
