@@ -254,7 +254,7 @@ TEST(TrainFlags, TheLongPresetIsTheFortyFiveMinuteRunsFlags) {
 TEST(TrainFlags, TheForwardPresetIsFlowersFortyFiveMinuteFlags) {
   const trainer::TrainOptions preset = Parse({"--preset", "forward"});
   const trainer::TrainOptions flags =
-      Parse({"--head", "deferred", "--refine-cameras", "off", "--iters", "7500"});
+      Parse({"--head", "deferred", "--refine-cameras", "off", "--iters", "13000"});
   EXPECT_EQ(trainer::ScaledMilestones(preset.upsample_iters, preset),
             trainer::ScaledMilestones(flags.upsample_iters, flags));
   EXPECT_EQ(trainer::ScaledMilestones(preset.alpha_mask_iters, preset),
@@ -266,9 +266,9 @@ TEST(TrainFlags, TheForwardPresetIsFlowersFortyFiveMinuteFlags) {
     names.push_back(line.substr(0, line.find(':')));
   }
   EXPECT_EQ(names, (std::vector<std::string>{"preset", "rate_point_iters"}));
-  // Without a rate point: 6,000 iterations at fast's grid.
+  // Without a rate point: 10,400 iterations at fast's grid.
   const trainer::TrainOptions plain = Parse({"--preset", "forward", "--rate", "none"});
-  EXPECT_EQ(plain.iters, 6000);
+  EXPECT_EQ(plain.iters, 10400);
   EXPECT_EQ(plain.voxels_final, 180L * 180 * 180);
 }
 
