@@ -18,7 +18,8 @@ namespace dec {
 namespace naive {
 
 inline void RenderWith(const SceneField& s, const RenderOptions& opt, const Rays& rays,
-                std::vector<float>* rgb, std::vector<float>* acc, RenderStats* stats = nullptr) {
+                       std::vector<float>* rgb, std::vector<float>* acc,
+                       RenderStats* stats = nullptr) {
   RayMarcher rm;
   const Status st = rm.Init(&s, opt);
   ASSERT_TRUE(st.ok()) << st.message();
@@ -30,7 +31,7 @@ inline void RenderWith(const SceneField& s, const RenderOptions& opt, const Rays
 }
 
 inline void ExpectMatchesNaive(const TestScene& ts, const RenderOptions& opt, uint32_t seed,
-                        double min_mean_acc = 0.05, double tol = 1e-4) {
+                               double min_mean_acc = 0.05, double tol = 1e-4) {
   const Rays rays = MakeRays(ts.field, seed);
   std::vector<float> rgb, acc;
   RenderWith(ts.field, opt, rays, &rgb, &acc);
