@@ -228,6 +228,18 @@ void ForwardRays(std::vector<float>* origins, std::vector<float>* dirs) {
   }
 }
 
+// The trainer's renderer on `model` holding the decoded grids of `field` (its float grids would
+// differ by the quantization) against the decoder's, on rays through the NDC box.
+void ExpectBothRenderersAgree(const dec::SceneField& field, TensorfModel model,
+                              const std::vector<float>& origins, const std::vector<float>& dirs) {
+  model.UpdateAlphaMask({9, 8, 9});
+  LoadDecodedGrids(field, &model);
+  const RendererAgreement r = RenderBothWays(model, field, origins, dirs);
+  EXPECT_LT(r.worst, 2e-3f);
+  EXPECT_GT(r.spread, 0.01f);
+  EXPECT_GT(r.decoder_samples, origins.size() / 3 * 5);
+}
+
 TEST(ForwardScene, StreamIsVersion13WithAnNdcpChunkAndTheDecoderRendersWhatTheTrainerRenders) {
   TensorfModel model = SmallForwardModel(5);
   model.UpdateAlphaMask({9, 8, 9});
@@ -251,14 +263,7 @@ TEST(ForwardScene, StreamIsVersion13WithAnNdcpChunkAndTheDecoderRendersWhatTheTr
 
   std::vector<float> origins, dirs;
   ForwardRays(&origins, &dirs);
-  // Both renderers on the decoded grids (the model's float grids differ by the quantization).
-  TensorfModel decoded_model = SmallForwardModel(5);
-  decoded_model.UpdateAlphaMask({9, 8, 9});
-  LoadDecodedGrids(field, &decoded_model);
-  const RendererAgreement r = RenderBothWays(decoded_model, field, origins, dirs);
-  EXPECT_LT(r.worst, 2e-3f);
-  EXPECT_GT(r.spread, 0.01f);
-  EXPECT_GT(r.decoder_samples, origins.size() / 3 * 5);
+  ExpectBothRenderersAgree(field, SmallForwardModel(5), origins, dirs);
 
   // A ray looking away from the reference camera's view sees only the background.
   const float back_o[3] = {0.f, 0.f, 0.f};
@@ -288,13 +293,7 @@ TEST(ForwardScene, ReluDensityIsVersion19AndTheDecoderRendersWhatTheTrainerRende
   EXPECT_EQ(field.density_shift, -0.05f);
   std::vector<float> origins, dirs;
   ForwardRays(&origins, &dirs);
-  TensorfModel decoded_model = SmallForwardModel(6, DensityActivation::kRelu);
-  decoded_model.UpdateAlphaMask({9, 8, 9});
-  LoadDecodedGrids(field, &decoded_model);
-  const RendererAgreement r = RenderBothWays(decoded_model, field, origins, dirs);
-  EXPECT_LT(r.worst, 2e-3f);
-  EXPECT_GT(r.spread, 0.01f);
-  EXPECT_GT(r.decoder_samples, origins.size() / 3 * 5);
+  ExpectBothRenderersAgree(field, SmallForwardModel(6, DensityActivation::kRelu), origins, dirs);
 }
 
 // The stream re-framed with the payload of chunk `name` dropped (empty patch) or with `patch`
